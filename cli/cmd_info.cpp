@@ -1,0 +1,184 @@
+// nurbsrt info FILE: what a CAD file holds once imported (format, units, box,
+// counts of faces/patches/degrees/poles/trim loops), per-face details and the
+// import's stage times, as text or JSON.
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <map>
+
+#include "cli/commands.h"
+#include "importer/importer.h"
+#include "importer/isolated.h"
+
+namespace nurbsrt::cli {
+namespace {
+
+using nlohmann::json;
+
+json vec_json(Vec3 v) { return json::array({v.x, v.y, v.z}); }
+
+json face_json(const Face& f, const Scene& scene) {
+    const NurbsSurface& s = f.surface;
+    size_t loop_points = 0;
+    for (const TrimLoop& l : f.loops) loop_points += l.points.size();
+    json j = {
+        {"index", f.index},
+        {"degree", {s.degree_u, s.degree_v}},
+        {"poles", {s.num_u, s.num_v}},
+        {"rational", s.rational},
+        {"reversed", f.reversed},
+        {"uv_box", {f.u_min, f.u_max, f.v_min, f.v_max}},
+        {"trim_loops", f.loops.size()},
+        {"trim_points", loop_points},
+        {"trim_tolerance_uv", f.trim_tolerance_uv},
+        {"mesh_triangles", f.mesh.triangles.size() / 3},
+        {"mesh_fallback", f.mesh.fallback_grid},
+        {"name", f.name},
+    };
+    if (f.body < scene.bodies.size()) j["body"] = scene.bodies[f.body].name;
+    if (f.has_color) j["color"] = {f.color.r, f.color.g, f.color.b};
+    return j;
+}
+
+json scene_summary(const Scene& scene, bool per_face, double total_ms) {
+    std::map<std::string, int> degrees;
+    size_t rational = 0, reversed = 0, poles = 0, max_poles = 0, loops = 0, inner = 0,
+           triangles = 0, fallback = 0, colored = 0;
+    for (const Face& f : scene.faces) {
+        const NurbsSurface& s = f.surface;
+        degrees[std::to_string(s.degree_u) + "x" + std::to_string(s.degree_v)]++;
+        rational += s.rational;
+        reversed += f.reversed;
+        const size_t n = static_cast<size_t>(s.num_u) * s.num_v;
+        poles += n;
+        max_poles = std::max(max_poles, n);
+        loops += f.loops.size();
+        for (const TrimLoop& l : f.loops) inner += !l.outer;
+        triangles += f.mesh.triangles.size() / 3;
+        fallback += f.mesh.fallback_grid;
+        colored += f.has_color;
+    }
+    json j = {
+        {"file", scene.source_name},
+        {"format", scene.format},
+        {"units", scene.units},
+        {"coordinates_unit", "mm"},
+        {"bbox", {{"min", vec_json(scene.bbox.lo)}, {"max", vec_json(scene.bbox.hi)},
+                  {"diagonal", scene.bbox.diagonal()}}},
+        {"faces", scene.faces.size()},
+        {"bodies", scene.bodies.size()},
+        {"patches", {{"bspline", scene.faces.size()}, {"rational", rational},
+                     {"polynomial", scene.faces.size() - rational}, {"reversed", reversed},
+                     {"degrees", degrees}}},
+        {"poles", {{"total", poles}, {"max_per_face", max_poles}}},
+        {"trim_loops", {{"total", loops}, {"inner", inner}, {"outer", loops - inner}}},
+        {"mesh", {{"triangles", triangles}, {"fallback_faces", fallback}}},
+        {"colored_faces", colored},
+        {"timings_ms", {{"read", scene.timings.read_ms},
+                        {"nurbs_convert", scene.timings.nurbs_convert_ms},
+                        {"mesh", scene.timings.mesh_ms},
+                        {"total", total_ms}}},
+        {"warnings", scene.warnings},
+    };
+    if (per_face) {
+        json faces = json::array();
+        for (const Face& f : scene.faces) faces.push_back(face_json(f, scene));
+        j["face_list"] = std::move(faces);
+    }
+    return j;
+}
+
+void print_text(const json& j) {
+    auto v3 = [](const json& a) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", a[0].get<double>(), a[1].get<double>(),
+                      a[2].get<double>());
+        return std::string(buf);
+    };
+    std::printf("file:        %s\n", j["file"].get<std::string>().c_str());
+    std::printf("format:      %s, declared units %s (coordinates in mm)\n",
+                j["format"].get<std::string>().c_str(),
+                j["units"].get<std::string>().empty() ? "unknown" : j["units"].get<std::string>().c_str());
+    std::printf("bbox:        %s .. %s, diagonal %.6g mm\n", v3(j["bbox"]["min"]).c_str(),
+                v3(j["bbox"]["max"]).c_str(), j["bbox"]["diagonal"].get<double>());
+    const json& p = j["patches"];
+    std::printf("faces:       %zu in %zu bodies (B-spline %zu: rational %zu, polynomial %zu; reversed %zu)\n",
+                j["faces"].get<size_t>(), j["bodies"].get<size_t>(), p["bspline"].get<size_t>(),
+                p["rational"].get<size_t>(), p["polynomial"].get<size_t>(), p["reversed"].get<size_t>());
+    std::string degrees;
+    for (const auto& [k, v] : p["degrees"].items()) degrees += (degrees.empty() ? "" : ", ") + k + ": " + v.dump();
+    std::printf("degrees:     %s\n", degrees.c_str());
+    std::printf("poles:       %zu (at most %zu on one face)\n", j["poles"]["total"].get<size_t>(),
+                j["poles"]["max_per_face"].get<size_t>());
+    std::printf("trim loops:  %zu (%zu outer, %zu inner)\n", j["trim_loops"]["total"].get<size_t>(),
+                j["trim_loops"]["outer"].get<size_t>(), j["trim_loops"]["inner"].get<size_t>());
+    std::printf("mesh:        %zu triangles (uv-grid fallback on %zu faces)\n",
+                j["mesh"]["triangles"].get<size_t>(), j["mesh"]["fallback_faces"].get<size_t>());
+    const json& t = j["timings_ms"];
+    std::printf("timings:     read %.1f ms, nurbs_convert %.1f ms, mesh %.1f ms, total %.1f ms\n",
+                t["read"].get<double>(), t["nurbs_convert"].get<double>(), t["mesh"].get<double>(),
+                t["total"].get<double>());
+    for (const auto& w : j["warnings"]) std::printf("warning:     %s\n", w.get<std::string>().c_str());
+    if (j.contains("face_list")) {
+        std::printf("\n%6s %7s %9s %4s %4s %6s %6s  %s\n", "face", "degree", "poles", "rat", "rev",
+                    "loops", "tris", "name");
+        for (const json& f : j["face_list"]) {
+            std::printf("%6u %3dx%-3d %4dx%-4d %4s %4s %6zu %6zu  %s\n", f["index"].get<unsigned>(),
+                        f["degree"][0].get<int>(), f["degree"][1].get<int>(), f["poles"][0].get<int>(),
+                        f["poles"][1].get<int>(), f["rational"].get<bool>() ? "yes" : "no",
+                        f["reversed"].get<bool>() ? "yes" : "no", f["trim_loops"].get<size_t>(),
+                        f["mesh_triangles"].get<size_t>(), f["name"].get<std::string>().c_str());
+        }
+    }
+}
+
+}  // namespace
+
+void add_info_command(CLI::App& app) {
+    struct Args {
+        std::string file;
+        bool json = false, faces = false, isolated = false;
+        ImportOptions options;
+        double time_limit_s = 300;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd = app.add_subcommand(
+        "info",
+        "Import a STEP or IGES file and describe it: format, units, bounding box,\n"
+        "faces, B-spline degrees, poles, trim loops, mesh, and the import's stage times.\n"
+        "Example: nurbsrt info part.step --faces");
+    cmd->add_option("FILE", a->file, "STEP or IGES file (format recognised from its content)")
+        ->required()->check(CLI::ExistingFile);
+    cmd->add_flag("--json", a->json, "print JSON instead of text");
+    cmd->add_flag("--faces", a->faces, "list every face (degree, poles, loops, triangles, name)");
+    cmd->add_flag("--isolated", a->isolated,
+                  "import in a child process with a time limit (as the service does)");
+    cmd->add_option("--time-limit", a->time_limit_s, "seconds allowed for an --isolated import")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--mesh-deflection", a->options.mesh_relative_deflection,
+                    "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
+        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
+    cmd->add_flag("!--no-attributes", a->options.read_attributes,
+                  "skip colours and names (plain readers instead of XDE; faster)");
+    cmd->callback([a] {
+        const auto t0 = std::chrono::steady_clock::now();
+        Scene scene;
+        if (a->isolated) {
+            IsolationLimits limits;
+            limits.time_limit_s = a->time_limit_s;
+            scene = import_isolated(a->file, a->options, limits);
+        } else {
+            scene = import_file(a->file, a->options);
+        }
+        const double total_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        const json j = scene_summary(scene, a->faces, total_ms);
+        if (a->json) std::cout << j.dump(2) << "\n";
+        else print_text(j);
+    });
+}
+
+}  // namespace nurbsrt::cli

@@ -1,0 +1,38 @@
+// nurbsrt: direct ray tracing of trimmed NURBS surfaces from STEP and IGES files.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+#include "cli/commands.h"
+#include "renderer/error.h"
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "nurbsrt renders STEP and IGES files by ray tracing their exact trimmed NURBS\n"
+        "surfaces, and converts between CAD formats.\n"
+        "Run 'nurbsrt <command> --help' for the options of a command."};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "nurbsrt 0.1.0");
+    app.footer(
+        "Exit status: 0 success, 1 the command failed (the message says why, with an\n"
+        "error code such as unreadable_file or no_faces), 2 bad command line.");
+    nurbsrt::cli::add_render_command(app);
+    nurbsrt::cli::add_info_command(app);
+    nurbsrt::cli::add_convert_command(app);
+    nurbsrt::cli::add_import_worker_command(app);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int rc = app.exit(e);
+        return rc == 0 ? 0 : 2;
+    } catch (const nurbsrt::Error& e) {
+        std::fprintf(stderr, "nurbsrt: error [%s]: %s\n", nurbsrt::error_code_name(e.code()), e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "nurbsrt: error [internal]: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}

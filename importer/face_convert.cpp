@@ -1,0 +1,162 @@
+// One face to a clamped, non-periodic B-spline surface (convert_face), its
+// parameter box, and the Scene form of the surface.
+#include <algorithm>
+#include <cmath>
+
+#include <BRepBuilderAPI_Copy.hxx>
+#include <BRepBuilderAPI_NurbsConvert.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Tool.hxx>
+#include <GeomConvert.hxx>
+#include <Geom_Surface.hxx>
+#include <Precision.hxx>
+#include <Standard_Failure.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <TColStd_Array2OfReal.hxx>
+#include <TColgp_Array2OfPnt.hxx>
+#include <TopLoc_Location.hxx>
+#include <TopoDS.hxx>
+
+#include "importer/internal.h"
+#include "renderer/error.h"
+
+namespace nurbsrt::occt {
+namespace {
+
+// True when the flat knot vector starts and ends with degree+1 equal knots.
+bool clamped(const TColStd_Array1OfReal& flat, int degree) {
+    const int lo = flat.Lower(), hi = flat.Upper();
+    for (int k = 1; k <= degree; ++k) {
+        if (flat(lo + k) != flat(lo) || flat(hi - k) != flat(hi)) return false;
+    }
+    return true;
+}
+
+// Makes a periodic direction non-periodic over a range that contains the
+// face's pcurves: pcurves on a periodic surface may sit one period (or part
+// of one) away from the knot range, and a clamped surface is only valid on
+// its knot range. Segment() keeps the parametrization, so (u,v) of the face
+// stay valid.
+void unperiodize(Geom_BSplineSurface& s, double fu0, double fu1, double fv0, double fv1) {
+    double u0, u1, v0, v1;
+    s.Bounds(u0, u1, v0, v1);
+    double tu0 = u0, tu1 = u1, tv0 = v0, tv1 = v1;
+    bool segment = false;
+    const double eps = Precision::PConfusion();
+    if (s.IsUPeriodic() && fu1 > fu0 && (fu0 < u0 - eps || fu1 > u1 + eps)) {
+        tu0 = fu0;
+        tu1 = fu0 + s.UPeriod();
+        segment = true;
+    }
+    if (s.IsVPeriodic() && fv1 > fv0 && (fv0 < v0 - eps || fv1 > v1 + eps)) {
+        tv0 = fv0;
+        tv1 = fv0 + s.VPeriod();
+        segment = true;
+    }
+    if (segment) s.Segment(tu0, tu1, tv0, tv1);
+    if (s.IsUPeriodic()) s.SetUNotPeriodic();
+    if (s.IsVPeriodic()) s.SetVNotPeriodic();
+}
+
+}  // namespace
+
+double UVBox::diagonal() const { return std::hypot(u1 - u0, v1 - v0); }
+
+ConvertedFace convert_face(const TopoDS_Face& face) {
+    route_occt_messages();
+    ConvertedFace out;
+    try {
+        // Every converted face owns copies of its edges (copy = true), so faces
+        // can later be meshed in parallel without two threads writing one edge.
+        TopoDS_Shape s;
+        TopLoc_Location face_loc;
+        if (Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(face, face_loc)).IsNull()) {
+            BRepBuilderAPI_NurbsConvert nc(face, Standard_True);
+            if (!nc.IsDone()) throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_NurbsConvert failed");
+            s = nc.Shape();
+        } else {
+            // Already a B-spline surface: NurbsConvert would return the same
+            // surface (checked pole for pole on trj8, trj3, linkrods, bearing,
+            // ship_kcs) but re-approximates every edge curve, which costs
+            // seconds on some faces (trj8_b1-ec-214 face 151: 8.6 s). A plain
+            // copy keeps the exact pcurves and the same (u,v).
+            BRepBuilderAPI_Copy copy(face, /*copyGeom=*/Standard_False, /*copyMesh=*/Standard_False);
+            if (!copy.IsDone()) throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_Copy failed");
+            s = copy.Shape();
+        }
+        if (s.IsNull() || s.ShapeType() != TopAbs_FACE)
+            throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_NurbsConvert gave no face");
+        out.face = TopoDS::Face(s);
+
+        TopLoc_Location loc;
+        const Handle(Geom_Surface) g = BRep_Tool::Surface(out.face, loc);
+        if (g.IsNull()) throw Error(ErrorCode::occt_failure, "converted face has no surface");
+        Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(g);
+        // NurbsConvert leaves B-splines as they are but may wrap others (e.g. a
+        // trimmed B-spline); GeomConvert gives a fresh copy either way, which we
+        // need because the surface may be shared and we modify it below.
+        if (bs.IsNull()) bs = GeomConvert::SurfaceToBSplineSurface(g);
+        else bs = Handle(Geom_BSplineSurface)::DownCast(bs->Copy());
+        if (bs.IsNull()) throw Error(ErrorCode::occt_failure, "surface is not convertible to a B-spline");
+
+        double fu0 = 0, fu1 = 0, fv0 = 0, fv1 = 0;
+        BRepTools::UVBounds(out.face, fu0, fu1, fv0, fv1);
+        unperiodize(*bs, fu0, fu1, fv0, fv1);
+        if (!clamped(bs->UKnotSequence(), bs->UDegree()) ||
+            !clamped(bs->VKnotSequence(), bs->VDegree())) {
+            double u0, u1, v0, v1;
+            bs->Bounds(u0, u1, v0, v1);
+            bs->Segment(u0, u1, v0, v1);  // inserts end knots to full multiplicity
+        }
+        if (!loc.IsIdentity())
+            bs = Handle(Geom_BSplineSurface)::DownCast(bs->Transformed(loc.Transformation()));
+        out.surface = bs;
+    } catch (const Standard_Failure& f) {
+        throw Error(ErrorCode::occt_failure, "NURBS conversion: " + failure_text(f));
+    }
+    return out;
+}
+
+UVBox face_uv_box(const ConvertedFace& cf) {
+    double su0, su1, sv0, sv1;
+    cf.surface->Bounds(su0, su1, sv0, sv1);
+    UVBox b;
+    BRepTools::UVBounds(cf.face, b.u0, b.u1, b.v0, b.v1);
+    // pcurves may stray slightly outside the surface's range (STACK.md); the
+    // Scene's box must lie inside the knot range.
+    b.u0 = std::clamp(b.u0, su0, su1);
+    b.u1 = std::clamp(b.u1, su0, su1);
+    b.v0 = std::clamp(b.v0, sv0, sv1);
+    b.v1 = std::clamp(b.v1, sv0, sv1);
+    if (!(b.u1 > b.u0)) { b.u0 = su0; b.u1 = su1; }
+    if (!(b.v1 > b.v0)) { b.v0 = sv0; b.v1 = sv1; }
+    return b;
+}
+
+NurbsSurface to_scene_surface(const Geom_BSplineSurface& s) {
+    NurbsSurface n;
+    n.degree_u = s.UDegree();
+    n.degree_v = s.VDegree();
+    n.num_u = s.NbUPoles();
+    n.num_v = s.NbVPoles();
+    const TColStd_Array1OfReal& ku = s.UKnotSequence();
+    const TColStd_Array1OfReal& kv = s.VKnotSequence();
+    n.knots_u.assign(ku.begin(), ku.end());
+    n.knots_v.assign(kv.begin(), kv.end());
+    const TColgp_Array2OfPnt& poles = s.Poles();
+    const TColStd_Array2OfReal* weights = s.Weights();  // null when non-rational
+    n.cp.resize(static_cast<size_t>(n.num_u) * static_cast<size_t>(n.num_v));
+    for (int i = 0; i < n.num_u; ++i) {
+        for (int j = 0; j < n.num_v; ++j) {
+            const gp_Pnt& p = poles(poles.LowerRow() + i, poles.LowerCol() + j);
+            const double w =
+                weights != nullptr ? (*weights)(weights->LowerRow() + i, weights->LowerCol() + j) : 1.0;
+            // Rational iff a weight differs from 1: IsURational() alone misleads (STACK.md).
+            if (w != 1.0) n.rational = true;
+            n.cp[static_cast<size_t>(i) * n.num_v + j] = Vec4{w * p.X(), w * p.Y(), w * p.Z(), w};
+        }
+    }
+    return n;
+}
+
+}  // namespace nurbsrt::occt

@@ -1,0 +1,192 @@
+// Coarse (u,v) meshes for the preliminary map: BRepMesh per face under a time
+// budget, and a trimmed regular grid wherever BRepMesh fails or runs out of time.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRep_Tool.hxx>
+#include <IMeshTools_Parameters.hxx>
+#include <Message_ProgressIndicator.hxx>
+#include <Message_ProgressRange.hxx>
+#include <Poly_Triangulation.hxx>
+#include <Standard_Failure.hxx>
+#include <TopLoc_Location.hxx>
+#include <tbb/parallel_for.h>
+
+#include "importer/internal.h"
+
+namespace nurbsrt::occt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// BRepMesh polls UserBreak() of the progress indicator between its steps;
+// answering "break" past the deadline makes it give up on the face.
+class DeadlineIndicator : public Message_ProgressIndicator {
+public:
+    explicit DeadlineIndicator(Clock::time_point deadline) : deadline_(deadline) {}
+    Standard_Boolean UserBreak() override {
+        if (Clock::now() > deadline_) broke_ = true;
+        return broke_.load();
+    }
+    void Show(const Message_ProgressScope&, const Standard_Boolean) override {}
+    bool broke() const { return broke_.load(); }
+
+private:
+    Clock::time_point deadline_;
+    std::atomic<bool> broke_{false};
+};
+
+}  // namespace
+
+bool mesh_from_triangulation(const ConvertedFace& cf, FaceMesh& out) {
+    TopLoc_Location loc;
+    const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(cf.face, loc);
+    if (tri.IsNull() || tri->NbTriangles() == 0 || !tri->HasUVNodes()) return false;
+    const gp_Trsf trsf = loc.Transformation();
+    const bool moved = !loc.IsIdentity();
+    FaceMesh m;
+    const int n = tri->NbNodes();
+    m.uv.reserve(static_cast<size_t>(n));
+    m.xyz.reserve(static_cast<size_t>(n));
+    for (int i = 1; i <= n; ++i) {
+        const gp_Pnt2d uv = tri->UVNode(i);
+        gp_Pnt p = tri->Node(i);
+        if (moved) p.Transform(trsf);
+        m.uv.push_back({uv.X(), uv.Y()});
+        m.xyz.push_back({p.X(), p.Y(), p.Z()});
+    }
+    m.triangles.reserve(3 * static_cast<size_t>(tri->NbTriangles()));
+    for (int t = 1; t <= tri->NbTriangles(); ++t) {
+        int a, b, c;
+        tri->Triangle(t).Get(a, b, c);
+        if (a < 1 || b < 1 || c < 1 || a > n || b > n || c > n) return false;
+        m.triangles.insert(m.triangles.end(), {static_cast<uint32_t>(a - 1),
+                                               static_cast<uint32_t>(b - 1),
+                                               static_cast<uint32_t>(c - 1)});
+    }
+    out = std::move(m);
+    return true;
+}
+
+FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
+                           const std::vector<TrimLoop>& loops, int cells) {
+    FaceMesh m;
+    m.fallback_grid = true;
+    const int n = cells + 1;
+    std::vector<int> index(static_cast<size_t>(n) * n, -1);
+    auto uv_of = [&](int i, int j) {
+        return Vec2{box.u0 + (box.u1 - box.u0) * i / cells, box.v0 + (box.v1 - box.v0) * j / cells};
+    };
+    // Only vertices of kept triangles are emitted, so the mesh (and the scene
+    // bbox built from it) does not reach into trimmed-away parts.
+    auto vertex = [&](int i, int j) -> uint32_t {
+        int& idx = index[static_cast<size_t>(i) * n + j];
+        if (idx < 0) {
+            const Vec2 uv = uv_of(i, j);
+            const gp_Pnt p = cf.surface->Value(uv.x, uv.y);
+            idx = static_cast<int>(m.uv.size());
+            m.uv.push_back(uv);
+            m.xyz.push_back({p.X(), p.Y(), p.Z()});
+        }
+        return static_cast<uint32_t>(idx);
+    };
+    for (int i = 0; i < cells; ++i) {
+        for (int j = 0; j < cells; ++j) {
+            const Vec2 a = uv_of(i, j), c = uv_of(i + 1, j + 1);
+            const Vec2 b = uv_of(i + 1, j), d = uv_of(i, j + 1);
+            if (inside_loops(loops, {(a.x + b.x + c.x) / 3, (a.y + b.y + c.y) / 3}))
+                m.triangles.insert(m.triangles.end(), {vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1)});
+            if (inside_loops(loops, {(a.x + c.x + d.x) / 3, (a.y + c.y + d.y) / 3}))
+                m.triangles.insert(m.triangles.end(), {vertex(i, j), vertex(i + 1, j + 1), vertex(i, j + 1)});
+        }
+    }
+    return m;
+}
+
+void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
+                const std::vector<const std::vector<TrimLoop>*>& loops,
+                const std::vector<double>& face_sizes, const MeshParams& p,
+                std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings) {
+    const size_t n = faces.size();
+    meshes.assign(n, FaceMesh{});
+    const Clock::time_point start = Clock::now();
+    const auto budget = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(std::max(0.0, p.time_limit_s)));
+    const Clock::time_point deadline = start + budget;
+    // One face may not eat the whole budget (iges/bug22869_Spring.igs: BRepMesh
+    // never finishes one face), so the others still get their real meshes.
+    const auto face_budget = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(std::max(0.0, p.face_time_limit_s)));
+    enum Outcome : char { ok, failed, timed_out, skipped };
+    std::vector<char> outcome(n, ok);
+    std::vector<std::string> errors(n);
+
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        if (faces[i].face.IsNull() || faces[i].surface.IsNull()) {
+            outcome[i] = failed;
+            return;
+        }
+        const Clock::time_point now = Clock::now();
+        if (now >= deadline) {
+            outcome[i] = skipped;
+            return;
+        }
+        Handle(DeadlineIndicator) indicator = new DeadlineIndicator(std::min(deadline, now + face_budget));
+        // A deflection larger than the face itself (a bolt hole in a model
+        // 3e5 mm across, step/as1_motor.step) polygonizes its edges into
+        // self-intersecting wires and BRepMesh gives up; so the deflection is
+        // capped by the face's size, and a failed face gets one finer retry.
+        double deflection = p.deflection;
+        if (i < face_sizes.size() && face_sizes[i] > 0) deflection = std::min(deflection, 0.1 * face_sizes[i]);
+        try {
+            for (int attempt = 0; attempt < 2; ++attempt) {
+                IMeshTools_Parameters params;
+                params.Deflection = deflection;
+                params.Angle = p.angle;
+                params.InParallel = Standard_False;  // we parallelize over faces ourselves
+                BRepMesh_IncrementalMesh mesher(faces[i].face, params, indicator->Start());
+                if (indicator->broke()) {
+                    outcome[i] = timed_out;
+                    break;
+                }
+                if (mesh_from_triangulation(faces[i], meshes[i])) {
+                    outcome[i] = ok;
+                    break;
+                }
+                outcome[i] = failed;
+                deflection *= 0.2;
+            }
+        } catch (const Standard_Failure& f) {
+            outcome[i] = failed;
+            errors[i] = failure_text(f);
+        }
+    });
+
+    for (size_t i = 0; i < n; ++i) {
+        if (outcome[i] == ok) continue;
+        const std::string face = "face " + std::to_string(i + 1);
+        switch (outcome[i]) {
+            case failed:
+                warnings.push_back(face + ": BRepMesh gave no triangulation" +
+                                   (errors[i].empty() ? "" : " (" + errors[i] + ")") +
+                                   "; using a trimmed (u,v) grid");
+                break;
+            case timed_out:
+                warnings.push_back(face + ": BRepMesh ran out of time; using a trimmed (u,v) grid");
+                break;
+            default:
+                warnings.push_back(face + ": mesh time limit reached before meshing; using a trimmed (u,v) grid");
+                break;
+        }
+        if (faces[i].surface.IsNull()) continue;
+        try {
+            meshes[i] = trimmed_grid_mesh(faces[i], boxes[i], *loops[i], p.grid_cells);
+        } catch (const Standard_Failure& f) {
+            warnings.push_back(face + ": trimmed grid failed too (" + failure_text(f) + ")");
+        }
+    }
+}
+
+}  // namespace nurbsrt::occt

@@ -1,0 +1,82 @@
+// Declarations shared between the importer's translation units (importer/*.cpp
+// only). OCCT types come in through occt_shape.h; nothing outside importer/
+// may include this header.
+#pragma once
+
+#include <chrono>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "importer/occt_shape.h"
+#include "renderer/scene.h"
+
+class Standard_Failure;
+
+namespace nurbsrt::occt {
+
+// Routes OCCT's default messenger to stderr with an "[occt]" prefix (warnings
+// and worse; chatter below that is dropped) instead of coloured stdout.
+// Idempotent and thread-safe; every entry point calls it before touching OCCT.
+void route_occt_messages();
+
+// "Standard_OutOfRange: message" for an OCCT exception.
+std::string failure_text(const Standard_Failure& f);
+
+// Milliseconds since `t0` on the steady clock.
+inline double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+        .count();
+}
+
+// The B-spline surface as Scene data: homogeneous poles u-major, flat clamped knots.
+NurbsSurface to_scene_surface(const Geom_BSplineSurface& s);
+
+// Parameter box of a converted face (BRepTools::UVBounds) clamped to the
+// surface's knot range; an empty or inverted box falls back to the full range.
+struct UVBox {
+    double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
+    double diagonal() const;
+};
+UVBox face_uv_box(const ConvertedFace& cf);
+
+// Trim loops of a converted face sampled from its pcurves (see trim_loops.cpp).
+struct TrimResult {
+    std::vector<TrimLoop> loops;
+    double tolerance_uv = 0;
+    std::vector<std::string> warnings;  // without the face number; the caller prefixes it
+};
+TrimResult sample_trim_loops(const ConvertedFace& cf, const UVBox& box, double relative_tolerance);
+
+// Even-odd point-in-loops test in (u,v); no loops means inside everywhere.
+bool inside_loops(const std::vector<TrimLoop>& loops, Vec2 p);
+
+// Mesh of a converted face from its BRepMesh triangulation (UV nodes and
+// located nodes); false when the face has no usable triangulation.
+bool mesh_from_triangulation(const ConvertedFace& cf, FaceMesh& out);
+
+// Regular (u,v) grid over the box, triangles kept where their centroid lies
+// inside the trim loops; xyz evaluated on the surface.
+FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
+                           const std::vector<TrimLoop>& loops, int cells_per_side);
+
+// Meshes every face (BRepMesh per face, in parallel, under the time limits);
+// faces without a usable triangulation get trimmed_grid_mesh (warning each).
+// face_sizes[i]: 3D bounding-box diagonal of face i (caps its deflection).
+struct MeshParams {
+    double deflection = 0.1;         // absolute linear deflection, model units
+    double angle = 0.35;             // angular deflection, radians
+    double time_limit_s = 60;        // all faces together
+    double face_time_limit_s = 15;   // one face
+    int grid_cells = 48;             // fallback grid cells per side
+};
+void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
+                const std::vector<const std::vector<TrimLoop>*>& loops,
+                const std::vector<double>& face_sizes, const MeshParams& p,
+                std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings);
+
+// Serializes STEP/IGES reading, transfer and writing process-wide (STACK.md:
+// concurrent use corrupts OCCT's heap).
+std::mutex& exchange_mutex();
+
+}  // namespace nurbsrt::occt

@@ -1,0 +1,220 @@
+// Process-isolated import: see isolated.h. Plain POSIX; no OCCT here.
+#include "importer/isolated.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "renderer/error.h"
+#include "renderer/scene_io.h"
+
+namespace nurbsrt {
+namespace {
+
+std::string self_executable() {
+    char buf[4096];
+    const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
+    if (n <= 0) throw Error(ErrorCode::internal, "cannot resolve /proc/self/exe");
+    return std::string(buf, static_cast<size_t>(n));
+}
+
+std::string read_small_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+ErrorCode error_code_from_name(const std::string& name) {
+    for (int c = 0; c <= static_cast<int>(ErrorCode::internal); ++c) {
+        if (name == error_code_name(static_cast<ErrorCode>(c))) return static_cast<ErrorCode>(c);
+    }
+    return ErrorCode::internal;
+}
+
+// Removes the scratch files on every exit path.
+struct ScratchFiles {
+    std::string scene, error;
+    ~ScratchFiles() {
+        if (!scene.empty()) unlink(scene.c_str());
+        if (!error.empty()) unlink(error.c_str());
+    }
+};
+
+// Waits for `pid` for at most `seconds`; returns true and fills `status` when it
+// exited. Uses a pidfd so the wait is an event, not a polling loop; falls back
+// to short sleeps on kernels without pidfd_open.
+bool wait_with_timeout(pid_t pid, double seconds, int& status) {
+    using clock = std::chrono::steady_clock;
+    const auto deadline = clock::now() + std::chrono::duration<double>(seconds);
+    const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid, 0));
+    for (;;) {
+        const pid_t r = waitpid(pid, &status, WNOHANG);
+        if (r == pid) {
+            if (pidfd >= 0) close(pidfd);
+            return true;
+        }
+        if (r < 0 && errno != EINTR) {
+            if (pidfd >= 0) close(pidfd);
+            throw Error(ErrorCode::internal, std::string("waitpid: ") + std::strerror(errno));
+        }
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - clock::now()).count();
+        if (left <= 0) {
+            if (pidfd >= 0) close(pidfd);
+            return false;
+        }
+        if (pidfd >= 0) {
+            pollfd p{pidfd, POLLIN, 0};
+            poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000)));
+        } else {
+            std::this_thread::sleep_for(std::chrono::milliseconds(std::min<long long>(left, 5)));
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<std::string> import_options_to_args(const ImportOptions& o) {
+    auto num = [](double v) {
+        std::ostringstream s;
+        s.precision(17);
+        s << v;
+        return s.str();
+    };
+    return {"--mesh-deflection=" + num(o.mesh_relative_deflection),
+            "--mesh-angle=" + num(o.mesh_angular_deflection),
+            "--mesh-time-limit=" + num(o.mesh_time_limit_s),
+            "--trim-tolerance=" + num(o.trim_relative_tolerance),
+            std::string("--attributes=") + (o.read_attributes ? "1" : "0")};
+}
+
+ImportOptions import_options_from_args(const std::vector<std::string>& args) {
+    ImportOptions o;
+    for (const std::string& a : args) {
+        const size_t eq = a.find('=');
+        if (eq == std::string::npos) throw Error(ErrorCode::invalid_argument, "bad worker option: " + a);
+        const std::string key = a.substr(0, eq), value = a.substr(eq + 1);
+        char* end = nullptr;
+        const double v = std::strtod(value.c_str(), &end);
+        if (end == value.c_str() || *end != '\0')
+            throw Error(ErrorCode::invalid_argument, "bad worker option value: " + a);
+        if (key == "--mesh-deflection") o.mesh_relative_deflection = v;
+        else if (key == "--mesh-angle") o.mesh_angular_deflection = v;
+        else if (key == "--mesh-time-limit") o.mesh_time_limit_s = v;
+        else if (key == "--trim-tolerance") o.trim_relative_tolerance = v;
+        else if (key == "--attributes") o.read_attributes = v != 0;
+        else throw Error(ErrorCode::invalid_argument, "unknown worker option: " + a);
+    }
+    return o;
+}
+
+Scene import_isolated(const std::string& path, const ImportOptions& options,
+                      const IsolationLimits& limits) {
+    const std::string exe = limits.worker_executable.empty() ? self_executable() : limits.worker_executable;
+    std::string dir = limits.scratch_dir;
+    if (dir.empty()) {
+        const char* t = std::getenv("TMPDIR");
+        dir = (t && *t) ? t : "/tmp";
+    }
+
+    ScratchFiles scratch;
+    std::string tmpl = dir + "/nurbsrt-import-XXXXXX";
+    const int fd = mkstemp(tmpl.data());
+    if (fd < 0) throw Error(ErrorCode::io, "cannot create scratch file in " + dir + ": " + std::strerror(errno));
+    close(fd);
+    scratch.scene = tmpl;
+    scratch.error = tmpl + ".error";
+
+    // Build argv before fork: the child may only make async-signal-safe calls.
+    std::vector<std::string> args = {exe, "import-worker", path, scratch.scene};
+    for (std::string& a : import_options_to_args(options)) args.push_back(std::move(a));
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+
+    const pid_t pid = fork();
+    if (pid < 0) throw Error(ErrorCode::internal, std::string("fork: ") + std::strerror(errno));
+    if (pid == 0) {
+        if (limits.memory_limit_bytes > 0) {
+            rlimit rl{limits.memory_limit_bytes, limits.memory_limit_bytes};
+            setrlimit(RLIMIT_AS, &rl);
+        }
+        rlimit no_core{0, 0};  // a crashing import must not litter the data directory with cores
+        setrlimit(RLIMIT_CORE, &no_core);
+        // Do not leak the server's sockets and files into the worker.
+        syscall(SYS_close_range, 3u, ~0u, 0u);
+        execv(exe.c_str(), argv.data());
+        _exit(127);
+    }
+
+    int status = 0;
+    if (!wait_with_timeout(pid, limits.time_limit_s, status)) {
+        kill(pid, SIGKILL);
+        waitpid(pid, &status, 0);
+        std::ostringstream msg;
+        msg << "import of '" << path << "' did not finish within " << limits.time_limit_s << " s";
+        throw Error(ErrorCode::import_timeout, msg.str());
+    }
+    if (WIFSIGNALED(status)) {
+        const int sig = WTERMSIG(status);
+        std::ostringstream msg;
+        msg << "import process died of signal " << sig << " (" << strsignal(sig) << ")";
+        if (sig == SIGKILL || sig == SIGABRT || sig == SIGSEGV)
+            msg << "; the file may be malformed or exceed the memory limit of "
+                << (limits.memory_limit_bytes >> 20) << " MiB";
+        throw Error(ErrorCode::import_crashed, msg.str());
+    }
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    if (code == 0) return read_scene_file(scratch.scene);
+    if (code == 127) throw Error(ErrorCode::internal, "cannot start import worker " + exe);
+
+    const std::string err = read_small_file(scratch.error);
+    const size_t nl = err.find('\n');
+    if (nl == std::string::npos) {
+        // No typed error written: the worker failed before or while writing it
+        // (std::bad_alloc under the memory limit ends up here too).
+        throw Error(ErrorCode::import_crashed,
+                    "import process exited with status " + std::to_string(code) + " without a result");
+    }
+    throw Error(error_code_from_name(err.substr(0, nl)), err.substr(nl + 1));
+}
+
+int run_import_worker(const std::string& in_path, const std::string& out_path,
+                      const ImportOptions& options) {
+    // Test hook: lets integration tests prove that a dying or hanging import
+    // fails only its own request. Read only here, in the worker process.
+    if (const char* fault = std::getenv("NURBSRT_IMPORT_WORKER_FAULT")) {
+        if (std::strcmp(fault, "crash") == 0) raise(SIGSEGV);
+        if (std::strcmp(fault, "hang") == 0) for (;;) pause();
+    }
+    auto write_error = [&](ErrorCode code, const std::string& message) {
+        std::ofstream e(out_path + ".error", std::ios::binary | std::ios::trunc);
+        e << error_code_name(code) << '\n' << message;
+    };
+    try {
+        const Scene scene = import_file(in_path, options);
+        write_scene_file(scene, out_path);
+        return 0;
+    } catch (const Error& e) {
+        write_error(e.code(), e.what());
+    } catch (const std::bad_alloc&) {
+        write_error(ErrorCode::limit_exceeded, "import ran out of memory (memory limit of the import process)");
+    } catch (const std::exception& e) {
+        write_error(ErrorCode::internal, e.what());
+    }
+    return 1;
+}
+
+}  // namespace nurbsrt

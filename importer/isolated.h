@@ -1,0 +1,41 @@
+// Import in a child process, so that a file that crashes, hangs or exhausts
+// memory in OCCT fails only its own request (DESIGN.md, robustness rules).
+//
+// The child is this same program run as `nurbsrt import-worker IN OUT ...`
+// (cli/cmd_import_worker.cpp), under an address-space limit; the parent waits
+// with a wall-clock limit, kills the child when it runs over, and reads the
+// serialized scene (renderer/scene_io.h) or the typed error the child wrote.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "importer/importer.h"
+
+namespace nurbsrt {
+
+struct IsolationLimits {
+    double time_limit_s = 300.0;                      // wall clock, whole import
+    size_t memory_limit_bytes = size_t(8) << 30;      // RLIMIT_AS of the child; 0 = none
+    std::string worker_executable;                    // empty: this process's own binary
+    std::string scratch_dir;                          // empty: $TMPDIR or /tmp
+};
+
+// Runs import_file(path, options) in a child process. Throws nurbsrt::Error with
+// the child's own error (io, unreadable_file, no_faces, ...), or import_timeout
+// when it ran over, or import_crashed when it died (signal, out of memory).
+Scene import_isolated(const std::string& path, const ImportOptions& options,
+                      const IsolationLimits& limits = {});
+
+// The command-line arguments that carry `options` to the worker, and their
+// parser (used by the import-worker subcommand); kept together so they cannot drift.
+std::vector<std::string> import_options_to_args(const ImportOptions& options);
+ImportOptions import_options_from_args(const std::vector<std::string>& args);
+
+// Entry point of the worker: imports IN and writes the scene to OUT, or writes
+// the error to OUT + ".error" (code name, newline, message). Returns the exit status.
+int run_import_worker(const std::string& in_path, const std::string& out_path,
+                      const ImportOptions& options);
+
+}  // namespace nurbsrt

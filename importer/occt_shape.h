@@ -1,0 +1,58 @@
+// Internal OCCT-level interface of the importer. Includes OCCT headers, so only
+// importer/*.cpp, tests and benchmarks (which use OCCT as the independent
+// reference) may include it; never include it from a widely used header.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Geom_BSplineSurface.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Shape.hxx>
+
+#include "importer/importer.h"
+
+namespace nurbsrt::occt {
+
+// Colour/name found for a face through XDE (face, then its solid/instance label).
+struct FaceAttributes {
+    bool has_color = false;
+    Color color;
+    std::string name;
+    uint32_t body = 0;  // index into OcctModel::bodies
+};
+
+// A file as OCCT reads it: all transferred roots in one shape, and the faces
+// in the order of the face-index contract (faces.FindKey(i) is face i, 1-based).
+struct OcctModel {
+    CadFormat format = CadFormat::unknown;
+    std::string units;                       // declared length unit of the file
+    TopoDS_Shape shape;                      // compound of all transferred roots
+    TopTools_IndexedMapOfShape faces;        // TopExp::MapShapes(shape, TopAbs_FACE, faces)
+    std::vector<FaceAttributes> attributes;  // attributes[i-1] for face i (empty when not read)
+    std::vector<Body> bodies;
+    std::vector<std::string> warnings;
+    double read_ms = 0;
+};
+
+// Reads STEP or IGES (format by content). Serialized by a process-wide mutex
+// (STACK.md: concurrent reads corrupt OCCT's heap). OCCT's console output goes
+// to our log, never to stdout. Throws nurbsrt::Error.
+OcctModel read_model(const std::string& path, bool read_attributes);
+
+// One face converted for the renderer: `face` is the result of
+// BRepBuilderAPI_NurbsConvert (same orientation and location as the input;
+// a face whose surface already is a Geom_BSplineSurface is copied instead,
+// which gives the same surface and (u,v) without re-approximating its edges),
+// `surface` its B-spline surface made non-periodic and clamped, with the
+// face's location (instance transform) applied, so that `surface->D1(u,v)` is
+// the reference for nurbsrt::evaluate_d1 on Scene::faces[i-1].surface at the
+// same (u,v). (u,v) are the converted face's parameters (pcurves, UVBounds).
+struct ConvertedFace {
+    TopoDS_Face face;
+    Handle(Geom_BSplineSurface) surface;
+};
+ConvertedFace convert_face(const TopoDS_Face& face);
+
+}  // namespace nurbsrt::occt

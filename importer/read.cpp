@@ -1,0 +1,359 @@
+// Reading STEP/IGES into an OcctModel: one compound of all transferred roots,
+// the face-index map, bodies, and (through XDE) colours and names.
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <mutex>
+
+#include <BRep_Builder.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <IGESCAFControl_Reader.hxx>
+#include <IGESControl_Reader.hxx>
+#include <IGESData_GlobalSection.hxx>
+#include <IGESData_IGESModel.hxx>
+#include <Quantity_Color.hxx>
+#include <STEPCAFControl_Reader.hxx>
+#include <STEPControl_Reader.hxx>
+#include <Standard_Failure.hxx>
+#include <TColStd_SequenceOfAsciiString.hxx>
+#include <TDF_ChildIterator.hxx>
+#include <TDF_Label.hxx>
+#include <TDataStd_Name.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XSControl_Reader.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+#include <XCAFPrs.hxx>
+#include <XCAFPrs_DocumentExplorer.hxx>
+#include <XCAFPrs_IndexedDataMapOfShapeStyle.hxx>
+#include <XCAFPrs_Style.hxx>
+
+#include "importer/internal.h"
+#include "renderer/error.h"
+
+namespace nurbsrt::occt {
+namespace {
+
+const char* status_name(IFSelect_ReturnStatus s) {
+    switch (s) {
+        case IFSelect_RetVoid: return "void (nothing read)";
+        case IFSelect_RetDone: return "done";
+        case IFSelect_RetError: return "error";
+        case IFSelect_RetFail: return "fail";
+        case IFSelect_RetStop: return "stop";
+    }
+    return "?";
+}
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+// Unit names as STEP (".MILLI.", "METRE", "INCH") or IGES ("MM", "IN") spell them,
+// normalised to short lowercase names.
+std::string unit_short_name(std::string raw) {
+    std::string s;
+    for (char c : lower(std::move(raw)))
+        if (std::isalpha(static_cast<unsigned char>(c))) s += c;
+    if (s == "mm" || s == "millimetre" || s == "millimeter" || s == "millimetremetre") return "mm";
+    if (s == "cm" || s == "centimetre" || s == "centimeter") return "cm";
+    if (s == "m" || s == "metre" || s == "meter") return "m";
+    if (s == "km" || s == "kilometre" || s == "kilometer") return "km";
+    if (s == "in" || s == "inch" || s == "inches") return "inch";
+    if (s == "ft" || s == "foot" || s == "feet") return "foot";
+    if (s == "mi" || s == "mile") return "mile";
+    if (s == "mil") return "mil";
+    if (s == "um" || s == "micron" || s == "micrometre" || s == "micrometer") return "micron";
+    if (s == "uin" || s == "microinch") return "microinch";
+    return s;
+}
+
+std::string step_units(STEPControl_Reader& reader) {
+    TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
+    reader.FileUnits(lengths, angles, solid_angles);
+    std::vector<std::string> names;
+    for (int i = 1; i <= lengths.Length(); ++i) {
+        const std::string n = unit_short_name(lengths.Value(i).ToCString());
+        if (!n.empty() && std::find(names.begin(), names.end(), n) == names.end())
+            names.push_back(n);
+    }
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ",") + n;
+    return out;
+}
+
+std::string iges_units(const IGESControl_Reader& reader) {
+    const Handle(IGESData_IGESModel) model = reader.IGESModel();
+    if (model.IsNull()) return {};
+    const IGESData_GlobalSection& gs = model->GlobalSection();
+    const Handle(TCollection_HAsciiString) name = gs.UnitName();
+    if (!name.IsNull() && name->Length() > 0) return unit_short_name(name->ToCString());
+    switch (gs.UnitFlag()) {  // IGES 5.3 global parameter 14
+        case 1: return "inch";
+        case 2: return "mm";
+        case 4: return "foot";
+        case 5: return "mile";
+        case 6: return "m";
+        case 7: return "km";
+        case 8: return "mil";
+        case 9: return "micron";
+        case 10: return "cm";
+        case 11: return "microinch";
+        default: return {};
+    }
+}
+
+std::string label_name(const TDF_Label& label) {
+    Handle(TDataStd_Name) attr;
+    if (label.IsNull() || !label.FindAttribute(TDataStd_Name::GetID(), attr)) return {};
+    // TCollection_AsciiString from an extended string with no replacement char is UTF-8.
+    return TCollection_AsciiString(attr->Get()).ToCString();
+}
+
+Color to_color(const Quantity_Color& c) {
+    // Quantity_Color stores linear RGB in OCCT 7.6, as the Scene wants.
+    return Color{static_cast<float>(c.Red()), static_cast<float>(c.Green()),
+                 static_cast<float>(c.Blue())};
+}
+
+// Bodies by topology: every solid, then every shell outside solids, then all
+// remaining free faces as one body. Same for both reader modes, so the body
+// numbering does not depend on read_attributes.
+void assign_bodies(OcctModel& m) {
+    const int n = m.faces.Extent();
+    m.attributes.assign(static_cast<size_t>(n), FaceAttributes{});
+    std::vector<bool> done(static_cast<size_t>(n), false);
+    auto claim = [&](const TopoDS_Shape& group) {
+        bool any = false;
+        const uint32_t body = static_cast<uint32_t>(m.bodies.size());
+        for (TopExp_Explorer ex(group, TopAbs_FACE); ex.More(); ex.Next()) {
+            const int i = m.faces.FindIndex(ex.Current());
+            if (i == 0 || done[static_cast<size_t>(i - 1)]) continue;
+            done[static_cast<size_t>(i - 1)] = true;
+            m.attributes[static_cast<size_t>(i - 1)].body = body;
+            any = true;
+        }
+        if (any) m.bodies.push_back(Body{});
+    };
+    for (TopExp_Explorer ex(m.shape, TopAbs_SOLID); ex.More(); ex.Next()) claim(ex.Current());
+    for (TopExp_Explorer ex(m.shape, TopAbs_SHELL, TopAbs_SOLID); ex.More(); ex.Next())
+        claim(ex.Current());
+    if (std::find(done.begin(), done.end(), false) != done.end()) claim(m.shape);
+}
+
+// Names and colours from the XDE document, matched to our faces by located
+// TShape. Follows what RWMesh_FaceIterator does for glTF export: the node's
+// style is the default; styles of sub-shapes (faces, solids) of the part override it.
+void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document)& doc) {
+    size_t unmatched = 0;
+    std::vector<bool> body_named(m.bodies.size(), false);
+    for (XCAFPrs_DocumentExplorer ex(doc, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More();
+         ex.Next()) {
+        const XCAFPrs_DocumentNode& node = ex.Current();
+        TopoDS_Shape part;
+        if (!XCAFDoc_ShapeTool::GetShape(node.RefLabel, part) || part.IsNull()) continue;
+        part.Location(node.Location, false);
+
+        std::string name = label_name(node.Label);
+        if (name.empty()) name = label_name(node.RefLabel);
+        const XCAFPrs_Style& style = node.Style;
+
+        // Sub-shape styles, most specific last so that faces win over solids.
+        XCAFPrs_IndexedDataMapOfShapeStyle styles;
+        XCAFPrs::CollectStyleSettings(node.RefLabel, TopLoc_Location(), styles);
+        NCollection_DataMap<TopoDS_Shape, Quantity_Color, TopTools_ShapeMapHasher> face_color;
+        for (int type = TopAbs_COMPOUND; type <= TopAbs_FACE; ++type) {
+            for (XCAFPrs_IndexedDataMapOfShapeStyle::Iterator it(styles); it.More(); it.Next()) {
+                if (it.Key().ShapeType() != type || !it.Value().IsSetColorSurf()) continue;
+                const TopoDS_Shape located = it.Key().Located(node.Location);
+                for (TopExp_Explorer fe(located, TopAbs_FACE); fe.More(); fe.Next())
+                    face_color.Bind(fe.Current(), it.Value().GetColorSurf());
+            }
+        }
+        // Sub-shape names (rare: named faces).
+        NCollection_DataMap<TopoDS_Shape, std::string, TopTools_ShapeMapHasher> face_name;
+        for (TDF_ChildIterator ci(node.RefLabel); ci.More(); ci.Next()) {
+            TopoDS_Shape sub;
+            if (!XCAFDoc_ShapeTool::GetShape(ci.Value(), sub) || sub.IsNull()) continue;
+            const std::string n = label_name(ci.Value());
+            if (n.empty()) continue;
+            for (TopExp_Explorer fe(sub.Located(node.Location), TopAbs_FACE); fe.More(); fe.Next())
+                face_name.Bind(fe.Current(), n);
+        }
+
+        for (TopExp_Explorer fe(part, TopAbs_FACE); fe.More(); fe.Next()) {
+            const int i = m.faces.FindIndex(fe.Current());
+            if (i == 0) { ++unmatched; continue; }
+            FaceAttributes& a = m.attributes[static_cast<size_t>(i - 1)];
+            if (const Quantity_Color* c = face_color.Seek(fe.Current())) {
+                a.has_color = true;
+                a.color = to_color(*c);
+            } else if (style.IsSetColorSurf()) {
+                a.has_color = true;
+                a.color = to_color(style.GetColorSurf());
+            }
+            if (const std::string* fn = face_name.Seek(fe.Current())) a.name = *fn;
+            else a.name = name;
+            if (a.body < m.bodies.size() && a.has_color && !m.bodies[a.body].has_color) {
+                // Colour set on the solid or its faces only: the body takes its first face's.
+                m.bodies[a.body].has_color = true;
+                m.bodies[a.body].color = a.color;
+            }
+            if (a.body < m.bodies.size() && !body_named[a.body]) {
+                body_named[a.body] = true;
+                Body& b = m.bodies[a.body];
+                b.name = name;
+                if (style.IsSetColorSurf()) {
+                    b.has_color = true;
+                    b.color = to_color(style.GetColorSurf());
+                }
+            }
+        }
+    }
+    if (unmatched > 0)
+        m.warnings.push_back(std::to_string(unmatched) +
+                             " face(s) of the XDE document not found in the transferred shape; "
+                             "their colours/names were not applied");
+}
+
+// Compound of all transferred roots, as OneShape() would build it (a single
+// root stays itself, which gives the same MapShapes order).
+TopoDS_Shape all_roots(XSControl_Reader& reader) {
+    return reader.OneShape();
+}
+
+void read_step(const std::string& path, bool attributes, OcctModel& m) {
+    Handle(TDocStd_Document) doc;
+    STEPCAFControl_Reader caf;
+    STEPControl_Reader plain;
+    STEPControl_Reader& reader = attributes ? caf.ChangeReader() : plain;
+    if (attributes) {
+        caf.SetColorMode(true);
+        caf.SetNameMode(true);
+        caf.SetLayerMode(false);
+        caf.SetPropsMode(false);
+        caf.SetGDTMode(false);
+        caf.SetMatMode(false);
+        caf.SetViewMode(false);
+    }
+    const IFSelect_ReturnStatus st = attributes ? caf.ReadFile(path.c_str()) : plain.ReadFile(path.c_str());
+    // RetVoid: parsed fine but holds no entities at all.
+    if (st == IFSelect_RetVoid) throw Error(ErrorCode::no_faces, "STEP file read, but it holds no entities");
+    if (st != IFSelect_RetDone)
+        throw Error(ErrorCode::unreadable_file,
+                    std::string("STEP reader: file status ") + status_name(st));
+    m.units = step_units(reader);
+    const int roots = reader.NbRootsForTransfer();
+    if (attributes) {
+        XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+        caf.Transfer(doc);  // false also for "nothing to transfer": judged below
+    } else {
+        reader.TransferRoots();
+    }
+    if (reader.NbShapes() == 0) {
+        // A syntactically fine file with nothing to transfer holds no faces;
+        // roots that all fail to transfer mean content OCCT cannot read.
+        if (roots == 0) throw Error(ErrorCode::no_faces, "STEP file read, but it has no shape to transfer");
+        throw Error(ErrorCode::unreadable_file,
+                    "STEP reader: 0 of " + std::to_string(roots) + " roots transferred");
+    }
+    m.shape = all_roots(reader);
+    if (m.shape.IsNull())
+        throw Error(ErrorCode::unreadable_file, "STEP reader: transferred shape is null");
+    TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
+    assign_bodies(m);
+    if (attributes && !doc.IsNull()) {
+        apply_xde_attributes(m, doc);
+        XCAFApp_Application::GetApplication()->Close(doc);
+    }
+}
+
+void read_iges(const std::string& path, bool attributes, OcctModel& m) {
+    Handle(TDocStd_Document) doc;
+    IGESCAFControl_Reader caf;
+    IGESControl_Reader plain;
+    IGESControl_Reader& reader = attributes ? static_cast<IGESControl_Reader&>(caf) : plain;
+    if (attributes) {
+        caf.SetColorMode(true);
+        caf.SetNameMode(true);
+        caf.SetLayerMode(false);
+    }
+    const IFSelect_ReturnStatus st = reader.ReadFile(path.c_str());
+    // RetVoid: parsed fine but holds no entities at all.
+    if (st == IFSelect_RetVoid) throw Error(ErrorCode::no_faces, "IGES file read, but it holds no entities");
+    if (st != IFSelect_RetDone)
+        throw Error(ErrorCode::unreadable_file,
+                    std::string("IGES reader: file status ") + status_name(st));
+    m.units = iges_units(reader);
+    const int roots = reader.NbRootsForTransfer();
+    if (attributes) {
+        XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+        caf.Transfer(doc);
+    } else {
+        reader.TransferRoots();
+    }
+    if (reader.NbShapes() == 0) {
+        // A syntactically fine file with nothing to transfer holds no faces;
+        // roots that all fail to transfer mean content OCCT cannot read.
+        if (roots == 0) throw Error(ErrorCode::no_faces, "IGES file read, but it has no shape to transfer");
+        throw Error(ErrorCode::unreadable_file,
+                    "IGES reader: 0 of " + std::to_string(roots) + " roots transferred");
+    }
+    m.shape = all_roots(reader);
+    if (m.shape.IsNull())
+        throw Error(ErrorCode::unreadable_file, "IGES reader: transferred shape is null");
+    TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
+    assign_bodies(m);
+    if (attributes && !doc.IsNull()) {
+        apply_xde_attributes(m, doc);
+        XCAFApp_Application::GetApplication()->Close(doc);
+    }
+}
+
+}  // namespace
+
+std::mutex& exchange_mutex() {
+    static std::mutex m;
+    return m;
+}
+
+OcctModel read_model(const std::string& path, bool read_attributes) {
+    route_occt_messages();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw Error(ErrorCode::io, "cannot open '" + path + "': no such file (or not a regular file)");
+    OcctModel m;
+    m.format = detect_format(path);
+    if (m.format == CadFormat::unknown)
+        throw Error(ErrorCode::unsupported_format,
+                    "'" + path + "' is neither STEP (ISO-10303-21 header) nor IGES (80-column records)");
+    const auto t0 = std::chrono::steady_clock::now();
+    {
+        std::lock_guard<std::mutex> lock(exchange_mutex());
+        const char* who = m.format == CadFormat::step ? "STEP reader: " : "IGES reader: ";
+        try {
+            if (m.format == CadFormat::step) read_step(path, read_attributes, m);
+            else read_iges(path, read_attributes, m);
+        } catch (const Standard_Failure& f) {
+            throw Error(ErrorCode::occt_failure, who + failure_text(f));
+        } catch (const std::bad_alloc&) {
+            throw Error(ErrorCode::occt_failure, std::string(who) + "out of memory");
+        }
+    }
+    m.read_ms = ms_since(t0);
+    if (m.faces.Extent() == 0)
+        throw Error(ErrorCode::no_faces,
+                    std::string(format_name(m.format)) + " file read, but it holds no faces (" +
+                        "only curves, points or empty shapes)");
+    return m;
+}
+
+}  // namespace nurbsrt::occt

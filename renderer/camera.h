@@ -1,0 +1,124 @@
+// The camera and its pixel rays (DESIGN.md "Camera and pixel rays", fixed
+// contract), the named views fitted to a bounding box, and the paper's
+// projection of homogeneous control points to the image plane (PAPER.md,
+// "Projection to R^2", the x, y, w of eq. 8).
+#pragma once
+
+#include <string>
+
+#include "renderer/scene.h"
+#include "renderer/vec.h"
+
+namespace nurbsrt {
+
+enum class Projection { perspective, orthographic };
+
+// What a user specifies. `width` x `height` is the image in pixels; the
+// orthographic view height (model units) is `ortho_height` (the contract's
+// `height` for orthographic cameras).
+struct CameraSpec {
+    Vec3 eye{0, 0, 1};
+    Vec3 target{0, 0, 0};
+    Vec3 up{0, 1, 0};
+    Projection projection = Projection::perspective;
+    double fov_deg = 40;        // vertical field of view, perspective
+    double ortho_height = 1;    // view height in model units, orthographic
+    int width = 512;
+    int height = 512;
+};
+
+struct Ray {
+    Vec3 origin;
+    Vec3 dir;  // unit length; hit = origin + t * dir
+};
+
+// Image-plane coordinates of the contract: sx in [-a, a] (a = W/H), sy in [-1, 1].
+struct ScreenPoint {
+    double sx = 0, sy = 0;
+};
+
+class Camera {
+public:
+    // Throws Error(invalid_argument) for a degenerate spec (eye == target, up
+    // parallel to the view direction, non-positive size/fov/height).
+    explicit Camera(const CameraSpec& spec);
+
+    const CameraSpec& spec() const { return spec_; }
+    int width() const { return spec_.width; }
+    int height() const { return spec_.height; }
+    bool perspective() const { return spec_.projection == Projection::perspective; }
+    Vec3 forward() const { return f_; }   // f
+    Vec3 right() const { return r_; }     // r
+    Vec3 up() const { return u_; }        // u = r x f
+    double aspect() const { return aspect_; }
+    double tan_half_fov() const { return tan_half_; }
+
+    // sx, sy of a continuous pixel position: column i + 0.5 is the centre of column i.
+    ScreenPoint screen(double px, double py) const {
+        return {(2.0 * px / spec_.width - 1.0) * aspect_, 1.0 - 2.0 * py / spec_.height};
+    }
+    // sx, sy of the centre of pixel (i, j): the contract's 0.5 offsets.
+    ScreenPoint pixel_screen(int i, int j) const { return screen(i + 0.5, j + 0.5); }
+
+    Ray ray(ScreenPoint s) const;
+    Ray pixel_ray(int i, int j) const { return ray(pixel_screen(i, j)); }
+
+    // The paper's projection to R^2 as a linear map on a homogeneous point
+    // P^w = (wx, wy, wz, w), with d = P^w.xyz - w * eye:
+    //   perspective:  X = r.d / tan(fov/2),  Y = u.d / tan(fov/2),  D = f.d,  4th = w
+    //                 -> X/D = sx, Y/D = sy, depth along f = D / w
+    //   orthographic: X = r.d / (h/2),       Y = u.d / (h/2),        D = w,    4th = f.d
+    //                 -> X/D = sx, Y/D = sy, depth along f = (f.d) / w = 4th / D
+    // (for orthographic D = w already carries the weight, so the 4th slot holds
+    // the depth numerator instead of repeating w). Being linear, it maps control
+    // points to control points: the projected surface is a NURBS surface with the
+    // same knots whose (X, Y, D) are the paper's (x, y, w) of eq. (8)-(11).
+    Vec4 project_h(Vec4 pw) const;
+
+    // Depth along f of a projected homogeneous point (any point of the projected surface).
+    double depth(Vec4 projected) const {
+        return perspective() ? projected.z / projected.w : projected.w / projected.z;
+    }
+    // Hit distance t (DESIGN.md) of a point on the ray through screen point s,
+    // from its depth along f: perspective t = depth / (f . dir); orthographic t = depth.
+    double hit_distance_from_depth(double depth_along_f, ScreenPoint s) const;
+
+    // Size in model units of one unit of image-plane residual at a given depth:
+    // perspective depth * tan(fov/2), orthographic h/2. Converts the `proposed`
+    // residual |F| (image-plane units) into model units.
+    double image_to_model_scale(double depth_along_f) const {
+        return perspective() ? depth_along_f * tan_half_ : 0.5 * spec_.ortho_height;
+    }
+
+    // OpenGL clip coordinates of a model point for the preliminary map, laid out
+    // so that GL pixel centres coincide with the contract's pixel rays: x_ndc = sx/a,
+    // y_ndc = sy (GL row 0 is the bottom row, i.e. contract row H-1), and depth in
+    // [near, far] along f mapped to [-1, 1].
+    Vec4 clip(Vec3 p, double near_depth, double far_depth) const;
+
+private:
+    CameraSpec spec_;
+    Vec3 f_, r_, u_;
+    double aspect_ = 1, tan_half_ = 0;
+};
+
+// The projected copy of a surface (same degrees and knots, control points mapped
+// by Camera::project_h). Made once per frame per patch.
+NurbsSurface project_surface(const Camera& camera, const NurbsSurface& s);
+
+// Named views fitted to a bounding box. View directions (from eye towards target,
+// model axes; Z is up for every view except top/bottom, whose up is +Y):
+//   front  looks along +Y (eye at -Y)     back   along -Y (eye at +Y)
+//   left   looks along +X (eye at -X)     right  along -X (eye at +X)
+//   top    looks along -Z (eye at +Z)     bottom along +Z (eye at -Z)
+//   iso    looks along (-1,-1,-1)/sqrt(3) (eye at +X+Y+Z), up +Z
+// Fit: target = box centre; perspective: the eye is moved back along the view
+// direction until all 8 box corners lie inside the frustum with a 5% margin;
+// orthographic: the view height is the smallest that holds all corners with a 5%
+// margin, and the eye plane sits one box diagonal before the centre.
+// `projection`, width and height are taken from `base`; returns the full spec.
+// Throws Error(invalid_argument) for an unknown name or an empty box.
+CameraSpec named_view(const std::string& name, const BBox& box, const CameraSpec& base);
+bool is_named_view(const std::string& name);
+
+}  // namespace nurbsrt

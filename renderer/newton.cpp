@@ -1,0 +1,195 @@
+// Newton iteration for ray/patch hits: the paper's projected step (eq. 9-11) and
+// Martin et al.'s two-plane step, with the shared termination rules (12)-(14).
+// See newton.h for the definitions.
+#include "renderer/newton.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace nurbsrt {
+
+const char* newton_method_name(NewtonMethod m) {
+    return m == NewtonMethod::proposed ? "proposed" : "martin";
+}
+
+const char* newton_status_name(NewtonStatus s) {
+    switch (s) {
+        case NewtonStatus::converged: return "converged";
+        case NewtonStatus::diverged: return "diverged";
+        case NewtonStatus::singular: return "singular";
+        case NewtonStatus::max_iterations: return "max_iterations";
+        case NewtonStatus::left_domain: return "left_domain";
+        case NewtonStatus::behind_eye: return "behind_eye";
+    }
+    return "unknown";
+}
+
+double default_newton_eps(const BBox& box) {
+    const double d = box.diagonal();
+    return 1e-9 * (d > 0 ? d : 1.0);
+}
+
+namespace {
+
+inline Vec3 xyz(Vec4 h) { return {h.x, h.y, h.z}; }
+
+// Clamp (u, v) into the box; returns true when it had to move.
+inline bool clamp_to_box(double& u, double& v, const UvBox& b) {
+    const double cu = std::clamp(u, b.u0, b.u1), cv = std::clamp(v, b.v0, b.v1);
+    const bool moved = cu != u || cv != v;
+    u = cu;
+    v = cv;
+    return moved;
+}
+
+// ||F|| of the projected system in model units (see newton.h, (12)).
+inline double proposed_residual(const Vec4& S, const Camera& cam, ScreenPoint s) {
+    const double fx = S.x / S.z - s.sx, fy = S.y / S.z - s.sy;
+    return std::sqrt(fx * fx + fy * fy) * cam.image_to_model_scale(std::abs(cam.depth(S)));
+}
+
+}  // namespace
+
+bool proposed_step(const SurfaceDerivs& d, ScreenPoint s, double eps_det, Step& out) {
+    // Columns P = (X, Y, D), P_u, P_v, R = (xR, yR, 1); det[a, b, c] = a . (b x c).
+    const Vec3 P = xyz(d.S), Pu = xyz(d.Su), Pv = xyz(d.Sv), R{s.sx, s.sy, 1.0};
+    const double M = dot(P, cross(Pu, Pv));           // (10) M   = det[P, P_u, P_v]
+    if (!(std::abs(M) > eps_det * length(P) * length(Pu) * length(Pv))) return false;  // (14)
+    const double MU = dot(R, cross(Pv, P));           // (10) M_U = det[P, R, P_v]
+    const double MV = dot(R, cross(P, Pu));           // (11) M_V = det[P, P_u, R]
+    const double k = P.z / M;                         // (9)  (du, dv) = (w / M) (M_U, M_V)
+    out = {k * MU, k * MV};
+    return true;
+}
+
+bool textbook_step(const SurfaceDerivs& d, ScreenPoint s, double eps_det, Step& out) {
+    const double X = d.S.x, Y = d.S.y, D = d.S.z, D2 = D * D;
+    // (7): J = d(X/D, Y/D)/d(u, v) by the quotient rule; F = (X/D - xR, Y/D - yR).
+    const double a = (d.Su.x * D - X * d.Su.z) / D2, b = (d.Sv.x * D - X * d.Sv.z) / D2;
+    const double c = (d.Su.y * D - Y * d.Su.z) / D2, e = (d.Sv.y * D - Y * d.Sv.z) / D2;
+    const double f1 = X / D - s.sx, f2 = Y / D - s.sy;
+    const double det = a * e - b * c;
+    if (!(std::abs(det) > eps_det * std::hypot(a, c) * std::hypot(b, e))) return false;
+    out = {-(e * f1 - b * f2) / det, -(-c * f1 + a * f2) / det};  // (6) -J^{-1} F
+    return true;
+}
+
+NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
+                             double u0, double v0, const UvBox& box, const NewtonParams& params) {
+    NewtonResult res;
+    double u = u0, v = v0;
+    clamp_to_box(u, v, box);
+    bool clamped_once = false;
+    SurfaceDerivs d = evaluate_d1(projected, u, v);
+    double r = proposed_residual(d.S, camera, s);
+    for (int it = 0;; ++it) {
+        res.u = u;
+        res.v = v;
+        res.residual = r;
+        res.iterations = it;
+        if (r < params.eps) {                                                  // (12)
+            res.t = camera.hit_distance_from_depth(camera.depth(d.S), s);
+            res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
+            return res;
+        }
+        if (it == params.max_iterations) {
+            res.status = NewtonStatus::max_iterations;
+            return res;
+        }
+        Step st;
+        if (!proposed_step(d, s, params.eps_det, st)) {                        // (14)
+            res.status = NewtonStatus::singular;
+            return res;
+        }
+        double un = u + st.du, vn = v + st.dv;                                 // (5)
+        if (clamp_to_box(un, vn, box)) {
+            if (clamped_once) {
+                res.status = NewtonStatus::left_domain;
+                return res;
+            }
+            clamped_once = true;
+        }
+        const SurfaceDerivs dn = evaluate_d1(projected, un, vn);
+        const double rn = proposed_residual(dn.S, camera, s);
+        if (!(rn <= r)) {                                                      // (13)
+            res.iterations = it + 1;
+            res.status = NewtonStatus::diverged;
+            return res;
+        }
+        u = un;
+        v = vn;
+        d = dn;
+        r = rn;
+    }
+}
+
+RayPlanes ray_planes(const Ray& ray) {
+    const Vec3 dir = ray.dir;
+    // Martin et al.: N1 from the two largest components of dir, so it is well defined.
+    Vec3 n1 = (std::abs(dir.x) > std::abs(dir.y) && std::abs(dir.x) > std::abs(dir.z))
+                  ? Vec3{dir.y, -dir.x, 0}
+                  : Vec3{0, dir.z, -dir.y};
+    n1 = normalize(n1);
+    const Vec3 n2 = normalize(cross(n1, dir));
+    return {n1, n2, -dot(n1, ray.origin), -dot(n2, ray.origin)};
+}
+
+NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
+                           const UvBox& box, const NewtonParams& params) {
+    const RayPlanes pl = ray_planes(ray);
+    NewtonResult res;
+    double u = u0, v = v0;
+    clamp_to_box(u, v, box);
+    bool clamped_once = false;
+    CartesianDerivs c = cartesian_d1(surface, u, v);
+    double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
+    double r = std::hypot(f1, f2);
+    for (int it = 0;; ++it) {
+        res.u = u;
+        res.v = v;
+        res.residual = r;
+        res.iterations = it;
+        if (r < params.eps) {                                                  // (12)
+            res.t = dot(c.P - ray.origin, ray.dir);
+            res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
+            return res;
+        }
+        if (it == params.max_iterations) {
+            res.status = NewtonStatus::max_iterations;
+            return res;
+        }
+        // J = [N1.C_u  N1.C_v; N2.C_u  N2.C_v] with the rational partials.
+        const double a = dot(pl.n1, c.Pu), b = dot(pl.n1, c.Pv);
+        const double cc = dot(pl.n2, c.Pu), e = dot(pl.n2, c.Pv);
+        const double det = a * e - b * cc;
+        if (!(std::abs(det) > params.eps_det * length(c.Pu) * length(c.Pv))) {  // (14)
+            res.status = NewtonStatus::singular;
+            return res;
+        }
+        double un = u - (e * f1 - b * f2) / det;                               // -J^{-1} F
+        double vn = v - (-cc * f1 + a * f2) / det;
+        if (clamp_to_box(un, vn, box)) {
+            if (clamped_once) {
+                res.status = NewtonStatus::left_domain;
+                return res;
+            }
+            clamped_once = true;
+        }
+        const CartesianDerivs cn = cartesian_d1(surface, un, vn);
+        const double g1 = dot(pl.n1, cn.P) + pl.d1, g2 = dot(pl.n2, cn.P) + pl.d2;
+        const double rn = std::hypot(g1, g2);
+        if (!(rn <= r)) {                                                      // (13)
+            res.iterations = it + 1;
+            res.status = NewtonStatus::diverged;
+            return res;
+        }
+        u = un;
+        v = vn;
+        c = cn;
+        f1 = g1;
+        f2 = g2;
+        r = rn;
+    }
+}
+
+}  // namespace nurbsrt

@@ -1,0 +1,71 @@
+// The preliminary map (PAPER.md "Preprocessing", eq. 4): every face's (u,v) mesh
+// is rasterized with OpenGL into a face-id buffer and a (u,v) buffer, so each
+// pixel gets the face it most likely hits and a start (u0, v0) for Newton.
+//
+// Rendering is offscreen with OSMesa (Mesa llvmpipe), OpenGL 4.5 core, into a
+// framebuffer object with GL_R32UI face ids (Face::index, 0 = background),
+// GL_RG32F (u, v) and GL_DEPTH_COMPONENT32F depth (STACK.md: these read back
+// exactly). The paper packs the patch number and u, v into 8-bit RGB channels;
+// here ids are 32-bit and u, v float by default, and MapPrecision::rgb8 reproduces
+// the paper's 8-bit quantization of eq. (4) on readback, for comparison.
+//
+// Geometry goes through Camera::clip, so GL pixel centres are exactly the
+// contract's pixel rays (row 0 of the map is the contract's top row j = 0).
+// Vertices are transformed to clip space on the CPU in double precision
+// (relative to the eye), so large model coordinates lose nothing before the
+// float conversion.
+//
+// Threads: a MapRenderer owns one OSMesa context and is used by one thread at a
+// time; render_preliminary_map() keeps one per calling thread (thread_local).
+// llvmpipe starts its own rasterizer threads per context; LP_NUM_THREADS (read
+// by Mesa at start-up) sets their number, 0 rasterizes in the calling thread.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "renderer/camera.h"
+#include "renderer/scene.h"
+
+namespace nurbsrt {
+
+enum class MapPrecision : uint8_t {
+    float32,  // u, v as interpolated by GL (float)
+    rgb8,     // u, v quantized to 8 bits of the face's parameter box (eq. 4)
+};
+const char* map_precision_name(MapPrecision p);  // "float32", "rgb8"
+
+struct PreliminaryMap {
+    int width = 0, height = 0;
+    std::vector<uint32_t> face;  // width * height, row-major, row 0 = top; 0 = background
+    std::vector<float> u, v;     // start parameters where face != 0
+    size_t index(int i, int j) const { return static_cast<size_t>(j) * width + i; }
+};
+
+class MapRenderer {
+public:
+    MapRenderer();   // creates the OSMesa context; throws Error(internal) on failure
+    ~MapRenderer();
+    MapRenderer(const MapRenderer&) = delete;
+    MapRenderer& operator=(const MapRenderer&) = delete;
+
+    PreliminaryMap render(const Scene& scene, const Camera& camera, MapPrecision precision);
+
+    // Triangles drawn by the last render (for statistics).
+    size_t last_triangles() const { return last_triangles_; }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    size_t last_triangles_ = 0;
+};
+
+// Renders with this thread's own MapRenderer (created on first use).
+PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera,
+                                      MapPrecision precision = MapPrecision::float32);
+
+// eq. (4): u0 = (u_max - u_min) g / 255 + u_min with g = round(255 (u - u_min) / (u_max - u_min)).
+float quantize_rgb8(float u, double lo, double hi);
+
+}  // namespace nurbsrt

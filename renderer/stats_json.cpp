@@ -1,0 +1,45 @@
+#include "renderer/stats_json.h"
+
+#include <nlohmann/json.hpp>
+
+namespace nurbsrt {
+
+nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& import, double encode_ms,
+                                 double total_ms) {
+    using nlohmann::json;
+    json histogram = json::object();
+    for (size_t k = 0; k < s.iteration_histogram.size(); ++k)
+        if (s.iteration_histogram[k]) histogram[std::to_string(k)] = s.iteration_histogram[k];
+    return {
+        {"method", s.method},
+        {"width", s.width},
+        {"height", s.height},
+        {"threads", s.threads},
+        {"faces", s.faces},
+        {"patches", s.patches},
+        {"map_triangles", s.map_triangles},
+        {"pixels_hit", s.pixels_hit},
+        {"newton",
+         {{"mean_iterations", s.mean_iterations},
+          {"iteration_histogram", histogram},
+          {"converged", s.converged},
+          {"diverged", s.diverged},
+          {"singular", s.singular},
+          {"max_iterations", s.max_iterations},
+          {"left_domain", s.left_domain},
+          {"behind_eye", s.behind_eye},
+          {"trimmed", s.trimmed},
+          {"fallback", s.fallback}}},
+        {"timings_ms",
+         {{"read", import.read_ms},
+          {"nurbs_convert", import.nurbs_convert_ms},
+          {"mesh", import.mesh_ms},
+          {"preliminary_map", s.preliminary_map_ms},
+          {"newton", s.newton_ms},
+          {"shade", s.shade_ms},
+          {"encode", encode_ms},
+          {"total", total_ms}}},
+    };
+}
+
+}  // namespace nurbsrt

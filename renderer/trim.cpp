@@ -1,0 +1,162 @@
+// Grid-accelerated even-odd trim test (see trim.h).
+#include "renderer/trim.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace nurbsrt {
+
+namespace {
+
+inline double orient(double ax, double ay, double bx, double by, double cx, double cy) {
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+}
+
+// Does the closed segment a-b overlap the closed box [x0,x1] x [y0,y1]?
+// (separating axes: the box's two axes and the segment's normal)
+bool segment_overlaps_box(double ax, double ay, double bx, double by, double x0, double y0, double x1, double y1) {
+    if (std::max(ax, bx) < x0 || std::min(ax, bx) > x1 || std::max(ay, by) < y0 || std::min(ay, by) > y1)
+        return false;
+    const double s0 = orient(ax, ay, bx, by, x0, y0), s1 = orient(ax, ay, bx, by, x1, y0);
+    const double s2 = orient(ax, ay, bx, by, x0, y1), s3 = orient(ax, ay, bx, by, x1, y1);
+    return !((s0 > 0 && s1 > 0 && s2 > 0 && s3 > 0) || (s0 < 0 && s1 < 0 && s2 < 0 && s3 < 0));
+}
+
+}  // namespace
+
+bool inside_even_odd_bruteforce(const std::vector<TrimLoop>& loops, Vec2 p) {
+    bool in = false;
+    for (const TrimLoop& loop : loops) {
+        const size_t n = loop.points.size();
+        for (size_t k = 0, l = n - 1; k < n; l = k++) {
+            const Vec2 a = loop.points[l], b = loop.points[k];
+            if ((a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y)) in = !in;
+        }
+    }
+    return in;
+}
+
+TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_side) {
+    double lo_x = HUGE_VAL, lo_y = HUGE_VAL, hi_x = -HUGE_VAL, hi_y = -HUGE_VAL;
+    for (const TrimLoop& loop : loops) {
+        const size_t n = loop.points.size();
+        if (n < 2) continue;
+        for (size_t k = 0, l = n - 1; k < n; l = k++) {
+            const Vec2 a = loop.points[l], b = loop.points[k];
+            if (a.x == b.x && a.y == b.y) continue;
+            edges_.push_back({a.x, a.y, b.x, b.y});
+            lo_x = std::min({lo_x, a.x, b.x});
+            hi_x = std::max({hi_x, a.x, b.x});
+            lo_y = std::min({lo_y, a.y, b.y});
+            hi_y = std::max({hi_y, a.y, b.y});
+        }
+    }
+    if (edges_.empty()) return;
+    // About 2 cells per edge, as square as the box allows. The box is grown by an
+    // odd fraction so that cell centres rarely coincide with exact CAD coordinates.
+    const double w0 = std::max(hi_x - lo_x, 1e-12), h0 = std::max(hi_y - lo_y, 1e-12);
+    // (Asymmetric, so the middle cell's centre is not the box's midpoint either.)
+    const double gx = 0.0123457 * w0 + 1e-12, gy = 0.0123457 * h0 + 1e-12;
+    u0_ = lo_x - gx;
+    v0_ = lo_y - 1.7071 * gy;
+    const double w = w0 + 2.4142 * gx, h = h0 + 2.7071 * gy;
+    const double cells = std::clamp(2.0 * edges_.size(), 1.0, double(max_cells_per_side) * max_cells_per_side);
+    nu_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(cells * w / h))), 1, max_cells_per_side);
+    nv_ = std::clamp(static_cast<int>(std::ceil(cells / nu_)), 1, max_cells_per_side);
+    du_ = w / nu_;
+    dv_ = h / nv_;
+
+    // Bin edges into the cells they overlap (two passes: count, then fill).
+    const size_t ncell = static_cast<size_t>(nu_) * nv_;
+    cell_start_.assign(ncell + 1, 0);
+    auto for_cells = [&](const Edge& e, auto&& fn) {
+        const int i0 = std::clamp(static_cast<int>((std::min(e.ax, e.bx) - u0_) / du_), 0, nu_ - 1);
+        const int i1 = std::clamp(static_cast<int>((std::max(e.ax, e.bx) - u0_) / du_), 0, nu_ - 1);
+        const int j0 = std::clamp(static_cast<int>((std::min(e.ay, e.by) - v0_) / dv_), 0, nv_ - 1);
+        const int j1 = std::clamp(static_cast<int>((std::max(e.ay, e.by) - v0_) / dv_), 0, nv_ - 1);
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+                const double x0 = u0_ + i * du_, y0 = v0_ + j * dv_;
+                // Slightly enlarged cell: floating-point cell assignment of the query never misses an edge.
+                const double ex = 1e-9 * du_, ey = 1e-9 * dv_;
+                if (segment_overlaps_box(e.ax, e.ay, e.bx, e.by, x0 - ex, y0 - ey, x0 + du_ + ex, y0 + dv_ + ey))
+                    fn(static_cast<size_t>(j) * nu_ + i);
+            }
+    };
+    for (const Edge& e : edges_) for_cells(e, [&](size_t c) { ++cell_start_[c + 1]; });
+    for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+    cell_edges_.resize(cell_start_[ncell]);
+    std::vector<uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (uint32_t k = 0; k < edges_.size(); ++k) for_cells(edges_[k], [&](size_t c) { cell_edges_[fill[c]++] = k; });
+
+    // Inside state of the cell centres: one scanline per grid row (even-odd with
+    // the same half-open rule as the brute-force test).
+    centre_inside_.assign(ncell, 0);
+    ref_.resize(ncell);
+    for (int j = 0; j < nv_; ++j)
+        for (int i = 0; i < nu_; ++i) ref_[static_cast<size_t>(j) * nu_ + i] = {u0_ + (i + 0.5) * du_, v0_ + (j + 0.5) * dv_};
+    std::vector<double> xs;
+    for (int j = 0; j < nv_; ++j) {
+        const double y = v0_ + (j + 0.5) * dv_;
+        xs.clear();
+        for (const Edge& e : edges_)
+            if ((e.ay > y) != (e.by > y)) xs.push_back(e.ax + (y - e.ay) * (e.bx - e.ax) / (e.by - e.ay));
+        std::sort(xs.begin(), xs.end());
+        size_t k = 0;
+        for (int i = 0; i < nu_; ++i) {
+            const double x = u0_ + (i + 0.5) * du_;
+            while (k < xs.size() && xs[k] <= x) ++k;
+            // crossings strictly right of x: xs.size() - k
+            centre_inside_[static_cast<size_t>(j) * nu_ + i] = (xs.size() - k) & 1;
+        }
+    }
+    // A reference point (nearly) on an edge of its cell would make the query's
+    // crossing count ambiguous: move it to another point of the cell, away from
+    // every edge, and classify it by brute force (rare: exact CAD coordinates).
+    const double tol = 1e-6 * std::min(du_, dv_);
+    auto near_edge = [&](size_t c, Vec2 q) {
+        for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+            const Edge& e = edges_[cell_edges_[k]];
+            const double ex = e.bx - e.ax, ey = e.by - e.ay, len2 = ex * ex + ey * ey;
+            const double s = std::clamp(((q.x - e.ax) * ex + (q.y - e.ay) * ey) / len2, 0.0, 1.0);
+            if (std::hypot(e.ax + s * ex - q.x, e.ay + s * ey - q.y) <= tol) return true;
+        }
+        return false;
+    };
+    static const double kAlt[][2] = {{0.3137, 0.6911}, {0.7219, 0.2683}, {0.1871, 0.1429}, {0.8377, 0.8621},
+                                     {0.4423, 0.3089}, {0.6047, 0.5813}};
+    for (int j = 0; j < nv_; ++j)
+        for (int i = 0; i < nu_; ++i) {
+            const size_t c = static_cast<size_t>(j) * nu_ + i;
+            if (!near_edge(c, ref_[c])) continue;
+            for (const auto& a : kAlt) {
+                const Vec2 q{u0_ + (i + a[0]) * du_, v0_ + (j + a[1]) * dv_};
+                if (near_edge(c, q)) continue;
+                ref_[c] = q;
+                centre_inside_[c] = inside_even_odd_bruteforce(loops, q);
+                break;
+            }
+        }
+}
+
+bool TrimTester::inside(Vec2 p) const {
+    if (edges_.empty()) return true;
+    const double fx = (p.x - u0_) / du_, fy = (p.y - v0_) / dv_;
+    if (!(fx >= 0 && fy >= 0 && fx < nu_ && fy < nv_)) return false;  // also NaN
+    const int i = static_cast<int>(fx), j = static_cast<int>(fy);
+    const size_t c = static_cast<size_t>(j) * nu_ + i;
+    const double cx = ref_[c].x, cy = ref_[c].y;
+    bool in = centre_inside_[c];
+    for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+        const Edge& e = edges_[cell_edges_[k]];
+        // Edge endpoints on opposite sides of the line centre->p (half-open: > 0 vs <= 0) ...
+        const bool sa = orient(cx, cy, p.x, p.y, e.ax, e.ay) > 0, sb = orient(cx, cy, p.x, p.y, e.bx, e.by) > 0;
+        if (sa == sb) continue;
+        // ... and centre and p on opposite sides of the edge's line.
+        const bool sc = orient(e.ax, e.ay, e.bx, e.by, cx, cy) > 0, sp = orient(e.ax, e.ay, e.bx, e.by, p.x, p.y) > 0;
+        if (sc != sp) in = !in;
+    }
+    return in;
+}
+
+}  // namespace nurbsrt

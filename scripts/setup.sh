@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package nurbsrt needs, then configures and builds it
+# (Release, Ninja) in ./build. Idempotent: a second run installs nothing and
+# only rebuilds what changed. Used by scripts/test.sh, scripts/serve.sh and the Dockerfile.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  cmake ninja-build pkg-config g++ git ca-certificates
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
+  libocct-data-exchange-dev libocct-ocaf-dev occt-misc libtbb-dev
+  libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
+  libsqlite3-dev sqlite3
+  python3 python3-pytest python3-requests python3-jsonschema python3-numpy
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${#missing[@]} package(s): ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  # A machine where 'apt-get update' never ran has no package lists: update first.
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+BUILD_DIR=${NURBSRT_BUILD_DIR:-build}
+BUILD_TYPE=${NURBSRT_BUILD_TYPE:-Release}
+if [ ! -f "$BUILD_DIR/build.ninja" ]; then
+  cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="$BUILD_TYPE" ${NURBSRT_CMAKE_ARGS:-}
+fi
+cmake --build "$BUILD_DIR" --parallel "$(nproc)"
+echo "setup: built $BUILD_DIR/nurbsrt"

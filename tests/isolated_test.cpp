@@ -1,0 +1,98 @@
+// Process-isolated import (importer/isolated.h): a crashing or hanging import
+// fails only its own call, with the right typed error, and the caller goes on.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+
+#include "importer/isolated.h"
+#include "renderer/error.h"
+#include "renderer/scene_io.h"
+
+namespace {
+
+const std::string kScrew = "/usr/share/opencascade/data/step/screw.step";
+
+nurbsrt::IsolationLimits limits(double seconds) {
+    nurbsrt::IsolationLimits l;
+    l.time_limit_s = seconds;
+    l.worker_executable = NURBSRT_BINARY;
+    return l;
+}
+
+nurbsrt::ErrorCode code_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const nurbsrt::Error& e) {
+        return e.code();
+    }
+    ADD_FAILURE() << "no nurbsrt::Error thrown";
+    return nurbsrt::ErrorCode::internal;
+}
+
+// setenv affects the child started by fork/exec; each test restores it.
+struct FaultHook {
+    explicit FaultHook(const char* what) { setenv("NURBSRT_IMPORT_WORKER_FAULT", what, 1); }
+    ~FaultHook() { unsetenv("NURBSRT_IMPORT_WORKER_FAULT"); }
+};
+
+TEST(IsolatedImport, SameSceneAsInProcess) {
+    const nurbsrt::Scene a = nurbsrt::import_isolated(kScrew, {}, limits(120));
+    const nurbsrt::Scene b = nurbsrt::import_file(kScrew, {});
+    ASSERT_EQ(a.faces.size(), b.faces.size());
+    // Import is deterministic, so the serialized geometry must match byte for byte
+    // once the (wall-clock) timings are equalized.
+    nurbsrt::Scene a2 = a, b2 = b;
+    a2.timings = b2.timings = {};
+    EXPECT_EQ(nurbsrt::serialize_scene(a2), nurbsrt::serialize_scene(b2));
+}
+
+TEST(IsolatedImport, ChildErrorsKeepTheirCode) {
+    EXPECT_EQ(code_of([] { nurbsrt::import_isolated("/nonexistent.step", {}, limits(60)); }),
+              nurbsrt::ErrorCode::io);
+    const std::string junk = (std::filesystem::temp_directory_path() / "nurbsrt-isolated-junk.igs").string();
+    std::ofstream(junk) << "this is not a CAD file\n";
+    EXPECT_EQ(code_of([&] { nurbsrt::import_isolated(junk, {}, limits(60)); }),
+              nurbsrt::ErrorCode::unsupported_format);
+    std::filesystem::remove(junk);
+}
+
+TEST(IsolatedImport, CrashFailsOnlyThisImport) {
+    {
+        FaultHook hook("crash");
+        EXPECT_EQ(code_of([] { nurbsrt::import_isolated(kScrew, {}, limits(60)); }),
+                  nurbsrt::ErrorCode::import_crashed);
+    }
+    EXPECT_EQ(nurbsrt::import_isolated(kScrew, {}, limits(120)).faces.size(), 10u);
+}
+
+TEST(IsolatedImport, HangIsKilledAtTheTimeLimit) {
+    FaultHook hook("hang");
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(code_of([] { nurbsrt::import_isolated(kScrew, {}, limits(1.0)); }),
+              nurbsrt::ErrorCode::import_timeout);
+    // Not a performance assertion: proves the child was killed rather than waited for.
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 30.0);
+}
+
+TEST(IsolatedImport, WorkerOptionsRoundTrip) {
+    nurbsrt::ImportOptions o;
+    o.mesh_relative_deflection = 0.0123;
+    o.mesh_angular_deflection = 0.5;
+    o.mesh_time_limit_s = 7;
+    o.trim_relative_tolerance = 3e-5;
+    o.read_attributes = false;
+    const nurbsrt::ImportOptions p = nurbsrt::import_options_from_args(nurbsrt::import_options_to_args(o));
+    EXPECT_EQ(p.mesh_relative_deflection, o.mesh_relative_deflection);
+    EXPECT_EQ(p.mesh_angular_deflection, o.mesh_angular_deflection);
+    EXPECT_EQ(p.mesh_time_limit_s, o.mesh_time_limit_s);
+    EXPECT_EQ(p.trim_relative_tolerance, o.trim_relative_tolerance);
+    EXPECT_EQ(p.read_attributes, o.read_attributes);
+    EXPECT_THROW(nurbsrt::import_options_from_args({"--bogus=1"}), nurbsrt::Error);
+    EXPECT_THROW(nurbsrt::import_options_from_args({"--mesh-angle=abc"}), nurbsrt::Error);
+}
+
+}  // namespace
