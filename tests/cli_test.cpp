@@ -122,3 +122,64 @@ TEST(Cli, ConvertRoundTripKeepsFaces) {
 }
 
 }  // namespace
+
+namespace {
+
+// `render` writes the image, the AOV EXR and the statistics object of the
+// DESIGN.md contract; a JSON scene file places copies of a model.
+TEST(CliRender, WritesImageAovAndContractStats) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-render-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string png = (dir / "s.png").string(), exr = (dir / "s.exr").string(),
+                      stats = (dir / "s.json").string();
+    const CliRun r = run_nurbsrt("render " + kScrew + " -o " + png + " --aov " + exr + " --stats " + stats +
+                                 " --width 96 --height 64 --view front -q");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_GT(fs::file_size(png), 100u);
+    EXPECT_GT(fs::file_size(exr), 100u);
+    std::ifstream in(stats);
+    const auto j = nlohmann::json::parse(in);
+    for (const char* k : {"method", "width", "height", "threads", "faces", "patches", "pixels_hit", "newton",
+                          "timings_ms"})
+        EXPECT_TRUE(j.contains(k)) << k;
+    for (const char* k : {"mean_iterations", "converged", "diverged", "singular", "max_iterations", "trimmed",
+                          "fallback"})
+        EXPECT_TRUE(j["newton"].contains(k)) << k;
+    for (const char* k : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"})
+        EXPECT_TRUE(j["timings_ms"].contains(k)) << k;
+    EXPECT_EQ(j["width"], 96);
+    EXPECT_EQ(j["faces"], 10);
+    EXPECT_GT(j["pixels_hit"].get<int>(), 500);  // a front view of the screw fills a good part of the frame
+    fs::remove_all(dir);
+}
+
+TEST(CliRender, SceneFilePlacesCopies) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-scene-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string scene = (dir / "two.json").string(), stats = (dir / "s.json").string();
+    std::ofstream(scene) << R"({"models": [{"file": ")" << kScrew << R"("},
+        {"file": ")" << kScrew << R"(", "translate": [60, 0, 0], "rotate_deg": [0, 0, 90], "scale": 0.5}]})";
+    const CliRun r = run_nurbsrt("render " + scene + " -o " + (dir / "two.png").string() + " --stats " + stats +
+                                 " --width 64 --height 48 -q");
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::ifstream in(stats);
+    EXPECT_EQ(nlohmann::json::parse(in)["faces"], 20);
+    std::ofstream(scene) << R"({"models": []})";
+    const CliRun bad = run_nurbsrt("render " + scene + " -o " + (dir / "x.png").string());
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("[invalid_argument]"), std::string::npos) << bad.err;
+    fs::remove_all(dir);
+}
+
+TEST(CliRender, RejectsBadOptions) {
+    EXPECT_EQ(run_nurbsrt("render " + kScrew + " -o /tmp/x.png --method newton").status, 2);
+    EXPECT_EQ(run_nurbsrt("render " + kScrew + " -o /tmp/x.png --width 0").status, 2);
+    const CliRun aov = run_nurbsrt("render " + kScrew + " -o /tmp/x.png --aov /tmp/x.png");
+    EXPECT_EQ(aov.status, 1);
+    EXPECT_NE(aov.err.find("--aov needs an .exr"), std::string::npos) << aov.err;
+    const CliRun eye = run_nurbsrt("render " + kScrew + " -o /tmp/x.png --eye 1,2");
+    EXPECT_EQ(eye.status, 1);
+    EXPECT_NE(eye.err.find("--eye must be x,y,z"), std::string::npos) << eye.err;
+}
+
+}  // namespace
