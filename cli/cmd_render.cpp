@@ -49,14 +49,14 @@ struct Args {
     bool quiet = false;
 };
 
-CameraSpec camera_from_args(const Args& a, const BBox& box) {
+CameraSpec camera_from_args(const Args& a, const Scene& scene) {
     CameraSpec base;
     base.width = a.width;
     base.height = a.height;
     base.projection = (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic
                                                                               : Projection::perspective;
     if (a.fov > 0) base.fov_deg = a.fov;
-    CameraSpec spec = named_view(a.view, box, base);
+    CameraSpec spec = fit_view(a.view, scene, base);
     // Explicit vectors override the named view's fit, one by one.
     if (!a.eye.empty()) spec.eye = parse_vec3(a.eye, "--eye");
     if (!a.target.empty()) spec.target = parse_vec3(a.target, "--target");
@@ -129,7 +129,7 @@ void add_render_command(CLI::App& app) {
         say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
             scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-        const Camera camera(camera_from_args(*a, scene.bbox));
+        const Camera camera(camera_from_args(*a, scene));
         RenderOptions options;
         options.method = a->method == "martin" ? NewtonMethod::martin : NewtonMethod::proposed;
         options.map_precision = a->map_precision == "rgb8" ? MapPrecision::rgb8 : MapPrecision::float32;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "renderer/scene.h"
 #include "renderer/vec.h"
@@ -119,6 +120,12 @@ NurbsSurface project_surface(const Camera& camera, const NurbsSurface& s);
 // `projection`, width and height are taken from `base`; returns the full spec.
 // Throws Error(invalid_argument) for an unknown name or an empty box.
 CameraSpec named_view(const std::string& name, const BBox& box, const CameraSpec& base);
+// The same fit for a set of points: the target is centred on the points' extent
+// across the view, so an oblique view of a flat part is not framed by its box.
+CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, const CameraSpec& base);
+// The named view fitted to the scene's geometry (its preliminary-map mesh
+// vertices; the box when there are none). What users of named views want.
+CameraSpec fit_view(const std::string& name, const Scene& scene, const CameraSpec& base);
 bool is_named_view(const std::string& name);
 
 }  // namespace nurbsrt
