@@ -20,7 +20,9 @@ int main(int argc, char** argv) {
     nurbsrt::cli::add_render_command(app);
     nurbsrt::cli::add_info_command(app);
     nurbsrt::cli::add_convert_command(app);
+    nurbsrt::cli::add_serve_command(app);
     nurbsrt::cli::add_import_worker_command(app);
+    nurbsrt::cli::add_convert_worker_command(app);
 
     try {
         app.parse(argc, argv);

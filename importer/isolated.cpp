@@ -120,27 +120,32 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args) {
     return o;
 }
 
-Scene import_isolated(const std::string& path, const ImportOptions& options,
-                      const IsolationLimits& limits) {
-    const std::string exe = limits.worker_executable.empty() ? self_executable() : limits.worker_executable;
-    std::string dir = limits.scratch_dir;
-    if (dir.empty()) {
-        const char* t = std::getenv("TMPDIR");
-        dir = (t && *t) ? t : "/tmp";
-    }
+namespace {
 
-    ScratchFiles scratch;
-    std::string tmpl = dir + "/nurbsrt-import-XXXXXX";
+std::string scratch_dir_of(const IsolationLimits& limits) {
+    if (!limits.scratch_dir.empty()) return limits.scratch_dir;
+    const char* t = std::getenv("TMPDIR");
+    return (t && *t) ? t : "/tmp";
+}
+
+// Creates the worker's result file (and names its ".error" companion).
+void make_scratch(ScratchFiles& scratch, const std::string& dir, const char* stem) {
+    std::string tmpl = dir + "/" + stem + "-XXXXXX";
     const int fd = mkstemp(tmpl.data());
     if (fd < 0) throw Error(ErrorCode::io, "cannot create scratch file in " + dir + ": " + std::strerror(errno));
     close(fd);
     scratch.scene = tmpl;
     scratch.error = tmpl + ".error";
+}
 
-    // Build argv before fork: the child may only make async-signal-safe calls.
-    std::vector<std::string> args = {exe, "import-worker", path, scratch.scene};
-    for (std::string& a : import_options_to_args(options)) args.push_back(std::move(a));
-    std::vector<char*> argv;
+// Runs `args` (argv[0] is the executable) under the limits. Returns normally
+// when the worker exited with status 0; otherwise throws the worker's typed
+// error (read from `error_path`), import_timeout, import_crashed or internal.
+// `what` names the work in messages ("import", "conversion").
+void run_worker(std::vector<std::string> args, const IsolationLimits& limits, const std::string& error_path,
+                const std::string& what, const std::string& subject) {
+    const std::string& exe = args.front();
+    std::vector<char*> argv;  // built before fork: the child may only make async-signal-safe calls
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
 
@@ -153,6 +158,11 @@ Scene import_isolated(const std::string& path, const ImportOptions& options,
         }
         rlimit no_core{0, 0};  // a crashing import must not litter the data directory with cores
         setrlimit(RLIMIT_CORE, &no_core);
+        // A server may block or ignore signals in its own threads; the worker starts clean.
+        sigset_t none;
+        sigemptyset(&none);
+        sigprocmask(SIG_SETMASK, &none, nullptr);
+        signal(SIGPIPE, SIG_DFL);
         // Do not leak the server's sockets and files into the worker.
         syscall(SYS_close_range, 3u, ~0u, 0u);
         execv(exe.c_str(), argv.data());
@@ -164,44 +174,105 @@ Scene import_isolated(const std::string& path, const ImportOptions& options,
         kill(pid, SIGKILL);
         waitpid(pid, &status, 0);
         std::ostringstream msg;
-        msg << "import of '" << path << "' did not finish within " << limits.time_limit_s << " s";
+        msg << what << " of '" << subject << "' did not finish within " << limits.time_limit_s << " s";
         throw Error(ErrorCode::import_timeout, msg.str());
     }
     if (WIFSIGNALED(status)) {
         const int sig = WTERMSIG(status);
         std::ostringstream msg;
-        msg << "import process died of signal " << sig << " (" << strsignal(sig) << ")";
+        msg << what << " process died of signal " << sig << " (" << strsignal(sig) << ")";
         if (sig == SIGKILL || sig == SIGABRT || sig == SIGSEGV)
             msg << "; the file may be malformed or exceed the memory limit of "
                 << (limits.memory_limit_bytes >> 20) << " MiB";
         throw Error(ErrorCode::import_crashed, msg.str());
     }
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    if (code == 0) return read_scene_file(scratch.scene);
-    if (code == 127) throw Error(ErrorCode::internal, "cannot start import worker " + exe);
+    if (code == 0) return;
+    if (code == 127) throw Error(ErrorCode::internal, "cannot start " + what + " worker " + exe);
 
-    const std::string err = read_small_file(scratch.error);
+    const std::string err = read_small_file(error_path);
     const size_t nl = err.find('\n');
     if (nl == std::string::npos) {
         // No typed error written: the worker failed before or while writing it
         // (std::bad_alloc under the memory limit ends up here too).
         throw Error(ErrorCode::import_crashed,
-                    "import process exited with status " + std::to_string(code) + " without a result");
+                    what + " process exited with status " + std::to_string(code) + " without a result");
     }
     throw Error(error_code_from_name(err.substr(0, nl)), err.substr(nl + 1));
 }
 
-int run_import_worker(const std::string& in_path, const std::string& out_path,
-                      const ImportOptions& options) {
-    // Test hook: lets integration tests prove that a dying or hanging import
-    // fails only its own request. Read only here, in the worker process.
+// Test hook: lets integration tests prove that a dying or hanging worker fails
+// only its own request. Read only in worker processes.
+void apply_fault_hook() {
     if (const char* fault = std::getenv("NURBSRT_IMPORT_WORKER_FAULT")) {
         if (std::strcmp(fault, "crash") == 0) raise(SIGSEGV);
         if (std::strcmp(fault, "hang") == 0) for (;;) pause();
     }
+}
+
+void write_error_file(const std::string& path, ErrorCode code, const std::string& message) {
+    std::ofstream e(path, std::ios::binary | std::ios::trunc);
+    e << error_code_name(code) << '\n' << message;
+}
+
+}  // namespace
+
+Scene import_isolated(const std::string& path, const ImportOptions& options,
+                      const IsolationLimits& limits) {
+    const std::string exe = limits.worker_executable.empty() ? self_executable() : limits.worker_executable;
+    ScratchFiles scratch;
+    make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-import");
+    std::vector<std::string> args = {exe, "import-worker", path, scratch.scene};
+    for (std::string& a : import_options_to_args(options)) args.push_back(std::move(a));
+    run_worker(std::move(args), limits, scratch.error, "import", path);
+    return read_scene_file(scratch.scene);
+}
+
+ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
+                               const IsolationLimits& limits) {
+    const std::string exe = limits.worker_executable.empty() ? self_executable() : limits.worker_executable;
+    ScratchFiles scratch;  // here: the worker's report (and its error file)
+    make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-convert");
+    run_worker({exe, "convert-worker", in_path, out_path, scratch.scene}, limits, scratch.error, "conversion",
+               in_path);
+    std::istringstream in(read_small_file(scratch.scene));
+    ConvertReport r;
+    int in_format = 0, out_format = 0;
+    if (!(in >> in_format >> out_format >> r.faces >> r.read_ms >> r.write_ms) || in_format < 0 || in_format > 2 ||
+        out_format < 0 || out_format > 2)
+        throw Error(ErrorCode::internal, "conversion worker wrote no valid report");
+    r.in_format = static_cast<CadFormat>(in_format);
+    r.out_format = static_cast<CadFormat>(out_format);
+    return r;
+}
+
+int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path) {
+    apply_fault_hook();
+    const std::string error_path = report_path + ".error";
+    try {
+        const ConvertReport r = convert_file(in_path, out_path);
+        std::ofstream out(report_path, std::ios::binary | std::ios::trunc);
+        out.precision(17);
+        out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' ' << r.faces << ' '
+            << r.read_ms << ' ' << r.write_ms << '\n';
+        if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");
+        return 0;
+    } catch (const Error& e) {
+        write_error_file(error_path, e.code(), e.what());
+    } catch (const std::bad_alloc&) {
+        write_error_file(error_path, ErrorCode::limit_exceeded,
+                         "conversion ran out of memory (memory limit of the conversion process)");
+    } catch (const std::exception& e) {
+        write_error_file(error_path, ErrorCode::internal, e.what());
+    }
+    return 1;
+}
+
+int run_import_worker(const std::string& in_path, const std::string& out_path,
+                      const ImportOptions& options) {
+    apply_fault_hook();
     auto write_error = [&](ErrorCode code, const std::string& message) {
-        std::ofstream e(out_path + ".error", std::ios::binary | std::ios::trunc);
-        e << error_code_name(code) << '\n' << message;
+        write_error_file(out_path + ".error", code, message);
     };
     try {
         const Scene scene = import_file(in_path, options);

@@ -28,6 +28,11 @@ struct IsolationLimits {
 Scene import_isolated(const std::string& path, const ImportOptions& options,
                       const IsolationLimits& limits = {});
 
+// Runs convert_file(in_path, out_path) in a child process (`nurbsrt
+// convert-worker IN OUT REPORT`) under the same limits, with the same errors.
+ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
+                               const IsolationLimits& limits = {});
+
 // The command-line arguments that carry `options` to the worker, and their
 // parser (used by the import-worker subcommand); kept together so they cannot drift.
 std::vector<std::string> import_options_to_args(const ImportOptions& options);
@@ -37,5 +42,9 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args);
 // the error to OUT + ".error" (code name, newline, message). Returns the exit status.
 int run_import_worker(const std::string& in_path, const std::string& out_path,
                       const ImportOptions& options);
+
+// Entry point of the conversion worker: converts IN to OUT and writes a one-line
+// report to REPORT, or the error to REPORT + ".error". Returns the exit status.
+int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path);
 
 }  // namespace nurbsrt

@@ -14,6 +14,9 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::corrupt_scene: return "corrupt_scene";
         case ErrorCode::invalid_argument: return "invalid_argument";
         case ErrorCode::limit_exceeded: return "limit_exceeded";
+        case ErrorCode::not_found: return "not_found";
+        case ErrorCode::overloaded: return "overloaded";
+        case ErrorCode::render_timeout: return "render_timeout";
         case ErrorCode::internal: return "internal";
     }
     return "internal";  // out-of-range value cast to ErrorCode

@@ -19,6 +19,10 @@ enum class ErrorCode {
     corrupt_scene,       // serialized scene is truncated, has a bad header or checksum
     invalid_argument,    // a parameter out of range (camera, size, options)
     limit_exceeded,      // a configured limit (pixels, faces, bytes) was exceeded
+    // Service-level conditions (server/): every HTTP problem carries an ErrorCode name.
+    not_found,           // no such route or resource
+    overloaded,          // the work queue is full; retry later
+    render_timeout,      // a render exceeded its time limit
     internal,            // a bug: should never reach a user
 };
 

@@ -1,0 +1,64 @@
+// nurbsrt serve: the HTTP service (server/). Every flag can also be set by an
+// environment variable NURBSRT_<FLAG> (a flag on the command line wins).
+#include <CLI/CLI.hpp>
+
+#include "cli/commands.h"
+#include "server/server.h"
+
+namespace nurbsrt::cli {
+
+void add_serve_command(CLI::App& app) {
+    auto c = std::make_shared<server::ServerConfig>();
+    auto upload_mb = std::make_shared<double>(static_cast<double>(c->max_upload_bytes) / (1 << 20));
+    auto import_memory_mb = std::make_shared<double>(static_cast<double>(c->import_memory_bytes >> 20));
+    auto cache_mb = std::make_shared<double>(static_cast<double>(c->cache_bytes >> 20));
+    auto* cmd = app.add_subcommand(
+        "serve",
+        "Run the HTTP service: POST /v1/renders, POST /v1/conversions, GET /healthz,\n"
+        "/readyz, /metrics, /v1/openapi.json (the API document). Logs one JSON line per\n"
+        "request on stderr. Every option can also be set by the environment variable\n"
+        "shown, e.g. NURBSRT_PORT=9000. Stop with SIGINT or SIGTERM.\n"
+        "Example: nurbsrt serve --host 127.0.0.1 --port 8080 --data-dir ./data");
+    cmd->add_option("--host", c->host, "address to listen on")->envname("NURBSRT_HOST")->capture_default_str();
+    cmd->add_option("--port", c->port, "TCP port (0: any free port, see --port-file)")
+        ->envname("NURBSRT_PORT")->check(CLI::Range(0, 65535))->capture_default_str();
+    cmd->add_option("--port-file", c->port_file, "write the bound port to this file once listening")
+        ->envname("NURBSRT_PORT_FILE");
+    cmd->add_option("--data-dir", c->data_dir, "data directory (uploads are staged in DATA_DIR/tmp)")
+        ->envname("NURBSRT_DATA_DIR")->capture_default_str();
+    cmd->add_option("--workers", c->workers, "renders/conversions running at once")
+        ->envname("NURBSRT_WORKERS")->check(CLI::Range(1, 256))->capture_default_str();
+    cmd->add_option("--max-queue", c->max_queue, "requests waiting for a worker; beyond: 503 + Retry-After")
+        ->envname("NURBSRT_MAX_QUEUE")->check(CLI::Range(0, 10000))->capture_default_str();
+    cmd->add_option("--queue-timeout", c->queue_timeout_s, "longest wait for a worker, seconds; then 503")
+        ->envname("NURBSRT_QUEUE_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--retry-after", c->retry_after_s, "Retry-After seconds on 503")
+        ->envname("NURBSRT_RETRY_AFTER")->check(CLI::Range(1, 3600))->capture_default_str();
+    cmd->add_option("--render-threads", c->render_threads, "threads per render (0: all cores)")
+        ->envname("NURBSRT_RENDER_THREADS")->check(CLI::Range(0, 1024))->capture_default_str();
+    cmd->add_option("--max-upload-mb", *upload_mb, "largest upload, MiB (413 beyond)")
+        ->envname("NURBSRT_MAX_UPLOAD_MB")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--max-dimension", c->max_dimension, "largest image width or height, pixels")
+        ->envname("NURBSRT_MAX_DIMENSION")->check(CLI::Range(1, 16384))->capture_default_str();
+    cmd->add_option("--max-pixels", c->max_pixels, "largest image, width x height")
+        ->envname("NURBSRT_MAX_PIXELS")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--max-faces", c->max_faces, "most faces a rendered model may have")
+        ->envname("NURBSRT_MAX_FACES")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--render-timeout", c->render_timeout_s, "time limit of a render, seconds (504 beyond)")
+        ->envname("NURBSRT_RENDER_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--import-timeout", c->import_timeout_s, "time limit of an import or conversion, seconds")
+        ->envname("NURBSRT_IMPORT_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--import-memory-mb", *import_memory_mb, "memory limit of an import/conversion process, MiB")
+        ->envname("NURBSRT_IMPORT_MEMORY_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--cache-mb", *cache_mb, "scene cache capacity, MiB (0: no cache)")
+        ->envname("NURBSRT_CACHE_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->callback([c, upload_mb, import_memory_mb, cache_mb] {
+        c->max_upload_bytes = static_cast<size_t>(*upload_mb * (1 << 20));
+        c->import_memory_bytes = static_cast<size_t>(*import_memory_mb * (1 << 20));
+        c->cache_bytes = static_cast<size_t>(*cache_mb * (1 << 20));
+        const int rc = server::run_server(*c);
+        if (rc != 0) std::exit(rc);
+    });
+}
+
+}  // namespace nurbsrt::cli

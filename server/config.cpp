@@ -1,0 +1,25 @@
+#include "server/config.h"
+
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+
+void ServerConfig::validate() const {
+    auto fail = [](const std::string& what) { throw Error(ErrorCode::invalid_argument, what); };
+    if (host.empty()) fail("host must not be empty");
+    if (port < 0 || port > 65535) fail("port must be in 0..65535");
+    if (data_dir.empty()) fail("data dir must not be empty");
+    if (workers < 1 || workers > 256) fail("workers must be in 1..256");
+    if (max_queue < 0 || max_queue > 10000) fail("max queue must be in 0..10000");
+    if (!(queue_timeout_s > 0)) fail("queue timeout must be positive");
+    if (retry_after_s < 1) fail("retry-after must be at least 1 s");
+    if (render_threads < 0) fail("render threads must be >= 0");
+    if (max_upload_bytes < 1) fail("max upload size must be positive");
+    if (max_dimension < 1 || max_dimension > 16384) fail("max dimension must be in 1..16384");
+    if (max_pixels < 1) fail("max pixels must be positive");
+    if (max_faces < 1) fail("max faces must be positive");
+    if (!(render_timeout_s > 0)) fail("render timeout must be positive");
+    if (!(import_timeout_s > 0)) fail("import timeout must be positive");
+}
+
+}  // namespace nurbsrt::server

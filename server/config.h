@@ -1,0 +1,39 @@
+// Configuration of `nurbsrt serve`: where it listens, where it keeps data, and
+// every limit. Set by command-line flags or NURBSRT_* environment variables
+// (cli/cmd_serve.cpp binds both); validate() rejects nonsense before start.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace nurbsrt::server {
+
+struct ServerConfig {
+    std::string host = "127.0.0.1";
+    int port = 8080;                 // 0: any free port (see port_file)
+    std::string port_file;           // when set, the bound port is written there once listening
+    std::string data_dir = "data";   // private temp dir for uploads lives in DATA_DIR/tmp
+
+    // Work: renders and conversions admitted at once, and waiting for a slot.
+    int workers = 2;                 // concurrent renders/conversions
+    int max_queue = 8;               // requests waiting for a worker; beyond -> 503
+    double queue_timeout_s = 30;     // longest wait for a worker; then 503
+    int retry_after_s = 2;           // Retry-After on 503
+    int render_threads = 0;          // threads per render (0: all cores)
+
+    // Limits, all checked before work starts.
+    size_t max_upload_bytes = size_t(64) << 20;
+    int max_dimension = 8192;        // width and height each
+    long long max_pixels = 16LL << 20;
+    size_t max_faces = 100000;
+    double render_timeout_s = 120;   // the render itself (Newton, map, shading)
+    double import_timeout_s = 120;   // import / conversion child process, wall clock
+    size_t import_memory_bytes = size_t(4) << 30;
+
+    size_t cache_bytes = size_t(512) << 20;  // scene cache capacity (0: no cache)
+
+    // Throws nurbsrt::Error(invalid_argument) with a message naming the setting.
+    void validate() const;
+};
+
+}  // namespace nurbsrt::server

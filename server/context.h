@@ -1,0 +1,28 @@
+// What every handler shares: the configuration, the admission gate, the scene
+// cache, the metrics and the scratch directory. Free of HTTP and JSON headers.
+#pragma once
+
+#include <string_view>
+
+#include "server/admission.h"
+#include "server/config.h"
+#include "server/metrics.h"
+#include "server/scene_cache.h"
+#include "server/scratch.h"
+
+namespace nurbsrt::server {
+
+struct ServerContext {
+    explicit ServerContext(const ServerConfig& c)
+        : config(c), gate(c.workers, c.max_queue), cache(c.cache_bytes), scratch(c.data_dir) {}
+    const ServerConfig config;
+    AdmissionGate gate;
+    SceneCache cache;
+    Metrics metrics;
+    ScratchDir scratch;
+};
+
+// The OpenAPI document, embedded at build time from api_schema/openapi.json.
+std::string_view openapi_document();
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,95 @@
+#include "server/http_util.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+
+#include "server/problem.h"
+
+namespace nurbsrt::server {
+namespace {
+
+struct ThreadNote {
+    bool valid = false;
+    std::chrono::steady_clock::time_point start;
+    std::string request_id, code;
+};
+thread_local ThreadNote t_note;
+
+std::string lower(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+}  // namespace
+
+std::string request_id(const httplib::Response& res) { return res.get_header_value("X-Request-Id"); }
+
+void note_request_start(const std::string& id) {
+    t_note = ThreadNote{true, std::chrono::steady_clock::now(), id, ""};
+}
+
+void note_problem_code(const std::string& code) { t_note.code = code; }
+
+RequestNote take_request_note() {
+    RequestNote n;
+    if (t_note.valid) {
+        n.valid = true;
+        n.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_note.start).count();
+        n.code = t_note.code;
+    }
+    t_note = ThreadNote{};
+    return n;
+}
+
+void send_problem(httplib::Response& res, ErrorCode code, const std::string& detail, int retry_after_s) {
+    const Problem p = make_problem(code, detail, request_id(res));
+    res.status = p.status;
+    if (code == ErrorCode::overloaded && retry_after_s > 0) res.set_header("Retry-After", std::to_string(retry_after_s));
+    res.set_content(p.body, kProblemContentType);
+    note_problem_code(error_code_name(code));
+}
+
+bool wants_json(const httplib::Request& req) {
+    return lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
+}
+
+Upload read_upload(const httplib::Request& req) {
+    using nlohmann::json;
+    json options = json::object();
+    for (const auto& [k, v] : req.params) options[k] = v;
+
+    Upload up;
+    if (req.is_multipart_form_data()) {
+        const auto file = req.files.find("file");
+        if (file == req.files.end())
+            throw Error(ErrorCode::invalid_argument, "multipart upload without a 'file' part");
+        up.bytes = &file->second.content;
+        if (const auto part = req.files.find("options"); part != req.files.end()) {
+            const json o = json::parse(part->second.content, nullptr, false);
+            if (o.is_discarded() || !o.is_object())
+                throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
+            options.merge_patch(o);
+        }
+        for (const auto& [name, part] : req.files)
+            if (name != "file" && name != "options")
+                throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
+    } else {
+        const std::string type = lower(req.get_header_value("Content-Type"));
+        const std::string base = type.substr(0, type.find(';'));
+        static const char* accepted[] = {"",           "application/octet-stream", "model/step", "model/iges",
+                                         "application/step", "application/iges", "application/p21"};
+        bool ok = false;
+        for (const char* a : accepted) ok = ok || base == a;
+        if (!ok)
+            throw Error(ErrorCode::unsupported_format,
+                        "request body of type '" + base.substr(0, 64) +
+                            "': send the STEP/IGES file raw (application/octet-stream, model/step, model/iges) "
+                            "or as the 'file' part of multipart/form-data");
+        up.bytes = &req.body;
+    }
+    up.options_json = options.dump();
+    return up;
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,45 @@
+// Helpers shared by the route handlers (server/*.cpp only: this header pulls
+// in httplib.h): request ids, problem responses, content negotiation, and
+// reading an upload (multipart `file` + `options` part, or a raw body).
+#pragma once
+
+#include <httplib.h>
+
+#include <map>
+#include <string>
+
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+
+// The request id of the request being handled (set before routing).
+std::string request_id(const httplib::Response& res);
+
+// Per-request bookkeeping of the handling thread for the request log
+// (cpp-httplib runs a request's pre-routing, handler and logger on one thread).
+void note_request_start(const std::string& request_id);
+void note_problem_code(const std::string& code);
+struct RequestNote {
+    bool valid = false;
+    double elapsed_s = 0;
+    std::string code;
+};
+RequestNote take_request_note();
+
+// Fills `res` with the problem+json body and status for `code` (plus
+// Retry-After for overloaded).
+void send_problem(httplib::Response& res, ErrorCode code, const std::string& detail, int retry_after_s = 0);
+
+// True when the client asked for JSON (Accept contains application/json).
+bool wants_json(const httplib::Request& req);
+
+struct Upload {
+    const std::string* bytes = nullptr;  // the file's content (points into the request)
+    std::string options_json;            // JSON object text: query parameters overlaid by the options part
+};
+// Throws Error(invalid_argument) for a multipart body without `file`, or a bad
+// options part; Error(unsupported_format) for a raw body whose Content-Type is
+// not a CAD or octet-stream type. Query parameter values are passed as strings.
+Upload read_upload(const httplib::Request& req);
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,46 @@
+// Prometheus metrics of the service (text exposition format 0.0.4):
+// requests by route and status, request latency and render stage histograms,
+// import failures by error code, scene cache hits and misses. Thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace nurbsrt::server {
+
+class Metrics {
+public:
+    void observe_request(const std::string& route, int status, double seconds);
+    void observe_stage(const std::string& stage, double seconds);
+    void count_import_failure(const std::string& code);
+    void count_cache(bool hit);
+
+    // Gauges are sampled by the caller when the text is produced.
+    struct Gauges {
+        int active = 0, queued = 0, max_active = 0, max_queued = 0;
+        size_t cache_bytes = 0, cache_entries = 0, cache_capacity = 0;
+    };
+    std::string exposition(const Gauges& g) const;
+
+private:
+    struct Histogram {
+        std::vector<uint64_t> buckets;  // cumulative counts are computed on output
+        uint64_t count = 0;
+        double sum = 0;
+    };
+    static void observe(Histogram& h, const std::vector<double>& bounds, double v);
+    static void write_histogram(std::string& out, const std::string& name, const std::string& labels,
+                                const Histogram& h, const std::vector<double>& bounds);
+
+    mutable std::mutex m_;
+    std::map<std::pair<std::string, int>, uint64_t> requests_;
+    std::map<std::string, Histogram> latency_, stages_;
+    std::map<std::string, uint64_t> import_failures_;
+    uint64_t cache_hits_ = 0, cache_misses_ = 0;
+};
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,160 @@
+#include "server/render_options.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
+
+// Numbers may arrive as JSON numbers or (from query parameters) as strings.
+double number(const json& v, const std::string& key) {
+    if (v.is_number()) return v.get<double>();
+    if (v.is_string()) {
+        const std::string s = v.get<std::string>();
+        char* end = nullptr;
+        const double d = std::strtod(s.c_str(), &end);
+        if (!s.empty() && end && *end == '\0' && std::isfinite(d)) return d;
+    }
+    bad("option '" + key + "' must be a number");
+}
+
+int integer(const json& v, const std::string& key) {
+    const double d = number(v, key);
+    if (d != std::floor(d) || d < -2147483648.0 || d > 2147483647.0) bad("option '" + key + "' must be an integer");
+    return static_cast<int>(d);
+}
+
+std::string text(const json& v, const std::string& key) {
+    if (!v.is_string()) bad("option '" + key + "' must be a string");
+    return v.get<std::string>();
+}
+
+Vec3 vec3(const json& v, const std::string& key) {
+    Vec3 r;
+    if (v.is_array() && v.size() == 3 && v[0].is_number() && v[1].is_number() && v[2].is_number()) {
+        r = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+    } else if (v.is_string()) {
+        const std::string s = v.get<std::string>();
+        char tail = 0;
+        if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &r.x, &r.y, &r.z, &tail) != 3) bad("option '" + key + "' must be x,y,z");
+    } else {
+        bad("option '" + key + "' must be an array of 3 numbers");
+    }
+    if (!std::isfinite(r.x) || !std::isfinite(r.y) || !std::isfinite(r.z)) bad("option '" + key + "' must be finite");
+    return r;
+}
+
+std::string one_of(const json& v, const std::string& key, const std::set<std::string>& allowed) {
+    const std::string s = text(v, key);
+    if (!allowed.count(s)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        bad("option '" + key + "' must be one of: " + list);
+    }
+    return s;
+}
+
+void camera_field(RenderRequest& r, const std::string& key, const json& v) {
+    if (key == "eye") r.eye = vec3(v, key);
+    else if (key == "target") r.target = vec3(v, key);
+    else if (key == "up") r.up = vec3(v, key);
+    else if (key == "projection")
+        r.projection = one_of(v, key, {"perspective", "orthographic"}) == "orthographic" ? Projection::orthographic
+                                                                                         : Projection::perspective;
+    else if (key == "fov_deg") {
+        const double f = number(v, key);
+        if (!(f > 0 && f < 180)) bad("option 'fov_deg' must be in (0, 180)");
+        r.fov_deg = f;
+    } else if (key == "ortho_height") {
+        const double h = number(v, key);
+        if (!(h > 0)) bad("option 'ortho_height' must be positive");
+        r.ortho_height = h;
+        r.projection = Projection::orthographic;
+    } else if (key == "view") {
+        r.view = one_of(v, key, {"iso", "front", "back", "left", "right", "top", "bottom"});
+    } else {
+        bad("unknown camera option '" + key.substr(0, 64) + "'");
+    }
+}
+
+json parse_object(const std::string& options_json) {
+    const json o = json::parse(options_json, nullptr, false);
+    if (o.is_discarded() || !o.is_object()) bad("options must be a JSON object");
+    return o;
+}
+
+}  // namespace
+
+RenderRequest parse_render_options(const std::string& options_json) {
+    const json o = parse_object(options_json);
+    RenderRequest r;
+    for (const auto& [key, v] : o.items()) {
+        if (key == "width" || key == "height") {
+            const int n = integer(v, key);
+            if (n < 1) bad("option '" + key + "' must be at least 1");
+            (key == "width" ? r.width : r.height) = n;
+        } else if (key == "method") {
+            r.method = one_of(v, key, {"proposed", "martin"});
+        } else if (key == "map_precision") {
+            r.map_precision = one_of(v, key, {"float", "rgb8"});
+        } else if (key == "format") {
+            const std::string f = one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"});
+            if (f == "png") r.format = {"png", ".png", "image/png"};
+            else if (f == "jpeg" || f == "jpg") r.format = {"jpeg", ".jpg", "image/jpeg"};
+            else if (f == "tiff" || f == "tif") r.format = {"tiff", ".tif", "image/tiff"};
+            else r.format = {"exr", ".exr", "image/x-exr"};
+        } else if (key == "background") {
+            const Vec3 b = vec3(v, key);
+            if (b.x < 0 || b.x > 1 || b.y < 0 || b.y > 1 || b.z < 0 || b.z > 1)
+                bad("option 'background' must be r,g,b in [0,1]");
+            r.background = b;
+        } else if (key == "camera") {
+            if (!v.is_object()) bad("option 'camera' must be an object");
+            for (const auto& [ck, cv] : v.items()) camera_field(r, ck, cv);
+        } else {
+            // Flat camera fields (query parameters): view, eye, target, up, projection, fov_deg, ortho_height.
+            camera_field(r, key, v);
+        }
+    }
+    return r;
+}
+
+CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
+    CameraSpec base;
+    base.width = r.width;
+    base.height = r.height;
+    base.projection = r.projection;
+    if (r.fov_deg) base.fov_deg = *r.fov_deg;
+    CameraSpec spec = fit_view(r.view, scene, base);
+    if (r.eye) spec.eye = *r.eye;
+    if (r.target) spec.target = *r.target;
+    if (r.up) spec.up = *r.up;
+    if (r.ortho_height) spec.ortho_height = *r.ortho_height;
+    return spec;
+}
+
+std::string parse_conversion_format(const std::string& options_json) {
+    const json o = parse_object(options_json);
+    std::string format;
+    for (const auto& [key, v] : o.items()) {
+        if (key != "format") bad("unknown conversion option '" + key.substr(0, 64) + "'");
+        format = text(v, key);
+    }
+    if (format.empty()) bad("option 'format' is required (step or iges)");
+    if (format == "step" || format == "stp") return "step";
+    if (format == "iges" || format == "igs") return "iges";
+    if (format == "stl" || format == "glb" || format == "gltf" || format == "nurbs-json")
+        throw Error(ErrorCode::unsupported_format, "output format '" + format + "' is not available yet");
+    bad("option 'format' must be step or iges");
+}
+
+}  // namespace nurbsrt::server

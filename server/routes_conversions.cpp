@@ -1,0 +1,79 @@
+// POST /v1/conversions: one synchronous STEP <-> IGES conversion, run in a
+// child process (importer/isolated.h) under the import time and memory limits.
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+
+#include "importer/importer.h"
+#include "importer/isolated.h"
+#include "renderer/error.h"
+#include "server/base64.h"
+#include "server/context.h"
+#include "server/http_util.h"
+#include "server/render_options.h"
+#include "server/routes.h"
+#include "server/work.h"
+
+namespace nurbsrt::server {
+namespace {
+
+void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Upload upload = read_upload(req);
+    const std::string format = parse_conversion_format(upload.options_json);
+    const std::string& bytes = *upload.bytes;
+    if (bytes.empty()) throw Error(ErrorCode::invalid_argument, "empty upload: send a STEP or IGES file");
+    if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
+        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
+
+    auto ticket = admit(ctx);
+    const TempFile in = ctx.scratch.write("upload", ".cad", bytes);
+    const TempFile out = ctx.scratch.create("converted", format == "step" ? ".step" : ".igs");
+    ConvertReport report;
+    try {
+        report = convert_isolated(in.path(), out.path(), isolation_limits(ctx));
+    } catch (const Error& e) {
+        ctx.metrics.count_import_failure(error_code_name(e.code()));
+        throw;
+    }
+    const std::string data = read_file_bytes(out.path());
+    ticket.reset();
+    const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    const std::string content_type = format == "step" ? "model/step" : "model/iges";
+    char timing[160];
+    std::snprintf(timing, sizeof timing, "read;dur=%.3f, write;dur=%.3f, total;dur=%.3f", report.read_ms,
+                  report.write_ms, total_ms);
+    res.set_header("Server-Timing", timing);
+    if (wants_json(req)) {
+        const nlohmann::json body = {{"request_id", request_id(res)},
+                                     {"input_format", format_name(report.in_format)},
+                                     {"output_format", format_name(report.out_format)},
+                                     {"faces", report.faces},
+                                     {"content_type", content_type},
+                                     {"data_base64", base64_encode(data)},
+                                     {"timings_ms", {{"read", report.read_ms},
+                                                     {"write", report.write_ms},
+                                                     {"total", total_ms}}}};
+        res.set_content(body.dump(), "application/json");
+    } else {
+        res.set_header("Content-Disposition",
+                       std::string("attachment; filename=\"converted") + (format == "step" ? ".step\"" : ".igs\""));
+        res.set_content(data, content_type.c_str());
+    }
+}
+
+}  // namespace
+
+void add_conversion_routes(httplib::Server& svr, ServerContext& ctx) {
+    svr.Post("/v1/conversions", [&ctx](const httplib::Request& req, httplib::Response& res) {
+        try {
+            handle_conversion(ctx, req, res);
+        } catch (const Error& e) {
+            send_problem(res, e.code(), e.what(), ctx.config.retry_after_s);
+        }
+    });
+}
+
+}  // namespace nurbsrt::server

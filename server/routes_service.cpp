@@ -1,0 +1,44 @@
+// Service endpoints: GET /healthz (the process answers), /readyz (it can take
+// work now), /metrics (Prometheus text), /v1/openapi.json (the API document).
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "server/context.h"
+#include "server/routes.h"
+
+namespace nurbsrt::server {
+
+void add_service_routes(httplib::Server& svr, ServerContext& ctx) {
+    svr.Get("/healthz", [](const httplib::Request&, httplib::Response& res) {
+        res.set_content(R"({"status":"ok"})", "application/json");
+    });
+    svr.Get("/readyz", [&ctx](const httplib::Request&, httplib::Response& res) {
+        const int active = ctx.gate.active(), queued = ctx.gate.queued();
+        const bool ready = queued < ctx.gate.max_queued() || active < ctx.gate.max_active();
+        const nlohmann::json body = {{"status", ready ? "ready" : "overloaded"},
+                                     {"active", active},
+                                     {"queued", queued},
+                                     {"max_active", ctx.gate.max_active()},
+                                     {"max_queued", ctx.gate.max_queued()}};
+        res.status = ready ? 200 : 503;
+        if (!ready) res.set_header("Retry-After", std::to_string(ctx.config.retry_after_s));
+        res.set_content(body.dump(), "application/json");
+    });
+    svr.Get("/metrics", [&ctx](const httplib::Request&, httplib::Response& res) {
+        Metrics::Gauges g;
+        g.active = ctx.gate.active();
+        g.queued = ctx.gate.queued();
+        g.max_active = ctx.gate.max_active();
+        g.max_queued = ctx.gate.max_queued();
+        g.cache_bytes = ctx.cache.bytes();
+        g.cache_entries = ctx.cache.entries();
+        g.cache_capacity = ctx.cache.capacity();
+        res.set_content(ctx.metrics.exposition(g), "text/plain; version=0.0.4; charset=utf-8");
+    });
+    svr.Get("/v1/openapi.json", [](const httplib::Request&, httplib::Response& res) {
+        const std::string_view doc = openapi_document();
+        res.set_content(doc.data(), doc.size(), "application/json");
+    });
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,84 @@
+#include "server/scene_cache.h"
+
+#include <openssl/evp.h>
+
+#include "importer/isolated.h"
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+
+std::string scene_cache_key(const std::string& bytes, const ImportOptions& options) {
+    std::string opts;
+    for (const std::string& a : import_options_to_args(options)) opts += a + '\n';
+    EVP_MD_CTX* ctx = EVP_MD_CTX_new();
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int len = 0;
+    const bool ok = ctx && EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr) == 1 &&
+                    EVP_DigestUpdate(ctx, bytes.data(), bytes.size()) == 1 &&
+                    EVP_DigestUpdate(ctx, "\0options\n", 9) == 1 &&
+                    EVP_DigestUpdate(ctx, opts.data(), opts.size()) == 1 &&
+                    EVP_DigestFinal_ex(ctx, digest, &len) == 1;
+    EVP_MD_CTX_free(ctx);
+    if (!ok) throw Error(ErrorCode::internal, "SHA-256 failed");
+    static const char* hex = "0123456789abcdef";
+    std::string out;
+    for (unsigned i = 0; i < len; ++i) {
+        out += hex[digest[i] >> 4];
+        out += hex[digest[i] & 15];
+    }
+    return out;
+}
+
+size_t scene_memory_bytes(const Scene& s) {
+    size_t n = sizeof(Scene) + s.source_name.size() + s.format.size() + s.units.size();
+    for (const Face& f : s.faces) {
+        n += sizeof(Face) + f.name.size();
+        n += f.surface.knots_u.size() * sizeof(double) + f.surface.knots_v.size() * sizeof(double);
+        n += f.surface.cp.size() * sizeof(Vec4);
+        for (const TrimLoop& l : f.loops) n += sizeof(TrimLoop) + l.points.size() * sizeof(Vec2);
+        n += f.mesh.uv.size() * sizeof(Vec2) + f.mesh.xyz.size() * sizeof(Vec3) +
+             f.mesh.triangles.size() * sizeof(uint32_t);
+    }
+    for (const Body& b : s.bodies) n += sizeof(Body) + b.name.size();
+    for (const std::string& w : s.warnings) n += sizeof(std::string) + w.size();
+    return n;
+}
+
+std::shared_ptr<const Scene> SceneCache::get(const std::string& key) {
+    std::lock_guard<std::mutex> lock(m_);
+    const auto it = index_.find(key);
+    if (it == index_.end()) return nullptr;
+    lru_.splice(lru_.begin(), lru_, it->second);
+    return it->second->scene;
+}
+
+void SceneCache::put(const std::string& key, std::shared_ptr<const Scene> scene) {
+    const size_t size = scene_memory_bytes(*scene);
+    std::lock_guard<std::mutex> lock(m_);
+    if (const auto it = index_.find(key); it != index_.end()) {
+        bytes_ -= it->second->bytes;
+        lru_.erase(it->second);
+        index_.erase(it);
+    }
+    if (size > capacity_) return;
+    lru_.push_front(Entry{key, std::move(scene), size});
+    index_[key] = lru_.begin();
+    bytes_ += size;
+    while (bytes_ > capacity_ && !lru_.empty()) {
+        bytes_ -= lru_.back().bytes;
+        index_.erase(lru_.back().key);
+        lru_.pop_back();
+    }
+}
+
+size_t SceneCache::bytes() const {
+    std::lock_guard<std::mutex> lock(m_);
+    return bytes_;
+}
+
+size_t SceneCache::entries() const {
+    std::lock_guard<std::mutex> lock(m_);
+    return lru_.size();
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,50 @@
+// Content-addressed cache of imported scenes: key = SHA-256 of the uploaded
+// bytes and the import options, value = the immutable Scene, shared by every
+// render that uses it. Bounded by an estimate of the scenes' memory; least
+// recently used entries go first. Thread-safe.
+#pragma once
+
+#include <cstddef>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+
+#include "importer/importer.h"
+
+namespace nurbsrt::server {
+
+// SHA-256 (hex) of the bytes followed by the import options' canonical text.
+std::string scene_cache_key(const std::string& bytes, const ImportOptions& options);
+
+// Approximate memory held by a scene (its vectors' payloads), for the bound.
+size_t scene_memory_bytes(const Scene& scene);
+
+class SceneCache {
+public:
+    explicit SceneCache(size_t capacity_bytes) : capacity_(capacity_bytes) {}
+
+    std::shared_ptr<const Scene> get(const std::string& key);  // nullptr on a miss
+    // Inserts (or refreshes) the entry and evicts LRU entries beyond the bound;
+    // a scene larger than the whole capacity is not kept.
+    void put(const std::string& key, std::shared_ptr<const Scene> scene);
+
+    size_t bytes() const;
+    size_t entries() const;
+    size_t capacity() const { return capacity_; }
+
+private:
+    struct Entry {
+        std::string key;
+        std::shared_ptr<const Scene> scene;
+        size_t bytes = 0;
+    };
+    const size_t capacity_;
+    mutable std::mutex m_;
+    std::list<Entry> lru_;  // front = most recently used
+    std::unordered_map<std::string, std::list<Entry>::iterator> index_;
+    size_t bytes_ = 0;
+};
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,61 @@
+#include "server/scratch.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+
+namespace fs = std::filesystem;
+
+TempFile::~TempFile() {
+    if (!path_.empty()) unlink(path_.c_str());
+}
+
+ScratchDir::ScratchDir(const std::string& data_dir) {
+    std::error_code ec;
+    fs::create_directories(data_dir, ec);
+    if (ec) throw Error(ErrorCode::io, "cannot create data dir '" + data_dir + "': " + ec.message());
+    dir_ = (fs::absolute(data_dir) / "tmp").string();
+    fs::create_directories(dir_, ec);
+    if (ec) throw Error(ErrorCode::io, "cannot create '" + dir_ + "': " + ec.message());
+    if (chmod(dir_.c_str(), 0700) != 0)
+        throw Error(ErrorCode::io, "cannot make '" + dir_ + "' private: " + std::strerror(errno));
+    for (const auto& entry : fs::directory_iterator(dir_, ec)) fs::remove_all(entry.path(), ec);
+}
+
+TempFile ScratchDir::create(const char* stem, const char* suffix) const {
+    std::string tmpl = dir_ + "/" + stem + "-XXXXXX" + suffix;
+    const int fd = mkstemps(tmpl.data(), static_cast<int>(std::strlen(suffix)));
+    if (fd < 0) throw Error(ErrorCode::io, "cannot create a scratch file: " + std::string(std::strerror(errno)));
+    close(fd);
+    return TempFile(tmpl);
+}
+
+TempFile ScratchDir::write(const char* stem, const char* suffix, const std::string& bytes) const {
+    TempFile f = create(stem, suffix);
+    std::ofstream out(f.path(), std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) throw Error(ErrorCode::io, "cannot write a scratch file (disk full?)");
+    return f;
+}
+
+std::string read_file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(ErrorCode::io, "cannot read a scratch file");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace nurbsrt::server

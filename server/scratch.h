@@ -1,0 +1,45 @@
+// The service's private scratch directory (DATA_DIR/tmp, mode 0700) and the
+// temporary files in it. Names are generated (never taken from a request);
+// files are removed when their TempFile goes away, and leftovers of an earlier
+// run are removed at start.
+#pragma once
+
+#include <string>
+
+namespace nurbsrt::server {
+
+class TempFile {
+public:
+    TempFile() = default;
+    explicit TempFile(std::string path) : path_(std::move(path)) {}
+    ~TempFile();
+    TempFile(TempFile&& o) noexcept : path_(std::move(o.path_)) { o.path_.clear(); }
+    TempFile& operator=(TempFile&&) = delete;
+    TempFile(const TempFile&) = delete;
+    TempFile& operator=(const TempFile&) = delete;
+    const std::string& path() const { return path_; }
+
+private:
+    std::string path_;
+};
+
+class ScratchDir {
+public:
+    // Creates DATA_DIR and DATA_DIR/tmp (0700) and empties the latter.
+    // Throws Error(io) when that is not possible.
+    explicit ScratchDir(const std::string& data_dir);
+    const std::string& path() const { return dir_; }
+
+    // A new empty file named `<stem>-XXXXXX<suffix>` (suffix such as ".png").
+    TempFile create(const char* stem, const char* suffix) const;
+    // A new file holding `bytes`.
+    TempFile write(const char* stem, const char* suffix, const std::string& bytes) const;
+
+private:
+    std::string dir_;
+};
+
+// Reads a whole file (throws Error(io)).
+std::string read_file_bytes(const std::string& path);
+
+}  // namespace nurbsrt::server

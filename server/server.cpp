@@ -1,0 +1,181 @@
+#include "server/server.h"
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <signal.h>
+
+#include <atomic>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "renderer/error.h"
+#include "server/context.h"
+#include "server/http_util.h"
+#include "server/problem.h"
+#include "server/request_log.h"
+#include "server/routes.h"
+
+namespace nurbsrt::server {
+namespace {
+
+// Route label for logs and metrics: a known route, or "other" (never the raw
+// path, which is the client's and unbounded).
+std::string route_of(const httplib::Request& req) {
+    static const char* known[] = {"/v1/renders", "/v1/conversions", "/healthz", "/readyz", "/metrics",
+                                  "/v1/openapi.json"};
+    for (const char* k : known)
+        if (req.path == k) return k;
+    return "other";
+}
+
+ErrorCode code_for_status(int status) {
+    switch (status) {
+        case 404: case 405: return ErrorCode::not_found;
+        case 413: return ErrorCode::limit_exceeded;
+        case 415: return ErrorCode::unsupported_format;
+        case 503: return ErrorCode::overloaded;
+        default: return status < 500 ? ErrorCode::invalid_argument : ErrorCode::internal;
+    }
+}
+
+void write_port_file(const std::string& path, int port) {
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::trunc);
+        out << port << "\n";
+        if (!out) throw Error(ErrorCode::io, "cannot write port file " + path);
+    }
+    std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+int run_server(const ServerConfig& config) {
+    config.validate();
+    // SIGINT/SIGTERM are taken by a waiting thread (blocked everywhere else,
+    // before any thread starts); a peer closing its socket must not kill us.
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGINT);
+    sigaddset(&stop_signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+    signal(SIGPIPE, SIG_IGN);
+
+    ServerContext ctx(config);
+    httplib::Server svr;
+    const size_t threads = static_cast<size_t>(config.workers + config.max_queue + 4);
+    svr.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+    svr.set_payload_max_length(config.max_upload_bytes);
+    svr.set_read_timeout(30, 0);
+    svr.set_write_timeout(30, 0);
+    svr.set_keep_alive_max_count(20);
+
+    svr.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+        const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
+        res.set_header("X-Request-Id", id);
+        note_request_start(id);
+        return httplib::Server::HandlerResponse::Unhandled;
+    });
+    // Statuses set by cpp-httplib itself (404 no route, 413 payload, 400 bad
+    // request line) get a problem body too; handlers' own problems are kept.
+    svr.set_error_handler(httplib::Server::HandlerWithResponse([&config](const httplib::Request& req,
+                                                                           httplib::Response& res) {
+        if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+        if (!res.has_header("X-Request-Id")) res.set_header("X-Request-Id", new_request_id());
+        // cpp-httplib caps form-urlencoded bodies at 8 KiB and answers 413 itself;
+        // a CAD file sent that way has the wrong content type, not the wrong size.
+        if (res.status == 413 &&
+            req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {
+            send_problem(res, ErrorCode::unsupported_format,
+                         "form-urlencoded bodies are not accepted: send the file raw "
+                         "(application/octet-stream) or as multipart/form-data");
+            return httplib::Server::HandlerResponse::Handled;
+        }
+        const ErrorCode code = code_for_status(res.status);
+        const int status = res.status;
+        std::string detail = status == 413   ? "the upload exceeds the limit of " +
+                                                 std::to_string(config.max_upload_bytes) + " bytes"
+                             : status == 404 ? "no such resource"
+                             : status == 405 ? "method not allowed on this resource"
+                                             : "the request could not be handled";
+        send_problem(res, code, detail);
+        res.status = status;  // keep cpp-httplib's status (e.g. 405) when it differs from the code's
+        return httplib::Server::HandlerResponse::Handled;
+    }));
+    svr.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+        std::string what = "unexpected exception";
+        try {
+            if (ep) std::rethrow_exception(ep);
+        } catch (const std::exception& e) {
+            what = e.what();
+        } catch (...) {
+        }
+        send_problem(res, ErrorCode::internal, what);
+    });
+    svr.set_logger([&ctx](const httplib::Request& req, const httplib::Response& res) {
+        const RequestNote note = take_request_note();
+        RequestLogEntry e;
+        e.request_id = res.get_header_value("X-Request-Id");
+        e.method = req.method;
+        e.route = route_of(req);
+        e.remote = req.remote_addr;
+        e.status = res.status;
+        e.duration_ms = note.elapsed_s * 1000.0;
+        e.bytes_in = req.body.size();
+        for (const auto& [name, part] : req.files) e.bytes_in += part.content.size();
+        e.bytes_out = res.body.size();
+        e.code = note.code;
+        log_request(e);
+        ctx.metrics.observe_request(e.route, res.status, note.elapsed_s);
+    });
+
+    add_render_routes(svr, ctx);
+    add_conversion_routes(svr, ctx);
+    add_service_routes(svr, ctx);
+
+    int port = config.port;
+    if (port == 0) {
+        port = svr.bind_to_any_port(config.host);
+        if (port <= 0) throw Error(ErrorCode::io, "cannot listen on " + config.host);
+    } else if (!svr.bind_to_port(config.host, port)) {
+        throw Error(ErrorCode::io, "cannot listen on " + config.host + ":" + std::to_string(port));
+    }
+    if (!config.port_file.empty()) write_port_file(config.port_file, port);
+
+    const nlohmann::json fields = {{"host", config.host},
+                                   {"port", port},
+                                   {"data_dir", config.data_dir},
+                                   {"workers", config.workers},
+                                   {"max_queue", config.max_queue},
+                                   {"max_upload_bytes", config.max_upload_bytes},
+                                   {"max_pixels", config.max_pixels},
+                                   {"max_faces", config.max_faces},
+                                   {"render_timeout_s", config.render_timeout_s},
+                                   {"import_timeout_s", config.import_timeout_s},
+                                   {"cache_bytes", config.cache_bytes}};
+    log_event("listening", fields.dump());
+
+    std::atomic<bool> done{false};
+    std::thread signal_waiter([&] {
+        const timespec tick{0, 200 * 1000 * 1000};
+        while (!done) {
+            const int sig = sigtimedwait(&stop_signals, nullptr, &tick);
+            if (sig == SIGINT || sig == SIGTERM) {
+                log_event("stopping", nlohmann::json{{"signal", sig == SIGINT ? "SIGINT" : "SIGTERM"}}.dump());
+                svr.stop();
+                return;
+            }
+        }
+    });
+    const bool ok = svr.listen_after_bind();
+    done = true;
+    signal_waiter.join();
+    log_event("stopped");
+    return ok ? 0 : 1;
+}
+
+}  // namespace nurbsrt::server
