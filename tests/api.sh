@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# API integration tests: starts the real `nurbsrt serve` on a free loopback port
+# with a temporary data dir, runs tests/api/ with Debian's python3 (pytest,
+# requests, jsonschema), then stops the server. Usage: tests/api.sh path/to/nurbsrt
+set -euo pipefail
+BIN=$(realpath "${1:?usage: tests/api.sh path/to/nurbsrt}")
+HERE=$(cd "$(dirname "$0")" && pwd)
+PY=/usr/bin/python3   # python3 on PATH is another build without Debian's modules (STACK.md)
+
+TMP=$(mktemp -d)
+SERVER_PID=""
+cleanup() {
+  if [ -n "$SERVER_PID" ] && kill -0 "$SERVER_PID" 2>/dev/null; then
+    kill -TERM "$SERVER_PID" 2>/dev/null || true
+    for _ in $(seq 1 50); do kill -0 "$SERVER_PID" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$SERVER_PID" 2>/dev/null || true
+  fi
+  rm -rf "$TMP"
+}
+trap cleanup EXIT
+
+# Small limits so that the limit tests are cheap; 2 workers + 2 queued so that
+# the concurrency test sees the queue fill up.
+"$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
+  --workers 2 --max-queue 2 --queue-timeout 60 --max-upload-mb 4 --max-dimension 4096 \
+  --max-pixels 4000000 --import-timeout 60 --render-timeout 60 --render-threads 2 \
+  2> "$TMP/server.log" &
+SERVER_PID=$!
+for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done
+if [ ! -s "$TMP/port" ]; then
+  echo "api.sh: the server did not start; its log:"; cat "$TMP/server.log"; exit 1
+fi
+
+status=0
+NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_BIN="$BIN" NURBSRT_DATA_DIR="$TMP/data" \
+  "$PY" -m pytest -q -rs -p no:cacheprovider "$HERE/api" || status=$?
+
+if ! kill -0 "$SERVER_PID" 2>/dev/null; then
+  echo "api.sh: the server died during the tests"; status=1
+fi
+if [ $status -ne 0 ]; then echo "api.sh: server log (last 40 lines):"; tail -n 40 "$TMP/server.log"; fi
+exit $status

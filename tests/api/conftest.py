@@ -1,0 +1,106 @@
+"""Shared fixtures of the API tests: the running server (started by tests/api.sh),
+extra servers with special settings, and validation against api_schema/openapi.json."""
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import tempfile
+import time
+
+import jsonschema
+import pytest
+import requests
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+SCHEMA = json.loads((REPO / "api_schema" / "openapi.json").read_text())
+MODELS = (REPO / ".." / "shared" / "models").resolve()
+OCCT_DATA = pathlib.Path("/usr/share/opencascade/data")
+SCREW = OCCT_DATA / "step" / "screw.step"
+BEARING = OCCT_DATA / "iges" / "bearing.iges"
+TIMEOUT = 180  # seconds, for every HTTP call: no test can hang
+
+
+def validate(instance, name):
+    """Validates `instance` against components/schemas/<name> of the OpenAPI document."""
+    schema = {"$ref": f"#/components/schemas/{name}", "components": SCHEMA["components"]}
+    jsonschema.Draft202012Validator(schema).validate(instance)
+
+
+def check_problem(resp, status, code=None):
+    """A problem+json response with the given status (and code), valid against the schema."""
+    assert resp.status_code == status, (resp.status_code, resp.text[:300])
+    assert resp.headers["Content-Type"].startswith("application/problem+json")
+    body = resp.json()
+    validate(body, "Problem")
+    assert body["status"] == status
+    assert body["request_id"] == resp.headers["X-Request-Id"]
+    if code is not None:
+        assert body["code"] == code, body
+    return body
+
+
+class Server:
+    """A `nurbsrt serve` of our own, for settings the shared server must not have."""
+
+    def __init__(self, args=(), env=None):
+        self.tmp = tempfile.TemporaryDirectory()
+        port_file = pathlib.Path(self.tmp.name) / "port"
+        self.log = open(pathlib.Path(self.tmp.name) / "server.log", "wb")
+        self.proc = subprocess.Popen(
+            [os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--port-file", str(port_file),
+             "--data-dir", str(pathlib.Path(self.tmp.name) / "data"), *args],
+            env={**os.environ, **(env or {})}, stderr=self.log)
+        for _ in range(100):
+            if port_file.exists() and port_file.read_text().strip():
+                break
+            time.sleep(0.1)
+        else:
+            self.stop()
+            raise RuntimeError("server did not start")
+        self.url = f"http://127.0.0.1:{port_file.read_text().strip()}"
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(timeout=10)
+        self.log.close()
+        self.tmp.cleanup()
+
+
+@pytest.fixture(scope="session")
+def url():
+    u = os.environ.get("NURBSRT_URL")
+    if not u:
+        pytest.skip("NURBSRT_URL not set: run tests/api.sh")
+    return u
+
+
+@pytest.fixture
+def own_server():
+    servers = []
+
+    def start(args=(), env=None):
+        s = Server(args, env)
+        servers.append(s)
+        return s
+
+    yield start
+    for s in servers:
+        s.stop()
+
+
+def post_raw(url, path, data, params=None, headers=None):
+    h = {"Content-Type": "application/octet-stream"}
+    h.update(headers or {})
+    return requests.post(url + path, data=data, params=params, headers=h, timeout=TIMEOUT)
+
+
+def healthy(url):
+    r = requests.get(url + "/healthz", timeout=30)
+    assert r.status_code == 200
+    validate(r.json(), "Health")

@@ -1,0 +1,137 @@
+"""POST /v1/renders: real files, raw and multipart, every output format, JSON
+variant with statistics, Server-Timing, and the scene cache."""
+import base64
+import json
+import os
+import struct
+import time
+
+import pytest
+import requests
+
+from conftest import BEARING, MODELS, OCCT_DATA, SCREW, TIMEOUT, post_raw, validate
+
+STAGES = ["read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"]
+MAGIC = {"png": b"\x89PNG\r\n\x1a\n", "jpeg": b"\xff\xd8\xff", "exr": b"\x76\x2f\x31\x01"}
+CONTENT_TYPE = {"png": "image/png", "jpeg": "image/jpeg", "tiff": "image/tiff", "exr": "image/x-exr"}
+
+
+def server_timing(resp):
+    out = {}
+    for item in resp.headers["Server-Timing"].split(","):
+        parts = [p.strip() for p in item.split(";")]
+        for p in parts[1:]:
+            if p.startswith("dur="):
+                out[parts[0]] = float(p[4:])
+            if p.startswith("desc="):
+                out[parts[0]] = p[5:]
+    return out
+
+
+def check_image(data, fmt, width=None, height=None):
+    if fmt == "tiff":
+        assert data[:4] in (b"II*\x00", b"MM\x00*")
+    else:
+        assert data.startswith(MAGIC[fmt]), data[:8]
+    if fmt == "png" and width:
+        w, h = struct.unpack(">II", data[16:24])
+        assert (w, h) == (width, height)
+
+
+def check_stats(stats, width, height, wall_ms):
+    validate(stats, "Statistics")
+    assert (stats["width"], stats["height"]) == (width, height)
+    t = stats["timings_ms"]
+    assert set(STAGES) <= set(t)
+    assert all(v >= 0 for v in t.values())
+    render_stages = t["preliminary_map"] + t["newton"] + t["shade"] + t["encode"]
+    assert t["total"] >= render_stages * 0.99
+    assert t["total"] <= wall_ms * 1.05 + 5  # the server cannot take longer than the client waited
+    assert stats["faces"] > 0 and stats["pixels_hit"] > 0
+
+
+def sample_files():
+    files = [SCREW, BEARING, OCCT_DATA / "step" / "linkrods.step", OCCT_DATA / "iges" / "hammer.iges"]
+    if MODELS.is_dir():  # small real files of ../shared/models (large ones take tens of seconds)
+        for sub in ("step", "iges", "duck"):
+            d = MODELS / sub
+            small = sorted(p for p in d.iterdir() if p.suffix.lower() in (".stp", ".step", ".igs", ".iges")
+                           and p.stat().st_size < 300_000)
+            files += small[:4]
+    return files
+
+
+def test_models_present_or_skipped_visibly():
+    if not MODELS.is_dir():
+        pytest.skip(f"{MODELS} is absent: only /usr/share/opencascade/data files are rendered")
+
+
+@pytest.mark.parametrize("path", sample_files(), ids=lambda p: p.name)
+def test_render_raw_png(url, path):
+    t0 = time.monotonic()
+    r = post_raw(url, "/v1/renders", path.read_bytes(), params={"width": 96, "height": 72})
+    wall_ms = (time.monotonic() - t0) * 1000
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == "image/png"
+    assert r.headers["X-Request-Id"]
+    check_image(r.content, "png", 96, 72)
+    timing = server_timing(r)
+    assert set(STAGES) <= set(timing)
+    assert 0 < timing["total"] <= wall_ms * 1.05 + 5
+
+
+@pytest.mark.parametrize("fmt", ["png", "jpeg", "tiff", "exr"])
+def test_render_each_format_multipart(url, fmt):
+    opts = {"width": 80, "height": 60, "format": fmt, "view": "front", "method": "martin"}
+    r = requests.post(url + "/v1/renders", files={"file": ("part.step", SCREW.read_bytes()),
+                                                  "options": (None, json.dumps(opts), "application/json")},
+                      timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == CONTENT_TYPE[fmt]
+    check_image(r.content, fmt, 80, 60)
+
+
+@pytest.mark.parametrize("fmt", ["png", "exr"])
+def test_render_json_variant(url, fmt):
+    t0 = time.monotonic()
+    r = post_raw(url, "/v1/renders", BEARING.read_bytes(),
+                 params={"width": 120, "height": 90, "format": fmt, "map_precision": "rgb8"},
+                 headers={"Accept": "application/json"})
+    wall_ms = (time.monotonic() - t0) * 1000
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"].startswith("application/json")
+    body = r.json()
+    validate(body, "RenderResponse")
+    assert body["request_id"] == r.headers["X-Request-Id"]
+    assert body["content_type"] == CONTENT_TYPE[fmt]
+    check_image(base64.b64decode(body["image_base64"]), fmt, 120, 90)
+    check_stats(body["statistics"], 120, 90, wall_ms)
+    assert body["statistics"]["map_precision"] == "rgb8"
+    assert body["statistics"]["method"] == "proposed"
+
+
+def test_explicit_camera_in_json_options(url):
+    opts = {"width": 64, "height": 64,
+            "camera": {"eye": [200, -300, 150], "target": [0, 0, 0], "up": [0, 0, 1], "fov_deg": 30}}
+    r = requests.post(url + "/v1/renders", files={"file": ("x", SCREW.read_bytes()), "options": (None, json.dumps(opts))},
+                      headers={"Accept": "application/json"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    cam = r.json()["statistics"]["camera"]
+    assert cam["eye"] == [200, -300, 150] and cam["fov_deg"] == 30
+
+
+def test_second_render_of_same_bytes_uses_the_cache(url):
+    # Unique bytes (a trailing newline count no other test uses) make the first render a miss.
+    data = SCREW.read_bytes() + b"\n" * (7 + os.getpid() % 50)
+    first = post_raw(url, "/v1/renders", data, params={"width": 64, "height": 48}, headers={"Accept": "application/json"})
+    second = post_raw(url, "/v1/renders", data, params={"width": 64, "height": 48}, headers={"Accept": "application/json"})
+    assert first.status_code == 200 and second.status_code == 200
+    s1, s2 = first.json()["statistics"], second.json()["statistics"]
+    assert s1["cache"] == "miss" and s2["cache"] == "hit"
+    assert s1["timings_ms"]["read"] > 0
+    for stage in ("read", "nurbs_convert", "mesh"):
+        assert s2["timings_ms"][stage] == 0
+    assert s2["timings_ms"]["total"] < s1["timings_ms"]["total"]
+    assert server_timing(second)["cache"] == "hit"
+    m = requests.get(url + "/metrics", timeout=TIMEOUT).text
+    assert 'nurbsrt_scene_cache_requests_total{result="hit"}' in m
