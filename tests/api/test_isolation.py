@@ -26,3 +26,10 @@ def test_hanging_import_times_out(own_server):
     healthy(s.url)
     m = __import__("requests").get(s.url + "/metrics", timeout=30).text
     assert 'nurbsrt_import_failures_total{code="import_timeout"} 1' in m
+
+
+def test_render_over_its_time_limit_is_504(own_server):
+    s = own_server(args=["--render-timeout", "0.001"])
+    check_problem(post_raw(s.url, "/v1/renders", SCREW.read_bytes(), params={"width": 400, "height": 300}),
+                  504, "render_timeout")
+    healthy(s.url)
