@@ -30,7 +30,17 @@ ScratchDir::ScratchDir(const std::string& data_dir) {
     if (ec) throw Error(ErrorCode::io, "cannot create '" + dir_ + "': " + ec.message());
     if (chmod(dir_.c_str(), 0700) != 0)
         throw Error(ErrorCode::io, "cannot make '" + dir_ + "' private: " + std::strerror(errno));
-    for (const auto& entry : fs::directory_iterator(dir_, ec)) fs::remove_all(entry.path(), ec);
+    // Remove leftovers of an earlier run: only files with the names we generate,
+    // so a data dir pointed at a shared place never loses anything else.
+    static const char* ours[] = {"upload-", "render-", "converted-", "nurbsrt-import-", "nurbsrt-convert-"};
+    for (const auto& entry : fs::directory_iterator(dir_, ec)) {
+        const std::string name = entry.path().filename().string();
+        for (const char* prefix : ours)
+            if (name.rfind(prefix, 0) == 0 && entry.is_regular_file(ec)) {
+                fs::remove(entry.path(), ec);
+                break;
+            }
+    }
 }
 
 TempFile ScratchDir::create(const char* stem, const char* suffix) const {

@@ -1,7 +1,7 @@
 // The service's private scratch directory (DATA_DIR/tmp, mode 0700) and the
 // temporary files in it. Names are generated (never taken from a request);
 // files are removed when their TempFile goes away, and leftovers of an earlier
-// run are removed at start.
+// run (files with those generated names only) are removed at start.
 #pragma once
 
 #include <string>
@@ -25,7 +25,7 @@ private:
 
 class ScratchDir {
 public:
-    // Creates DATA_DIR and DATA_DIR/tmp (0700) and empties the latter.
+    // Creates DATA_DIR and DATA_DIR/tmp (0700) and removes our leftovers from it.
     // Throws Error(io) when that is not possible.
     explicit ScratchDir(const std::string& data_dir);
     const std::string& path() const { return dir_; }
