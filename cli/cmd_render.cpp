@@ -9,6 +9,8 @@
 #include <fstream>
 #include <iostream>
 
+#include <unistd.h>
+
 #include "cli/commands.h"
 #include "cli/scene_file.h"
 #include "renderer/error.h"
@@ -139,7 +141,28 @@ void add_render_command(CLI::App& app) {
             options.background = {static_cast<float>(bg.x), static_cast<float>(bg.y), static_cast<float>(bg.z)};
         }
         say("rendering %dx%d with %s", a->width, a->height, a->method.c_str());
+        // Progress on stderr: live on a terminal; otherwise a line per 10% once the
+        // render has taken over a second (logs of long renders, quiet for short ones).
+        const bool tty = isatty(STDERR_FILENO) != 0;
+        const auto tr = clock_type::now();
+        bool live = false;
+        int next_decile = 1;
+        if (!a->quiet)
+            options.progress = [&](double f) {
+                const double ms = ms_since(tr);
+                if (tty) {
+                    if (ms < 300 && f < 1.0) return;
+                    std::fprintf(stderr, "\rnurbsrt: rendering %3.0f%%", 100.0 * f);
+                    if (f >= 1.0) std::fputc('\n', stderr);
+                    live = f < 1.0;
+                } else if (ms > 1000 && f >= 0.1 * next_decile) {
+                    std::fprintf(stderr, "nurbsrt: [%8.1f ms] rendering %3.0f%%\n", ms_since(t0), 100.0 * f);
+                    next_decile = static_cast<int>(f * 10.0) + 1;
+                }
+                std::fflush(stderr);
+            };
         const RenderResult result = render(scene, camera, options);
+        if (live) std::fputc('\n', stderr);
         say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms",
             result.stats.pixels_hit, result.stats.mean_iterations, result.stats.total_ms);
 

@@ -24,6 +24,25 @@ const char* newton_status_name(NewtonStatus s) {
     return "unknown";
 }
 
+UvBox face_uv_box(const NurbsSurface& s, double u0, double u1, double v0, double v1, double tol) {
+    UvBox b{u0, u1, v0, v1};
+    if (!(u1 > u0) || !(v1 > v0)) return b;
+    auto coincide = [&](bool along_v, int n) {
+        for (int k = 0; k <= n; ++k) {
+            const double f = double(k) / n;
+            const Vec4 a = along_v ? evaluate(s, u0, v0 + f * (v1 - v0)) : evaluate(s, u0 + f * (u1 - u0), v0);
+            const Vec4 c = along_v ? evaluate(s, u1, v0 + f * (v1 - v0)) : evaluate(s, u0 + f * (u1 - u0), v1);
+            if (!(a.w != 0 && c.w != 0)) return false;
+            const Vec3 pa{a.x / a.w, a.y / a.w, a.z / a.w}, pc{c.x / c.w, c.y / c.w, c.z / c.w};
+            if (!(length(pa - pc) <= tol)) return false;
+        }
+        return true;
+    };
+    b.wrap_u = coincide(true, 2 * (s.num_v + 8));
+    b.wrap_v = coincide(false, 2 * (s.num_u + 8));
+    return b;
+}
+
 double default_newton_eps(const BBox& box) {
     const double d = box.diagonal();
     return 1e-9 * (d > 0 ? d : 1.0);
@@ -33,13 +52,35 @@ namespace {
 
 inline Vec3 xyz(Vec4 h) { return {h.x, h.y, h.z}; }
 
-// Clamp (u, v) into the box; returns true when it had to move.
+// Across a seam, a parameter beyond the box continues from the opposite edge.
+inline void wrap(double& x, double x0, double x1) {
+    const double period = x1 - x0;
+    if (x < x0 || x > x1) x = x0 + (x - x0) - period * std::floor((x - x0) / period);
+}
+
+// Wrap across seams, then clamp (u, v) into the box; returns true when the clamp
+// had to move it (wrapping is not leaving the domain).
 inline bool clamp_to_box(double& u, double& v, const UvBox& b) {
+    if (b.wrap_u) wrap(u, b.u0, b.u1);
+    if (b.wrap_v) wrap(v, b.v0, b.v1);
     const double cu = std::clamp(u, b.u0, b.u1), cv = std::clamp(v, b.v0, b.v1);
     const bool moved = cu != u || cv != v;
     u = cu;
     v = cv;
     return moved;
+}
+
+// Box handling of a step from (u, v) to (un, vn): clamp onto the box. Default: a
+// second clamp fails (left_domain). Robust: clamping is always allowed; only a
+// clamped iterate that did not move (stuck on the border, the solution beyond
+// it) fails. Returns false on failure.
+inline bool accept_box(double u, double v, double& un, double& vn, const UvBox& box, bool robust,
+                       bool& clamped_once) {
+    if (!clamp_to_box(un, vn, box)) return true;
+    if (robust) return un != u || vn != v;
+    if (clamped_once) return false;
+    clamped_once = true;
+    return true;
 }
 
 // ||F|| of the projected system in model units (see newton.h, (12)).
@@ -102,15 +143,19 @@ NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera
             return res;
         }
         double un = u + st.du, vn = v + st.dv;                                 // (5)
-        if (clamp_to_box(un, vn, box)) {
-            if (clamped_once) {
-                res.status = NewtonStatus::left_domain;
-                return res;
-            }
-            clamped_once = true;
+        if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
+            res.status = NewtonStatus::left_domain;
+            return res;
         }
-        const SurfaceDerivs dn = evaluate_d1(projected, un, vn);
-        const double rn = proposed_residual(dn.S, camera, s);
+        SurfaceDerivs dn = evaluate_d1(projected, un, vn);
+        double rn = proposed_residual(dn.S, camera, s);
+        // (13); robust: backtrack along the (clamped) step before giving up.
+        for (int half = 0; params.robust && !(rn <= r) && half < 4; ++half) {
+            un = 0.5 * (u + un);
+            vn = 0.5 * (v + vn);
+            dn = evaluate_d1(projected, un, vn);
+            rn = proposed_residual(dn.S, camera, s);
+        }
         if (!(rn <= r)) {                                                      // (13)
             res.iterations = it + 1;
             res.status = NewtonStatus::diverged;
@@ -168,16 +213,22 @@ NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u
         }
         double un = u - (e * f1 - b * f2) / det;                               // -J^{-1} F
         double vn = v - (-cc * f1 + a * f2) / det;
-        if (clamp_to_box(un, vn, box)) {
-            if (clamped_once) {
-                res.status = NewtonStatus::left_domain;
-                return res;
-            }
-            clamped_once = true;
+        if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
+            res.status = NewtonStatus::left_domain;
+            return res;
         }
-        const CartesianDerivs cn = cartesian_d1(surface, un, vn);
-        const double g1 = dot(pl.n1, cn.P) + pl.d1, g2 = dot(pl.n2, cn.P) + pl.d2;
-        const double rn = std::hypot(g1, g2);
+        CartesianDerivs cn = cartesian_d1(surface, un, vn);
+        double g1 = dot(pl.n1, cn.P) + pl.d1, g2 = dot(pl.n2, cn.P) + pl.d2;
+        double rn = std::hypot(g1, g2);
+        // (13); robust: backtrack along the (clamped) step before giving up.
+        for (int half = 0; params.robust && !(rn <= r) && half < 4; ++half) {
+            un = 0.5 * (u + un);
+            vn = 0.5 * (v + vn);
+            cn = cartesian_d1(surface, un, vn);
+            g1 = dot(pl.n1, cn.P) + pl.d1;
+            g2 = dot(pl.n2, cn.P) + pl.d2;
+            rn = std::hypot(g1, g2);
+        }
         if (!(rn <= r)) {                                                      // (13)
             res.iterations = it + 1;
             res.status = NewtonStatus::diverged;

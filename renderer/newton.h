@@ -36,6 +36,15 @@
 //                       Both systems describe the whole line, not the half-ray.
 // `iterations` counts Newton steps taken (0: the start already satisfied (12)).
 //
+// NewtonParams::robust (used only by the renderer's rescue of failed pixels, never
+// for the primary map-started solves whose statistics the paper's criteria describe):
+//   - a step that leaves the box is clamped onto the box and the iteration goes on
+//     (the hit may lie exactly on the face border, or the start was across it);
+//     left_domain only when the clamped iterate no longer moves;
+//   - a step that increases the residual (13) is halved up to 4 times before
+//     diverged is declared (backtracking; Newton overshoots near silhouettes,
+//     where the Jacobian of (3) becomes singular).
+//
 // The loops allocate nothing (nurbs.h evaluation is stack-only up to kMaxFastDegree).
 #pragma once
 
@@ -54,14 +63,27 @@ enum class NewtonStatus : uint8_t { converged, diverged, singular, max_iteration
 constexpr int kNewtonStatusCount = 6;
 const char* newton_status_name(NewtonStatus s);  // "converged", "diverged", ...
 
+// The face's parameter box. wrap_u (wrap_v): the edges u = u0 and u = u1 (v = v0
+// and v = v1) are the same curve in 3D, a seam (cylinders, spheres, tori and
+// closed free-form faces converted from periodic surfaces). A step across a seam
+// continues on the other side (u - (u1 - u0)) instead of stopping at the box: the
+// hit just across the seam is the nearest one, and clamping would leave Newton
+// stuck on the seam, short of the ray.
 struct UvBox {
     double u0 = 0, u1 = 1, v0 = 0, v1 = 1;
+    bool wrap_u = false, wrap_v = false;
 };
+
+// The box [u0,u1] x [v0,v1] of a face on surface s, with seams detected: the two
+// opposite edges coincide within `tol` (model units) at 2 * (control points + 8)
+// samples along them.
+UvBox face_uv_box(const NurbsSurface& s, double u0, double u1, double v0, double v1, double tol);
 
 struct NewtonParams {
     double eps = 1e-9;        // (12), model units; see default_newton_eps
     double eps_det = 1e-12;   // (14), relative
     int max_iterations = 8;
+    bool robust = false;      // clamp-and-continue at the box, backtracking on (13); see above
 };
 
 // eps = 1e-9 x the scene's bounding-box diagonal. Why: one pixel of a

@@ -7,10 +7,12 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <thread>
 
 #include "renderer/error.h"
@@ -31,6 +33,7 @@ struct FaceFrame {
     NurbsSurface projected;  // proposed: the paper's projection to R^2 (camera.h)
     TrimTester trim;
     UvBox box;
+    double near_uv = 0;      // trim-tolerance band for crack filling (see Solver::solve)
 };
 
 // Per-pixel solve result of a pass.
@@ -41,7 +44,7 @@ struct PixelHit {
     uint8_t iterations = 0;
 };
 
-enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLeftDomain, kBehind, kTrimmed };
+enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLeftDomain, kBehind, kTrimmed, kNearTrim };
 
 struct Solver {
     const Scene& scene;
@@ -50,14 +53,22 @@ struct Solver {
     const RenderOptions& opt;
     NewtonParams params;
 
-    // One Newton solve of face id at pixel (i, j) from (u0, v0); hit if converged and inside the trim.
-    Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
+    // One Newton solve of face id at pixel (i, j) from (u0, v0); hit if converged and
+    // inside the trim. With `near`, a hit converged outside the trim but within the
+    // face's trim-tolerance band is also returned (as kNearTrim): the sampled loops of
+    // two faces sharing an edge are each only within that tolerance of the true edge,
+    // so a ray through the sliver between the two polylines is rejected by both (a crack).
+    Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
+                  PixelHit& hit) const {
         const FaceFrame& ff = frames[id - 1];
         const NewtonResult r =
             opt.method == NewtonMethod::proposed
-                ? newton_proposed(ff.projected, camera, camera.pixel_screen(i, j), u0, v0, ff.box, params)
-                : newton_martin(scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, params);
+                ? newton_proposed(ff.projected, camera, camera.pixel_screen(i, j), u0, v0, ff.box, p)
+                : newton_martin(scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, p);
         hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
+        if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
+            border_gap_hit(id, i, j, r, hit))
+            return kNearTrim;
         switch (r.status) {
             case NewtonStatus::converged: break;
             case NewtonStatus::diverged: return kDiverged;
@@ -66,20 +77,89 @@ struct Solver {
             case NewtonStatus::left_domain: return kLeftDomain;
             case NewtonStatus::behind_eye: return kBehind;
         }
-        if (!ff.trim.inside({r.u, r.v})) return kTrimmed;
+        Outcome o = kConverged;
+        if (!ff.trim.inside({r.u, r.v})) {
+            if (!near || !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return kTrimmed;
+            o = kNearTrim;
+        }
         hit.face = id;
         hit.u = static_cast<float>(r.u);
         hit.v = static_cast<float>(r.v);
         hit.t = r.t;
-        return kConverged;
+        return o;
+    }
+    // Adjacent faces of a CAD model meet only within their edges' tolerance: a ray
+    // through the gap makes Newton stop on the face's parameter-box border, short
+    // of the ray (the exact hit lies on the surface's extension). Such a stop counts
+    // as a near hit when the border point is within the trim band in (u,v) and
+    // within the same band in model units (band x surface speed) of the ray.
+    bool border_gap_hit(uint32_t id, int i, int j, const NewtonResult& r, PixelHit& hit) const {
+        const FaceFrame& ff = frames[id - 1];
+        const UvBox& b = ff.box;
+        if (!(r.u == b.u0 || r.u == b.u1 || r.v == b.v0 || r.v == b.v1)) return false;
+        if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
+            return false;
+        const CartesianDerivs c = cartesian_d1(scene.faces[id - 1].surface, r.u, r.v);
+        const Ray ray = camera.pixel_ray(i, j);
+        const Vec3 q = c.P - ray.origin;
+        const double t = dot(q, ray.dir);
+        const double gap = length(q - t * ray.dir);
+        const double band = ff.near_uv * std::max(length(c.Pu), length(c.Pv));
+        if (!(t > 0) || !(gap <= band)) return false;
+        hit.face = id;
+        hit.u = static_cast<float>(r.u);
+        hit.v = static_cast<float>(r.v);
+        hit.t = t;
+        return true;
+    }
+    Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
+        return solve(id, i, j, u0, v0, params, false, hit);
     }
 };
 
+// Fraction-done reporting for RenderOptions::progress: rows are counted with one
+// relaxed atomic add; a thread that crosses the next ~2% mark reports, serialized
+// by a mutex it only try-locks (a busy reporter just skips one report).
+class Progress {
+public:
+    Progress(const std::function<void(double)>& fn, int64_t total)
+        : fn_(fn), total_(std::max<int64_t>(total, 1)), step_(std::max<int64_t>(total_ / 50, 1)), next_(step_) {}
+    void add(int64_t n) {
+        if (!fn_) return;
+        const int64_t d = done_.fetch_add(n, std::memory_order_relaxed) + n;
+        if (d < next_.load(std::memory_order_relaxed)) return;
+        std::unique_lock<std::mutex> lock(m_, std::try_to_lock);
+        if (!lock.owns_lock()) return;
+        const int64_t now = done_.load(std::memory_order_relaxed);
+        if (now < next_.load(std::memory_order_relaxed)) return;
+        next_.store(now + step_, std::memory_order_relaxed);
+        report(std::min(0.999, double(now) / double(total_)));
+    }
+    void finish() {
+        if (!fn_) return;
+        std::lock_guard<std::mutex> lock(m_);
+        report(1.0);
+    }
+
+private:
+    void report(double f) {
+        if (f <= last_) return;
+        last_ = f;
+        fn_(f);
+    }
+    const std::function<void(double)>& fn_;
+    const int64_t total_, step_;
+    std::atomic<int64_t> done_{0}, next_;
+    std::mutex m_;
+    double last_ = 0;
+};
+
 template <class F>
-void parallel_rows(int height, tbb::task_arena& arena, F&& fn) {
+void parallel_rows(int height, tbb::task_arena& arena, Progress* progress, F&& fn) {
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, height, 4), [&](const tbb::blocked_range<int>& r) {
             for (int j = r.begin(); j < r.end(); ++j) fn(j);
+            if (progress) progress->add(r.end() - r.begin());
         });
     });
 }
@@ -111,67 +191,232 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     st.preliminary_map_ms = ms_since(t0);
 
     // 3-4. Newton per pixel from the map's start, trim test, then rescue.
+    // Progress units: rows of the three per-pixel passes (Newton, rescue, shading).
+    Progress progress(options.progress, 3 * static_cast<int64_t>(H));
     t0 = Clock::now();
     std::vector<FaceFrame> frames(scene.faces.size());
+    const double seam_tol = 1e-7 * std::max(scene.bbox.diagonal(), 1e-300);
     arena.execute([&] {
         tbb::parallel_for(size_t(0), scene.faces.size(), [&](size_t k) {
             const Face& f = scene.faces[k];
             if (options.method == NewtonMethod::proposed) frames[k].projected = project_surface(camera, f.surface);
             frames[k].trim = TrimTester(f.loops);
-            frames[k].box = {f.u_min, f.u_max, f.v_min, f.v_max};
+            // Seam tolerance: far below a pixel, far above the rounding of a closed
+            // surface's two edge curves (they coincide to ~1e-15 when converted
+            // from a periodic surface; files' own closed B-splines to their tolerance).
+            frames[k].box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, seam_tol);
+            // Each of two faces' sampled loops lies within its tolerance of the shared
+            // edge, so a sliver point is within about twice it of either polyline.
+            // Faces built without a tolerance get a rounding-level band.
+            const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
+            frames[k].near_uv = std::max(2.0 * f.trim_tolerance_uv, 1e-9 * diag);
         });
     });
     Solver solver{scene, camera, frames, options, options.newton};
     if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(scene.bbox);
+    // Rescue solves: clamp-and-continue at face borders, backtracking, a few more steps.
+    NewtonParams robust = solver.params;
+    robust.robust = true;
+    robust.max_iterations = std::max(robust.max_iterations, 16);
+    const uint32_t nfaces = static_cast<uint32_t>(scene.faces.size());
 
     std::vector<PixelHit> first(npx);
     std::vector<uint8_t> outcome(npx, kNone);
-    parallel_rows(H, arena, [&](int j) {
+    parallel_rows(H, arena, &progress, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t k = map.index(i, j);
             const uint32_t id = map.face[k];
-            if (id == 0 || id > scene.faces.size()) continue;
+            if (id == 0 || id > nfaces) continue;
             outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], first[k]);
         }
     });
 
-    // Rescue: a pixel without a hit tries the faces of its 8 neighbours (map faces
-    // and first-pass hits), started from the neighbour's (u, v); the nearest hit
-    // wins. Reads only first-pass data, so the result is thread-count independent.
+    // Rescue of pixels without a first-pass hit. Reads only the map and first-pass
+    // data, so every pixel's result is independent of the thread count.
+    //  A (neighbour / silhouette): the faces of the 8 neighbours, started from their
+    //    converged (u, v) (first-pass hits), then from their map (u, v); the pixel's
+    //    own map face is retried from the neighbours' converged (u, v). Pixels the
+    //    map calls background are tried the same way when they touch a hit: the
+    //    exact silhouette is not the mesh's.
+    //  B (general): if A found nothing and the pixel should be covered (its map face
+    //    failed, or at least two 4-neighbours are hit), every face of the 5x5
+    //    neighbourhood from several starts: the converged (u, v) of its pixels, its
+    //    map (u, v), and the face's mesh vertex projected nearest to the pixel.
+    //  Crack pixels (hit on opposite sides, or on 3 of 4 sides) also accept a hit
+    //    just outside a trim loop, within the face's tolerance band (Solver::solve).
+    // All rescue solves use the robust Newton (newton.h); the nearest hit wins.
     std::vector<PixelHit> final_hits = first;
-    std::vector<uint8_t> rescued(npx, 0);
-    if (options.rescue) {
-        parallel_rows(H, arena, [&](int j) {
-            for (int i = 0; i < W; ++i) {
-                const size_t k = map.index(i, j);
-                if (first[k].face) continue;
-                PixelHit best;
-                uint32_t tried[18];
-                int ntried = 0;
-                if (map.face[k]) tried[ntried++] = map.face[k];  // already solved in pass 1
+    enum : uint8_t { kNoRescue, kRescueNeighbour, kRescueSilhouette, kRescueGeneral, kRescueTrimTol };
+    std::vector<uint8_t> rescued(npx, kNoRescue);
+    // One pixel's rescue from the hits `src` (and the map); returns its kind, or kNoRescue.
+    auto rescue_pixel = [&](int i, int j, const std::vector<PixelHit>& src, PixelHit& out) -> uint8_t {
+        struct Start {
+            uint32_t id;
+            float u, v;
+        };
+        constexpr int kMaxTried = 64;
+        Start tried[kMaxTried];
+        const size_t k = map.index(i, j);
+        auto hit_at = [&](int a, int b) {
+            return a >= 0 && b >= 0 && a < W && b < H && src[map.index(a, b)].face != 0;
+        };
+            const uint32_t id0 = map.face[k] <= nfaces ? map.face[k] : 0;
+            bool touches = false;
+            for (int dj = -1; dj <= 1 && !touches; ++dj)
+                for (int di = -1; di <= 1; ++di)
+                    if (hit_at(i + di, j + dj)) touches = true;
+            if (!id0 && !touches) return kNoRescue;  // plain background
+            const bool l = hit_at(i - 1, j), r = hit_at(i + 1, j), u = hit_at(i, j - 1), d = hit_at(i, j + 1);
+            const int n4 = l + r + u + d;
+            const bool crack = (l && r) || (u && d) || n4 >= 3;
+
+            PixelHit best, best_near;
+            int ntried = 0;
+            // The own map start was solved in pass 1 (non-robust): retry it robustly.
+            auto attempt = [&](uint32_t id, float su, float sv) {
+                if (id == 0 || id > nfaces) return;
+                for (int q = 0; q < ntried; ++q)
+                    if (tried[q].id == id && tried[q].u == su && tried[q].v == sv) return;
+                if (ntried == kMaxTried) return;
+                tried[ntried++] = {id, su, sv};
+                PixelHit h;
+                const Outcome o = solver.solve(id, i, j, su, sv, robust, crack, h);
+                if (o == kConverged && h.t < best.t) best = h;
+                if (o == kNearTrim && h.t < best_near.t) best_near = h;
+            };
+            // A: converged neighbours first (their uv is on the exact surface, next to
+            // this pixel), one start per face; then the map faces' starts.
+            uint32_t faces_a[8];
+            int nfa = 0;
+            for (int pass = 0; pass < 2; ++pass)
                 for (int dj = -1; dj <= 1; ++dj)
                     for (int di = -1; di <= 1; ++di) {
                         const int ni = i + di, nj = j + dj;
                         if ((di == 0 && dj == 0) || ni < 0 || nj < 0 || ni >= W || nj >= H) continue;
                         const size_t n = map.index(ni, nj);
-                        // Candidates: the neighbour's hit (its converged uv), then its map face (map uv).
-                        const PixelHit& nh = first[n];
-                        const std::pair<uint32_t, std::pair<float, float>> cands[2] = {
-                            {nh.face, {nh.u, nh.v}}, {map.face[n], {map.u[n], map.v[n]}}};
-                        for (const auto& [id, uv] : cands) {
-                            if (id == 0 || id > scene.faces.size()) continue;
-                            if (std::find(tried, tried + ntried, id) != tried + ntried) continue;
-                            tried[ntried++] = id;
-                            PixelHit h;
-                            if (solver.solve(id, i, j, uv.first, uv.second, h) == kConverged && h.t < best.t) best = h;
+                        const uint32_t id = pass == 0 ? src[n].face : map.face[n];
+                        if (id == 0 || std::find(faces_a, faces_a + nfa, id) != faces_a + nfa) continue;
+                        faces_a[nfa++] = id;
+                        if (pass == 0) attempt(id, src[n].u, src[n].v);
+                        else attempt(id, map.u[n], map.v[n]);
+                    }
+            if (id0) {
+                attempt(id0, map.u[k], map.v[k]);
+                for (int dj = -1; dj <= 1; ++dj)
+                    for (int di = -1; di <= 1; ++di)
+                        if (hit_at(i + di, j + dj) && src[map.index(i + di, j + dj)].face == id0) {
+                            const PixelHit& nh = src[map.index(i + di, j + dj)];
+                            attempt(id0, nh.u, nh.v);
+                            di = dj = 2;  // one converged start of the own face is enough
+                        }
+            }
+            uint8_t kind = id0 ? kRescueNeighbour : kRescueSilhouette;
+            // B: the general fallback.
+            if (!best.face && !best_near.face && (id0 || n4 >= 2)) {
+                uint32_t faces_b[24];
+                int nfb = 0;
+                for (int dj = -2; dj <= 2; ++dj)
+                    for (int di = -2; di <= 2; ++di) {
+                        const int ni = i + di, nj = j + dj;
+                        if (ni < 0 || nj < 0 || ni >= W || nj >= H) continue;
+                        const size_t n = map.index(ni, nj);
+                        for (const uint32_t id : {src[n].face, map.face[n]})
+                            if (id && id <= nfaces && nfb < 24 &&
+                                std::find(faces_b, faces_b + nfb, id) == faces_b + nfb)
+                                faces_b[nfb++] = id;
+                    }
+                const ScreenPoint sp = camera.pixel_screen(i, j);
+                for (int q = 0; q < nfb; ++q) {
+                    const uint32_t id = faces_b[q];
+                    for (int dj = -2; dj <= 2; ++dj)
+                        for (int di = -2; di <= 2; ++di) {
+                            const int ni = i + di, nj = j + dj;
+                            if (ni < 0 || nj < 0 || ni >= W || nj >= H) continue;
+                            const size_t n = map.index(ni, nj);
+                            if (src[n].face == id) attempt(id, src[n].u, src[n].v);
+                            if (map.face[n] == id) attempt(id, map.u[n], map.v[n]);
+                        }
+                    // The face's mesh vertex nearest to the pixel on screen (in front of the eye).
+                    const FaceMesh& mesh = scene.faces[id - 1].mesh;
+                    double bd = HUGE_VAL;
+                    size_t bv = mesh.uv.size();
+                    for (size_t m = 0; m < mesh.xyz.size() && m < mesh.uv.size(); ++m) {
+                        const Vec4 ph = camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
+                        if (!(camera.depth(ph) > 0)) continue;
+                        const double dx = ph.x / ph.z - sp.sx, dy = ph.y / ph.z - sp.sy, dd = dx * dx + dy * dy;
+                        if (dd < bd) {
+                            bd = dd;
+                            bv = m;
                         }
                     }
-                if (best.face) {
-                    final_hits[k] = best;
-                    rescued[k] = 1;
+                    if (bv < mesh.uv.size())
+                        attempt(id, static_cast<float>(mesh.uv[bv].x), static_cast<float>(mesh.uv[bv].y));
+                    const UvBox& bx = frames[id - 1].box;  // and the middle of its box
+                    attempt(id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
                 }
+                kind = kRescueGeneral;
+            }
+            // A hit inside a trim beats a near-trim one unless the latter is in front
+            // (a crack in a front face must not show the face behind it).
+            if (best_near.face && best_near.t < best.t) {
+                best = best_near;
+                kind = kRescueTrimTol;
+            }
+            if (!best.face) return kNoRescue;
+            out = best;
+            return kind;
+    };
+    if (options.rescue) {
+        parallel_rows(H, arena, &progress, [&](int j) {
+            for (int i = 0; i < W; ++i) {
+                const size_t k = map.index(i, j);
+                if (!first[k].face) rescued[k] = rescue_pixel(i, j, first, final_hits[k]);
             }
         });
+        // Silhouette growth: where the mesh is coarse, the exact silhouette can lie
+        // several pixels outside the map's. Repeat the rescue on the background
+        // pixels next to the last pass's new hits until none is added; each pass
+        // reads only the previous state, so the result stays thread-independent.
+        std::vector<size_t> fresh, cand;
+        for (size_t k = 0; k < npx; ++k)
+            if (rescued[k]) fresh.push_back(k);
+        std::vector<uint8_t> queued(npx, 0);
+        for (int pass = 0; pass < 64 && !fresh.empty(); ++pass) {
+            cand.clear();
+            for (const size_t k : fresh) {
+                const int i = static_cast<int>(k % W), j = static_cast<int>(k / W);
+                for (int dj = -1; dj <= 1; ++dj)
+                    for (int di = -1; di <= 1; ++di) {
+                        const int ni = i + di, nj = j + dj;
+                        if (ni < 0 || nj < 0 || ni >= W || nj >= H) continue;
+                        const size_t n = map.index(ni, nj);
+                        if (!final_hits[n].face && !queued[n]) {
+                            queued[n] = 1;
+                            cand.push_back(n);
+                        }
+                    }
+            }
+            std::sort(cand.begin(), cand.end());
+            std::vector<PixelHit> got(cand.size());
+            std::vector<uint8_t> kinds(cand.size(), kNoRescue);
+            arena.execute([&] {
+                tbb::parallel_for(size_t(0), cand.size(), [&](size_t q) {
+                    const size_t k = cand[q];
+                    // final_hits is only written after this loop: every pixel reads the previous pass.
+                    kinds[q] = rescue_pixel(static_cast<int>(k % W), static_cast<int>(k / W), final_hits, got[q]);
+                });
+            });
+            fresh.clear();
+            for (size_t q = 0; q < cand.size(); ++q) {
+                queued[cand[q]] = 0;
+                if (!kinds[q]) continue;
+                final_hits[cand[q]] = got[q];
+                rescued[cand[q]] = kinds[q];
+                fresh.push_back(cand[q]);
+            }
+        }
+    } else {
+        progress.add(H);
     }
     st.newton_ms = ms_since(t0);
 
@@ -182,13 +427,14 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     img.height = H;
     img.rgba.assign(4 * npx, 0.0f);
     img.z.assign(npx, std::numeric_limits<float>::infinity());
+    img.normal.assign(3 * npx, 0.0f);
     img.face.assign(npx, 0);
     img.u.assign(npx, 0.0f);
     img.v.assign(npx, 0.0f);
     img.iterations.assign(npx, 0);
     // Key light from the upper left behind the viewer, plus a headlight along the ray.
     const Vec3 key = normalize(-1.0 * camera.forward() + 0.6 * camera.up() - 0.5 * camera.right());
-    parallel_rows(H, arena, [&](int j) {
+    parallel_rows(H, arena, &progress, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t k = map.index(i, j);
             const PixelHit& h = final_hits[k];
@@ -214,6 +460,9 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             px[2] = static_cast<float>(c.b * lambert);
             px[3] = 1.0f;
             img.z[k] = static_cast<float>(h.t);
+            img.normal[3 * k] = static_cast<float>(n.x);
+            img.normal[3 * k + 1] = static_cast<float>(n.y);
+            img.normal[3 * k + 2] = static_cast<float>(n.z);
             img.face[k] = h.face;
             img.u[k] = h.u;
             img.v[k] = h.v;
@@ -226,7 +475,13 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     uint64_t solves = 0, its = 0;
     for (size_t k = 0; k < npx; ++k) {
         if (final_hits[k].face) ++st.pixels_hit;
-        st.fallback += rescued[k];
+        switch (rescued[k]) {
+            case kRescueNeighbour: ++st.rescue_neighbour; break;
+            case kRescueSilhouette: ++st.rescue_silhouette; break;
+            case kRescueGeneral: ++st.rescue_general; break;
+            case kRescueTrimTol: ++st.rescue_trim_tolerance; break;
+            default: break;
+        }
         if (outcome[k] == kNone) continue;
         ++solves;
         its += first[k].iterations;
@@ -243,12 +498,27 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             default: break;
         }
     }
+    st.fallback = st.rescue_neighbour + st.rescue_silhouette + st.rescue_general + st.rescue_trim_tolerance;
     st.mean_iterations = solves ? double(its) / solves : 0.0;
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            auto hit = [&](int a, int b) { return a >= 0 && b >= 0 && a < W && b < H && img.face[map.index(a, b)]; };
+            if (!img.face[map.index(i, j)] && hit(i - 1, j) && hit(i + 1, j) && hit(i, j - 1) && hit(i, j + 1))
+                ++st.holes;
+        }
     st.map_triangles = 0;
     for (const Face& f : scene.faces) st.map_triangles += f.mesh.triangles.size() / 3;
     st.total_ms = ms_since(t_total);
+    progress.finish();
     return res;
 }
+
+namespace {
+// The sRGB transfer function (IEC 61966-2-1): linear segment near black, then 1/2.4 power.
+float srgb_encode(float x) {
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+}  // namespace
 
 void write_image(const RenderImage& img, const std::string& path) {
     using namespace OIIO;
@@ -259,20 +529,28 @@ void write_image(const RenderImage& img, const std::string& path) {
     if (!out) throw Error(ErrorCode::unsupported_format, "cannot write image format of '" + path + "'");
     const size_t npx = static_cast<size_t>(img.width) * img.height;
     if (ext == "exr") {
-        ImageSpec spec(img.width, img.height, 6, TypeDesc::FLOAT);
-        spec.channelnames = {"R", "G", "B", "A", "Z", "face"};
-        spec.channelformats = {TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT,
-                               TypeDesc::UINT32};
+        ImageSpec spec(img.width, img.height, 12, TypeDesc::FLOAT);
+        spec.channelnames = {"R", "G", "B", "A", "Z", "face", "N.X", "N.Y", "N.Z", "u", "v", "iterations"};
+        spec.channelformats = {TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT,
+                               TypeDesc::FLOAT, TypeDesc::UINT32, TypeDesc::FLOAT, TypeDesc::FLOAT,
+                               TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::UINT32};
         spec.alpha_channel = 3;
         spec.z_channel = 4;
         struct Px {
             float r, g, b, a, z;
             uint32_t face;
+            float nx, ny, nz, u, v;
+            uint32_t iterations;
         };
-        static_assert(sizeof(Px) == 24);
+        static_assert(sizeof(Px) == 48);
+        const bool has_n = img.normal.size() == 3 * npx, has_uv = img.u.size() == npx && img.v.size() == npx;
+        const bool has_it = img.iterations.size() == npx;
         std::vector<Px> buf(npx);
         for (size_t k = 0; k < npx; ++k)
-            buf[k] = {img.rgba[4 * k], img.rgba[4 * k + 1], img.rgba[4 * k + 2], img.rgba[4 * k + 3], img.z[k], img.face[k]};
+            buf[k] = {img.rgba[4 * k], img.rgba[4 * k + 1], img.rgba[4 * k + 2], img.rgba[4 * k + 3], img.z[k], img.face[k],
+                      has_n ? img.normal[3 * k] : 0.0f, has_n ? img.normal[3 * k + 1] : 0.0f,
+                      has_n ? img.normal[3 * k + 2] : 0.0f, has_uv ? img.u[k] : 0.0f, has_uv ? img.v[k] : 0.0f,
+                      has_it ? img.iterations[k] : 0u};
         if (!out->open(path, spec) || !out->write_image(TypeDesc::UNKNOWN, buf.data()) || !out->close())
             throw Error(ErrorCode::io, "cannot write '" + path + "': " + out->geterror());
         return;
@@ -283,7 +561,7 @@ void write_image(const RenderImage& img, const std::string& path) {
     for (size_t k = 0; k < npx; ++k)
         for (int c = 0; c < nch; ++c) {
             const float x = std::clamp(img.rgba[4 * k + c], 0.0f, 1.0f);
-            const float g = c == 3 ? x : std::pow(x, 1.0f / 2.2f);  // gamma for display formats
+            const float g = c == 3 ? x : srgb_encode(x);  // display formats are sRGB; alpha stays linear
             buf[k * nch + c] = static_cast<uint8_t>(std::lround(g * 255.0f));
         }
     if (!out->open(path, spec) || !out->write_image(TypeDesc::UINT8, buf.data()) || !out->close())

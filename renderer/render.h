@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,12 @@ struct RenderOptions {
     MapPrecision map_precision = MapPrecision::float32;
     int threads = 0;           // 0: all hardware threads
     NewtonParams newton;       // newton.eps <= 0: default_newton_eps(scene.bbox)
-    bool rescue = true;        // retry failed pixels with their neighbours' faces
+    bool rescue = true;        // retry failed pixels with their neighbours' faces (see render.cpp)
     Color background{0, 0, 0}; // with alpha 0
+    // Called with the fraction done in (0, 1], from the rendering threads (one call
+    // at a time, fractions increasing), about every 2% of the frame's rows and once
+    // with 1.0 at the end. Must be cheap; has no effect on the output.
+    std::function<void(double fraction)> progress;
 };
 
 // Per-pixel buffers, row-major, row 0 = top (contract row j = 0).
@@ -31,6 +36,7 @@ struct RenderImage {
     int width = 0, height = 0;
     std::vector<float> rgba;        // 4 per pixel, linear
     std::vector<float> z;           // hit distance t, +inf for background
+    std::vector<float> normal;      // 3 per pixel: world-space shading normal (facing the viewer), 0 background
     std::vector<uint32_t> face;     // face index, 0 background
     std::vector<float> u, v;        // parameters of the hit
     std::vector<uint8_t> iterations;// Newton iterations of the pixel's final solve
@@ -47,7 +53,15 @@ struct RenderStats {
     // the trim), trimmed (converged outside the trim), or the failing criterion.
     uint64_t converged = 0, diverged = 0, singular = 0, max_iterations = 0, left_domain = 0, behind_eye = 0,
              trimmed = 0;
-    uint64_t fallback = 0;        // pixels whose hit came from the neighbour rescue
+    uint64_t fallback = 0;        // pixels whose hit came from the rescue (any kind below)
+    // Rescue, by kind (they sum to `fallback`): a pixel whose map face failed, hit
+    // from its 8 neighbours' faces and starts; a map-background pixel next to hits,
+    // hit the same way (the exact silhouette is not the mesh's); a pixel hit only
+    // by the general fallback (every face of the 5x5 neighbourhood, several starts);
+    // a crack pixel between faces filled by a hit just outside a trim loop, within
+    // the face's trim tolerance.
+    uint64_t rescue_neighbour = 0, rescue_silhouette = 0, rescue_general = 0, rescue_trim_tolerance = 0;
+    uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
     double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, total_ms = 0;
 };
 
@@ -58,8 +72,9 @@ struct RenderResult {
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options);
 
-// Writes by extension: .exr -> channels R, G, B, A, Z (float) and face (uint32);
-// .png/.jpg/.tif -> 8-bit RGBA (RGB for jpg) with sRGB-like gamma 1/2.2.
+// Writes by extension: .exr -> channels R, G, B, A, Z (float), face (uint32),
+// N.X, N.Y, N.Z, u, v (float) and iterations (uint32) (DESIGN.md AOVs);
+// .png/.jpg/.tif -> 8-bit RGBA (RGB for jpg), colour sRGB-encoded (IEC 61966-2-1), alpha linear.
 // Throws Error(io) or Error(unsupported_format).
 void write_image(const RenderImage& image, const std::string& path);
 

@@ -28,6 +28,9 @@ public:
 
     bool trimmed() const { return !edges_.empty(); }
     bool inside(Vec2 p) const;
+    // Distance from p to the nearest loop edge when it is <= max_d, else +inf
+    // (looks only at the grid cells within max_d of p). Untrimmed: +inf.
+    double boundary_distance(Vec2 p, double max_d) const;
 
     int cells_u() const { return nu_; }
     int cells_v() const { return nv_; }

@@ -284,3 +284,51 @@ TEST(RendererNewton, ToleranceCost) {
         std::printf("[ eps %.0e diag ] mean proposed iterations %.3f over %d hits\n", rel, double(it) / n, n);
     }
 }
+
+// A full rational cylinder (radius 1, axis z, z in [0, 1]) whose seam is at u = 0 == u = 1,
+// the point (1, 0, z). A ray hitting just past the seam (angle +0.05 rad, u ~ 0.0125),
+// started just before it (u = 0.99): the step crosses u = 1. With the seam detected,
+// Newton continues from u = 0 and converges; clamped at the box (the old behaviour)
+// it stops on the seam, short of the ray.
+TEST(RendererNewton, StepAcrossSeamWraps) {
+    NurbsSurface s;
+    s.degree_u = 2;
+    s.degree_v = 1;
+    s.num_u = 9;
+    s.num_v = 2;
+    s.knots_u = {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1};
+    s.knots_v = {0, 0, 1, 1};
+    s.rational = true;
+    const double w = std::sqrt(0.5);
+    const Vec3 circle[9] = {{1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 1, 0}, {-1, 0, 0},
+                            {-1, -1, 0}, {0, -1, 0}, {1, -1, 0}, {1, 0, 0}};
+    for (int i = 0; i < 9; ++i)
+        for (int j = 0; j < 2; ++j) s.cp.push_back(nurbsrt::testing::hpt(circle[i] + Vec3{0, 0, double(j)}, i % 2 ? w : 1.0));
+
+    const UvBox box = face_uv_box(s, 0, 1, 0, 1, 1e-9);
+    EXPECT_TRUE(box.wrap_u);
+    EXPECT_FALSE(box.wrap_v);  // the circles z = 0 and z = 1 are distinct
+    EXPECT_FALSE(face_uv_box(s, 0, 0.5, 0, 1, 1e-9).wrap_u);  // half a cylinder has no seam
+
+    const double y = std::sin(0.05), x = std::cos(0.05);
+    CameraSpec spec = nurbsrt::testing::look({5, y, 0.5}, {0, y, 0.5}, {0, 0, 1}, 10);
+    spec.width = spec.height = 31;  // the centre pixel's ray is the axis of the view
+    const Camera cam(spec);
+    const int ci = 15, cj = 15;
+    const Ray ray = cam.pixel_ray(ci, cj);
+    const double ta = (5 - x) / std::abs(ray.dir.x);
+    NewtonParams params;
+    params.eps = 1e-10;
+    const NurbsSurface ps = project_surface(cam, s);
+    const NewtonResult a = newton_proposed(ps, cam, cam.pixel_screen(ci, cj), 0.99, 0.5, box, params);
+    const NewtonResult b = newton_martin(s, ray, 0.99, 0.5, box, params);
+    for (const NewtonResult& r : {a, b}) {
+        ASSERT_EQ(r.status, NewtonStatus::converged) << newton_status_name(r.status);
+        EXPECT_NEAR(r.t, ta, 1e-9);
+        EXPECT_GT(r.u, 0.0);
+        EXPECT_LT(r.u, 0.05);  // on the far side of the seam
+    }
+    UvBox clamped = box;
+    clamped.wrap_u = false;
+    EXPECT_NE(newton_martin(s, ray, 0.99, 0.5, clamped, params).status, NewtonStatus::converged);
+}

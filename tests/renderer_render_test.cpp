@@ -121,6 +121,147 @@ TEST(RendererRender, SameOutputForOneAndTwoThreads) {
     EXPECT_EQ(a.image.face, b.image.face);
     EXPECT_EQ(a.stats.iteration_histogram, b.stats.iteration_histogram);
     EXPECT_EQ(a.stats.fallback, b.stats.fallback);
+    EXPECT_EQ(a.image.normal, b.image.normal);
+    EXPECT_EQ(a.stats.rescue_trim_tolerance, b.stats.rescue_trim_tolerance);
+    EXPECT_EQ(a.stats.rescue_general, b.stats.rescue_general);
+}
+
+namespace {
+
+// Pixels where the rendered face set disagrees with the exact sphere octant, and
+// background pixels whose 4 neighbours are hit.
+struct SphereCheck {
+    int missed = 0, extra = 0, holes = 0, expected_hits = 0;
+};
+SphereCheck check_sphere(const RenderResult& r, const Camera& cam, const AnalyticPatch& sphere) {
+    SphereCheck c;
+    const int W = cam.width(), H = cam.height();
+    auto hit = [&](int i, int j) { return i >= 0 && j >= 0 && i < W && j < H && r.image.face[size_t(j) * W + i] != 0; };
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const bool want = sphere.hit(cam.pixel_ray(i, j)).has_value();
+            c.expected_hits += want;
+            c.missed += want && !hit(i, j);
+            c.extra += !want && hit(i, j);
+            c.holes += !hit(i, j) && hit(i - 1, j) && hit(i + 1, j) && hit(i, j - 1) && hit(i, j + 1);
+        }
+    return c;
+}
+
+}  // namespace
+
+// Two faces on one sphere octant, split at v = 0.5, each with a deliberately
+// coarse mesh of its own resolution (a T-junction edge in the map, chords far
+// inside the silhouette) and trim loops that stop short of the shared edge by
+// their trim tolerance (as sampled loops may): the rescue must leave no crack
+// along the shared edge and no gap at the silhouette.
+TEST(RendererRender, RescueClosesCracksBetweenAdjacentFaces) {
+    const AnalyticPatch sphere = sphere_patch(1.5);
+    const double delta = 2e-3;
+    Scene scene;
+    for (int k = 0; k < 2; ++k) {
+        const int n = k == 0 ? 2 : 3;
+        Face f;
+        f.index = k + 1;
+        f.surface = sphere.surface;
+        f.u_min = 0;
+        f.u_max = 1;
+        f.v_min = k == 0 ? 0.0 : 0.5;
+        f.v_max = k == 0 ? 0.5 : 1.0;
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; j <= n; ++j) {
+                const double u = double(i) / n, v = f.v_min + (f.v_max - f.v_min) * j / n;
+                f.mesh.uv.push_back({u, v});
+                f.mesh.xyz.push_back(project(evaluate(f.surface, u, v)));
+            }
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                const uint32_t a = i * (n + 1) + j, b = a + (n + 1);
+                f.mesh.triangles.insert(f.mesh.triangles.end(), {a, b, b + 1, a, b + 1, a + 1});
+            }
+        const double v0 = k == 0 ? 0.0 : 0.5 + delta, v1 = k == 0 ? 0.5 - delta : 1.0;
+        TrimLoop loop;
+        loop.outer = true;
+        loop.points = {{0, v0}, {1, v0}, {1, v1}, {0, v1}};
+        f.loops = {loop};
+        f.trim_tolerance_uv = delta;
+        scene.faces.push_back(f);
+    }
+    scene.bbox = sphere.box;
+    CameraSpec spec = sphere.view;
+    spec.width = 320;
+    spec.height = 240;
+    const Camera cam(spec);
+    for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
+        RenderOptions opt;
+        opt.method = m;
+        const RenderResult r = render(scene, cam, opt);
+        const SphereCheck c = check_sphere(r, cam, sphere);
+        opt.rescue = false;
+        const SphereCheck c0 = check_sphere(render(scene, cam, opt), cam, sphere);
+        std::printf("[ split sphere %s ] expected %d: missed %d extra %d holes %d (without rescue: missed %d holes %d); "
+                    "rescue neighbour %llu silhouette %llu general %llu trim_tolerance %llu\n",
+                    newton_method_name(m), c.expected_hits, c.missed, c.extra, c.holes, c0.missed, c0.holes,
+                    (unsigned long long)r.stats.rescue_neighbour, (unsigned long long)r.stats.rescue_silhouette,
+                    (unsigned long long)r.stats.rescue_general, (unsigned long long)r.stats.rescue_trim_tolerance);
+        EXPECT_GT(c0.missed, 20);  // the setup does crack and lose silhouette pixels without the rescue
+        EXPECT_EQ(c.missed, 0);
+        EXPECT_EQ(c.extra, 0);
+        EXPECT_EQ(c.holes, 0);
+        EXPECT_EQ(r.stats.holes, 0u);
+        EXPECT_GT(r.stats.rescue_trim_tolerance, 0u);
+        EXPECT_GT(r.stats.rescue_silhouette, 0u);
+        EXPECT_EQ(r.stats.fallback, r.stats.rescue_neighbour + r.stats.rescue_silhouette + r.stats.rescue_general +
+                                        r.stats.rescue_trim_tolerance);
+    }
+}
+
+// A sphere octant with a 2 x 2 mesh: the map's silhouette is the chords', far
+// inside the exact one; the silhouette extension must recover every pixel whose
+// ray hits the exact surface, and nothing else.
+TEST(RendererRender, SilhouetteMatchesAnalyticSphere) {
+    const AnalyticPatch sphere = sphere_patch(1.5);
+    Scene scene;
+    scene.faces.push_back(make_face(sphere, 1, 2));
+    scene.bbox = sphere.box;
+    CameraSpec spec = sphere.view;
+    spec.width = 240;
+    spec.height = 180;
+    for (Projection proj : {Projection::perspective, Projection::orthographic}) {
+        spec.projection = proj;
+        spec.ortho_height = 3.0;
+        const Camera cam(spec);
+        for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
+            RenderOptions opt;
+            opt.method = m;
+            const RenderResult r = render(scene, cam, opt);
+            const SphereCheck c = check_sphere(r, cam, sphere);
+            std::printf("[ coarse sphere %s %s ] expected %d: missed %d extra %d; silhouette rescue %llu general %llu\n",
+                        proj == Projection::perspective ? "persp" : "ortho", newton_method_name(m), c.expected_hits,
+                        c.missed, c.extra, (unsigned long long)r.stats.rescue_silhouette,
+                        (unsigned long long)r.stats.rescue_general);
+            EXPECT_GT(r.stats.rescue_silhouette, 0u);
+            EXPECT_EQ(c.missed, 0);
+            EXPECT_EQ(c.extra, 0);
+        }
+    }
+}
+
+TEST(RendererRender, ProgressIsMonotoneAndEndsAtOne) {
+    AnalyticPatch sphere, plane;
+    const Scene scene = test_scene(sphere, plane);
+    const Camera cam(scene_view(scene, 160, 120));
+    std::vector<double> seen;
+    RenderOptions opt;
+    opt.threads = 2;
+    opt.progress = [&](double f) { seen.push_back(f); };  // calls are serialized by the renderer
+    const RenderResult r = render(scene, cam, opt);
+    ASSERT_GE(seen.size(), 3u);
+    EXPECT_EQ(seen.back(), 1.0);
+    for (size_t k = 1; k < seen.size(); ++k) EXPECT_GT(seen[k], seen[k - 1]);
+    RenderOptions quiet;
+    quiet.threads = 2;
+    EXPECT_EQ(render(scene, cam, quiet).image.rgba, r.image.rgba);  // no effect on the output
 }
 
 TEST(RendererRender, WritesExrWithAovsAndPng) {
@@ -136,15 +277,30 @@ TEST(RendererRender, WritesExrWithAovsAndPng) {
     ASSERT_TRUE(in);
     const OIIO::ImageSpec& spec = in->spec();
     EXPECT_EQ(spec.width, 64);
-    ASSERT_EQ(spec.nchannels, 6);
+    ASSERT_EQ(spec.nchannels, 12);
     std::vector<std::string> names(spec.channelnames.begin(), spec.channelnames.end());
-    for (const char* c : {"R", "G", "B", "A", "Z", "face"})
+    for (const char* c : {"R", "G", "B", "A", "Z", "face", "N.X", "N.Y", "N.Z", "u", "v", "iterations"})
         EXPECT_NE(std::find(names.begin(), names.end(), c), names.end()) << c;
-    const int fc = static_cast<int>(std::find(names.begin(), names.end(), "face") - names.begin());
+    auto channel = [&](const char* c) { return static_cast<int>(std::find(names.begin(), names.end(), c) - names.begin()); };
+    const int fc = channel("face"), ic = channel("iterations");
     EXPECT_EQ(spec.channelformat(fc), OIIO::TypeDesc::UINT32);
-    std::vector<uint32_t> face(64 * 48);
+    EXPECT_EQ(spec.channelformat(ic), OIIO::TypeDesc::UINT32);
+    std::vector<uint32_t> face(64 * 48), its(64 * 48);
     ASSERT_TRUE(in->read_image(0, 0, fc, fc + 1, OIIO::TypeDesc::UINT32, face.data()));
     EXPECT_EQ(face, r.image.face);
+    ASSERT_TRUE(in->read_image(0, 0, ic, ic + 1, OIIO::TypeDesc::UINT32, its.data()));
+    for (size_t k = 0; k < its.size(); ++k) EXPECT_EQ(its[k], r.image.iterations[k]);
+    std::vector<float> u(64 * 48), nz(64 * 48);
+    ASSERT_TRUE(in->read_image(0, 0, channel("u"), channel("u") + 1, OIIO::TypeDesc::FLOAT, u.data()));
+    ASSERT_TRUE(in->read_image(0, 0, channel("N.Z"), channel("N.Z") + 1, OIIO::TypeDesc::FLOAT, nz.data()));
+    EXPECT_EQ(u, r.image.u);
+    for (size_t k = 0; k < nz.size(); ++k) {
+        EXPECT_EQ(nz[k], r.image.normal[3 * k + 2]);
+        if (r.image.face[k]) {  // unit shading normals where hit
+            const float* n = &r.image.normal[3 * k];
+            EXPECT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0f, 1e-5f);
+        }
+    }
     in->close();
     EXPECT_GT(std::filesystem::file_size(dir / "f.png"), 100u);
     EXPECT_THROW(write_image(r.image, (dir / "f.unknownext").string()), std::exception);
