@@ -46,6 +46,7 @@ struct Args {
     std::string method = "proposed";
     std::string map_precision = "float";
     int threads = 0;
+    double tolerance = kDefaultRelativeTolerance;
     std::string background;
     LoadOptions load;
     bool quiet = false;
@@ -109,6 +110,10 @@ void add_render_command(CLI::App& app) {
         ->check(CLI::IsMember({"float", "rgb8"}))->capture_default_str();
     cmd->add_option("--threads", a->threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))
         ->capture_default_str();
+    cmd->add_option("--tolerance", a->tolerance,
+                    "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
+                    "the bounding-box diagonal (same for both methods)")
+        ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
     cmd->add_option("--background", a->background, "background colour r,g,b in [0,1] (default transparent black)");
     cmd->add_option("--mesh-deflection", a->load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
@@ -136,6 +141,7 @@ void add_render_command(CLI::App& app) {
         options.method = a->method == "martin" ? NewtonMethod::martin : NewtonMethod::proposed;
         options.map_precision = a->map_precision == "rgb8" ? MapPrecision::rgb8 : MapPrecision::float32;
         options.threads = a->threads;
+        options.newton.eps = a->tolerance * std::max(scene.bbox.diagonal(), 1e-300);
         if (!a->background.empty()) {
             const Vec3 bg = parse_vec3(a->background, "--background");
             options.background = {static_cast<float>(bg.x), static_cast<float>(bg.y), static_cast<float>(bg.z)};

@@ -43,9 +43,9 @@ UvBox face_uv_box(const NurbsSurface& s, double u0, double u1, double v0, double
     return b;
 }
 
-double default_newton_eps(const BBox& box) {
+double default_newton_eps(const BBox& box, double relative) {
     const double d = box.diagonal();
-    return 1e-9 * (d > 0 ? d : 1.0);
+    return relative * (d > 0 ? d : 1.0);
 }
 
 namespace {

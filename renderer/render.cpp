@@ -214,6 +214,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     });
     Solver solver{scene, camera, frames, options, options.newton};
     if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(scene.bbox);
+    st.tolerance = solver.params.eps;
     // Rescue solves: clamp-and-continue at face borders, backtracking, a few more steps.
     NewtonParams robust = solver.params;
     robust.robust = true;

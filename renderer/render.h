@@ -22,7 +22,7 @@ struct RenderOptions {
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
     int threads = 0;           // 0: all hardware threads
-    NewtonParams newton;       // newton.eps <= 0: default_newton_eps(scene.bbox)
+    NewtonParams newton;       // newton.eps <= 0 (the default): default_newton_eps(scene.bbox)
     bool rescue = true;        // retry failed pixels with their neighbours' faces (see render.cpp)
     Color background{0, 0, 0}; // with alpha 0
     // Called with the fraction done in (0, 1], from the rendering threads (one call
@@ -47,6 +47,7 @@ struct RenderStats {
     int width = 0, height = 0, threads = 0;
     size_t faces = 0, patches = 0, map_triangles = 0;
     size_t pixels_hit = 0;
+    double tolerance = 0;                       // (12) stop tolerance used, model units
     double mean_iterations = 0;                 // over every primary (map-started) solve
     std::vector<uint64_t> iteration_histogram;  // [k] = primary solves that took k iterations
     // Outcome of each pixel's primary solve (a map pixel): converged (hit inside

@@ -514,7 +514,7 @@ std::string diagnose(const Context& c, const RenderImage& im, const PreliminaryM
     params.eps = default_newton_eps(c.scene.bbox);
     auto run = [&](uint32_t id, double u0, double v0) {
         const Face& f = c.scene.faces[id - 1];
-        const UvBox box{f.u_min, f.u_max, f.v_min, f.v_max};
+        const UvBox box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, 1e-7 * c.scene.bbox.diagonal());
         const NewtonResult r =
             method == NewtonMethod::proposed
                 ? newton_proposed(project_surface(c.camera, f.surface), c.camera, c.camera.pixel_screen(s.i, s.j), u0,

@@ -90,7 +90,7 @@ TEST(RendererNewton, HitsMatchAnalyticIntersection) {
                 const NurbsSurface proj = project_surface(cam, p.surface);
                 const GridStart grid(p.surface);
                 NewtonParams params;
-                params.eps = default_newton_eps(p.box);
+                params.eps = default_newton_eps(p.box, 1e-9);
                 Tally tl;
                 for (int j = 0; j < spec.height; ++j)
                     for (int i = 0; i < spec.width; ++i) {
@@ -153,7 +153,7 @@ TEST(RendererNewton, ProposedAndMartinAgree) {
         const NurbsSurface proj = project_surface(cam, p.surface);
         const GridStart grid(p.surface);
         NewtonParams params;
-        params.eps = default_newton_eps(p.box);
+        params.eps = default_newton_eps(p.box, 1e-9);
         for (int j = 0; j < cam.height(); ++j)
             for (int i = 0; i < cam.width(); ++i) {
                 const Ray ray = cam.pixel_ray(i, j);
@@ -189,7 +189,7 @@ TEST(RendererNewton, DegeneratePole) {
         const NurbsSurface ps = project_surface(cam, p.surface);
         const GridStart grid(p.surface, 200);
         NewtonParams params;
-        params.eps = default_newton_eps(p.box);
+        params.eps = default_newton_eps(p.box, 1e-9);
         int hits = 0, conv = 0;
         for (int j = 0; j < spec.height; ++j)
             for (int i = 0; i < spec.width; ++i) {
@@ -219,7 +219,7 @@ TEST(RendererNewton, TerminationCriteria) {
     const NurbsSurface ps = project_surface(cam, p.surface);
     const UvBox box = full_box(p.surface);
     NewtonParams params;
-    params.eps = default_newton_eps(p.box);
+    params.eps = default_newton_eps(p.box, 1e-9);
     // Singular (14): starting exactly on the pole row, where P_v is parallel to P
     // (proposed) and C_v = 0 (martin).
     const int ci = cam.width() / 2, cj = cam.height() / 2;

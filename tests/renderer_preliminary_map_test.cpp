@@ -117,7 +117,7 @@ TEST(RendererPreliminaryMap, CurvedPatchStartsNearExactHit) {
     const PreliminaryMap map = render_preliminary_map(scene, cam);
     const NurbsSurface proj = project_surface(cam, p.surface);
     NewtonParams params;
-    params.eps = default_newton_eps(p.box);
+    params.eps = default_newton_eps(p.box, 1e-9);
     int n = 0, conv = 0;
     long its = 0;
     double max_d = 0;
