@@ -17,6 +17,8 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::not_found: return "not_found";
         case ErrorCode::overloaded: return "overloaded";
         case ErrorCode::render_timeout: return "render_timeout";
+        case ErrorCode::canceled: return "canceled";
+        case ErrorCode::unauthorized: return "unauthorized";
         case ErrorCode::internal: return "internal";
     }
     return "internal";  // out-of-range value cast to ErrorCode

@@ -23,6 +23,8 @@ enum class ErrorCode {
     not_found,           // no such route or resource
     overloaded,          // the work queue is full; retry later
     render_timeout,      // a render exceeded its time limit
+    canceled,            // the work was canceled (RenderOptions::cancel, a deleted job)
+    unauthorized,        // an API key is configured and the request has none or a wrong one
     internal,            // a bug: should never reach a user
 };
 

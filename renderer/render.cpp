@@ -154,10 +154,18 @@ private:
     double last_ = 0;
 };
 
+// RenderOptions::cancel: blocks of rows are skipped once it is set, and the pass
+// then ends with Error(canceled) (a partial pass is never used).
+bool canceled(const RenderOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
+void throw_if_canceled(const RenderOptions& o) {
+    if (canceled(o)) throw Error(ErrorCode::canceled, "the render was canceled");
+}
+
 template <class F>
-void parallel_rows(int height, tbb::task_arena& arena, Progress* progress, F&& fn) {
+void parallel_rows(int height, tbb::task_arena& arena, Progress* progress, const RenderOptions& options, F&& fn) {
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, height, 4), [&](const tbb::blocked_range<int>& r) {
+            if (canceled(options)) return;
             for (int j = r.begin(); j < r.end(); ++j) fn(j);
             if (progress) progress->add(r.end() - r.begin());
         });
@@ -187,7 +195,9 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
 
     // 1-2. Preliminary map (PAPER.md eq. 4).
     auto t0 = Clock::now();
+    throw_if_canceled(options);
     const PreliminaryMap map = render_preliminary_map(scene, camera, options.map_precision);
+    throw_if_canceled(options);
     st.preliminary_map_ms = ms_since(t0);
 
     // 3-4. Newton per pixel from the map's start, trim test, then rescue.
@@ -223,7 +233,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
 
     std::vector<PixelHit> first(npx);
     std::vector<uint8_t> outcome(npx, kNone);
-    parallel_rows(H, arena, &progress, [&](int j) {
+    parallel_rows(H, arena, &progress, options, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t k = map.index(i, j);
             const uint32_t id = map.face[k];
@@ -231,6 +241,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], first[k]);
         }
     });
+    throw_if_canceled(options);
 
     // Rescue of pixels without a first-pass hit. Reads only the map and first-pass
     // data, so every pixel's result is independent of the thread count.
@@ -368,12 +379,13 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             return kind;
     };
     if (options.rescue) {
-        parallel_rows(H, arena, &progress, [&](int j) {
+        parallel_rows(H, arena, &progress, options, [&](int j) {
             for (int i = 0; i < W; ++i) {
                 const size_t k = map.index(i, j);
                 if (!first[k].face) rescued[k] = rescue_pixel(i, j, first, final_hits[k]);
             }
         });
+        throw_if_canceled(options);
         // Silhouette growth: where the mesh is coarse, the exact silhouette can lie
         // several pixels outside the map's. Repeat the rescue on the background
         // pixels next to the last pass's new hits until none is added; each pass
@@ -383,6 +395,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             if (rescued[k]) fresh.push_back(k);
         std::vector<uint8_t> queued(npx, 0);
         for (int pass = 0; pass < 64 && !fresh.empty(); ++pass) {
+            throw_if_canceled(options);
             cand.clear();
             for (const size_t k : fresh) {
                 const int i = static_cast<int>(k % W), j = static_cast<int>(k / W);
@@ -435,7 +448,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     img.iterations.assign(npx, 0);
     // Key light from the upper left behind the viewer, plus a headlight along the ray.
     const Vec3 key = normalize(-1.0 * camera.forward() + 0.6 * camera.up() - 0.5 * camera.right());
-    parallel_rows(H, arena, &progress, [&](int j) {
+    parallel_rows(H, arena, &progress, options, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t k = map.index(i, j);
             const PixelHit& h = final_hits[k];
@@ -510,6 +523,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     st.map_triangles = 0;
     for (const Face& f : scene.faces) st.map_triangles += f.mesh.triangles.size() / 3;
     st.total_ms = ms_since(t_total);
+    throw_if_canceled(options);
     progress.finish();
     return res;
 }

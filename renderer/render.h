@@ -6,8 +6,10 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,10 @@ struct RenderOptions {
     // at a time, fractions increasing), about every 2% of the frame's rows and once
     // with 1.0 at the end. Must be cheap; has no effect on the output.
     std::function<void(double fraction)> progress;
+    // Cooperative cancellation: when set and it becomes true, render() stops at the
+    // next block of rows and throws Error(canceled). Shared so that a caller that
+    // stops waiting (a timed-out request, a deleted job) can leave it behind safely.
+    std::shared_ptr<const std::atomic<bool>> cancel;
 };
 
 // Per-pixel buffers, row-major, row 0 = top (contract row j = 0).

@@ -7,7 +7,9 @@ namespace nurbsrt::server {
 int http_status(ErrorCode code) {
     switch (code) {
         case ErrorCode::invalid_argument: return 400;
+        case ErrorCode::unauthorized: return 401;
         case ErrorCode::not_found: return 404;
+        case ErrorCode::canceled: return 409;                // the resource's work was canceled
         case ErrorCode::limit_exceeded: return 413;          // upload, pixels, faces, memory
         case ErrorCode::unsupported_format: return 415;
         case ErrorCode::unreadable_file:                     // the CAD content is the problem
@@ -27,7 +29,9 @@ int http_status(ErrorCode code) {
 const char* problem_title(ErrorCode code) {
     switch (code) {
         case ErrorCode::invalid_argument: return "Invalid request";
+        case ErrorCode::unauthorized: return "Unauthorized";
         case ErrorCode::not_found: return "Not found";
+        case ErrorCode::canceled: return "Canceled";
         case ErrorCode::limit_exceeded: return "Limit exceeded";
         case ErrorCode::unsupported_format: return "Unsupported format";
         case ErrorCode::unreadable_file: return "Unreadable CAD file";

@@ -4,6 +4,7 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <future>
@@ -64,16 +65,20 @@ std::shared_ptr<const Scene> scene_for(ServerContext& ctx, const std::string& by
 }
 
 // Runs the render on its own thread and waits at most the configured time. A
-// render that runs over keeps its worker slot (the ticket) until it really ends:
-// the renderer cannot be interrupted, and the slot must not be handed out twice.
+// render that runs over is canceled (RenderOptions::cancel); it keeps its worker
+// slot (the ticket) until its thread has really stopped, at the next block of
+// rows, so the slot is never handed out twice.
 RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> scene, const Camera& camera,
-                            const RenderOptions& options, std::shared_ptr<AdmissionGate::Ticket> ticket) {
+                            RenderOptions options, std::shared_ptr<AdmissionGate::Ticket> ticket) {
+    auto cancel = std::make_shared<std::atomic<bool>>(false);
+    options.cancel = cancel;
     auto task = std::make_shared<std::packaged_task<RenderResult()>>(
         [scene, camera, options, ticket] { return render(*scene, camera, options); });
     std::future<RenderResult> result = task->get_future();
     std::thread([task] { (*task)(); }).detach();
     const auto limit = std::chrono::duration<double>(ctx.config.render_timeout_s);
     if (result.wait_for(limit) != std::future_status::ready) {
+        cancel->store(true);
         char msg[128];
         std::snprintf(msg, sizeof msg, "the render did not finish within %.0f s", ctx.config.render_timeout_s);
         throw Error(ErrorCode::render_timeout, msg);

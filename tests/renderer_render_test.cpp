@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "renderer/error.h"
 #include "renderer/render.h"
 #include "renderer_test_surfaces.h"
 
@@ -262,6 +263,41 @@ TEST(RendererRender, ProgressIsMonotoneAndEndsAtOne) {
     RenderOptions quiet;
     quiet.threads = 2;
     EXPECT_EQ(render(scene, cam, quiet).image.rgba, r.image.rgba);  // no effect on the output
+}
+
+// A cancel flag set before the frame, or while it runs (from the progress
+// callback, i.e. mid-frame on a rendering thread), ends the render with
+// Error(canceled) instead of a partial image; an unset flag changes nothing.
+TEST(RendererRender, CancelFlagStopsTheFrame) {
+    AnalyticPatch sphere, plane;
+    const Scene scene = test_scene(sphere, plane);
+    const Camera cam(scene_view(scene, 160, 120));
+    auto flag = std::make_shared<std::atomic<bool>>(true);
+    RenderOptions opt;
+    opt.threads = 2;
+    opt.cancel = flag;
+    try {
+        render(scene, cam, opt);
+        ADD_FAILURE() << "a canceled render returned an image";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::canceled);
+    }
+
+    flag->store(false);
+    double last = 0;
+    opt.progress = [&](double f) {
+        last = f;
+        if (f > 0.3) flag->store(true);
+    };
+    EXPECT_THROW(render(scene, cam, opt), Error);
+    EXPECT_GT(last, 0.3);
+    EXPECT_LT(last, 1.0);  // it never reported a finished frame
+
+    flag->store(false);
+    opt.progress = nullptr;
+    RenderOptions plain;
+    plain.threads = 2;
+    EXPECT_EQ(render(scene, cam, opt).image.rgba, render(scene, cam, plain).image.rgba);
 }
 
 TEST(RendererRender, WritesExrWithAovsAndPng) {
