@@ -2,6 +2,8 @@
 // environment variable NURBSRT_<FLAG> (a flag on the command line wins).
 #include <CLI/CLI.hpp>
 
+#include <cstdlib>
+
 #include "cli/commands.h"
 #include "server/server.h"
 
@@ -52,7 +54,14 @@ void add_serve_command(CLI::App& app) {
         ->envname("NURBSRT_IMPORT_MEMORY_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--cache-mb", *cache_mb, "scene cache capacity, MiB (0: no cache)")
         ->envname("NURBSRT_CACHE_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--api-keys-file", c->api_keys_file,
+                    "require 'Authorization: Bearer <key>' with a key from this file (one per line,\n"
+                    "'#' comments, at least 16 characters) on every route but /healthz, /readyz and\n"
+                    "/v1/openapi.json; keys can also be given comma-separated in NURBSRT_API_KEYS")
+        ->envname("NURBSRT_API_KEYS_FILE");
     cmd->callback([c, upload_mb, import_memory_mb, cache_mb] {
+        // Keys themselves only from the environment: a command line shows in `ps`.
+        if (const char* k = std::getenv("NURBSRT_API_KEYS")) c->api_keys = k;
         c->max_upload_bytes = static_cast<size_t>(*upload_mb * (1 << 20));
         c->import_memory_bytes = static_cast<size_t>(*import_memory_mb * (1 << 20));
         c->cache_bytes = static_cast<size_t>(*cache_mb * (1 << 20));

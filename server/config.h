@@ -32,6 +32,11 @@ struct ServerConfig {
 
     size_t cache_bytes = size_t(512) << 20;  // scene cache capacity (0: no cache)
 
+    // API keys (server/api_keys.h): a file of keys, and/or a comma-separated list
+    // (from the environment only). None configured: no authentication.
+    std::string api_keys_file;
+    std::string api_keys;
+
     // Throws nurbsrt::Error(invalid_argument) with a message naming the setting.
     void validate() const;
 };

@@ -45,23 +45,23 @@ void check_limits(const ServerContext& ctx, const RenderRequest& r) {
 // The imported scene for these bytes: from the cache, or imported in a child process.
 std::shared_ptr<const Scene> scene_for(ServerContext& ctx, const std::string& bytes, bool& cache_hit) {
     const ImportOptions options;
-    const std::string key = scene_cache_key(bytes, options);
-    if (auto s = ctx.cache.get(key)) {
-        cache_hit = true;
-        ctx.metrics.count_cache(true);
-        return s;
-    }
-    cache_hit = false;
-    ctx.metrics.count_cache(false);
-    const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
-    try {
-        auto scene = std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
-        ctx.cache.put(key, scene);
-        return scene;
-    } catch (const Error& e) {
-        ctx.metrics.count_import_failure(error_code_name(e.code()));
-        throw;
-    }
+    SceneCache::Source source = SceneCache::Source::loaded;
+    auto scene = ctx.cache.get_or_load(
+        scene_cache_key(bytes, options),
+        [&] {
+            const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
+            try {
+                return std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
+            } catch (const Error& e) {
+                ctx.metrics.count_import_failure(error_code_name(e.code()));
+                throw;
+            }
+        },
+        source);
+    // A request that waited for another's import of the same bytes paid no import.
+    cache_hit = source != SceneCache::Source::loaded;
+    ctx.metrics.count_cache(cache_hit);
+    return scene;
 }
 
 // Runs the render on its own thread and waits at most the configured time. A

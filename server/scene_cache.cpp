@@ -71,6 +71,42 @@ void SceneCache::put(const std::string& key, std::shared_ptr<const Scene> scene)
     }
 }
 
+std::shared_ptr<const Scene> SceneCache::get_or_load(const std::string& key,
+                                                     const std::function<std::shared_ptr<const Scene>()>& load,
+                                                     Source& source) {
+    std::promise<std::shared_ptr<const Scene>> promise;
+    {
+        std::unique_lock<std::mutex> lock(m_);
+        if (const auto it = index_.find(key); it != index_.end()) {
+            lru_.splice(lru_.begin(), lru_, it->second);
+            source = Source::hit;
+            return it->second->scene;
+        }
+        if (const auto it = loading_.find(key); it != loading_.end()) {
+            std::shared_future<std::shared_ptr<const Scene>> pending = it->second;
+            lock.unlock();
+            source = Source::shared;
+            return pending.get();  // rethrows the loader's error
+        }
+        loading_.emplace(key, promise.get_future().share());
+    }
+    source = Source::loaded;
+    std::shared_ptr<const Scene> scene;
+    try {
+        scene = load();
+    } catch (...) {
+        promise.set_exception(std::current_exception());
+        std::lock_guard<std::mutex> lock(m_);
+        loading_.erase(key);
+        throw;
+    }
+    put(key, scene);  // before the waiters wake, so a later caller finds it cached
+    promise.set_value(scene);
+    std::lock_guard<std::mutex> lock(m_);
+    loading_.erase(key);
+    return scene;
+}
+
 size_t SceneCache::bytes() const {
     std::lock_guard<std::mutex> lock(m_);
     return bytes_;

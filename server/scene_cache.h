@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
+#include <future>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -30,6 +32,17 @@ public:
     // a scene larger than the whole capacity is not kept.
     void put(const std::string& key, std::shared_ptr<const Scene> scene);
 
+    // How the scene of get_or_load came: from the cache, by waiting for another
+    // request's import of the same key, or by running `load` itself.
+    enum class Source { hit, shared, loaded };
+    // The cached scene, or else `load()` run once for all concurrent callers of
+    // the same key ("single flight": N simultaneous first renders of one file
+    // import it once); the result is put in the cache. When `load` throws, every
+    // caller waiting for it gets the same exception and nothing is cached.
+    std::shared_ptr<const Scene> get_or_load(const std::string& key,
+                                             const std::function<std::shared_ptr<const Scene>()>& load,
+                                             Source& source);
+
     size_t bytes() const;
     size_t entries() const;
     size_t capacity() const { return capacity_; }
@@ -45,6 +58,7 @@ private:
     std::list<Entry> lru_;  // front = most recently used
     std::unordered_map<std::string, std::list<Entry>::iterator> index_;
     size_t bytes_ = 0;
+    std::unordered_map<std::string, std::shared_future<std::shared_ptr<const Scene>>> loading_;
 };
 
 }  // namespace nurbsrt::server

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "renderer/error.h"
+#include "server/api_keys.h"
 #include "server/context.h"
 #include "server/http_util.h"
 #include "server/problem.h"
@@ -65,6 +66,10 @@ int run_server(const ServerConfig& config) {
     pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
     signal(SIGPIPE, SIG_IGN);
 
+    ApiKeys keys;
+    if (!config.api_keys_file.empty()) keys.add_file(config.api_keys_file);
+    if (!config.api_keys.empty()) keys.add_list(config.api_keys);
+
     ServerContext ctx(config);
     httplib::Server svr;
     const size_t threads = static_cast<size_t>(config.workers + config.max_queue + 4);
@@ -74,10 +79,19 @@ int run_server(const ServerConfig& config) {
     svr.set_write_timeout(30, 0);
     svr.set_keep_alive_max_count(20);
 
-    svr.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+    svr.set_pre_routing_handler([&keys](const httplib::Request& req, httplib::Response& res) {
         const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
         res.set_header("X-Request-Id", id);
         note_request_start(id);
+        if (keys.enabled() && !ApiKeys::is_public_path(req.path) &&
+            !keys.accepts(req.get_header_value("Authorization"))) {
+            res.set_header("WWW-Authenticate", "Bearer realm=\"nurbsrt\"");
+            send_problem(res, ErrorCode::unauthorized,
+                         req.has_header("Authorization")
+                             ? "the API key is not valid"
+                             : "this service requires an API key: send 'Authorization: Bearer <key>'");
+            return httplib::Server::HandlerResponse::Handled;
+        }
         return httplib::Server::HandlerResponse::Unhandled;
     });
     // Statuses set by cpp-httplib itself (404 no route, 413 payload, 400 bad
@@ -156,7 +170,8 @@ int run_server(const ServerConfig& config) {
                                    {"max_faces", config.max_faces},
                                    {"render_timeout_s", config.render_timeout_s},
                                    {"import_timeout_s", config.import_timeout_s},
-                                   {"cache_bytes", config.cache_bytes}};
+                                   {"cache_bytes", config.cache_bytes},
+                                   {"api_keys", keys.size()}};  // how many, never which
     log_event("listening", fields.dump());
 
     std::atomic<bool> done{false};

@@ -135,3 +135,22 @@ def test_second_render_of_same_bytes_uses_the_cache(url):
     assert server_timing(second)["cache"] == "hit"
     m = requests.get(url + "/metrics", timeout=TIMEOUT).text
     assert 'nurbsrt_scene_cache_requests_total{result="hit"}' in m
+
+
+def test_simultaneous_first_renders_import_once(url):
+    # Two workers take both requests at once; the scene cache lets one import the
+    # file while the other waits for that import instead of starting its own.
+    import concurrent.futures
+    data = BEARING.read_bytes() + b"\n" * (60 + os.getpid() % 50)
+
+    def one(_):
+        return post_raw(url, "/v1/renders", data, params={"width": 64, "height": 48},
+                        headers={"Accept": "application/json"})
+
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        results = list(pool.map(one, range(2)))
+    assert all(r.status_code == 200 for r in results), [r.text[:200] for r in results]
+    caches = sorted(r.json()["statistics"]["cache"] for r in results)
+    assert caches == ["hit", "miss"], caches
+    reads = sorted(r.json()["statistics"]["timings_ms"]["read"] for r in results)
+    assert reads[0] == 0 and reads[1] > 0

@@ -1,0 +1,82 @@
+#include "server/api_keys.h"
+
+#include <cctype>
+#include <fstream>
+
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+namespace {
+
+std::string_view trim(std::string_view s) {
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+    return s;
+}
+
+// Equal strings -> true; the loop always runs over the whole presented key and
+// the whole stored key, so the time does not tell where they first differ.
+bool constant_time_equal(std::string_view a, std::string_view b) {
+    unsigned char diff = a.size() == b.size() ? 0 : 1;
+    const size_t n = std::max(a.size(), b.size());
+    for (size_t i = 0; i < n; ++i) {
+        const unsigned char x = i < a.size() ? static_cast<unsigned char>(a[i]) : 0;
+        const unsigned char y = i < b.size() ? static_cast<unsigned char>(b[i]) : 0;
+        diff |= static_cast<unsigned char>(x ^ y);
+    }
+    return diff == 0;
+}
+
+}  // namespace
+
+void ApiKeys::add(std::string_view key, const std::string& where) {
+    key = trim(key);
+    if (key.empty()) return;
+    if (key.size() < 16)
+        throw Error(ErrorCode::invalid_argument, "API key in " + where + " is shorter than 16 characters");
+    for (const char c : key)
+        if (std::isspace(static_cast<unsigned char>(c)) || std::iscntrl(static_cast<unsigned char>(c)))
+            throw Error(ErrorCode::invalid_argument, "API key in " + where + " contains whitespace or control characters");
+    keys_.emplace_back(key);
+}
+
+void ApiKeys::add_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error(ErrorCode::invalid_argument, "cannot read the API keys file " + path);
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+        ++n;
+        const std::string_view t = trim(line);
+        if (t.empty() || t.front() == '#') continue;
+        add(t, path + ":" + std::to_string(n));
+    }
+    if (in.bad()) throw Error(ErrorCode::invalid_argument, "cannot read the API keys file " + path);
+}
+
+void ApiKeys::add_list(std::string_view list) {
+    while (!list.empty()) {
+        const size_t comma = list.find(',');
+        add(list.substr(0, comma), "NURBSRT_API_KEYS");
+        if (comma == std::string_view::npos) break;
+        list.remove_prefix(comma + 1);
+    }
+}
+
+bool ApiKeys::accepts(std::string_view authorization) const {
+    authorization = trim(authorization);
+    constexpr std::string_view scheme = "bearer ";
+    if (authorization.size() <= scheme.size()) return false;
+    for (size_t i = 0; i < scheme.size(); ++i)
+        if (std::tolower(static_cast<unsigned char>(authorization[i])) != scheme[i]) return false;
+    const std::string_view presented = trim(authorization.substr(scheme.size()));
+    bool ok = false;
+    for (const std::string& k : keys_) ok |= constant_time_equal(presented, k);  // no early exit
+    return ok;
+}
+
+bool ApiKeys::is_public_path(std::string_view path) {
+    return path == "/healthz" || path == "/readyz" || path == "/v1/openapi.json";
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,38 @@
+// Optional API keys: when any key is configured, every request except the
+// unauthenticated probes (/healthz, /readyz) and the API document needs
+// `Authorization: Bearer <key>`; otherwise it gets 401 (problem+json) before
+// any work starts. Keys come from a file (one per line, '#' comments) and/or the
+// NURBSRT_API_KEYS environment variable (comma-separated), never from the
+// command line (it would show in `ps`), and are never logged.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace nurbsrt::server {
+
+class ApiKeys {
+public:
+    // Adds the keys of a file / of a comma-separated list. Throws
+    // Error(invalid_argument) for an unreadable file or a key that is too short
+    // (< 16 characters) or contains whitespace or control characters.
+    void add_file(const std::string& path);
+    void add_list(std::string_view comma_separated);
+
+    bool enabled() const { return !keys_.empty(); }
+    size_t size() const { return keys_.size(); }
+    // True when the Authorization header value carries one of the keys
+    // ("Bearer <key>", scheme case-insensitive). Compared in time independent
+    // of where the strings differ, so a key cannot be guessed byte by byte.
+    bool accepts(std::string_view authorization) const;
+
+    // Paths open without a key: liveness/readiness probes and the API document.
+    static bool is_public_path(std::string_view path);
+
+private:
+    void add(std::string_view key, const std::string& where);
+    std::vector<std::string> keys_;
+};
+
+}  // namespace nurbsrt::server
