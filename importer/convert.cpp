@@ -1,63 +1,55 @@
-// convert_file: STEP <-> IGES (and same-format re-export) through OCCT's writers.
+// convert_file: checks the output, then dispatches on its extension to the
+// writer of that format (convert_writers.h); the NURBS JSON dump is the
+// imported Scene written by renderer/scene_json.h.
+#include <chrono>
 #include <filesystem>
 
-#include <IFSelect_ReturnStatus.hxx>
-#include <IGESControl_Controller.hxx>
-#include <IGESControl_Writer.hxx>
-#include <Interface_Static.hxx>
-#include <STEPControl_Writer.hxx>
-#include <Standard_Failure.hxx>
-
-#include "importer/internal.h"
+#include "importer/convert_writers.h"
+#include "importer/importer.h"
 #include "renderer/error.h"
+#include "renderer/scene_json.h"
 
 namespace nurbsrt {
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void write_nurbs_json(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+    const Scene scene = import_file(in_path);
+    r.in_format = scene.format == "IGES" ? CadFormat::iges : CadFormat::step;
+    r.faces = static_cast<int>(scene.faces.size());
+    r.read_ms = scene.timings.read_ms;
+    r.mesh_ms = scene.timings.nurbs_convert_ms + scene.timings.mesh_ms;
+    const auto t0 = std::chrono::steady_clock::now();
+    write_scene_json_file(scene, out_path);
+    r.write_ms = ms_since(t0);
+}
+
+}  // namespace
 
 ConvertReport convert_file(const std::string& in_path, const std::string& out_path) {
     ConvertReport r;
-    r.out_format = format_from_extension(out_path);
-    if (r.out_format == CadFormat::unknown)
+    r.output = conversion_format_from_extension(out_path);
+    r.out_format = cad_format_of(r.output);
+    if (r.output == ConversionFormat::unknown)
         throw Error(ErrorCode::unsupported_format,
-                    "output '" + out_path + "': unknown extension (use .stp/.step or .igs/.iges)");
+                    "output '" + out_path +
+                        "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb or .json)");
     const std::filesystem::path out_dir = std::filesystem::path(out_path).parent_path();
     std::error_code ec;
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))
         throw Error(ErrorCode::io, "cannot write '" + out_path + "': no such directory");
 
-    const occt::OcctModel model = occt::read_model(in_path, /*read_attributes=*/false);
-    r.in_format = model.format;
-    r.faces = model.faces.Extent();
-    r.read_ms = model.read_ms;
-
-    const auto t0 = std::chrono::steady_clock::now();
-    {
-        std::lock_guard<std::mutex> lock(occt::exchange_mutex());
-        try {
-            if (r.out_format == CadFormat::iges) {
-                IGESControl_Controller::Init();
-                // BRep mode (186/514/510 entities) keeps faces and solids; the
-                // default "faces" mode writes trimmed surfaces without topology.
-                Interface_Static::SetIVal("write.iges.brep.mode", 1);
-                IGESControl_Writer writer("MM", 1);
-                if (!writer.AddShape(model.shape))
-                    throw Error(ErrorCode::occt_failure, "IGES writer: shape not accepted");
-                writer.ComputeModel();
-                if (!writer.Write(out_path.c_str()))
-                    throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
-            } else {
-                STEPControl_Writer writer;
-                const IFSelect_ReturnStatus st = writer.Transfer(model.shape, STEPControl_AsIs);
-                if (st != IFSelect_RetDone)
-                    throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
-                if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
-                    throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
-            }
-        } catch (const Standard_Failure& f) {
-            throw Error(ErrorCode::occt_failure,
-                        std::string(format_name(r.out_format)) + " writer: " + occt::failure_text(f));
-        }
+    switch (r.output) {
+        case ConversionFormat::step:
+        case ConversionFormat::iges: occt::write_cad(in_path, out_path, r); break;
+        case ConversionFormat::stl: occt::write_stl(in_path, out_path, r); break;
+        case ConversionFormat::glb: occt::write_glb(in_path, out_path, r); break;
+        case ConversionFormat::nurbs_json: write_nurbs_json(in_path, out_path, r); break;
+        case ConversionFormat::unknown: break;
     }
-    r.write_ms = occt::ms_since(t0);
     return r;
 }
 

@@ -98,4 +98,68 @@ CadFormat format_from_extension(const std::string& path) {
     return CadFormat::unknown;
 }
 
+ConversionFormat conversion_format_from_extension(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    switch (format_from_extension(path)) {
+        case CadFormat::step: return ConversionFormat::step;
+        case CadFormat::iges: return ConversionFormat::iges;
+        case CadFormat::unknown: break;
+    }
+    if (ext == "stl") return ConversionFormat::stl;
+    if (ext == "glb") return ConversionFormat::glb;
+    if (ext == "json") return ConversionFormat::nurbs_json;
+    return ConversionFormat::unknown;
+}
+
+ConversionFormat conversion_format_from_name(const std::string& name) {
+    if (name == "step" || name == "stp") return ConversionFormat::step;
+    if (name == "iges" || name == "igs") return ConversionFormat::iges;
+    if (name == "stl") return ConversionFormat::stl;
+    if (name == "glb") return ConversionFormat::glb;
+    if (name == "json") return ConversionFormat::nurbs_json;
+    return ConversionFormat::unknown;
+}
+
+const char* conversion_format_name(ConversionFormat f) {
+    switch (f) {
+        case ConversionFormat::step: return "STEP";
+        case ConversionFormat::iges: return "IGES";
+        case ConversionFormat::stl: return "STL";
+        case ConversionFormat::glb: return "GLB";
+        case ConversionFormat::nurbs_json: return "NURBS-JSON";
+        case ConversionFormat::unknown: break;
+    }
+    return "unknown";
+}
+
+const char* conversion_format_extension(ConversionFormat f) {
+    switch (f) {
+        case ConversionFormat::step: return ".step";
+        case ConversionFormat::iges: return ".igs";
+        case ConversionFormat::stl: return ".stl";
+        case ConversionFormat::glb: return ".glb";
+        case ConversionFormat::nurbs_json: return ".json";
+        case ConversionFormat::unknown: break;
+    }
+    return "";
+}
+
+const char* conversion_format_content_type(ConversionFormat f) {
+    switch (f) {
+        case ConversionFormat::step: return "model/step";
+        case ConversionFormat::iges: return "model/iges";
+        case ConversionFormat::stl: return "model/stl";
+        case ConversionFormat::glb: return "model/gltf-binary";
+        case ConversionFormat::nurbs_json: return "application/json";
+        case ConversionFormat::unknown: break;
+    }
+    return "application/octet-stream";
+}
+
+CadFormat cad_format_of(ConversionFormat f) {
+    if (f == ConversionFormat::step) return CadFormat::step;
+    if (f == ConversionFormat::iges) return CadFormat::iges;
+    return CadFormat::unknown;
+}
+
 }  // namespace nurbsrt

@@ -41,12 +41,37 @@ struct ImportOptions {
 // OCCT's heap); conversion and meshing run outside that lock.
 Scene import_file(const std::string& path, const ImportOptions& options = {});
 
+// What convert_file can write, chosen by the output file's extension. The CAD
+// formats keep the exact geometry; STL and glb are triangle meshes (BRepMesh at
+// ImportOptions' default relative deflection); nurbs_json is the imported Scene's
+// patches as JSON (renderer/scene_json.h, api_schema/nurbs_scene.schema.json).
+enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json };
+
+// .stp/.step/.p21, .igs/.iges, .stl, .glb, .json (case-insensitive); unknown otherwise.
+ConversionFormat conversion_format_from_extension(const std::string& path);
+// By the short names of the API and CLI: step|stp, iges|igs, stl, glb, json; unknown otherwise.
+ConversionFormat conversion_format_from_name(const std::string& name);
+// "STEP", "IGES", "STL", "GLB", "NURBS-JSON"
+const char* conversion_format_name(ConversionFormat f);
+// ".step", ".igs", ".stl", ".glb", ".json"
+const char* conversion_format_extension(ConversionFormat f);
+// "model/step", "model/iges", "model/stl", "model/gltf-binary", "application/json"
+const char* conversion_format_content_type(ConversionFormat f);
+// The CadFormat of a STEP/IGES output; CadFormat::unknown for the others.
+CadFormat cad_format_of(ConversionFormat f);
+
 // Writes the geometry of `in_path` to `out_path`, the output format taken from
-// the extension (.stp/.step or .igs/.iges). Throws nurbsrt::Error.
+// the extension (see ConversionFormat). Throws nurbsrt::Error (unsupported_format
+// for an unknown extension, io, unreadable_file, no_faces, occt_failure).
 struct ConvertReport {
-    CadFormat in_format = CadFormat::unknown, out_format = CadFormat::unknown;
+    CadFormat in_format = CadFormat::unknown;
+    CadFormat out_format = CadFormat::unknown;     // STEP/IGES outputs; unknown for mesh and JSON outputs
+    ConversionFormat output = ConversionFormat::unknown;  // every output, including STEP/IGES
     int faces = 0;
-    double read_ms = 0, write_ms = 0;
+    long long triangles = 0;                       // STL and glb: triangles written; 0 otherwise
+    int unmeshed_faces = 0;                        // STL and glb: faces BRepMesh left empty (missing)
+    double read_ms = 0, mesh_ms = 0, write_ms = 0; // mesh_ms: BRepMesh (STL, glb) or the import's
+                                                   // conversion + meshing (JSON); 0 for STEP/IGES
 };
 ConvertReport convert_file(const std::string& in_path, const std::string& out_path);
 

@@ -237,12 +237,16 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
                in_path);
     std::istringstream in(read_small_file(scratch.scene));
     ConvertReport r;
-    int in_format = 0, out_format = 0;
-    if (!(in >> in_format >> out_format >> r.faces >> r.read_ms >> r.write_ms) || in_format < 0 || in_format > 2 ||
-        out_format < 0 || out_format > 2)
+    int in_format = 0, out_format = 0, output = 0;
+    if (!(in >> in_format >> out_format >> output >> r.faces >> r.triangles >> r.unmeshed_faces >> r.read_ms >>
+          r.mesh_ms >> r.write_ms) ||
+        in_format < 0 || in_format > static_cast<int>(CadFormat::iges) || out_format < 0 ||
+        out_format > static_cast<int>(CadFormat::iges) || output < 0 ||
+        output > static_cast<int>(ConversionFormat::nurbs_json))
         throw Error(ErrorCode::internal, "conversion worker wrote no valid report");
     r.in_format = static_cast<CadFormat>(in_format);
     r.out_format = static_cast<CadFormat>(out_format);
+    r.output = static_cast<ConversionFormat>(output);
     return r;
 }
 
@@ -253,8 +257,10 @@ int run_convert_worker(const std::string& in_path, const std::string& out_path, 
         const ConvertReport r = convert_file(in_path, out_path);
         std::ofstream out(report_path, std::ios::binary | std::ios::trunc);
         out.precision(17);
-        out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' ' << r.faces << ' '
-            << r.read_ms << ' ' << r.write_ms << '\n';
+        // One line, the order convert_isolated reads it in.
+        out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' '
+            << static_cast<int>(r.output) << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' '
+            << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << '\n';
         if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");
         return 0;
     } catch (const Error& e) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Geom_BSplineSurface.hxx>
+#include <TDocStd_Document.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
@@ -34,12 +35,17 @@ struct OcctModel {
     std::vector<Body> bodies;
     std::vector<std::string> warnings;
     double read_ms = 0;
+    // The XDE document (colours, names, assembly structure), only when
+    // read_model was asked to keep it; the caller closes it
+    // (XCAFApp_Application::GetApplication()->Close) when done.
+    Handle(TDocStd_Document) document;
 };
 
 // Reads STEP or IGES (format by content). Serialized by a process-wide mutex
 // (STACK.md: concurrent reads corrupt OCCT's heap). OCCT's console output goes
-// to our log, never to stdout. Throws nurbsrt::Error.
-OcctModel read_model(const std::string& path, bool read_attributes);
+// to our log, never to stdout. Throws nurbsrt::Error. keep_document (implies
+// read_attributes) hands the XDE document to the caller in OcctModel::document.
+OcctModel read_model(const std::string& path, bool read_attributes, bool keep_document = false);
 
 // One face converted for the renderer: `face` is the result of
 // BRepBuilderAPI_NurbsConvert (same orientation and location as the input;

@@ -230,7 +230,7 @@ TopoDS_Shape all_roots(XSControl_Reader& reader) {
     return reader.OneShape();
 }
 
-void read_step(const std::string& path, bool attributes, OcctModel& m) {
+void read_step(const std::string& path, bool attributes, bool keep_document, OcctModel& m) {
     Handle(TDocStd_Document) doc;
     STEPCAFControl_Reader caf;
     STEPControl_Reader plain;
@@ -272,11 +272,12 @@ void read_step(const std::string& path, bool attributes, OcctModel& m) {
     assign_bodies(m);
     if (attributes && !doc.IsNull()) {
         apply_xde_attributes(m, doc);
-        XCAFApp_Application::GetApplication()->Close(doc);
+        if (keep_document) m.document = doc;
+        else XCAFApp_Application::GetApplication()->Close(doc);
     }
 }
 
-void read_iges(const std::string& path, bool attributes, OcctModel& m) {
+void read_iges(const std::string& path, bool attributes, bool keep_document, OcctModel& m) {
     Handle(TDocStd_Document) doc;
     IGESCAFControl_Reader caf;
     IGESControl_Reader plain;
@@ -314,7 +315,8 @@ void read_iges(const std::string& path, bool attributes, OcctModel& m) {
     assign_bodies(m);
     if (attributes && !doc.IsNull()) {
         apply_xde_attributes(m, doc);
-        XCAFApp_Application::GetApplication()->Close(doc);
+        if (keep_document) m.document = doc;
+        else XCAFApp_Application::GetApplication()->Close(doc);
     }
 }
 
@@ -325,7 +327,8 @@ std::mutex& exchange_mutex() {
     return m;
 }
 
-OcctModel read_model(const std::string& path, bool read_attributes) {
+OcctModel read_model(const std::string& path, bool read_attributes, bool keep_document) {
+    if (keep_document) read_attributes = true;
     route_occt_messages();
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
@@ -340,8 +343,8 @@ OcctModel read_model(const std::string& path, bool read_attributes) {
         std::lock_guard<std::mutex> lock(exchange_mutex());
         const char* who = m.format == CadFormat::step ? "STEP reader: " : "IGES reader: ";
         try {
-            if (m.format == CadFormat::step) read_step(path, read_attributes, m);
-            else read_iges(path, read_attributes, m);
+            if (m.format == CadFormat::step) read_step(path, read_attributes, keep_document, m);
+            else read_iges(path, read_attributes, keep_document, m);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure, who + failure_text(f));
         } catch (const std::bad_alloc&) {

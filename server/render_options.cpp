@@ -142,19 +142,17 @@ CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
     return spec;
 }
 
-std::string parse_conversion_format(const std::string& options_json) {
+ConversionFormat parse_conversion_format(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format;
     for (const auto& [key, v] : o.items()) {
         if (key != "format") bad("unknown conversion option '" + key.substr(0, 64) + "'");
         format = text(v, key);
     }
-    if (format.empty()) bad("option 'format' is required (step or iges)");
-    if (format == "step" || format == "stp") return "step";
-    if (format == "iges" || format == "igs") return "iges";
-    if (format == "stl" || format == "glb" || format == "gltf" || format == "nurbs-json")
-        throw Error(ErrorCode::unsupported_format, "output format '" + format + "' is not available yet");
-    bad("option 'format' must be step or iges");
+    if (format.empty()) bad("option 'format' is required (step, iges, stl, glb or json)");
+    const ConversionFormat f = conversion_format_from_name(format);
+    if (f == ConversionFormat::unknown) bad("option 'format' must be step, iges, stl, glb or json");
+    return f;
 }
 
 }  // namespace nurbsrt::server

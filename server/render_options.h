@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "importer/importer.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
 
@@ -35,7 +36,8 @@ RenderRequest parse_render_options(const std::string& options_json);
 // The camera for a scene: the named view fitted to it, then explicit values.
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene);
 
-// Options for the conversions endpoint: {"format": "step" | "iges"}.
-std::string parse_conversion_format(const std::string& options_json);
+// Options for the conversions endpoint: {"format": "step" | "stp" | "iges" | "igs" |
+// "stl" | "glb" | "json"}; anything else is Error(invalid_argument).
+ConversionFormat parse_conversion_format(const std::string& options_json);
 
 }  // namespace nurbsrt::server

@@ -1,5 +1,6 @@
-// POST /v1/conversions: one synchronous STEP <-> IGES conversion, run in a
-// child process (importer/isolated.h) under the import time and memory limits.
+// POST /v1/conversions: one synchronous conversion of a STEP/IGES upload to
+// STEP, IGES, STL, glb or NURBS JSON, run in a child process
+// (importer/isolated.h) under the import time and memory limits.
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
@@ -21,7 +22,7 @@ namespace {
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const auto t0 = std::chrono::steady_clock::now();
     const Upload upload = read_upload(req);
-    const std::string format = parse_conversion_format(upload.options_json);
+    const ConversionFormat format = parse_conversion_format(upload.options_json);
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, "empty upload: send a STEP or IGES file");
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
@@ -29,7 +30,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
 
     auto ticket = admit(ctx);
     const TempFile in = ctx.scratch.write("upload", ".cad", bytes);
-    const TempFile out = ctx.scratch.create("converted", format == "step" ? ".step" : ".igs");
+    // The worker picks the writer by this extension.
+    const TempFile out = ctx.scratch.create("converted", conversion_format_extension(format));
     ConvertReport report;
     try {
         report = convert_isolated(in.path(), out.path(), isolation_limits(ctx));
@@ -41,25 +43,27 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     ticket.reset();
     const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-    const std::string content_type = format == "step" ? "model/step" : "model/iges";
+    const std::string content_type = conversion_format_content_type(format);
     char timing[160];
-    std::snprintf(timing, sizeof timing, "read;dur=%.3f, write;dur=%.3f, total;dur=%.3f", report.read_ms,
-                  report.write_ms, total_ms);
+    std::snprintf(timing, sizeof timing, "read;dur=%.3f, mesh;dur=%.3f, write;dur=%.3f, total;dur=%.3f",
+                  report.read_ms, report.mesh_ms, report.write_ms, total_ms);
     res.set_header("Server-Timing", timing);
     if (wants_json(req)) {
         const nlohmann::json body = {{"request_id", request_id(res)},
                                      {"input_format", format_name(report.in_format)},
-                                     {"output_format", format_name(report.out_format)},
+                                     {"output_format", conversion_format_name(report.output)},
                                      {"faces", report.faces},
+                                     {"triangles", report.triangles},
                                      {"content_type", content_type},
                                      {"data_base64", base64_encode(data)},
                                      {"timings_ms", {{"read", report.read_ms},
+                                                     {"mesh", report.mesh_ms},
                                                      {"write", report.write_ms},
                                                      {"total", total_ms}}}};
         res.set_content(body.dump(), "application/json");
     } else {
         res.set_header("Content-Disposition",
-                       std::string("attachment; filename=\"converted") + (format == "step" ? ".step\"" : ".igs\""));
+                       std::string("attachment; filename=\"converted") + conversion_format_extension(format) + "\"");
         res.set_content(data, content_type.c_str());
     }
 }

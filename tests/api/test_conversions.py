@@ -1,14 +1,65 @@
-"""POST /v1/conversions: STEP <-> IGES in an isolated child process."""
+"""POST /v1/conversions: STEP/IGES to STEP, IGES, STL, glb and NURBS JSON, in an
+isolated child process. Every output is parsed here independently of nurbsrt."""
 import base64
+import json
+import math
+import struct
 
+import jsonschema
+import pytest
 import requests
 
-from conftest import BEARING, SCREW, TIMEOUT, check_problem, post_raw, validate
+from conftest import BEARING, MODELS, REPO, SCHEMA, SCREW, TIMEOUT, check_problem, post_raw, validate
+
+NURBS_SCHEMA = json.loads((REPO / "api_schema" / "nurbs_scene.schema.json").read_text())
+ASSEMBLY = MODELS / "step" / "as1-oc-214.stp"  # an assembly with colours and instance names
+
+
+def real_models():
+    """OCCT's sample files (always installed) plus, when present, a real assembly of
+    ../shared/models; its absence shows up as a skip, not as a silent pass."""
+    return [pytest.param(SCREW, id="screw.step"), pytest.param(BEARING, id="bearing.iges"),
+            pytest.param(ASSEMBLY, id="as1-oc-214.stp",
+                         marks=pytest.mark.skipif(not ASSEMBLY.is_file(), reason=f"{ASSEMBLY} is absent"))]
+
+
+def convert(url, path, fmt):
+    r = post_raw(url, "/v1/conversions", path.read_bytes(), params={"format": fmt})
+    assert r.status_code == 200, r.text[:300]
+    return r
+
+
+def parse_stl(data):
+    """Binary STL: 80-byte header, uint32 count, then per triangle 12 float32 + uint16."""
+    assert len(data) >= 84
+    (count,) = struct.unpack_from("<I", data, 80)
+    assert len(data) == 84 + 50 * count, (len(data), count)
+    tris = [struct.unpack_from("<12f", data, 84 + 50 * k) for k in range(count)]
+    for t in tris:
+        assert all(math.isfinite(x) for x in t), t
+    return tris
+
+
+def parse_glb(data):
+    """glTF 2.0 binary container: header, JSON chunk, BIN chunk (glTF spec 4.4)."""
+    magic, version, length = struct.unpack_from("<4sII", data, 0)
+    assert magic == b"glTF" and version == 2 and length == len(data)
+    json_len, json_type = struct.unpack_from("<I4s", data, 12)
+    assert json_type == b"JSON" and json_len % 4 == 0
+    gltf = json.loads(data[20:20 + json_len])
+    off = 20 + json_len
+    bin_len, bin_type = struct.unpack_from("<I4s", data, off)
+    assert bin_type == b"BIN\0"
+    assert off + 8 + bin_len == len(data)
+    assert gltf["asset"]["version"] == "2.0"
+    assert gltf["buffers"][0]["byteLength"] <= bin_len
+    for view in gltf["bufferViews"]:
+        assert view["byteOffset"] + view["byteLength"] <= gltf["buffers"][0]["byteLength"]
+    return gltf, data[off + 8:off + 8 + bin_len]
 
 
 def test_step_to_iges_raw(url):
-    r = post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "iges"})
-    assert r.status_code == 200, r.text[:300]
+    r = convert(url, SCREW, "iges")
     assert r.headers["Content-Type"] == "model/iges"
     assert "converted.igs" in r.headers["Content-Disposition"]
     assert r.content[72:73] == b"S"  # first IGES record: Start section
@@ -30,9 +81,108 @@ def test_iges_to_step_json(url):
     assert body["timings_ms"]["total"] >= body["timings_ms"]["read"]
 
 
+@pytest.mark.parametrize("model", real_models())
+def test_stl(url, model):
+    r = convert(url, model, "stl")
+    assert r.headers["Content-Type"] == "model/stl"
+    assert 'filename="converted.stl"' in r.headers["Content-Disposition"]
+    tris = parse_stl(r.content)
+    assert len(tris) > 100
+    # Normals are unit length (or zero for a degenerate triangle); corners span a real box.
+    for t in tris:
+        n = math.sqrt(t[0] ** 2 + t[1] ** 2 + t[2] ** 2)
+        assert n == 0 or abs(n - 1) < 1e-3, t
+    # The mesh spans the model's box (from the NURBS dump of the same file), in millimetres.
+    scene = convert(url, model, "json").json()
+    lo, hi = scene["bbox"]["min"], scene["bbox"]["max"]
+    diag = math.dist(lo, hi)
+    for axis in range(3):
+        cs = [t[3 + 3 * c + axis] for t in tris for c in range(3)]
+        assert abs(min(cs) - lo[axis]) < 0.01 * diag and abs(max(cs) - hi[axis]) < 0.01 * diag, (axis, lo, hi)
+    # The same triangle count as the JSON answer reports.
+    j = requests.post(url + "/v1/conversions", data=model.read_bytes(), params={"format": "stl"},
+                      headers={"Content-Type": "application/octet-stream", "Accept": "application/json"},
+                      timeout=TIMEOUT).json()
+    validate(j, "ConversionResponse")
+    assert (j["output_format"], j["content_type"], j["triangles"]) == ("STL", "model/stl", len(tris))
+    assert j["timings_ms"]["mesh"] > 0
+
+
+@pytest.mark.parametrize("model", real_models())
+def test_glb(url, model):
+    r = convert(url, model, "glb")
+    assert r.headers["Content-Type"] == "model/gltf-binary"
+    assert 'filename="converted.glb"' in r.headers["Content-Disposition"]
+    gltf, _ = parse_glb(r.content)
+    assert gltf["meshes"] and gltf["accessors"] and gltf["nodes"]
+    positions = [gltf["accessors"][p["attributes"]["POSITION"]] for m in gltf["meshes"] for p in m["primitives"]]
+    assert positions
+    for acc in positions:
+        assert acc["type"] == "VEC3" and acc["componentType"] == 5126 and acc["count"] >= 3
+        # Metres (glTF): the sample models are under 2 m across, so no coordinate reaches 2.
+        assert all(math.isfinite(x) and abs(x) < 2.0 for x in acc["min"] + acc["max"]), acc
+    triangles = sum(gltf["accessors"][p["indices"]]["count"] // 3 for m in gltf["meshes"] for p in m["primitives"])
+    assert triangles > 100
+
+
+def test_glb_keeps_assembly_names_and_colours(url):
+    if not ASSEMBLY.is_file():
+        pytest.skip(f"{ASSEMBLY} is absent")
+    gltf, _ = parse_glb(convert(url, ASSEMBLY, "glb").content)
+    names = {n.get("name") for n in gltf["nodes"]}
+    assert {"nut_1", "nut_2", "bolt_1", "rod_1"} <= names, names
+    assert len({tuple(m["pbrMetallicRoughness"]["baseColorFactor"]) for m in gltf["materials"]}) > 1
+
+
+@pytest.mark.parametrize("model", real_models())
+def test_nurbs_json(url, model):
+    r = convert(url, model, "json")
+    assert r.headers["Content-Type"].startswith("application/json")
+    assert 'filename="converted.json"' in r.headers["Content-Disposition"]
+    scene = r.json()
+    jsonschema.Draft202012Validator(NURBS_SCHEMA).validate(scene)
+    validate(scene, "NurbsScene")  # the copy inside the OpenAPI document accepts it too
+    assert scene["patches"] == len(scene["faces"]) > 0
+    assert [f["index"] for f in scene["faces"]] == list(range(1, len(scene["faces"]) + 1))
+    for f in scene["faces"]:
+        s = f["surface"]
+        assert len(s["control_points"]) == s["num_u"] * s["num_v"]
+        assert len(s["knots_u"]) == s["num_u"] + s["degree_u"] + 1
+        assert len(s["knots_v"]) == s["num_v"] + s["degree_v"] + 1
+    # The face count agrees with what the service reports for the same file.
+    j = requests.post(url + "/v1/conversions", data=model.read_bytes(), params={"format": "json"},
+                      headers={"Content-Type": "application/octet-stream", "Accept": "application/json"},
+                      timeout=TIMEOUT).json()
+    validate(j, "ConversionResponse")
+    assert (j["output_format"], j["content_type"], j["faces"]) == ("NURBS-JSON", "application/json",
+                                                                   scene["patches"])
+    assert json.loads(base64.b64decode(j["data_base64"]))["patches"] == scene["patches"]
+
+
+def test_openapi_embeds_the_nurbs_schema():
+    embedded = dict(SCHEMA["components"]["schemas"]["NurbsScene"])
+    standalone = {k: v for k, v in NURBS_SCHEMA.items() if k not in ("$schema", "$id")}
+    embedded.pop("description")
+    standalone.pop("description")
+    assert embedded == standalone
+
+
+def test_nurbs_schema_rejects_what_it_should():
+    base = {"format": "nurbsrt-nurbs-scene", "version": 1,
+            "source": {"name": "x", "format": "STEP", "declared_units": "mm"}, "units": "mm",
+            "bbox": None, "patches": 0, "bodies": [], "faces": [], "warnings": []}
+    v = jsonschema.Draft202012Validator(NURBS_SCHEMA)
+    v.validate(base)
+    assert not v.is_valid({**base, "units": "inch"})
+    assert not v.is_valid({**base, "extra": 1})
+    assert not v.is_valid({**base, "bbox": {"min": [0, 0], "max": [1, 1, 1]}})
+
+
 def test_conversion_errors(url):
     check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes()), 400, "invalid_argument")  # no format
     check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "dwg"}), 400)
-    check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "stl"}), 415)
+    check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "gltf"}), 400)
+    check_problem(post_raw(url, "/v1/conversions", b"hello", params={"format": "stl"}), 415)
     check_problem(post_raw(url, "/v1/conversions", b"hello", params={"format": "step"}), 415)
     check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes()[:1500], params={"format": "iges"}), 422)
+    check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes()[:1500], params={"format": "glb"}), 422)

@@ -1,0 +1,78 @@
+// Binary glTF 2.0 (.glb) output of convert_file, through OCCT's XDE document so
+// that colours, names and assembly instances (one mesh per part, one node per
+// placement) survive.
+//
+// Axes and units: glTF is Y-up and in metres (glTF 2.0 spec, 3.4), CAD models
+// are Z-up millimetres. The writer converts, so viewers show the model upright
+// and at its true size: a model point (x, y, z) mm becomes
+// (x, z, -y) / 1000 m in the glb. Reading it back with RWGltf_CafReader and
+// SetSystemLengthUnit(0.001) + SetSystemCoordinateSystem(Zup) restores the
+// model's coordinates (tests/convert_test.cpp checks both directions).
+#include <RWGltf_CafWriter.hxx>
+#include <RWMesh_CoordinateSystem.hxx>
+#include <Standard_Failure.hxx>
+#include <TColStd_IndexedDataMapOfStringString.hxx>
+#include <TDF_LabelSequence.hxx>
+#include <TopoDS_Compound.hxx>
+#include <BRep_Builder.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+
+#include "importer/convert_writers.h"
+#include "importer/internal.h"
+#include "renderer/error.h"
+
+namespace nurbsrt::occt {
+namespace {
+
+// Closes the XDE document on every exit path (it is registered with the
+// process-wide application until closed).
+struct DocumentCloser {
+    Handle(TDocStd_Document) doc;
+    ~DocumentCloser() {
+        if (!doc.IsNull()) XCAFApp_Application::GetApplication()->Close(doc);
+    }
+};
+
+}  // namespace
+
+void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+    OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
+    DocumentCloser closer{model.document};
+    r.in_format = model.format;
+    r.faces = model.faces.Extent();
+    r.read_ms = model.read_ms;
+    if (model.document.IsNull())
+        throw Error(ErrorCode::occt_failure, "XDE reader gave no document for the glTF export");
+
+    // Mesh the shapes the document holds (the writer takes the triangulations
+    // from them); parts placed twice share their faces, so are meshed once.
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(model.document->Main());
+    TDF_LabelSequence roots;
+    shapes->GetFreeShapes(roots);
+    TopoDS_Compound all;
+    BRep_Builder builder;
+    builder.MakeCompound(all);
+    for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
+    mesh_for_export(all, r);
+
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+        RWGltf_CafWriter writer(out_path.c_str(), /*binary=*/Standard_True);
+        RWMesh_CoordinateSystemConverter& cs = writer.ChangeCoordinateSystemConverter();
+        cs.SetInputLengthUnit(0.001);                            // OCCT's readers deliver mm
+        cs.SetInputCoordinateSystem(RWMesh_CoordinateSystem_Zup);
+        cs.SetOutputLengthUnit(1.0);                             // glTF: metres
+        cs.SetOutputCoordinateSystem(RWMesh_CoordinateSystem_glTF);  // Y-up
+        TColStd_IndexedDataMapOfStringString info;
+        info.Add("generator", "nurbsrt");
+        if (!writer.Perform(model.document, info, Message_ProgressRange()))
+            throw Error(ErrorCode::io, "glTF writer: cannot write '" + out_path + "'");
+    } catch (const Standard_Failure& f) {
+        throw Error(ErrorCode::occt_failure, "glTF writer: " + failure_text(f));
+    }
+    r.write_ms = ms_since(t0);
+}
+
+}  // namespace nurbsrt::occt

@@ -1,0 +1,29 @@
+// The per-format halves of convert_file (importer/convert.cpp dispatches on the
+// output extension). importer/*.cpp only: the mesh helper takes OCCT types.
+#pragma once
+
+#include <string>
+
+#include "importer/importer.h"
+
+class TopoDS_Shape;
+
+namespace nurbsrt::occt {
+
+// STEP or IGES through OCCT's writers (exact geometry, topology kept).
+void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// Binary STL of the whole model, meshed by mesh_for_export.
+void write_stl(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// Binary glTF 2.0 (.glb) from the XDE document: colours, names and assembly
+// instances kept; Y-up, metres (see convert_gltf.cpp).
+void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+
+// Meshes every face of `shape` with BRepMesh for export: linear deflection
+// ImportOptions{}.mesh_relative_deflection times the diagonal of the faces'
+// bounding box, angular deflection ImportOptions{}.mesh_angular_deflection.
+// Fills r.mesh_ms, r.triangles (over all face occurrences, instances counted
+// separately) and r.unmeshed_faces (faces left without a triangulation, which
+// mesh outputs cannot contain). Returns the deflection used.
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r);
+
+}  // namespace nurbsrt::occt

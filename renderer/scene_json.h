@@ -1,0 +1,30 @@
+// The Scene as a JSON document: every face's exact NURBS patch (degrees, knots,
+// homogeneous control points), its trim loops and attributes, for tools outside
+// nurbsrt. `nurbsrt convert IN OUT.json` and POST /v1/conversions?format=json
+// write it. The document is described by api_schema/nurbs_scene.schema.json
+// (draft 2020-12); keep the two in step.
+//
+// JSON has no NaN or infinity: a non-finite number (which a sane import never
+// produces, but a corrupt one might) is written as null, so the output always
+// parses; the schema allows null exactly where numbers are.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+#include "renderer/scene.h"
+
+namespace nurbsrt {
+
+// Identifies the document; bumped when a field changes meaning or disappears.
+inline constexpr const char* kSceneJsonFormat = "nurbsrt-nurbs-scene";
+inline constexpr int kSceneJsonVersion = 1;
+
+// Compact (indent < 0) or pretty-printed JSON text of the scene.
+std::string scene_to_json(const Scene& scene, int indent = -1);
+// Streams the same text; throws Error(io) when the stream fails.
+void write_scene_json(const Scene& scene, std::ostream& out);
+// Writes the JSON to `path`; throws Error(io) when it cannot be written.
+void write_scene_json_file(const Scene& scene, const std::string& path);
+
+}  // namespace nurbsrt
