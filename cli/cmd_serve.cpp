@@ -16,17 +16,18 @@ void add_serve_command(CLI::App& app) {
     auto cache_mb = std::make_shared<double>(static_cast<double>(c->cache_bytes >> 20));
     auto* cmd = app.add_subcommand(
         "serve",
-        "Run the HTTP service: POST /v1/renders, POST /v1/conversions, GET /healthz,\n"
-        "/readyz, /metrics, /v1/openapi.json (the API document). Logs one JSON line per\n"
-        "request on stderr. Every option can also be set by the environment variable\n"
-        "shown, e.g. NURBSRT_PORT=9000. Stop with SIGINT or SIGTERM.\n"
+        "Run the HTTP service: POST /v1/renders, POST /v1/conversions, /v1/jobs (batch\n"
+        "jobs, kept in DATA_DIR/jobs.db and DATA_DIR/jobs/), GET /healthz, /readyz,\n"
+        "/metrics, /v1/openapi.json (the API document). Logs one JSON line per request\n"
+        "on stderr. Every option can also be set by the environment variable shown,\n"
+        "e.g. NURBSRT_PORT=9000. Stop with SIGINT or SIGTERM.\n"
         "Example: nurbsrt serve --host 127.0.0.1 --port 8080 --data-dir ./data");
     cmd->add_option("--host", c->host, "address to listen on")->envname("NURBSRT_HOST")->capture_default_str();
     cmd->add_option("--port", c->port, "TCP port (0: any free port, see --port-file)")
         ->envname("NURBSRT_PORT")->check(CLI::Range(0, 65535))->capture_default_str();
     cmd->add_option("--port-file", c->port_file, "write the bound port to this file once listening")
         ->envname("NURBSRT_PORT_FILE");
-    cmd->add_option("--data-dir", c->data_dir, "data directory (uploads are staged in DATA_DIR/tmp)")
+    cmd->add_option("--data-dir", c->data_dir, "data directory (uploads staged in DATA_DIR/tmp; jobs in DATA_DIR/jobs.db, DATA_DIR/jobs/)")
         ->envname("NURBSRT_DATA_DIR")->capture_default_str();
     cmd->add_option("--workers", c->workers, "renders/conversions running at once")
         ->envname("NURBSRT_WORKERS")->check(CLI::Range(1, 256))->capture_default_str();
@@ -59,6 +60,17 @@ void add_serve_command(CLI::App& app) {
                     "'#' comments, at least 16 characters) on every route but /healthz, /readyz and\n"
                     "/v1/openapi.json; keys can also be given comma-separated in NURBSRT_API_KEYS")
         ->envname("NURBSRT_API_KEYS_FILE");
+    cmd->add_option("--job-runners", c->job_runners, "batch jobs running at once (their work shares --workers)")
+        ->envname("NURBSRT_JOB_RUNNERS")->check(CLI::Range(1, 256))->capture_default_str();
+    cmd->add_option("--max-queued-jobs", c->max_queued_jobs, "batch jobs waiting to run; beyond: 503 + Retry-After")
+        ->envname("NURBSRT_MAX_QUEUED_JOBS")->check(CLI::Range(1, 1000000))->capture_default_str();
+    cmd->add_option("--max-job-files", c->max_job_files, "most files in one batch job")
+        ->envname("NURBSRT_MAX_JOB_FILES")->check(CLI::Range(1, 10000))->capture_default_str();
+    cmd->add_option("--max-job-outputs", c->max_job_outputs, "most outputs (renders + conversions) of one batch job")
+        ->envname("NURBSRT_MAX_JOB_OUTPUTS")->check(CLI::Range(1, 10000))->capture_default_str();
+    cmd->add_option("--job-retention", c->job_retention_s,
+                    "seconds a finished job (and its artifacts) is kept before it is deleted")
+        ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->callback([c, upload_mb, import_memory_mb, cache_mb] {
         // Keys themselves only from the environment: a command line shows in `ps`.
         if (const char* k = std::getenv("NURBSRT_API_KEYS")) c->api_keys = k;

@@ -20,6 +20,11 @@ void ServerConfig::validate() const {
     if (max_faces < 1) fail("max faces must be positive");
     if (!(render_timeout_s > 0)) fail("render timeout must be positive");
     if (!(import_timeout_s > 0)) fail("import timeout must be positive");
+    if (job_runners < 1 || job_runners > 256) fail("job runners must be in 1..256");
+    if (max_queued_jobs < 1) fail("max queued jobs must be positive");
+    if (max_job_files < 1 || max_job_files > 10000) fail("max job files must be in 1..10000");
+    if (max_job_outputs < 1 || max_job_outputs > 10000) fail("max job outputs must be in 1..10000");
+    if (!(job_retention_s > 0)) fail("job retention must be positive");
 }
 
 }  // namespace nurbsrt::server

@@ -36,6 +36,12 @@ struct ServerConfig {
     // (from the environment only). None configured: no authentication.
     std::string api_keys_file;
     std::string api_keys;
+    // Batch jobs (POST /v1/jobs): kept in DATA_DIR/jobs.db and DATA_DIR/jobs/.
+    int job_runners = 2;             // jobs run at once (their outputs still pass the admission gate)
+    int max_queued_jobs = 100;       // jobs waiting; beyond -> 503
+    int max_job_files = 16;          // files per job
+    int max_job_outputs = 64;        // outputs per job
+    double job_retention_s = 7 * 86400.0;  // finished jobs are deleted this long after they finished
 
     // Throws nurbsrt::Error(invalid_argument) with a message naming the setting.
     void validate() const;

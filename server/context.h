@@ -1,5 +1,5 @@
 // What every handler shares: the configuration, the admission gate, the scene
-// cache, the metrics and the scratch directory. Free of HTTP and JSON headers.
+// cache, the metrics, the scratch directory and the batch jobs. Free of HTTP and JSON headers.
 #pragma once
 
 #include <string_view>
@@ -12,6 +12,8 @@
 
 namespace nurbsrt::server {
 
+class JobService;
+
 struct ServerContext {
     explicit ServerContext(const ServerConfig& c)
         : config(c), gate(c.workers, c.max_queue), cache(c.cache_bytes), scratch(c.data_dir) {}
@@ -20,6 +22,7 @@ struct ServerContext {
     SceneCache cache;
     Metrics metrics;
     ScratchDir scratch;
+    JobService* jobs = nullptr;  // set by run_server once the job store is open
 };
 
 // The OpenAPI document, embedded at build time from api_schema/openapi.json.

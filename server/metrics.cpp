@@ -50,6 +50,11 @@ void Metrics::count_cache(bool hit) {
     ++(hit ? cache_hits_ : cache_misses_);
 }
 
+void Metrics::count_job_finished(const std::string& result) {
+    std::lock_guard<std::mutex> lock(m_);
+    ++jobs_finished_[result];
+}
+
 void Metrics::write_histogram(std::string& out, const std::string& name, const std::string& labels,
                               const Histogram& h, const std::vector<double>& bounds) {
     uint64_t cumulative = 0;
@@ -87,6 +92,17 @@ std::string Metrics::exposition(const Gauges& g) const {
     out += "# TYPE nurbsrt_scene_cache_requests_total counter\n";
     out += "nurbsrt_scene_cache_requests_total{result=\"hit\"} " + std::to_string(cache_hits_) + "\n";
     out += "nurbsrt_scene_cache_requests_total{result=\"miss\"} " + std::to_string(cache_misses_) + "\n";
+    out += "# HELP nurbsrt_jobs_finished_total Batch jobs finished since start, by result.\n";
+    out += "# TYPE nurbsrt_jobs_finished_total counter\n";
+    for (const char* result : {"succeeded", "failed", "canceled"}) {
+        const auto it = jobs_finished_.find(result);
+        out += std::string("nurbsrt_jobs_finished_total{result=\"") + result + "\"} " +
+               std::to_string(it == jobs_finished_.end() ? 0 : it->second) + "\n";
+    }
+    out += "# HELP nurbsrt_jobs Batch jobs in the store by state (queued: the job queue's depth).\n";
+    out += "# TYPE nurbsrt_jobs gauge\n";
+    for (const auto& [state, n] : g.jobs_by_state)
+        out += "nurbsrt_jobs{state=\"" + state + "\"} " + std::to_string(n) + "\n";
     auto gauge = [&](const char* name, const char* help, double v) {
         out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " gauge\n" + name + " " + num(v) + "\n";
     };

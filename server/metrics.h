@@ -1,6 +1,7 @@
 // Prometheus metrics of the service (text exposition format 0.0.4):
 // requests by route and status, request latency and render stage histograms,
-// import failures by error code, scene cache hits and misses. Thread-safe.
+// import failures by error code, scene cache hits and misses, batch jobs by
+// state and finished jobs by result. Thread-safe.
 #pragma once
 
 #include <cstdint>
@@ -18,11 +19,13 @@ public:
     void observe_stage(const std::string& stage, double seconds);
     void count_import_failure(const std::string& code);
     void count_cache(bool hit);
+    void count_job_finished(const std::string& result);  // succeeded | failed | canceled
 
     // Gauges are sampled by the caller when the text is produced.
     struct Gauges {
         int active = 0, queued = 0, max_active = 0, max_queued = 0;
         size_t cache_bytes = 0, cache_entries = 0, cache_capacity = 0;
+        std::map<std::string, int64_t> jobs_by_state;  // from the job store
     };
     std::string exposition(const Gauges& g) const;
 
@@ -41,6 +44,7 @@ private:
     std::map<std::string, Histogram> latency_, stages_;
     std::map<std::string, uint64_t> import_failures_;
     uint64_t cache_hits_ = 0, cache_misses_ = 0;
+    std::map<std::string, uint64_t> jobs_finished_;
 };
 
 }  // namespace nurbsrt::server

@@ -19,6 +19,7 @@ int http_status(ErrorCode code) {
         case ErrorCode::overloaded: return 503;
         case ErrorCode::import_timeout:
         case ErrorCode::render_timeout: return 504;
+        case ErrorCode::interrupted:                         // job errors only; never a request's
         case ErrorCode::io:
         case ErrorCode::corrupt_scene:
         case ErrorCode::internal: return 500;
@@ -43,6 +44,7 @@ const char* problem_title(ErrorCode code) {
         case ErrorCode::render_timeout: return "Render timed out";
         case ErrorCode::io: return "I/O error";
         case ErrorCode::corrupt_scene: return "Corrupt cached scene";
+        case ErrorCode::interrupted: return "Interrupted by a service restart";
         case ErrorCode::internal: return "Internal error";
     }
     return "Internal error";

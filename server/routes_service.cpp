@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/context.h"
+#include "server/job_runner.h"
 #include "server/routes.h"
 
 namespace nurbsrt::server {
@@ -33,6 +34,7 @@ void add_service_routes(httplib::Server& svr, ServerContext& ctx) {
         g.cache_bytes = ctx.cache.bytes();
         g.cache_entries = ctx.cache.entries();
         g.cache_capacity = ctx.cache.capacity();
+        if (ctx.jobs) g.jobs_by_state = ctx.jobs->store().count_by_state();
         res.set_content(ctx.metrics.exposition(g), "text/plain; version=0.0.4; charset=utf-8");
     });
     svr.Get("/v1/openapi.json", [](const httplib::Request&, httplib::Response& res) {

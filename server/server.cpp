@@ -10,12 +10,14 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <thread>
 
 #include "renderer/error.h"
 #include "server/api_keys.h"
 #include "server/context.h"
 #include "server/http_util.h"
+#include "server/job_runner.h"
 #include "server/problem.h"
 #include "server/request_log.h"
 #include "server/routes.h"
@@ -26,10 +28,14 @@ namespace {
 // Route label for logs and metrics: a known route, or "other" (never the raw
 // path, which is the client's and unbounded).
 std::string route_of(const httplib::Request& req) {
-    static const char* known[] = {"/v1/renders", "/v1/conversions", "/healthz", "/readyz", "/metrics",
+    static const char* known[] = {"/v1/renders", "/v1/conversions", "/v1/jobs", "/healthz", "/readyz", "/metrics",
                                   "/v1/openapi.json"};
     for (const char* k : known)
         if (req.path == k) return k;
+    // Job resources by template (the id and name are the client's, unbounded).
+    static const std::regex job("^/v1/jobs/[^/]+$"), artifact("^/v1/jobs/[^/]+/artifacts/[^/]+$");
+    if (std::regex_match(req.path, job)) return "/v1/jobs/{id}";
+    if (std::regex_match(req.path, artifact)) return "/v1/jobs/{id}/artifacts/{name}";
     return "other";
 }
 
@@ -71,6 +77,9 @@ int run_server(const ServerConfig& config) {
     if (!config.api_keys.empty()) keys.add_list(config.api_keys);
 
     ServerContext ctx(config);
+    // Opened (and recovered) before listening: a bad job database stops the start.
+    JobService jobs(ctx);
+    ctx.jobs = &jobs;
     httplib::Server svr;
     const size_t threads = static_cast<size_t>(config.workers + config.max_queue + 4);
     svr.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
@@ -149,6 +158,7 @@ int run_server(const ServerConfig& config) {
 
     add_render_routes(svr, ctx);
     add_conversion_routes(svr, ctx);
+    add_job_routes(svr, ctx);
     add_service_routes(svr, ctx);
 
     int port = config.port;
@@ -171,8 +181,12 @@ int run_server(const ServerConfig& config) {
                                    {"render_timeout_s", config.render_timeout_s},
                                    {"import_timeout_s", config.import_timeout_s},
                                    {"cache_bytes", config.cache_bytes},
-                                   {"api_keys", keys.size()}};  // how many, never which
+                                   {"api_keys", keys.size()},  // how many, never which
+                                   {"job_runners", config.job_runners},
+                                   {"max_queued_jobs", config.max_queued_jobs},
+                                   {"job_retention_s", config.job_retention_s}};
     log_event("listening", fields.dump());
+    jobs.start();
 
     std::atomic<bool> done{false};
     std::thread signal_waiter([&] {
@@ -189,6 +203,7 @@ int run_server(const ServerConfig& config) {
     const bool ok = svr.listen_after_bind();
     done = true;
     signal_waiter.join();
+    jobs.stop();
     log_event("stopped");
     return ok ? 0 : 1;
 }

@@ -43,13 +43,15 @@ def check_problem(resp, status, code=None):
 class Server:
     """A `nurbsrt serve` of our own, for settings the shared server must not have."""
 
-    def __init__(self, args=(), env=None):
+    def __init__(self, args=(), env=None, data_dir=None):
+        """data_dir: a data directory that outlives this server (to restart on it); default: a private one."""
         self.tmp = tempfile.TemporaryDirectory()
+        self.data_dir = pathlib.Path(data_dir) if data_dir else pathlib.Path(self.tmp.name) / "data"
         port_file = pathlib.Path(self.tmp.name) / "port"
         self.log = open(pathlib.Path(self.tmp.name) / "server.log", "wb")
         self.proc = subprocess.Popen(
             [os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--port-file", str(port_file),
-             "--data-dir", str(pathlib.Path(self.tmp.name) / "data"), *args],
+             "--data-dir", str(self.data_dir), *args],
             env={**os.environ, **(env or {})}, stderr=self.log)
         for _ in range(100):
             if port_file.exists() and port_file.read_text().strip():
@@ -84,8 +86,8 @@ def url():
 def own_server():
     servers = []
 
-    def start(args=(), env=None):
-        s = Server(args, env)
+    def start(args=(), env=None, data_dir=None):
+        s = Server(args, env, data_dir)
         servers.append(s)
         return s
 

@@ -1,0 +1,310 @@
+#include "server/job_runner.h"
+
+#include <nlohmann/json.hpp>
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "importer/isolated.h"
+#include "renderer/error.h"
+#include "server/context.h"
+#include "server/job_spec.h"
+#include "server/render_options.h"
+#include "server/render_service.h"
+#include "server/request_log.h"
+#include "server/scratch.h"
+#include "server/work.h"
+
+namespace nurbsrt::server {
+namespace fs = std::filesystem;
+namespace {
+
+int64_t now_ms() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+void write_file(const std::string& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) throw Error(ErrorCode::io, "cannot write " + path);
+}
+
+std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
+
+// An error message for the client: the service's own paths (the job directory)
+// are cut out, leaving the generated file names.
+std::string without_paths(std::string message, const std::string& dir) {
+    for (const std::string& p : {dir + "/partial-", dir + "/"})
+        for (size_t at; (at = message.find(p)) != std::string::npos;) message.erase(at, p.size());
+    return message;
+}
+
+}  // namespace
+
+JobService::JobService(ServerContext& ctx) : ctx_(ctx), jobs_dir_(ctx.config.data_dir + "/jobs") {
+    std::error_code ec;
+    fs::create_directories(jobs_dir_, ec);
+    if (ec || ::chmod(jobs_dir_.c_str(), 0700) != 0)
+        throw Error(ErrorCode::io, "cannot create the job directory " + jobs_dir_);
+    store_ = std::make_shared<JobStore>(ctx.config.data_dir + "/jobs.db");
+
+    const RecoveryReport r = store_->recover(kMaxJobAttempts, now_ms());
+    for (const std::string& id : r.removed) remove_files(id);
+    if (!r.requeued.empty() || !r.failed.empty() || !r.removed.empty())
+        log_event("jobs_recovered", nlohmann::json{{"requeued", r.requeued},
+                                                   {"failed", r.failed},
+                                                   {"removed", r.removed}}.dump());
+    // Directories without a job row: a submission or deletion cut short. Only
+    // names the service generates are touched.
+    const std::vector<std::string> ids = store_->all_ids();
+    const std::set<std::string> known(ids.begin(), ids.end());
+    for (const auto& entry : fs::directory_iterator(jobs_dir_, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (valid_job_id(name) && !known.count(name)) remove_files(name);
+    }
+    sweep();
+}
+
+JobService::~JobService() { stop(); }
+
+std::string JobService::job_dir(const std::string& id) const { return jobs_dir_ + "/" + id; }
+
+std::string JobService::artifact_path(const std::string& id, const std::string& artifact) const {
+    return job_dir(id) + "/" + artifact;
+}
+
+void JobService::remove_files(const std::string& id) const {
+    std::error_code ec;
+    fs::remove_all(job_dir(id), ec);
+}
+
+void JobService::start() {
+    std::lock_guard<std::mutex> lock(m_);
+    stopping_ = false;
+    for (int i = 0; i < ctx_.config.job_runners; ++i) runners_.emplace_back([this] { run_loop(); });
+    sweeper_ = std::thread([this] { sweep_loop(); });
+}
+
+void JobService::stop() {
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        if (stopping_ && runners_.empty()) return;
+        stopping_ = true;
+        for (auto& [id, flag] : cancel_flags_) flag->store(true);
+    }
+    cv_.notify_all();
+    for (std::thread& t : runners_) t.join();
+    runners_.clear();
+    if (sweeper_.joinable()) sweeper_.join();
+}
+
+void JobService::submit(JobRecord& job, const std::vector<const std::string*>& input_bytes) {
+    // One submission at a time, so the queue bound holds exactly.
+    std::lock_guard<std::mutex> submit_lock(submit_m_);
+    if (store_->count_by_state()["queued"] >= ctx_.config.max_queued_jobs)
+        throw Error(ErrorCode::overloaded, std::to_string(ctx_.config.max_queued_jobs) +
+                                               " jobs are already waiting; retry later");
+    job.id = new_request_id();
+    job.created_ms = now_ms();
+    const std::string dir = job_dir(job.id);
+    try {
+        fs::create_directory(dir);
+        for (size_t i = 0; i < input_bytes.size(); ++i) write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+        store_->create(job);
+    } catch (const std::exception& e) {
+        remove_files(job.id);
+        if (const auto* err = dynamic_cast<const Error*>(&e)) throw *err;
+        throw Error(ErrorCode::io, std::string("cannot store the job: ") + e.what());
+    }
+    cv_.notify_one();
+}
+
+JobStore::DeleteOutcome JobService::remove(const std::string& id) {
+    const JobStore::DeleteOutcome outcome = store_->delete_job(id, now_ms());
+    if (outcome == JobStore::DeleteOutcome::removed) {
+        remove_files(id);
+    } else if (outcome == JobStore::DeleteOutcome::canceling) {
+        // The runner registered its flag before it checks the job's state for
+        // the next output, so either it sees `canceled` there or the flag here.
+        std::lock_guard<std::mutex> lock(m_);
+        if (auto it = cancel_flags_.find(id); it != cancel_flags_.end()) it->second->store(true);
+    }
+    return outcome;
+}
+
+int JobService::sweep() {
+    const auto retention_ms = static_cast<int64_t>(ctx_.config.job_retention_s * 1000);
+    int removed = 0;
+    for (const std::string& id : store_->finished_before(now_ms() - retention_ms))
+        if (store_->remove(id)) {
+            remove_files(id);
+            ++removed;
+        }
+    if (removed) log_event("jobs_expired", nlohmann::json{{"removed", removed}}.dump());
+    return removed;
+}
+
+void JobService::sweep_loop() {
+    // Often enough that a job outlives its retention by at most a quarter of it (and at most a minute).
+    const double interval_s = std::clamp(ctx_.config.job_retention_s / 4, 0.5, 60.0);
+    std::unique_lock<std::mutex> lock(m_);
+    while (!stopping_) {
+        cv_.wait_for(lock, std::chrono::duration<double>(interval_s), [this] { return stopping_; });
+        if (stopping_) break;
+        lock.unlock();
+        try {
+            sweep();
+        } catch (const Error& e) {
+            log_event("jobs_sweep_failed", nlohmann::json{{"error", e.what()}}.dump());
+        }
+        lock.lock();
+    }
+}
+
+void JobService::run_loop() {
+    while (true) {
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (stopping_) return;
+        }
+        std::optional<JobRecord> job;
+        try {
+            job = store_->claim_next(now_ms());
+        } catch (const Error& e) {
+            log_event("jobs_claim_failed", nlohmann::json{{"error", e.what()}}.dump());
+        }
+        if (!job) {
+            std::unique_lock<std::mutex> lock(m_);
+            cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_; });
+            continue;
+        }
+        run_job(*job);
+    }
+}
+
+void JobService::run_job(JobRecord& job) {
+    auto cancel = std::make_shared<std::atomic<bool>>(false);
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        cancel_flags_[job.id] = cancel;
+        if (stopping_) cancel->store(true);
+    }
+    log_event("job_started", nlohmann::json{{"job_id", job.id}, {"attempt", job.attempts}}.dump());
+    bool interrupted_by_stop = false;
+    for (const JobOutput& out : job.outputs) {
+        if (out.state != "queued") continue;  // finished before a restart: its artifact is kept
+        if (cancel->load() || !store_->running(job.id)) break;
+        try {
+            run_output(job, out, cancel);
+        } catch (const Error& e) {
+            if (e.code() == ErrorCode::canceled && cancel->load()) break;
+            store_->output_failed(job.id, out.index, error_code_name(e.code()), without_paths(e.what(), job_dir(job.id)),
+                                  now_ms());
+        } catch (const std::exception& e) {
+            store_->output_failed(job.id, out.index, "internal", e.what(), now_ms());
+        }
+    }
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        cancel_flags_.erase(job.id);
+        interrupted_by_stop = stopping_;
+    }
+    if (store_->running(job.id) && interrupted_by_stop) {
+        // Stopped with work left: back to the queue for the next start, not counted as an interrupted run.
+        const auto now = store_->get(job.id);
+        bool left = false;
+        for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{}) left = left || o.state == "queued" || o.state == "running";
+        if (left) {
+            store_->requeue(job.id);
+            log_event("job_requeued", nlohmann::json{{"job_id", job.id}}.dump());
+            return;
+        }
+    }
+    const std::optional<std::string> state = store_->finish(job.id, now_ms());
+    if (!state) {  // deleted while running
+        store_->remove(job.id);
+        remove_files(job.id);
+        ctx_.metrics.count_job_finished("canceled");
+        log_event("job_canceled", nlohmann::json{{"job_id", job.id}}.dump());
+        return;
+    }
+    ctx_.metrics.count_job_finished(*state);
+    log_event("job_finished", nlohmann::json{{"job_id", job.id}, {"state", *state}}.dump());
+}
+
+void JobService::run_output(const JobRecord& job, const JobOutput& out,
+                            const std::shared_ptr<std::atomic<bool>>& cancel) {
+    // A worker slot, waited for as long as it takes (the job is queued work
+    // already), in short waits so that a cancel or a stop is seen.
+    std::shared_ptr<AdmissionGate::Ticket> ticket;
+    while (!ticket) {
+        if (cancel->load()) throw Error(ErrorCode::canceled, "the job was canceled");
+        AdmissionGate::Refusal why;
+        ticket = ctx_.gate.enter(std::chrono::milliseconds(1000), why);
+        if (!ticket && why == AdmissionGate::Refusal::queue_full) std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    if (!store_->output_running(job.id, out.index, now_ms())) throw Error(ErrorCode::canceled, "the job was deleted");
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string dir = job_dir(job.id);
+    const std::string input = dir + "/" + input_name(out.file);
+    const std::string final_path = artifact_path(job.id, out.artifact);
+    // Written under a temporary name with the same extension (the converter
+    // picks the format from it), then renamed: an artifact exists only complete.
+    const std::string partial = dir + "/partial-" + out.artifact;
+    nlohmann::json result;
+    if (out.kind == "render") {
+        const RenderRequest r = parse_render_options(out.options_json);
+        RenderControl control;
+        control.cancel = cancel;
+        control.start = t0;
+        // The callback may run after this job is gone (a canceled render stops
+        // at its next block of rows): it holds the store, not `this`.
+        auto last = std::make_shared<std::atomic<int>>(0);
+        control.progress = [store = store_, id = job.id, index = out.index, last](double f) {
+            const int pct = static_cast<int>(f * 100);
+            if (pct >= last->load() + 5 && pct < 100) {
+                last->store(pct);
+                try {
+                    store->output_progress(id, index, f);
+                } catch (const Error&) {
+                    // Progress is advisory; the output's end state is what counts.
+                }
+            }
+        };
+        const RenderedImage image = render_upload(ctx_, read_file_bytes(input), r, std::move(ticket), control);
+        write_file(partial, image.bytes);
+        result = nlohmann::json::parse(image.stats_json);
+    } else {
+        ConvertReport report;
+        try {
+            report = convert_isolated(input, partial, isolation_limits(ctx_));
+        } catch (const Error& e) {
+            ctx_.metrics.count_import_failure(error_code_name(e.code()));
+            std::error_code ec;
+            fs::remove(partial, ec);
+            throw;
+        }
+        ticket.reset();
+        const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        result = {{"input_format", format_name(report.in_format)},
+                  {"output_format", artifact_format(out.artifact)},
+                  {"faces", report.faces},
+                  {"timings_ms", {{"read", report.read_ms}, {"write", report.write_ms}, {"total", total}}}};
+    }
+    std::error_code ec;
+    fs::rename(partial, final_path, ec);
+    if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
+    const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
+    store_->output_succeeded(job.id, out.index, size, result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+                             now_ms());
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,74 @@
+// Batch jobs at run time: the job store (server/job_store.h), the files under
+// DATA_DIR/jobs/<id>/ (input-<n>.cad and the artifacts), the runner threads
+// that take queued jobs from the store in submission order and run their
+// outputs one by one through the same admission gate as synchronous renders
+// and conversions, restart recovery at start, cancellation, and the retention
+// sweep. Free of HTTP and JSON headers.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/job_store.h"
+
+namespace nurbsrt::server {
+
+struct ServerContext;
+
+// Runs that a service restart may interrupt before the job fails with `interrupted`.
+inline constexpr int kMaxJobAttempts = 2;
+
+class JobService {
+public:
+    // Opens DATA_DIR/jobs.db (throws Error(io) when it cannot), creates
+    // DATA_DIR/jobs, recovers jobs a dead service left running, removes expired
+    // jobs and directories without a job. Runs nothing until start().
+    explicit JobService(ServerContext& ctx);
+    ~JobService();  // stop()
+    JobService(const JobService&) = delete;
+    JobService& operator=(const JobService&) = delete;
+
+    void start();
+    // Stops the runners: a running render is canceled and its job goes back to
+    // the queue without counting the run; a conversion child finishes first.
+    void stop();
+
+    // Stores the inputs and queues the job (id and created time are set here).
+    // Throws Error(overloaded) when max_queued_jobs are already waiting.
+    void submit(JobRecord& job, const std::vector<const std::string*>& input_bytes);
+    // DELETE: see JobStore::delete_job; a running job's render is canceled.
+    JobStore::DeleteOutcome remove(const std::string& id);
+    JobStore& store() { return *store_; }
+    // The path of a stored artifact; the name must have passed valid_artifact_name.
+    std::string artifact_path(const std::string& id, const std::string& artifact) const;
+    // Removes expired jobs now; returns how many.
+    int sweep();
+
+private:
+    void run_loop();
+    void sweep_loop();
+    void run_job(JobRecord& job);
+    void run_output(const JobRecord& job, const JobOutput& out, const std::shared_ptr<std::atomic<bool>>& cancel);
+    void remove_files(const std::string& id) const;
+    std::string job_dir(const std::string& id) const;
+
+    ServerContext& ctx_;
+    std::string jobs_dir_;
+    std::shared_ptr<JobStore> store_;  // shared: a canceled render's thread may report progress late
+    std::mutex submit_m_;
+
+    std::mutex m_;
+    std::condition_variable cv_;
+    bool stopping_ = false;
+    std::map<std::string, std::shared_ptr<std::atomic<bool>>> cancel_flags_;  // running jobs
+    std::vector<std::thread> runners_;
+    std::thread sweeper_;
+};
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,144 @@
+#include "server/job_spec.h"
+
+#include <nlohmann/json.hpp>
+
+#include <regex>
+
+#include "renderer/error.h"
+#include "server/render_options.h"
+#include "server/render_service.h"
+
+namespace nurbsrt::server {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
+
+const ConversionFormat kConversionFormats[] = {
+    {"step", ".step", "model/step"},  {"iges", ".igs", "model/iges"},       {"stl", ".stl", "model/stl"},
+    {"glb", ".glb", "model/gltf-binary"}, {"json", ".json", "application/json"},
+};
+
+// The input an output refers to: its index among the `file` parts, or its
+// filename when that names exactly one of them.
+int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::string& where) {
+    if (v.is_number_integer()) {
+        const long long i = v.get<long long>();
+        if (i < 0 || i >= static_cast<long long>(inputs.size()))
+            bad(where + ": 'file' " + std::to_string(i) + " is out of range (" + std::to_string(inputs.size()) +
+                " file(s) uploaded)");
+        return static_cast<int>(i);
+    }
+    if (v.is_string()) {
+        const std::string name = v.get<std::string>();
+        int found = -1;
+        for (const JobInput& in : inputs)
+            if (in.filename == name) {
+                if (found >= 0) bad(where + ": several uploaded files are named '" + name.substr(0, 64) + "'; use the index");
+                found = in.index;
+            }
+        if (found < 0) bad(where + ": no uploaded file is named '" + name.substr(0, 64) + "'");
+        return found;
+    }
+    bad(where + ": 'file' must be the index of a file part or its filename");
+}
+
+}  // namespace
+
+const ConversionFormat* conversion_format(const std::string& name) {
+    const std::string n = name == "stp" ? "step" : name == "igs" ? "iges" : name;
+    for (const ConversionFormat& f : kConversionFormats)
+        if (n == f.name) return &f;
+    return nullptr;
+}
+
+std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs,
+                                      const ServerConfig& config) {
+    const json j = json::parse(job_json, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) bad("the 'job' part must be a JSON object");
+    for (const auto& [key, v] : j.items())
+        if (key != "outputs") bad("unknown job field '" + key.substr(0, 64) + "'");
+    if (!j.contains("outputs") || !j["outputs"].is_array() || j["outputs"].empty())
+        bad("the job needs a non-empty 'outputs' array");
+    const json& list = j["outputs"];
+    if (list.size() > static_cast<size_t>(config.max_job_outputs))
+        throw Error(ErrorCode::limit_exceeded, "the job has " + std::to_string(list.size()) +
+                                                   " outputs; the limit is " + std::to_string(config.max_job_outputs));
+    std::vector<JobOutput> outputs;
+    std::vector<bool> used(inputs.size(), false);
+    for (size_t i = 0; i < list.size(); ++i) {
+        const std::string where = "output " + std::to_string(i);
+        const json& o = list[i];
+        if (!o.is_object()) bad(where + " must be an object");
+        if (!o.contains("file")) bad(where + ": 'file' is required");
+        if (!o.contains("type") || !o["type"].is_string()) bad(where + ": 'type' must be render or conversion");
+        JobOutput out;
+        out.index = static_cast<int>(i);
+        out.file = resolve_file(o["file"], inputs, where);
+        out.kind = o["type"].get<std::string>();
+        std::string extension;
+        if (out.kind == "render") {
+            for (const auto& [key, v] : o.items())
+                if (key != "file" && key != "type" && key != "options")
+                    bad(where + ": unknown field '" + key.substr(0, 64) + "' of a render");
+            const json options = o.value("options", json::object());
+            if (!options.is_object()) bad(where + ": 'options' must be an object");
+            out.options_json = options.dump();
+            RenderRequest r;
+            try {
+                r = parse_render_options(out.options_json);
+                check_render_limits(config, r);
+            } catch (const Error& e) {
+                throw Error(e.code(), where + ": " + e.what());
+            }
+            extension = r.format.extension;
+            out.content_type = r.format.content_type;
+        } else if (out.kind == "conversion") {
+            for (const auto& [key, v] : o.items())
+                if (key != "file" && key != "type" && key != "format")
+                    bad(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
+            if (!o.contains("format") || !o["format"].is_string())
+                bad(where + ": a conversion needs 'format' (step, iges, stl, glb or json)");
+            const ConversionFormat* f = conversion_format(o["format"].get<std::string>());
+            if (!f) bad(where + ": 'format' must be one of step, iges, stl, glb, json");
+            out.options_json = json{{"format", f->name}}.dump();
+            extension = f->extension;
+            out.content_type = f->content_type;
+        } else {
+            bad(where + ": 'type' must be render or conversion");
+        }
+        out.artifact = artifact_name(out.file, out.kind, out.index, extension);
+        used[static_cast<size_t>(out.file)] = true;
+        outputs.push_back(std::move(out));
+    }
+    for (size_t f = 0; f < used.size(); ++f)
+        if (!used[f]) bad("file " + std::to_string(f) + " has no outputs");
+    return outputs;
+}
+
+std::string artifact_name(int file, const std::string& type, int output, const std::string& extension) {
+    return std::to_string(file) + "-" + type + "-" + std::to_string(output) + extension;
+}
+
+bool valid_artifact_name(const std::string& name) {
+    static const std::regex pattern(R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|step|igs|stl|glb|json)$)");
+    return name.size() <= 64 && std::regex_match(name, pattern);
+}
+
+std::string artifact_format(const std::string& name) {
+    const std::string ext = name.substr(name.rfind('.') + 1);
+    if (ext == "jpg") return "jpeg";
+    if (ext == "tif") return "tiff";
+    if (ext == "igs") return "iges";
+    return ext;
+}
+
+bool valid_job_id(const std::string& id) {
+    if (id.size() != 32) return false;
+    for (char c : id)
+        if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
+    return true;
+}
+
+}  // namespace nurbsrt::server

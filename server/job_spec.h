@@ -1,0 +1,42 @@
+// The description of a batch job (the `job` part of POST /v1/jobs), validated
+// against the uploaded files and the configured limits before the job is
+// accepted; the formats of its outputs; and the names the service gives to
+// jobs and artifacts (generated, checked against strict patterns, never a
+// path taken from a request).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "server/config.h"
+#include "server/job_store.h"
+
+namespace nurbsrt::server {
+
+// Output formats of conversion outputs: step, iges, stl, glb, json (the
+// converter picks the format from the artifact's extension).
+struct ConversionFormat {
+    const char* name;          // step
+    const char* extension;     // .step
+    const char* content_type;  // model/step
+};
+// nullptr for an unknown name; accepts the aliases stp, igs.
+const ConversionFormat* conversion_format(const std::string& name);
+
+// Parses `job_json` ({"outputs": [{"file": 0 | "name.igs", "type": "render",
+// "options": {...}} | {"file": ..., "type": "conversion", "format": "step"}]})
+// for these inputs. Throws Error(invalid_argument) naming the problem,
+// Error(limit_exceeded) beyond max_job_outputs or the image size limits.
+// The outputs come back numbered, with their artifact names and content types.
+std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs,
+                                      const ServerConfig& config);
+
+// `<file>-<type>-<output><extension>`, e.g. 0-render-1.png, 1-conversion-0.stl.
+std::string artifact_name(int file, const std::string& type, int output, const std::string& extension);
+bool valid_artifact_name(const std::string& name);
+// The output format named by an artifact's extension (png, exr, step, ...).
+std::string artifact_format(const std::string& name);
+// Job ids are 32 lowercase hex digits.
+bool valid_job_id(const std::string& id);
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,138 @@
+#include "server/render_service.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <future>
+#include <thread>
+
+#include "importer/importer.h"
+#include "importer/isolated.h"
+#include "renderer/error.h"
+#include "renderer/render.h"
+#include "renderer/stats_json.h"
+#include "server/work.h"
+
+namespace nurbsrt::server {
+namespace {
+
+using clock_type = std::chrono::steady_clock;
+double ms_since(clock_type::time_point t0) {
+    return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count();
+}
+
+// The imported scene for these bytes: from the cache, by waiting for a
+// simultaneous request's import of the same bytes, or imported in a child process.
+std::shared_ptr<const Scene> scene_for(ServerContext& ctx, const std::string& bytes, bool& cache_hit) {
+    const ImportOptions options;
+    SceneCache::Source source = SceneCache::Source::loaded;
+    auto scene = ctx.cache.get_or_load(
+        scene_cache_key(bytes, options),
+        [&] {
+            const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
+            try {
+                return std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
+            } catch (const Error& e) {
+                ctx.metrics.count_import_failure(error_code_name(e.code()));
+                throw;
+            }
+        },
+        source);
+    // A request that waited for another's import of the same bytes paid no import.
+    cache_hit = source != SceneCache::Source::loaded;
+    ctx.metrics.count_cache(cache_hit);
+    return scene;
+}
+
+// Runs the render on its own thread and waits at most the configured time. A
+// render that runs over, or whose caller cancels it, is canceled
+// (RenderOptions::cancel); it keeps its worker slot (the ticket) until its
+// thread has really stopped, at the next block of rows, so the slot is never
+// handed out twice.
+RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> scene, const Camera& camera,
+                            RenderOptions options, std::shared_ptr<AdmissionGate::Ticket> ticket,
+                            const std::shared_ptr<const std::atomic<bool>>& external_cancel) {
+    auto cancel = std::make_shared<std::atomic<bool>>(false);
+    options.cancel = cancel;
+    auto task = std::make_shared<std::packaged_task<RenderResult()>>(
+        [scene, camera, options, ticket] { return render(*scene, camera, options); });
+    std::future<RenderResult> result = task->get_future();
+    std::thread([task] { (*task)(); }).detach();
+    const auto deadline = clock_type::now() + std::chrono::duration_cast<clock_type::duration>(
+                                                  std::chrono::duration<double>(ctx.config.render_timeout_s));
+    // Short waits so that an external cancel is seen promptly.
+    while (result.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+        if (external_cancel && external_cancel->load()) {
+            cancel->store(true);
+            throw Error(ErrorCode::canceled, "the render was canceled");
+        }
+        if (clock_type::now() >= deadline) {
+            cancel->store(true);
+            char msg[128];
+            std::snprintf(msg, sizeof msg, "the render did not finish within %.0f s", ctx.config.render_timeout_s);
+            throw Error(ErrorCode::render_timeout, msg);
+        }
+    }
+    return result.get();
+}
+
+}  // namespace
+
+void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
+    if (r.width > c.max_dimension || r.height > c.max_dimension)
+        throw Error(ErrorCode::limit_exceeded, "image " + std::to_string(r.width) + "x" + std::to_string(r.height) +
+                                                   " exceeds the limit of " + std::to_string(c.max_dimension) +
+                                                   " pixels per side");
+    if (static_cast<long long>(r.width) * r.height > c.max_pixels)
+        throw Error(ErrorCode::limit_exceeded, "image of " +
+                                                   std::to_string(static_cast<long long>(r.width) * r.height) +
+                                                   " pixels exceeds the limit of " + std::to_string(c.max_pixels));
+}
+
+RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const RenderRequest& r,
+                            std::shared_ptr<AdmissionGate::Ticket> ticket, const RenderControl& control) {
+    const auto t0 = control.start.value_or(clock_type::now());
+    RenderedImage out;
+    std::shared_ptr<const Scene> scene = scene_for(ctx, bytes, out.cache_hit);
+    if (scene->faces.size() > ctx.config.max_faces)
+        throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene->faces.size()) +
+                                                   " faces; the limit is " + std::to_string(ctx.config.max_faces));
+    const Camera camera(camera_spec_for(r, *scene));
+    RenderOptions options;
+    options.method = r.method == "martin" ? NewtonMethod::martin : NewtonMethod::proposed;
+    options.map_precision = r.map_precision == "rgb8" ? MapPrecision::rgb8 : MapPrecision::float32;
+    options.threads = ctx.config.render_threads;
+    options.progress = control.progress;
+    if (r.background)
+        options.background = {static_cast<float>(r.background->x), static_cast<float>(r.background->y),
+                              static_cast<float>(r.background->z)};
+    const RenderResult result = render_bounded(ctx, scene, camera, options, ticket, control.cancel);
+
+    const auto te = clock_type::now();
+    {
+        const TempFile file = ctx.scratch.create("render", r.format.extension.c_str());
+        write_image(result.image, file.path());
+        out.bytes = read_file_bytes(file.path());
+    }
+    const double encode_ms = ms_since(te);
+    ticket.reset();
+
+    const ImportTimings import_ms = out.cache_hit ? ImportTimings{} : scene->timings;
+    nlohmann::json stats = render_stats_json(result.stats, import_ms, encode_ms, ms_since(t0));
+    const CameraSpec& cs = camera.spec();
+    stats["camera"] = {{"eye", {cs.eye.x, cs.eye.y, cs.eye.z}},
+                       {"target", {cs.target.x, cs.target.y, cs.target.z}},
+                       {"up", {cs.up.x, cs.up.y, cs.up.z}},
+                       {"projection", camera.perspective() ? "perspective" : "orthographic"},
+                       {"fov_deg", cs.fov_deg},
+                       {"ortho_height", cs.ortho_height}};
+    stats["map_precision"] = r.map_precision;
+    stats["warnings"] = scene->warnings;
+    stats["cache"] = out.cache_hit ? "hit" : "miss";
+    for (const char* stage : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"})
+        ctx.metrics.observe_stage(stage, stats["timings_ms"].value(stage, 0.0) / 1000.0);
+    out.stats_json = stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    return out;
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,44 @@
+// The "upload -> rendered image bytes + statistics" step shared by POST
+// /v1/renders and batch jobs: limit checks, the scene (cache or isolated
+// import), the render bounded in time and cancelable, and the encoding.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <optional>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "server/context.h"
+#include "server/render_options.h"
+
+namespace nurbsrt::server {
+
+// Throws Error(limit_exceeded) when the image is over the configured size limits.
+void check_render_limits(const ServerConfig& config, const RenderRequest& r);
+
+struct RenderedImage {
+    std::string bytes;          // the encoded image (r.format)
+    std::string stats_json;     // the Statistics object's JSON text (with camera, cache, warnings)
+    bool cache_hit = false;
+};
+
+struct RenderControl {
+    // Set by the caller to stop the render (a deleted job); the render then ends
+    // with Error(canceled) at its next block of rows.
+    std::shared_ptr<const std::atomic<bool>> cancel;
+    // Fraction done in (0, 1], from the rendering threads.
+    std::function<void(double)> progress;
+    // When the request started (for the `total` timing); default: the call.
+    std::optional<std::chrono::steady_clock::time_point> start;
+};
+
+// Renders `cad_bytes` (STEP/IGES, already checked by content) with `r`. The
+// ticket is the caller's admission slot; it is held until the render really
+// stops. Throws nurbsrt::Error (import errors, limit_exceeded for too many
+// faces, render_timeout, canceled). Stage times go to the metrics.
+RenderedImage render_upload(ServerContext& ctx, const std::string& cad_bytes, const RenderRequest& r,
+                            std::shared_ptr<AdmissionGate::Ticket> ticket, const RenderControl& control = {});
+
+}  // namespace nurbsrt::server

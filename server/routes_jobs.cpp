@@ -1,0 +1,279 @@
+// Batch jobs: POST /v1/jobs (several STEP/IGES files, each with render and
+// conversion outputs; everything is validated before 202 Accepted), GET
+// /v1/jobs (paged), GET and DELETE /v1/jobs/{id}, and GET
+// /v1/jobs/{id}/artifacts/{name}. The work itself is server/job_runner.h.
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <ctime>
+#include <fstream>
+
+#include "importer/importer.h"
+#include "renderer/error.h"
+#include "server/context.h"
+#include "server/http_util.h"
+#include "server/job_runner.h"
+#include "server/job_spec.h"
+#include "server/routes.h"
+
+namespace nurbsrt::server {
+namespace {
+
+using nlohmann::json;
+
+std::string job_url(const std::string& id) { return "/v1/jobs/" + id; }
+
+// RFC 3339 UTC with milliseconds, or null for "not yet".
+json timestamp(int64_t ms) {
+    if (ms <= 0) return nullptr;
+    const std::time_t s = static_cast<std::time_t>(ms / 1000);
+    std::tm tm{};
+    gmtime_r(&s, &tm);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                  tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms % 1000));
+    return buf;
+}
+
+json span(int64_t from, int64_t to) {
+    if (from <= 0 || to <= 0) return nullptr;
+    return to - from;
+}
+
+json parse_or_null(const std::string& text) {
+    if (text.empty()) return nullptr;
+    json j = json::parse(text, nullptr, false);
+    return j.is_discarded() ? json(nullptr) : j;
+}
+
+json job_json(const JobRecord& j) {
+    json files = json::array();
+    for (const JobInput& in : j.inputs)
+        files.push_back({{"index", in.index}, {"filename", in.filename}, {"format", in.format}, {"bytes", in.bytes}});
+    json outputs = json::array();
+    double progress = 0;
+    for (const JobOutput& o : j.outputs) {
+        json out = {{"index", o.index},
+                    {"file", o.file},
+                    {"type", o.kind},
+                    {"format", artifact_format(o.artifact)},
+                    {"state", o.state},
+                    {"progress", o.state == "succeeded" ? 1.0 : o.progress},
+                    {"started_at", timestamp(o.started_ms)},
+                    {"finished_at", timestamp(o.finished_ms)},
+                    {"duration_ms", span(o.started_ms, o.finished_ms)}};
+        const json options = parse_or_null(o.options_json);
+        if (o.kind == "render") out["options"] = options.is_object() ? options : json::object();
+        if (!o.error_code.empty()) out["error"] = {{"code", o.error_code}, {"message", o.error_message}};
+        if (o.state == "succeeded") {
+            out["artifact"] = {{"name", o.artifact},
+                               {"url", job_url(j.id) + "/artifacts/" + o.artifact},
+                               {"content_type", o.content_type},
+                               {"bytes", o.artifact_bytes}};
+            const json result = parse_or_null(o.result_json);
+            if (result.is_object()) out[o.kind == "render" ? "statistics" : "report"] = result;
+        }
+        progress += o.state == "succeeded" || o.state == "failed" ? 1.0 : o.progress;
+        outputs.push_back(std::move(out));
+    }
+    json body = {{"id", j.id},
+                 {"url", job_url(j.id)},
+                 {"state", j.state},
+                 {"progress", j.outputs.empty() ? 0.0 : progress / static_cast<double>(j.outputs.size())},
+                 {"attempts", j.attempts},
+                 {"created_at", timestamp(j.created_ms)},
+                 {"started_at", timestamp(j.started_ms)},
+                 {"finished_at", timestamp(j.finished_ms)},
+                 {"timings_ms", {{"queued", span(j.created_ms, j.started_ms)}, {"run", span(j.started_ms, j.finished_ms)}}},
+                 {"files", files},
+                 {"outputs", outputs}};
+    if (!j.error_code.empty()) body["error"] = {{"code", j.error_code}, {"message", j.error_message}};
+    return body;
+}
+
+void send_json(httplib::Response& res, const json& body, int status = 200) {
+    res.status = status;
+    res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
+}
+
+JobService& jobs_of(ServerContext& ctx) {
+    if (!ctx.jobs) throw Error(ErrorCode::internal, "the job service is not running");
+    return *ctx.jobs;
+}
+
+void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    if (!req.is_multipart_form_data())
+        throw Error(ErrorCode::unsupported_format,
+                    "a job is multipart/form-data: one or more 'file' parts and one 'job' part (JSON)");
+    std::vector<JobInput> inputs;
+    std::vector<const std::string*> bytes;
+    const std::string* job_part = nullptr;
+    for (const auto& [name, part] : req.files) {
+        if (name == "file") {
+            if (static_cast<int>(inputs.size()) >= ctx.config.max_job_files)
+                throw Error(ErrorCode::limit_exceeded, "more than " + std::to_string(ctx.config.max_job_files) +
+                                                           " files in one job");
+            const std::string& b = part.content;
+            const int index = static_cast<int>(inputs.size());
+            if (b.empty()) throw Error(ErrorCode::invalid_argument, "file " + std::to_string(index) + " is empty");
+            const CadFormat f = detect_format_bytes(b.data(), b.size());
+            if (f == CadFormat::unknown)
+                throw Error(ErrorCode::unsupported_format,
+                            "file " + std::to_string(index) + " is neither STEP nor IGES (recognised by content)");
+            // The filename is only a label for the client (and to refer to the file): bounded, never a path.
+            inputs.push_back({index, part.filename.substr(0, 255), format_name(f), static_cast<int64_t>(b.size())});
+            bytes.push_back(&b);
+        } else if (name == "job") {
+            if (job_part) throw Error(ErrorCode::invalid_argument, "more than one 'job' part");
+            job_part = &part.content;
+        } else {
+            throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
+        }
+    }
+    if (inputs.empty()) throw Error(ErrorCode::invalid_argument, "a job needs at least one 'file' part");
+    if (!job_part) throw Error(ErrorCode::invalid_argument, "a job needs a 'job' part (JSON with 'outputs')");
+    JobRecord job;
+    job.inputs = std::move(inputs);
+    job.outputs = parse_job_spec(*job_part, job.inputs, ctx.config);
+    jobs_of(ctx).submit(job, bytes);
+    res.set_header("Location", job_url(job.id));
+    send_json(res, job_json(job), 202);
+}
+
+// Cursors are opaque to clients: the order's letter and the last job's
+// sequence number in hex, so a cursor cannot be used with the other order.
+std::string make_cursor(bool newest_first, int64_t seq) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%c%llx", newest_first ? 'n' : 'o', static_cast<unsigned long long>(seq));
+    return buf;
+}
+
+int64_t parse_cursor(const std::string& c, bool newest_first) {
+    const auto bad = [] { return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page"); };
+    if (c.size() < 2 || c.size() > 17 || c[0] != (newest_first ? 'n' : 'o')) throw bad();
+    int64_t v = 0;
+    for (size_t i = 1; i < c.size(); ++i) {
+        const char ch = c[i];
+        const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+        if (d < 0 || v > (INT64_MAX >> 4)) throw bad();
+        v = v * 16 + d;
+    }
+    return v;
+}
+
+void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    for (const auto& [k, v] : req.params)
+        if (k != "limit" && k != "order" && k != "state" && k != "cursor")
+            throw Error(ErrorCode::invalid_argument, "unknown query parameter '" + k.substr(0, 64) + "'");
+    int limit = 20;
+    if (req.has_param("limit")) {
+        const std::string v = req.get_param_value("limit");
+        char* end = nullptr;
+        const long n = std::strtol(v.c_str(), &end, 10);
+        if (v.empty() || *end || n < 1 || n > 100)
+            throw Error(ErrorCode::invalid_argument, "'limit' must be an integer in 1..100");
+        limit = static_cast<int>(n);
+    }
+    const std::string order = req.has_param("order") ? req.get_param_value("order") : "newest";
+    if (order != "newest" && order != "oldest")
+        throw Error(ErrorCode::invalid_argument, "'order' must be newest or oldest");
+    const bool newest = order == "newest";
+    std::optional<std::string> state;
+    if (req.has_param("state")) {
+        state = req.get_param_value("state");
+        bool known = false;
+        for (const char* s : kJobStates) known = known || *state == s;
+        if (!known) throw Error(ErrorCode::invalid_argument, "'state' must be queued, running, succeeded, failed or canceled");
+    }
+    std::optional<int64_t> after;
+    if (req.has_param("cursor")) after = parse_cursor(req.get_param_value("cursor"), newest);
+    const JobPage page = jobs_of(ctx).store().list(state, newest, limit, after);
+    json list = json::array();
+    for (const JobRecord& j : page.jobs) list.push_back(job_json(j));
+    send_json(res, {{"jobs", list},
+                    {"next_cursor", page.next_after ? json(make_cursor(newest, *page.next_after)) : json(nullptr)}});
+}
+
+std::string checked_id(const std::string& id) {
+    if (!valid_job_id(id)) throw Error(ErrorCode::not_found, "no such job");
+    return id;
+}
+
+void handle_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const std::string id = checked_id(req.matches[1]);
+    const auto job = jobs_of(ctx).store().get(id);
+    if (!job) throw Error(ErrorCode::not_found, "no such job");
+    send_json(res, job_json(*job));
+}
+
+void handle_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const std::string id = checked_id(req.matches[1]);
+    switch (jobs_of(ctx).remove(id)) {
+        case JobStore::DeleteOutcome::not_found: throw Error(ErrorCode::not_found, "no such job");
+        case JobStore::DeleteOutcome::removed: res.status = 204; return;
+        case JobStore::DeleteOutcome::canceling: {
+            const auto job = jobs_of(ctx).store().get(id);
+            if (!job) {  // the runner already removed it
+                res.status = 204;
+                return;
+            }
+            send_json(res, job_json(*job), 202);
+            return;
+        }
+    }
+}
+
+void handle_artifact(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const std::string id = checked_id(req.matches[1]);
+    const std::string name = req.matches[2];
+    if (!valid_artifact_name(name)) throw Error(ErrorCode::not_found, "no such artifact");
+    const auto job = jobs_of(ctx).store().get(id);
+    if (!job) throw Error(ErrorCode::not_found, "no such job");
+    for (const JobOutput& o : job->outputs) {
+        if (o.artifact != name) continue;
+        if (o.state != "succeeded")
+            throw Error(ErrorCode::not_found, "artifact " + name + " is not available: its output is " + o.state);
+        // The path is built from the stored id and name, both generated by the service.
+        auto in = std::make_shared<std::ifstream>(jobs_of(ctx).artifact_path(job->id, o.artifact), std::ios::binary);
+        if (!*in) throw Error(ErrorCode::not_found, "artifact " + name + " is gone");
+        in->seekg(0, std::ios::end);
+        const auto size = static_cast<size_t>(in->tellg());
+        in->seekg(0);
+        res.set_header("Content-Disposition", "attachment; filename=\"" + o.artifact + "\"");
+        res.set_content_provider(size, o.content_type.c_str(),
+                                 [in](size_t offset, size_t length, httplib::DataSink& sink) {
+                                     std::vector<char> buf(std::min<size_t>(length, 1 << 16));
+                                     in->seekg(static_cast<std::streamoff>(offset));
+                                     in->read(buf.data(), static_cast<std::streamsize>(buf.size()));
+                                     const auto n = in->gcount();
+                                     if (n <= 0) return false;
+                                     sink.write(buf.data(), static_cast<size_t>(n));
+                                     return true;
+                                 });
+        return;
+    }
+    throw Error(ErrorCode::not_found, "no such artifact");
+}
+
+template <typename F>
+httplib::Server::Handler guarded(ServerContext& ctx, F f) {
+    return [&ctx, f](const httplib::Request& req, httplib::Response& res) {
+        try {
+            f(ctx, req, res);
+        } catch (const Error& e) {
+            send_problem(res, e.code(), e.what(), ctx.config.retry_after_s);
+        }
+    };
+}
+
+}  // namespace
+
+void add_job_routes(httplib::Server& svr, ServerContext& ctx) {
+    svr.Post("/v1/jobs", guarded(ctx, handle_submit));
+    svr.Get("/v1/jobs", guarded(ctx, handle_list));
+    svr.Get(R"(/v1/jobs/([^/]+))", guarded(ctx, handle_get));
+    svr.Delete(R"(/v1/jobs/([^/]+))", guarded(ctx, handle_delete));
+    svr.Get(R"(/v1/jobs/([^/]+)/artifacts/([^/]+))", guarded(ctx, handle_artifact));
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,453 @@
+"""Batch jobs (/v1/jobs): several files with render and conversion outputs run
+to completion, artifacts download and decode (images) or re-import with the
+same face count (STEP/IGES); paging; 404s and traversal; every validation
+error before 202; DELETE of a queued and a running job; the job queue bound;
+retention; and recovery after the service is killed (SIGKILL) under a job."""
+import http.client
+import json
+import pathlib
+import struct
+import subprocess
+import time
+import urllib.parse
+import zlib
+import os
+
+import pytest
+import requests
+
+from conftest import BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, validate
+
+# Inputs: a large-ish IGES and a small STEP from ../shared/models, else OCCT's own data files.
+if MODELS.is_dir():
+    IGES_FILE = MODELS / "iges" / "bearing.iges"
+    STEP_FILE = MODELS / "step" / "bug3883_xr2-ct-214_bolt.stp"
+else:
+    IGES_FILE, STEP_FILE = BEARING, SCREW
+TRUNCATED_STEP = SCREW.read_bytes()[:1500]  # a STEP header, then nothing readable
+
+
+def test_models_present_or_skipped_visibly():
+    if not MODELS.is_dir():
+        pytest.skip(f"{MODELS} is absent: jobs use /usr/share/opencascade/data files instead")
+
+
+# ---- helpers -------------------------------------------------------------------------------------------
+
+def submit(base, files, spec):
+    """POST /v1/jobs with `files` [(filename, bytes)] as `file` parts and `spec` as the `job` part."""
+    parts = [("file", (name, data, "application/octet-stream")) for name, data in files]
+    parts.append(("job", (None, spec if isinstance(spec, str) else json.dumps(spec), "application/json")))
+    return requests.post(base + "/v1/jobs", files=parts, timeout=TIMEOUT)
+
+
+def accepted(resp):
+    assert resp.status_code == 202, resp.text[:400]
+    job = resp.json()
+    validate(job, "Job")
+    assert resp.headers["Location"] == f"/v1/jobs/{job['id']}" == job["url"]
+    assert job["state"] in ("queued", "running")
+    return job
+
+
+def get_job(base, job_id):
+    r = requests.get(f"{base}/v1/jobs/{job_id}", timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    job = r.json()
+    validate(job, "Job")
+    return job
+
+
+def wait_for(base, job_id, pred, timeout=90, what="condition"):
+    deadline = time.monotonic() + timeout
+    while True:
+        job = get_job(base, job_id)
+        if pred(job):
+            return job
+        assert time.monotonic() < deadline, f"job never reached {what}: {json.dumps(job)[:800]}"
+        time.sleep(0.1)
+
+
+def wait_finished(base, job_id, timeout=90):
+    return wait_for(base, job_id, lambda j: j["state"] in ("succeeded", "failed"), timeout, "a finished state")
+
+
+def wait_gone(base, job_id, timeout=30):
+    deadline = time.monotonic() + timeout
+    while requests.get(f"{base}/v1/jobs/{job_id}", timeout=TIMEOUT).status_code != 404:
+        assert time.monotonic() < deadline, "the job was never removed"
+        time.sleep(0.1)
+
+
+def download(base, output):
+    art = output["artifact"]
+    r = requests.get(base + art["url"], timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == art["content_type"]
+    assert r.headers["Content-Disposition"] == f'attachment; filename="{art["name"]}"'
+    assert len(r.content) == art["bytes"] > 0
+    return r.content
+
+
+def png_size(data):
+    """Decodes a non-interlaced 8-bit PNG far enough to prove it whole: chunk CRCs, IHDR, and the
+    inflated IDAT stream of exactly height rows of (filter byte + width * channels) bytes."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, ihdr = 8, b"", None
+    while pos < len(data):
+        length, ctype = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        (crc,) = struct.unpack(">I", data[pos + 8 + length:pos + 12 + length])
+        assert zlib.crc32(ctype + body) == crc, ctype
+        if ctype == b"IHDR":
+            ihdr = struct.unpack(">IIBBBBB", body)
+        elif ctype == b"IDAT":
+            idat += body
+        pos += 12 + length
+        if ctype == b"IEND":
+            break
+    width, height, depth, color, _, _, interlace = ihdr
+    assert depth == 8 and interlace == 0
+    channels = {0: 1, 2: 3, 4: 2, 6: 4}[color]
+    assert len(zlib.decompress(idat)) == height * (1 + width * channels)
+    return width, height
+
+
+def exr_size(data):
+    """OpenEXR magic, then the header's dataWindow attribute (box2i)."""
+    assert data[:4] == b"\x76\x2f\x31\x01"
+    pos = 8
+    while data[pos] != 0:
+        name_end = data.index(b"\0", pos)
+        type_end = data.index(b"\0", name_end + 1)
+        name = data[pos:name_end]
+        (size,) = struct.unpack("<i", data[type_end + 1:type_end + 5])
+        value = data[type_end + 5:type_end + 5 + size]
+        if name == b"dataWindow":
+            xmin, ymin, xmax, ymax = struct.unpack("<iiii", value)
+            return xmax - xmin + 1, ymax - ymin + 1
+        pos = type_end + 5 + size
+    raise AssertionError("no dataWindow in the EXR header")
+
+
+def face_count(path):
+    out = subprocess.run([os.environ["NURBSRT_BIN"], "info", "--json", str(path)], capture_output=True,
+                         timeout=120, check=True)
+    return json.loads(out.stdout)["faces"]
+
+
+def raw_get(base, path):
+    """A GET with the path sent exactly as written (no client-side normalisation of ../)."""
+    u = urllib.parse.urlparse(base)
+    conn = http.client.HTTPConnection(u.hostname, u.port, timeout=30)
+    conn.request("GET", path)
+    r = conn.getresponse()
+    body = r.read()
+    conn.close()
+    return r.status, r.getheader("Content-Type", ""), body
+
+
+# ---- a complete job ------------------------------------------------------------------------------------
+
+def test_job_with_several_files_and_outputs(url, tmp_path):
+    iges, step = IGES_FILE.read_bytes(), STEP_FILE.read_bytes()
+    spec = {"outputs": [
+        {"file": 0, "type": "render", "options": {"width": 96, "height": 72, "view": "front"}},
+        {"file": STEP_FILE.name, "type": "render", "options": {"width": 64, "height": 48, "format": "exr"}},
+        {"file": 0, "type": "conversion", "format": "step"},
+        {"file": 1, "type": "conversion", "format": "iges"},
+    ]}
+    t0 = time.monotonic()
+    job = accepted(submit(url, [(IGES_FILE.name, iges), (STEP_FILE.name, step)], spec))
+    assert [f["format"] for f in job["files"]] == ["IGES", "STEP"]
+    assert [f["bytes"] for f in job["files"]] == [len(iges), len(step)]
+    assert [o["state"] for o in job["outputs"]] == ["queued"] * 4
+    job = wait_finished(url, job["id"])
+    wall_ms = (time.monotonic() - t0) * 1000
+    assert job["state"] == "succeeded", json.dumps(job)[:1000]
+    assert "error" not in job and job["progress"] == 1 and job["attempts"] == 1
+    assert job["created_at"] <= job["started_at"] <= job["finished_at"]
+    assert 0 <= job["timings_ms"]["run"] <= wall_ms
+    names = [o["artifact"]["name"] for o in job["outputs"]]
+    assert names == ["0-render-0.png", "1-render-1.exr", "0-conversion-2.step", "1-conversion-3.igs"]
+    for o in job["outputs"]:
+        assert o["state"] == "succeeded" and o["progress"] == 1
+        assert o["started_at"] <= o["finished_at"] and o["duration_ms"] >= 0
+
+    png, exr = download(url, job["outputs"][0]), download(url, job["outputs"][1])
+    assert png_size(png) == (96, 72)
+    assert exr_size(exr) == (64, 48)
+    stats = job["outputs"][0]["statistics"]
+    assert (stats["width"], stats["height"], stats["camera"]["projection"]) == (96, 72, "perspective")
+    assert stats["pixels_hit"] > 0
+
+    # The conversions re-import with the faces of their inputs.
+    (tmp_path / "in.igs").write_bytes(iges)
+    (tmp_path / "in.stp").write_bytes(step)
+    (tmp_path / "out.step").write_bytes(download(url, job["outputs"][2]))
+    (tmp_path / "out.igs").write_bytes(download(url, job["outputs"][3]))
+    assert (tmp_path / "out.step").read_bytes().startswith(b"ISO-10303-21;")
+    for src, out, output in (("in.igs", "out.step", 2), ("in.stp", "out.igs", 3)):
+        faces = face_count(tmp_path / src)
+        assert face_count(tmp_path / out) == faces > 0
+        assert job["outputs"][output]["report"]["faces"] == faces
+
+    m = requests.get(url + "/metrics", timeout=TIMEOUT).text
+    assert 'nurbsrt_jobs{state="succeeded"}' in m
+    assert 'nurbsrt_jobs_finished_total{result="succeeded"}' in m
+    assert 'nurbsrt_jobs_finished_total{result="succeeded"} 0' not in m
+
+
+def test_unreadable_cad_is_a_failed_output(url):
+    spec = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"},
+                        {"file": 1, "type": "render", "options": {"width": 32, "height": 32}}]}
+    job = accepted(submit(url, [("cut.step", TRUNCATED_STEP), ("screw.step", SCREW.read_bytes())], spec))
+    job = wait_finished(url, job["id"])
+    assert job["state"] == "failed"
+    bad, good = job["outputs"]
+    assert bad["state"] == "failed" and bad["error"]["code"] == "unreadable_file" and bad["error"]["message"]
+    assert "/jobs/" not in bad["error"]["message"]  # no server paths in messages
+    assert "artifact" not in bad
+    assert good["state"] == "succeeded"
+    assert png_size(download(url, good)) == (32, 32)  # the other output still has its artifact
+    assert job["error"]["code"] == "unreadable_file" and "1 of 2 outputs failed" in job["error"]["message"]
+    status, _, _ = raw_get(url, f"/v1/jobs/{job['id']}/artifacts/{'0-conversion-0.igs'}")
+    assert status == 404
+
+
+# ---- listing --------------------------------------------------------------------------------------------
+
+def test_listing_pages_and_filters(url):
+    ids = [accepted(submit(url, [("s.step", SCREW.read_bytes())],
+                           {"outputs": [{"file": 0, "type": "conversion", "format": "iges"}]}))["id"]
+           for _ in range(3)]
+
+    def walk(order, limit=2, state=None):
+        seen, cursor, pages = [], None, 0
+        while True:
+            params = {"limit": limit, "order": order}
+            if cursor:
+                params["cursor"] = cursor
+            if state:
+                params["state"] = state
+            r = requests.get(url + "/v1/jobs", params=params, timeout=TIMEOUT)
+            assert r.status_code == 200, r.text[:300]
+            body = r.json()
+            validate(body, "JobList")
+            assert len(body["jobs"]) <= limit
+            seen += [j["id"] for j in body["jobs"]]
+            for j in body["jobs"]:
+                assert state is None or j["state"] == state
+            pages += 1
+            cursor = body["next_cursor"]
+            if cursor is None:
+                return seen, pages
+            assert pages < 500
+
+    newest, pages = walk("newest")
+    assert pages >= 2 and len(newest) == len(set(newest))
+    assert [i for i in newest if i in ids] == ids[::-1]  # newest first
+    oldest, _ = walk("oldest", limit=3)
+    assert oldest == newest[::-1]
+    assert newest[:3] == ids[::-1]  # nothing newer was submitted meanwhile
+    for j in ids:
+        wait_finished(url, j)
+    succeeded, _ = walk("newest", limit=5, state="succeeded")
+    assert set(ids) <= set(succeeded)
+    queued, _ = walk("newest", state="queued")
+    assert not set(ids) & set(queued)
+
+    first = requests.get(url + "/v1/jobs", params={"limit": 1}, timeout=TIMEOUT).json()
+    assert first["jobs"][0]["id"] == ids[-1] and first["next_cursor"]
+    for params in ({"limit": 0}, {"limit": 101}, {"limit": "x"}, {"order": "random"}, {"state": "done"},
+                   {"cursor": "zz"}, {"cursor": first["next_cursor"], "order": "oldest"}, {"page": 2}):
+        check_problem(requests.get(url + "/v1/jobs", params=params, timeout=TIMEOUT), 400, "invalid_argument")
+
+
+# ---- not found, traversal --------------------------------------------------------------------------------
+
+def test_not_found_and_traversal(url):
+    job = accepted(submit(url, [("s.step", SCREW.read_bytes())],
+                          {"outputs": [{"file": 0, "type": "render", "options": {"width": 40, "height": 30}}]}))
+    job = wait_finished(url, job["id"])
+    assert job["state"] == "succeeded"
+    base = f"/v1/jobs/{job['id']}"
+    assert raw_get(url, base + "/artifacts/0-render-0.png")[0] == 200
+    for path in ("/v1/jobs/" + "0" * 32, "/v1/jobs/nope", "/v1/jobs/..%2F..%2Fjobs.db",
+                 base + "/artifacts/0-render-1.png",   # a valid name, not this job's
+                 base + "/artifacts/input-0.cad",      # exists on disk, but is no artifact
+                 base + "/artifacts/..%2Finput-0.cad", base + "/artifacts/..%2F..%2F..%2Fjobs.db",
+                 base + "/artifacts/%2e%2e%2f%2e%2e%2fjobs.db", base + "/artifacts/../../../jobs.db",
+                 base + "/artifacts/0-render-0.png%00.txt", "/v1/jobs/" + "0" * 32 + "/artifacts/0-render-0.png"):
+        status, ctype, body = raw_get(url, path)
+        assert status in (400, 404), (path, status)
+        assert ctype.startswith("application/problem+json"), (path, ctype)
+        validate(json.loads(body), "Problem")
+    check_problem(requests.delete(url + "/v1/jobs/" + "f" * 32, timeout=TIMEOUT), 404, "not_found")
+    # DELETE of a finished job removes it and its artifacts.
+    r = requests.delete(url + base, timeout=TIMEOUT)
+    assert r.status_code == 204
+    check_problem(requests.get(url + base, timeout=TIMEOUT), 404, "not_found")
+    assert raw_get(url, base + "/artifacts/0-render-0.png")[0] == 404
+    data_dir = os.environ.get("NURBSRT_DATA_DIR")
+    if data_dir:
+        assert not (pathlib.Path(data_dir) / "jobs" / job["id"]).exists()
+
+
+# ---- validation before 202 -------------------------------------------------------------------------------
+
+def test_validation_errors_before_202(url):
+    def count():
+        return sum(1 for _ in requests.get(url + "/v1/jobs", params={"limit": 100}, timeout=TIMEOUT).json()["jobs"])
+
+    before = count()
+    step = [("s.step", SCREW.read_bytes())]
+    conv = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"}]}
+    render = lambda **o: {"outputs": [{"file": 0, "type": "render", "options": o}]}  # noqa: E731
+    cases = [
+        (submit(url, step, "not json"), 400),
+        (submit(url, step, {"outputs": []}), 400),
+        (submit(url, step, {"outputs": [{"file": 0, "type": "render"}], "extra": 1}), 400),
+        (submit(url, step, {"outputs": [{"file": 1, "type": "render"}]}), 400),
+        (submit(url, step, {"outputs": [{"file": "other.step", "type": "render"}]}), 400),
+        (submit(url, step, {"outputs": [{"file": 0, "type": "thumbnail"}]}), 400),
+        (submit(url, step, {"outputs": [{"file": 0, "type": "conversion"}]}), 400),
+        (submit(url, step, {"outputs": [{"file": 0, "type": "conversion", "format": "dwg"}]}), 400),
+        (submit(url, step, {"outputs": [{"file": 0, "type": "conversion", "format": "iges", "width": 3}]}), 400),
+        (submit(url, step, render(width=-1)), 400),
+        (submit(url, step, render(format="gif")), 400),
+        (submit(url, step, render(view="sideways")), 400),
+        (submit(url, step, render(width=5000, height=10)), 413),     # over --max-dimension 4096
+        (submit(url, step, render(width=4000, height=4000)), 413),   # over --max-pixels 4000000
+        (submit(url, step + step, conv), 400),                        # file 1 has no outputs
+        (submit(url, [("a.step", SCREW.read_bytes()), ("a.step", SCREW.read_bytes())],
+                {"outputs": [{"file": "a.step", "type": "render"}, {"file": 1, "type": "render"}]}), 400),
+        (submit(url, [("e.step", b"")], conv), 400),
+        (submit(url, [("hello.step", b"hello world")], conv), 415),
+        (submit(url, [], conv), 400),
+        (requests.post(url + "/v1/jobs", files={"file": ("s.step", SCREW.read_bytes())}, timeout=TIMEOUT), 400),
+        (requests.post(url + "/v1/jobs", data=SCREW.read_bytes(),
+                       headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT), 415),
+        (submit(url, [("big.step", b"ISO-10303-21;\n" + b" " * (5 << 20))], conv), 413),  # over --max-upload-mb 4
+    ]
+    for i, (resp, status) in enumerate(cases):
+        body = check_problem(resp, status)
+        assert body["detail"], i
+    assert count() == before  # none of them created a job
+
+
+def test_job_limits_and_queue_bound(own_server):
+    s = own_server(args=["--max-job-files", "2", "--max-job-outputs", "3", "--max-queued-jobs", "1",
+                         "--workers", "1", "--job-runners", "1", "--render-threads", "1"])
+    step = SCREW.read_bytes()
+    render = {"file": 0, "type": "render", "options": {"width": 16, "height": 16}}
+    check_problem(submit(s.url, [("a.step", step)] * 3, {"outputs": [dict(render, file=i) for i in range(3)]}),
+                  413, "limit_exceeded")
+    check_problem(submit(s.url, [("a.step", step)], {"outputs": [render] * 4}), 413, "limit_exceeded")
+    # One slow job runs, one waits: the next is turned away with Retry-After.
+    slow = {"outputs": [{"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}}]}
+    running = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], slow))
+    wait_for(s.url, running["id"], lambda j: j["state"] == "running", what="running")
+    queued = accepted(submit(s.url, [("a.step", step)], {"outputs": [render]}))
+    r = submit(s.url, [("a.step", step)], {"outputs": [render]})
+    check_problem(r, 503, "overloaded")
+    assert int(r.headers["Retry-After"]) >= 1
+    # DELETE of the queued job: gone at once, with its files.
+    assert requests.delete(f"{s.url}/v1/jobs/{queued['id']}", timeout=TIMEOUT).status_code == 204
+    check_problem(requests.get(f"{s.url}/v1/jobs/{queued['id']}", timeout=TIMEOUT), 404)
+    assert not (s.data_dir / "jobs" / queued["id"]).exists()
+    requests.delete(f"{s.url}/v1/jobs/{running['id']}", timeout=TIMEOUT)
+
+
+# ---- DELETE of a running job -------------------------------------------------------------------------------
+
+def test_delete_running_job(own_server):
+    s = own_server(args=["--workers", "1", "--job-runners", "1", "--render-threads", "1"])
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}},
+                        {"file": 0, "type": "conversion", "format": "step"}]}
+    job = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], spec))
+    job = wait_for(s.url, job["id"], lambda j: j["outputs"][0]["state"] == "running", what="a running render")
+    r = requests.delete(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT)
+    assert r.status_code == 202, r.text[:300]  # running: canceled now, removed once the render stops
+    body = r.json()
+    validate(body, "Job")
+    assert body["state"] == "canceled" and body["error"]["code"] == "canceled"
+    assert [o["state"] for o in body["outputs"]] == ["canceled", "canceled"]
+    wait_gone(s.url, job["id"])
+    check_problem(requests.get(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT), 404)
+    deadline = time.monotonic() + 10
+    while (s.data_dir / "jobs" / job["id"]).exists():
+        assert time.monotonic() < deadline, "the job's files were not removed"
+        time.sleep(0.1)
+    healthy(s.url)
+    # The worker slot is free again: a synchronous render goes through.
+    r = requests.post(s.url + "/v1/renders", params={"width": 32, "height": 32}, data=SCREW.read_bytes(),
+                      headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+    assert r.status_code == 200
+    m = requests.get(s.url + "/metrics", timeout=TIMEOUT).text
+    assert 'nurbsrt_jobs_finished_total{result="canceled"} 1' in m
+    # Only that synchronous render completed: the job's render was stopped, not run to its end.
+    assert 'nurbsrt_render_stage_seconds_count{stage="total"} 1\n' in m
+
+
+# ---- retention ---------------------------------------------------------------------------------------------
+
+def test_finished_jobs_expire(own_server):
+    s = own_server(args=["--job-retention", "1"])
+    job = accepted(submit(s.url, [("s.step", SCREW.read_bytes())],
+                          {"outputs": [{"file": 0, "type": "conversion", "format": "iges"}]}))
+    wait_finished(s.url, job["id"])
+    assert (s.data_dir / "jobs" / job["id"]).is_dir()
+    wait_gone(s.url, job["id"], timeout=10)
+    assert not (s.data_dir / "jobs" / job["id"]).exists()
+
+
+# ---- SIGKILL under a running job ---------------------------------------------------------------------------
+
+SLOW_ARGS = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
+SLOW_SPEC = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"},
+                         {"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}}]}
+
+
+def kill_while_rendering(s, job_id, attempt):
+    job = wait_for(s.url, job_id, lambda j: j["attempts"] == attempt and j["outputs"][1]["state"] == "running",
+                   what=f"attempt {attempt} rendering")
+    s.proc.kill()  # SIGKILL: no chance to put anything in order
+    s.proc.wait(timeout=10)
+    return job
+
+
+def test_sigkill_then_restart_reruns_the_job(own_server, tmp_path):
+    data = tmp_path / "data"
+    s1 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = accepted(submit(s1.url, [("s.step", SCREW.read_bytes())], SLOW_SPEC))
+    before = kill_while_rendering(s1, job["id"], 1)
+    conversion = before["outputs"][0]
+    assert conversion["state"] == "succeeded"
+
+    s2 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = wait_finished(s2.url, job["id"])
+    assert job["state"] == "succeeded", json.dumps(job)[:800]
+    assert job["attempts"] == 2
+    assert job["outputs"][0]["finished_at"] == conversion["finished_at"]  # kept, not converted again
+    assert download(s2.url, job["outputs"][0])[72:73] == b"S"  # IGES: the first record is the Start section
+    assert png_size(download(s2.url, job["outputs"][1])) == (2000, 2000)
+
+
+def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_path):
+    data = tmp_path / "data"
+    s1 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = accepted(submit(s1.url, [("s.step", SCREW.read_bytes())], SLOW_SPEC))
+    kill_while_rendering(s1, job["id"], 1)
+    s2 = own_server(args=SLOW_ARGS, data_dir=data)
+    kill_while_rendering(s2, job["id"], 2)
+    s3 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = get_job(s3.url, job["id"])
+    assert job["state"] == "failed"
+    assert job["error"]["code"] == "interrupted"
+    assert "interrupted by a service restart" in job["error"]["message"]
+    conv, rend = job["outputs"]
+    assert conv["state"] == "succeeded"
+    assert download(s3.url, conv)[72:73] == b"S"  # the finished output keeps its IGES artifact
+    assert rend["state"] == "failed" and rend["error"]["code"] == "interrupted"
+    healthy(s3.url)
