@@ -39,10 +39,10 @@ void write_file(const std::string& path, const std::string& bytes) {
 
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
 
-// An error message for the client: the service's own paths (the job directory)
-// are cut out, leaving the generated file names.
-std::string without_paths(std::string message, const std::string& dir) {
-    for (const std::string& p : {dir + "/partial-", dir + "/"})
+// An error message for the client: the service's own paths (the job and
+// scratch directories) are cut out, leaving the generated file names.
+std::string without_paths(std::string message, const std::string& dir, const std::string& scratch) {
+    for (const std::string& p : {dir + "/partial-", dir + "/", scratch + "/"})
         for (size_t at; (at = message.find(p)) != std::string::npos;) message.erase(at, p.size());
     return message;
 }
@@ -59,9 +59,8 @@ JobService::JobService(ServerContext& ctx) : ctx_(ctx), jobs_dir_(ctx.config.dat
     const RecoveryReport r = store_->recover(kMaxJobAttempts, now_ms());
     for (const std::string& id : r.removed) remove_files(id);
     if (!r.requeued.empty() || !r.failed.empty() || !r.removed.empty())
-        log_event("jobs_recovered", nlohmann::json{{"requeued", r.requeued},
-                                                   {"failed", r.failed},
-                                                   {"removed", r.removed}}.dump());
+        log_event("jobs_recovered",
+                  nlohmann::json{{"requeued", r.requeued}, {"failed", r.failed}, {"removed", r.removed}}.dump());
     // Directories without a job row: a submission or deletion cut short. Only
     // names the service generates are touched.
     const std::vector<std::string> ids = store_->all_ids();
@@ -110,14 +109,15 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
     // One submission at a time, so the queue bound holds exactly.
     std::lock_guard<std::mutex> submit_lock(submit_m_);
     if (store_->count_by_state()["queued"] >= ctx_.config.max_queued_jobs)
-        throw Error(ErrorCode::overloaded, std::to_string(ctx_.config.max_queued_jobs) +
-                                               " jobs are already waiting; retry later");
+        throw Error(ErrorCode::overloaded,
+                    std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
     job.id = new_request_id();
     job.created_ms = now_ms();
     const std::string dir = job_dir(job.id);
     try {
         fs::create_directory(dir);
-        for (size_t i = 0; i < input_bytes.size(); ++i) write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+        for (size_t i = 0; i < input_bytes.size(); ++i)
+            write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
         store_->create(job);
     } catch (const std::exception& e) {
         remove_files(job.id);
@@ -206,8 +206,8 @@ void JobService::run_job(JobRecord& job) {
             run_output(job, out, cancel);
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) break;
-            store_->output_failed(job.id, out.index, error_code_name(e.code()), without_paths(e.what(), job_dir(job.id)),
-                                  now_ms());
+            store_->output_failed(job.id, out.index, error_code_name(e.code()),
+                                  without_paths(e.what(), job_dir(job.id), ctx_.scratch.path()), now_ms());
         } catch (const std::exception& e) {
             store_->output_failed(job.id, out.index, "internal", e.what(), now_ms());
         }
@@ -221,7 +221,8 @@ void JobService::run_job(JobRecord& job) {
         // Stopped with work left: back to the queue for the next start, not counted as an interrupted run.
         const auto now = store_->get(job.id);
         bool left = false;
-        for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{}) left = left || o.state == "queued" || o.state == "running";
+        for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{})
+            left = left || o.state == "queued" || o.state == "running";
         if (left) {
             store_->requeue(job.id);
             log_event("job_requeued", nlohmann::json{{"job_id", job.id}}.dump());
@@ -249,7 +250,8 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
         if (cancel->load()) throw Error(ErrorCode::canceled, "the job was canceled");
         AdmissionGate::Refusal why;
         ticket = ctx_.gate.enter(std::chrono::milliseconds(1000), why);
-        if (!ticket && why == AdmissionGate::Refusal::queue_full) std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        if (!ticket && why == AdmissionGate::Refusal::queue_full)
+            std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
     if (!store_->output_running(job.id, out.index, now_ms())) throw Error(ErrorCode::canceled, "the job was deleted");
     const auto t0 = std::chrono::steady_clock::now();
@@ -303,8 +305,8 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
     fs::rename(partial, final_path, ec);
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
-    store_->output_succeeded(job.id, out.index, size, result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
-                             now_ms());
+    store_->output_succeeded(job.id, out.index, size,
+                             result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), now_ms());
 }
 
 }  // namespace nurbsrt::server
