@@ -243,13 +243,14 @@ void JobService::run_job(JobRecord& job) {
 
 void JobService::run_output(const JobRecord& job, const JobOutput& out,
                             const std::shared_ptr<std::atomic<bool>>& cancel) {
-    // A worker slot, waited for as long as it takes (the job is queued work
-    // already), in short waits so that a cancel or a stop is seen.
+    // A worker slot, waited for as long as it takes (the job is accepted work
+    // already) in its place in the gate's order; a cancel or a stop leaves the
+    // queue. While the gate's queue is full, the runner tries again shortly.
     std::shared_ptr<AdmissionGate::Ticket> ticket;
     while (!ticket) {
         if (cancel->load()) throw Error(ErrorCode::canceled, "the job was canceled");
         AdmissionGate::Refusal why;
-        ticket = ctx_.gate.enter(std::chrono::milliseconds(1000), why);
+        ticket = ctx_.gate.enter(std::chrono::hours(24), why, [&cancel] { return cancel->load(); });
         if (!ticket && why == AdmissionGate::Refusal::queue_full)
             std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }

@@ -230,7 +230,9 @@ JobStore::JobStore(const std::string& db_path) : impl_(std::make_unique<Impl>())
     try {
         // The first statement reads the file: a file that is not a database fails here.
         impl_->exec("PRAGMA journal_mode=WAL");
-        impl_->exec("PRAGMA synchronous=NORMAL");
+        // FULL: a commit (an accepted job, a finished output) survives a power
+        // loss too, not only a crash of the process; commits are few per job.
+        impl_->exec("PRAGMA synchronous=FULL");
         impl_->exec("PRAGMA foreign_keys=ON");
         impl_->exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
         int version = 0;

@@ -5,13 +5,15 @@ error before 202; DELETE of a queued and a running job; the job queue bound;
 retention; and recovery after the service is killed (SIGKILL) under a job."""
 import http.client
 import json
+import os
 import pathlib
+import signal
 import struct
 import subprocess
 import time
 import urllib.parse
 import zlib
-import os
+
 
 import pytest
 import requests
@@ -393,12 +395,13 @@ def test_delete_running_job(own_server):
 # ---- retention ---------------------------------------------------------------------------------------------
 
 def test_finished_jobs_expire(own_server):
-    s = own_server(args=["--job-retention", "1"])
+    s = own_server(args=["--job-retention", "2"])
     job = accepted(submit(s.url, [("s.step", SCREW.read_bytes())],
                           {"outputs": [{"file": 0, "type": "conversion", "format": "iges"}]}))
-    wait_finished(s.url, job["id"])
-    assert (s.data_dir / "jobs" / job["id"]).is_dir()
-    wait_gone(s.url, job["id"], timeout=10)
+    job = wait_finished(s.url, job["id"])
+    assert job["state"] == "succeeded"
+    download(s.url, job["outputs"][0])  # still there right after it finished
+    wait_gone(s.url, job["id"], timeout=15)
     assert not (s.data_dir / "jobs" / job["id"]).exists()
 
 
@@ -451,3 +454,18 @@ def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_pat
     assert download(s3.url, conv)[72:73] == b"S"  # the finished output keeps its IGES artifact
     assert rend["state"] == "failed" and rend["error"]["code"] == "interrupted"
     healthy(s3.url)
+
+
+def test_graceful_stop_requeues_without_counting_the_run(own_server, tmp_path):
+    data = tmp_path / "data"
+    s1 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = accepted(submit(s1.url, [("s.step", SCREW.read_bytes())], SLOW_SPEC))
+    wait_for(s1.url, job["id"], lambda j: j["outputs"][1]["state"] == "running", what="rendering")
+    t0 = time.monotonic()
+    s1.proc.send_signal(signal.SIGTERM)
+    assert s1.proc.wait(timeout=20) == 0
+    assert time.monotonic() - t0 < 5  # the render was canceled, not waited for
+    s2 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = wait_finished(s2.url, job["id"])
+    assert job["state"] == "succeeded" and job["attempts"] == 1
+    assert png_size(download(s2.url, job["outputs"][1])) == (2000, 2000)
