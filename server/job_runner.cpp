@@ -2,13 +2,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <cctype>
 #include <set>
 
 #include "importer/isolated.h"
@@ -30,11 +34,30 @@ int64_t now_ms() {
         .count();
 }
 
+// Writes the file and flushes it to the disk before returning: an accepted
+// job's inputs (and a finished output's artifact) must outlive a power loss
+// as its database row does. The file name is never the job's own path.
 void write_file(const std::string& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) throw Error(ErrorCode::io, "cannot write " + path);
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    if (fd < 0) throw Error(ErrorCode::io, "cannot create " + fs::path(path).filename().string());
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        done += static_cast<size_t>(n);
+    }
+    const bool ok = done == bytes.size() && ::fsync(fd) == 0;
+    ::close(fd);
+    if (!ok) throw Error(ErrorCode::io, "cannot write " + fs::path(path).filename().string());
+}
+
+void sync_dir(const std::string& dir) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd >= 0) {
+        ::fsync(fd);
+        ::close(fd);
+    }
 }
 
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
@@ -118,6 +141,8 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
         fs::create_directory(dir);
         for (size_t i = 0; i < input_bytes.size(); ++i)
             write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+        sync_dir(dir);
+        sync_dir(jobs_dir_);
         store_->create(job);
     } catch (const std::exception& e) {
         remove_files(job.id);
@@ -297,14 +322,17 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
         }
         ticket.reset();
         const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        std::string out_format = artifact_format(out.artifact);  // STEP, IGES, STL, ... as in POST /v1/conversions
+        for (char& ch : out_format) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
         result = {{"input_format", format_name(report.in_format)},
-                  {"output_format", artifact_format(out.artifact)},
+                  {"output_format", out_format},
                   {"faces", report.faces},
                   {"timings_ms", {{"read", report.read_ms}, {"write", report.write_ms}, {"total", total}}}};
     }
     std::error_code ec;
     fs::rename(partial, final_path, ec);
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
+    sync_dir(dir);
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
     store_->output_succeeded(job.id, out.index, size,
                              result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), now_ms());
