@@ -88,10 +88,12 @@ JobService::JobService(ServerContext& ctx) : ctx_(ctx), jobs_dir_(ctx.config.dat
     // names the service generates are touched.
     const std::vector<std::string> ids = store_->all_ids();
     const std::set<std::string> known(ids.begin(), ids.end());
+    std::vector<std::string> orphans;
     for (const auto& entry : fs::directory_iterator(jobs_dir_, ec)) {
         const std::string name = entry.path().filename().string();
-        if (valid_job_id(name) && !known.count(name)) remove_files(name);
+        if (valid_job_id(name) && !known.count(name)) orphans.push_back(name);
     }
+    for (const std::string& id : orphans) remove_files(id);
     sweep();
 }
 
@@ -187,7 +189,7 @@ void JobService::sweep_loop() {
         lock.unlock();
         try {
             sweep();
-        } catch (const Error& e) {
+        } catch (const std::exception& e) {
             log_event("jobs_sweep_failed", nlohmann::json{{"error", e.what()}}.dump());
         }
         lock.lock();
@@ -200,18 +202,23 @@ void JobService::run_loop() {
             std::lock_guard<std::mutex> lock(m_);
             if (stopping_) return;
         }
+        // A store that fails (disk full, database locked for long) must not end
+        // the runner thread, which would end the process: log, pause, go on.
+        // The job stays `running` and is recovered at the next start.
         std::optional<JobRecord> job;
+        bool failed = false;
         try {
             job = store_->claim_next(now_ms());
-        } catch (const Error& e) {
-            log_event("jobs_claim_failed", nlohmann::json{{"error", e.what()}}.dump());
+            if (job) run_job(*job);
+        } catch (const std::exception& e) {
+            failed = true;
+            log_event("job_runner_error",
+                      nlohmann::json{{"job_id", job ? job->id : std::string()}, {"error", e.what()}}.dump());
         }
-        if (!job) {
+        if (!job || failed) {
             std::unique_lock<std::mutex> lock(m_);
             cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_; });
-            continue;
         }
-        run_job(*job);
     }
 }
 
@@ -222,6 +229,15 @@ void JobService::run_job(JobRecord& job) {
         cancel_flags_[job.id] = cancel;
         if (stopping_) cancel->store(true);
     }
+    // The flag is unregistered however this ends.
+    struct Unregister {
+        JobService& s;
+        const std::string& id;
+        ~Unregister() {
+            std::lock_guard<std::mutex> lock(s.m_);
+            s.cancel_flags_.erase(id);
+        }
+    } unregister{*this, job.id};
     log_event("job_started", nlohmann::json{{"job_id", job.id}, {"attempt", job.attempts}}.dump());
     bool interrupted_by_stop = false;
     for (const JobOutput& out : job.outputs) {
@@ -239,7 +255,6 @@ void JobService::run_job(JobRecord& job) {
     }
     {
         std::lock_guard<std::mutex> lock(m_);
-        cancel_flags_.erase(job.id);
         interrupted_by_stop = stopping_;
     }
     if (store_->running(job.id) && interrupted_by_stop) {
