@@ -1,8 +1,11 @@
 #include "server/admission.h"
 
+#include <algorithm>
+
 namespace nurbsrt::server {
 
-std::shared_ptr<AdmissionGate::Ticket> AdmissionGate::enter(std::chrono::milliseconds max_wait, Refusal& why) {
+std::shared_ptr<AdmissionGate::Ticket> AdmissionGate::enter(std::chrono::milliseconds max_wait, Refusal& why,
+                                                            const std::function<bool()>& give_up) {
     std::unique_lock<std::mutex> lock(m_);
     why = Refusal::none;
     if (queued_ == 0 && active_ < max_active_) {
@@ -15,7 +18,21 @@ std::shared_ptr<AdmissionGate::Ticket> AdmissionGate::enter(std::chrono::millise
     }
     ++queued_;
     const uint64_t my_number = next_number_++;
-    const bool admitted = cv_.wait_for(lock, max_wait, [&] { return serving_ == my_number && active_ < max_active_; });
+    const auto deadline = std::chrono::steady_clock::now() + max_wait;
+    const auto my_turn = [&] { return serving_ == my_number && active_ < max_active_; };
+    bool admitted = false, gave_up = false;
+    if (!give_up) {
+        admitted = cv_.wait_until(lock, deadline, my_turn);
+    } else {
+        while (!(admitted = my_turn())) {
+            if (give_up()) {
+                gave_up = true;
+                break;
+            }
+            const auto next = std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(100));
+            if (!cv_.wait_until(lock, next, my_turn) && std::chrono::steady_clock::now() >= deadline) break;
+        }
+    }
     --queued_;
     if (!admitted) {
         // Give up our place: waiters behind us must not wait for a number that never comes.
@@ -23,7 +40,7 @@ std::shared_ptr<AdmissionGate::Ticket> AdmissionGate::enter(std::chrono::millise
         abandoned_.push_back(my_number);
         skip_abandoned();
         cv_.notify_all();
-        why = Refusal::queue_timeout;
+        why = gave_up ? Refusal::gave_up : Refusal::queue_timeout;
         return nullptr;
     }
     ++serving_;

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -31,10 +32,14 @@ public:
         AdmissionGate& gate_;
     };
 
-    enum class Refusal { none, queue_full, queue_timeout };
+    enum class Refusal { none, queue_full, queue_timeout, gave_up };
 
     // A ticket, or nullptr with `why` set when the queue is full or the wait timed out.
-    std::shared_ptr<Ticket> enter(std::chrono::milliseconds max_wait, Refusal& why);
+    // `give_up`, when set, is polled while waiting (a few times a second): once it
+    // returns true the caller leaves the queue (a batch job that was canceled or a
+    // service stopping), without losing its place in the order before that.
+    std::shared_ptr<Ticket> enter(std::chrono::milliseconds max_wait, Refusal& why,
+                                  const std::function<bool()>& give_up = {});
 
     int active() const;
     int queued() const;

@@ -2,13 +2,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <cctype>
 #include <set>
 
 #include "importer/isolated.h"
@@ -30,19 +34,38 @@ int64_t now_ms() {
         .count();
 }
 
+// Writes the file and flushes it to the disk before returning: an accepted
+// job's inputs (and a finished output's artifact) must outlive a power loss
+// as its database row does. The file name is never the job's own path.
 void write_file(const std::string& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) throw Error(ErrorCode::io, "cannot write " + path);
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    if (fd < 0) throw Error(ErrorCode::io, "cannot create " + fs::path(path).filename().string());
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        done += static_cast<size_t>(n);
+    }
+    const bool ok = done == bytes.size() && ::fsync(fd) == 0;
+    ::close(fd);
+    if (!ok) throw Error(ErrorCode::io, "cannot write " + fs::path(path).filename().string());
+}
+
+void sync_dir(const std::string& dir) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd >= 0) {
+        ::fsync(fd);
+        ::close(fd);
+    }
 }
 
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
 
-// An error message for the client: the service's own paths (the job directory)
-// are cut out, leaving the generated file names.
-std::string without_paths(std::string message, const std::string& dir) {
-    for (const std::string& p : {dir + "/partial-", dir + "/"})
+// An error message for the client: the service's own paths (the job and
+// scratch directories) are cut out, leaving the generated file names.
+std::string without_paths(std::string message, const std::string& dir, const std::string& scratch) {
+    for (const std::string& p : {dir + "/partial-", dir + "/", scratch + "/"})
         for (size_t at; (at = message.find(p)) != std::string::npos;) message.erase(at, p.size());
     return message;
 }
@@ -59,17 +82,18 @@ JobService::JobService(ServerContext& ctx) : ctx_(ctx), jobs_dir_(ctx.config.dat
     const RecoveryReport r = store_->recover(kMaxJobAttempts, now_ms());
     for (const std::string& id : r.removed) remove_files(id);
     if (!r.requeued.empty() || !r.failed.empty() || !r.removed.empty())
-        log_event("jobs_recovered", nlohmann::json{{"requeued", r.requeued},
-                                                   {"failed", r.failed},
-                                                   {"removed", r.removed}}.dump());
+        log_event("jobs_recovered",
+                  nlohmann::json{{"requeued", r.requeued}, {"failed", r.failed}, {"removed", r.removed}}.dump());
     // Directories without a job row: a submission or deletion cut short. Only
     // names the service generates are touched.
     const std::vector<std::string> ids = store_->all_ids();
     const std::set<std::string> known(ids.begin(), ids.end());
+    std::vector<std::string> orphans;
     for (const auto& entry : fs::directory_iterator(jobs_dir_, ec)) {
         const std::string name = entry.path().filename().string();
-        if (valid_job_id(name) && !known.count(name)) remove_files(name);
+        if (valid_job_id(name) && !known.count(name)) orphans.push_back(name);
     }
+    for (const std::string& id : orphans) remove_files(id);
     sweep();
 }
 
@@ -110,14 +134,17 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
     // One submission at a time, so the queue bound holds exactly.
     std::lock_guard<std::mutex> submit_lock(submit_m_);
     if (store_->count_by_state()["queued"] >= ctx_.config.max_queued_jobs)
-        throw Error(ErrorCode::overloaded, std::to_string(ctx_.config.max_queued_jobs) +
-                                               " jobs are already waiting; retry later");
+        throw Error(ErrorCode::overloaded,
+                    std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
     job.id = new_request_id();
     job.created_ms = now_ms();
     const std::string dir = job_dir(job.id);
     try {
         fs::create_directory(dir);
-        for (size_t i = 0; i < input_bytes.size(); ++i) write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+        for (size_t i = 0; i < input_bytes.size(); ++i)
+            write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+        sync_dir(dir);
+        sync_dir(jobs_dir_);
         store_->create(job);
     } catch (const std::exception& e) {
         remove_files(job.id);
@@ -162,7 +189,7 @@ void JobService::sweep_loop() {
         lock.unlock();
         try {
             sweep();
-        } catch (const Error& e) {
+        } catch (const std::exception& e) {
             log_event("jobs_sweep_failed", nlohmann::json{{"error", e.what()}}.dump());
         }
         lock.lock();
@@ -175,18 +202,23 @@ void JobService::run_loop() {
             std::lock_guard<std::mutex> lock(m_);
             if (stopping_) return;
         }
+        // A store that fails (disk full, database locked for long) must not end
+        // the runner thread, which would end the process: log, pause, go on.
+        // The job stays `running` and is recovered at the next start.
         std::optional<JobRecord> job;
+        bool failed = false;
         try {
             job = store_->claim_next(now_ms());
-        } catch (const Error& e) {
-            log_event("jobs_claim_failed", nlohmann::json{{"error", e.what()}}.dump());
+            if (job) run_job(*job);
+        } catch (const std::exception& e) {
+            failed = true;
+            log_event("job_runner_error",
+                      nlohmann::json{{"job_id", job ? job->id : std::string()}, {"error", e.what()}}.dump());
         }
-        if (!job) {
+        if (!job || failed) {
             std::unique_lock<std::mutex> lock(m_);
             cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_; });
-            continue;
         }
-        run_job(*job);
     }
 }
 
@@ -197,6 +229,15 @@ void JobService::run_job(JobRecord& job) {
         cancel_flags_[job.id] = cancel;
         if (stopping_) cancel->store(true);
     }
+    // The flag is unregistered however this ends.
+    struct Unregister {
+        JobService& s;
+        const std::string& id;
+        ~Unregister() {
+            std::lock_guard<std::mutex> lock(s.m_);
+            s.cancel_flags_.erase(id);
+        }
+    } unregister{*this, job.id};
     log_event("job_started", nlohmann::json{{"job_id", job.id}, {"attempt", job.attempts}}.dump());
     bool interrupted_by_stop = false;
     for (const JobOutput& out : job.outputs) {
@@ -206,22 +247,22 @@ void JobService::run_job(JobRecord& job) {
             run_output(job, out, cancel);
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) break;
-            store_->output_failed(job.id, out.index, error_code_name(e.code()), without_paths(e.what(), job_dir(job.id)),
-                                  now_ms());
+            store_->output_failed(job.id, out.index, error_code_name(e.code()),
+                                  without_paths(e.what(), job_dir(job.id), ctx_.scratch.path()), now_ms());
         } catch (const std::exception& e) {
             store_->output_failed(job.id, out.index, "internal", e.what(), now_ms());
         }
     }
     {
         std::lock_guard<std::mutex> lock(m_);
-        cancel_flags_.erase(job.id);
         interrupted_by_stop = stopping_;
     }
     if (store_->running(job.id) && interrupted_by_stop) {
         // Stopped with work left: back to the queue for the next start, not counted as an interrupted run.
         const auto now = store_->get(job.id);
         bool left = false;
-        for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{}) left = left || o.state == "queued" || o.state == "running";
+        for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{})
+            left = left || o.state == "queued" || o.state == "running";
         if (left) {
             store_->requeue(job.id);
             log_event("job_requeued", nlohmann::json{{"job_id", job.id}}.dump());
@@ -242,14 +283,16 @@ void JobService::run_job(JobRecord& job) {
 
 void JobService::run_output(const JobRecord& job, const JobOutput& out,
                             const std::shared_ptr<std::atomic<bool>>& cancel) {
-    // A worker slot, waited for as long as it takes (the job is queued work
-    // already), in short waits so that a cancel or a stop is seen.
+    // A worker slot, waited for as long as it takes (the job is accepted work
+    // already) in its place in the gate's order; a cancel or a stop leaves the
+    // queue. While the gate's queue is full, the runner tries again shortly.
     std::shared_ptr<AdmissionGate::Ticket> ticket;
     while (!ticket) {
         if (cancel->load()) throw Error(ErrorCode::canceled, "the job was canceled");
         AdmissionGate::Refusal why;
-        ticket = ctx_.gate.enter(std::chrono::milliseconds(1000), why);
-        if (!ticket && why == AdmissionGate::Refusal::queue_full) std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        ticket = ctx_.gate.enter(std::chrono::hours(24), why, [&cancel] { return cancel->load(); });
+        if (!ticket && why == AdmissionGate::Refusal::queue_full)
+            std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
     if (!store_->output_running(job.id, out.index, now_ms())) throw Error(ErrorCode::canceled, "the job was deleted");
     const auto t0 = std::chrono::steady_clock::now();
@@ -294,17 +337,20 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
         }
         ticket.reset();
         const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        std::string out_format = artifact_format(out.artifact);  // STEP, IGES, STL, ... as in POST /v1/conversions
+        for (char& ch : out_format) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
         result = {{"input_format", format_name(report.in_format)},
-                  {"output_format", artifact_format(out.artifact)},
+                  {"output_format", out_format},
                   {"faces", report.faces},
                   {"timings_ms", {{"read", report.read_ms}, {"write", report.write_ms}, {"total", total}}}};
     }
     std::error_code ec;
     fs::rename(partial, final_path, ec);
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
+    sync_dir(dir);
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
-    store_->output_succeeded(job.id, out.index, size, result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
-                             now_ms());
+    store_->output_succeeded(job.id, out.index, size,
+                             result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), now_ms());
 }
 
 }  // namespace nurbsrt::server

@@ -16,7 +16,7 @@ using nlohmann::json;
 [[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
 
 const ConversionFormat kConversionFormats[] = {
-    {"step", ".step", "model/step"},  {"iges", ".igs", "model/iges"},       {"stl", ".stl", "model/stl"},
+    {"step", ".step", "model/step"},      {"iges", ".igs", "model/iges"},        {"stl", ".stl", "model/stl"},
     {"glb", ".glb", "model/gltf-binary"}, {"json", ".json", "application/json"},
 };
 
@@ -35,7 +35,8 @@ int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::
         int found = -1;
         for (const JobInput& in : inputs)
             if (in.filename == name) {
-                if (found >= 0) bad(where + ": several uploaded files are named '" + name.substr(0, 64) + "'; use the index");
+                if (found >= 0)
+                    bad(where + ": several uploaded files are named '" + name.substr(0, 64) + "'; use the index");
                 found = in.index;
             }
         if (found < 0) bad(where + ": no uploaded file is named '" + name.substr(0, 64) + "'");
@@ -122,7 +123,8 @@ std::string artifact_name(int file, const std::string& type, int output, const s
 }
 
 bool valid_artifact_name(const std::string& name) {
-    static const std::regex pattern(R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|step|igs|stl|glb|json)$)");
+    static const std::regex pattern(
+        R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|step|igs|stl|glb|json)$)");
     return name.size() <= 64 && std::regex_match(name, pattern);
 }
 

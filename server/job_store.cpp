@@ -198,8 +198,9 @@ struct JobStore::Impl {
     std::optional<JobRecord> get(const std::string& id) {
         std::optional<JobRecord> j;
         {
-            Stmt s(*this, "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, "
-                          "error_message FROM jobs WHERE id = ?");
+            Stmt s(*this,
+                   "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, "
+                   "error_message FROM jobs WHERE id = ?");
             s.bind(1, id);
             if (s.step()) j = read_job(s);
         }
@@ -229,7 +230,9 @@ JobStore::JobStore(const std::string& db_path) : impl_(std::make_unique<Impl>())
     try {
         // The first statement reads the file: a file that is not a database fails here.
         impl_->exec("PRAGMA journal_mode=WAL");
-        impl_->exec("PRAGMA synchronous=NORMAL");
+        // FULL: a commit (an accepted job, a finished output) survives a power
+        // loss too, not only a crash of the process; commits are few per job.
+        impl_->exec("PRAGMA synchronous=FULL");
         impl_->exec("PRAGMA foreign_keys=ON");
         impl_->exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
         int version = 0;
@@ -268,8 +271,9 @@ void JobStore::create(JobRecord& job) {
         s.bind(1, job.id).bind(2, in.index).bind(3, in.filename).bind(4, in.format).bind(5, in.bytes).run();
     }
     for (const JobOutput& o : job.outputs) {
-        Impl::Stmt s(*impl_, "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
-                             "VALUES (?, ?, ?, ?, ?, ?, ?, 'queued')");
+        Impl::Stmt s(*impl_,
+                     "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
+                     "VALUES (?, ?, ?, ?, ?, ?, ?, 'queued')");
         s.bind(1, job.id).bind(2, o.index).bind(3, o.file).bind(4, o.kind).bind(5, o.options_json);
         s.bind(6, o.artifact).bind(7, o.content_type).run();
     }
@@ -334,8 +338,9 @@ std::optional<JobRecord> JobStore::claim_next(int64_t now_ms) {
         id = s.text(0);
     }
     {
-        Impl::Stmt s(*impl_, "UPDATE jobs SET state = 'running', attempts = attempts + 1, "
-                             "started_ms = CASE WHEN started_ms = 0 THEN ?2 ELSE started_ms END WHERE id = ?1");
+        Impl::Stmt s(*impl_,
+                     "UPDATE jobs SET state = 'running', attempts = attempts + 1, "
+                     "started_ms = CASE WHEN started_ms = 0 THEN ?2 ELSE started_ms END WHERE id = ?1");
         s.bind(1, id).bind(2, now_ms).run();
     }
     auto job = impl_->get(id);
@@ -346,8 +351,9 @@ std::optional<JobRecord> JobStore::claim_next(int64_t now_ms) {
 bool JobStore::output_running(const std::string& id, int output, int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
-    Impl::Stmt s(*impl_, "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = ? "
-                         "WHERE job_id = ? AND idx = ? AND state = 'queued'");
+    Impl::Stmt s(*impl_,
+                 "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = ? "
+                 "WHERE job_id = ? AND idx = ? AND state = 'queued'");
     s.bind(1, now_ms).bind(2, id).bind(3, output).run();
     const bool ok = s.changes() > 0;
     t.commit();
@@ -365,8 +371,9 @@ bool JobStore::output_succeeded(const std::string& id, int output, int64_t artif
                                 const std::string& result_json, int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
-    Impl::Stmt s(*impl_, "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = ?, result = ?, "
-                         "finished_ms = ? WHERE job_id = ? AND idx = ? AND state = 'running'");
+    Impl::Stmt s(*impl_,
+                 "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = ?, result = ?, "
+                 "finished_ms = ? WHERE job_id = ? AND idx = ? AND state = 'running'");
     s.bind(1, artifact_bytes).bind(2, result_json).bind(3, now_ms).bind(4, id).bind(5, output).run();
     const bool ok = s.changes() > 0;
     t.commit();
@@ -377,8 +384,9 @@ bool JobStore::output_failed(const std::string& id, int output, const std::strin
                              int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
-    Impl::Stmt s(*impl_, "UPDATE job_outputs SET state = 'failed', error_code = ?, error_message = ?, finished_ms = ? "
-                         "WHERE job_id = ? AND idx = ? AND state IN ('queued', 'running')");
+    Impl::Stmt s(*impl_,
+                 "UPDATE job_outputs SET state = 'failed', error_code = ?, error_message = ?, finished_ms = ? "
+                 "WHERE job_id = ? AND idx = ? AND state IN ('queued', 'running')");
     s.bind(1, code).bind(2, message).bind(3, now_ms).bind(4, id).bind(5, output).run();
     const bool ok = s.changes() > 0;
     t.commit();
@@ -417,12 +425,14 @@ std::optional<std::string> JobStore::finish(const std::string& id, int64_t now_m
 void JobStore::requeue(const std::string& id) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
-    Impl::Stmt(*impl_, "UPDATE jobs SET state = 'queued', attempts = MAX(attempts - 1, 0) WHERE id = ? AND "
-                       "state = 'running'")
+    Impl::Stmt(*impl_,
+               "UPDATE jobs SET state = 'queued', attempts = MAX(attempts - 1, 0) WHERE id = ? AND "
+               "state = 'running'")
         .bind(1, id)
         .run();
-    Impl::Stmt(*impl_, "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 WHERE job_id = ? AND "
-                       "state = 'running'")
+    Impl::Stmt(*impl_,
+               "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 WHERE job_id = ? AND "
+               "state = 'running'")
         .bind(1, id)
         .run();
     t.commit();
@@ -446,14 +456,16 @@ JobStore::DeleteOutcome JobStore::delete_job(const std::string& id, int64_t now_
     }
     if (state == "canceled") return DeleteOutcome::canceling;
     if (state == "running") {
-        Impl::Stmt(*impl_, "UPDATE jobs SET state = 'canceled', finished_ms = ?, error_code = 'canceled', "
-                           "error_message = 'deleted while running; removed once its current step stops' "
-                           "WHERE id = ?")
+        Impl::Stmt(*impl_,
+                   "UPDATE jobs SET state = 'canceled', finished_ms = ?, error_code = 'canceled', "
+                   "error_message = 'deleted while running; removed once its current step stops' "
+                   "WHERE id = ?")
             .bind(1, now_ms)
             .bind(2, id)
             .run();
-        Impl::Stmt(*impl_, "UPDATE job_outputs SET state = 'canceled', finished_ms = ? WHERE job_id = ? AND "
-                           "state IN ('queued', 'running')")
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'canceled', finished_ms = ? WHERE job_id = ? AND "
+                   "state IN ('queued', 'running')")
             .bind(1, now_ms)
             .bind(2, id)
             .run();
@@ -495,20 +507,23 @@ RecoveryReport JobStore::recover(int max_attempts, int64_t now_ms) {
     const std::string reason = "interrupted by a service restart (" + std::to_string(max_attempts) + " attempts)";
     for (const std::string& id : r.requeued) {
         Impl::Stmt(*impl_, "UPDATE jobs SET state = 'queued' WHERE id = ?").bind(1, id).run();
-        Impl::Stmt(*impl_, "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 "
-                           "WHERE job_id = ? AND state = 'running'")
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 "
+                   "WHERE job_id = ? AND state = 'running'")
             .bind(1, id)
             .run();
     }
     for (const std::string& id : r.failed) {
-        Impl::Stmt(*impl_, "UPDATE jobs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
-                           "error_message = ? WHERE id = ?")
+        Impl::Stmt(*impl_,
+                   "UPDATE jobs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
+                   "error_message = ? WHERE id = ?")
             .bind(1, now_ms)
             .bind(2, reason)
             .bind(3, id)
             .run();
-        Impl::Stmt(*impl_, "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
-                           "error_message = ? WHERE job_id = ? AND state IN ('queued', 'running')")
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
+                   "error_message = ? WHERE job_id = ? AND state IN ('queued', 'running')")
             .bind(1, now_ms)
             .bind(2, reason)
             .bind(3, id)
@@ -521,8 +536,9 @@ RecoveryReport JobStore::recover(int max_attempts, int64_t now_ms) {
 std::vector<std::string> JobStore::finished_before(int64_t before_ms) {
     std::lock_guard<std::mutex> lock(m_);
     std::vector<std::string> ids;
-    Impl::Stmt s(*impl_, "SELECT id FROM jobs WHERE state IN ('succeeded', 'failed') AND finished_ms < ? "
-                         "ORDER BY seq");
+    Impl::Stmt s(*impl_,
+                 "SELECT id FROM jobs WHERE state IN ('succeeded', 'failed') AND finished_ms < ? "
+                 "ORDER BY seq");
     s.bind(1, before_ms);
     while (s.step()) ids.push_back(s.text(0));
     return ids;

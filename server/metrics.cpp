@@ -92,7 +92,8 @@ std::string Metrics::exposition(const Gauges& g) const {
     out += "# TYPE nurbsrt_scene_cache_requests_total counter\n";
     out += "nurbsrt_scene_cache_requests_total{result=\"hit\"} " + std::to_string(cache_hits_) + "\n";
     out += "nurbsrt_scene_cache_requests_total{result=\"miss\"} " + std::to_string(cache_misses_) + "\n";
-    out += "# HELP nurbsrt_jobs_finished_total Batch jobs finished since start, by result.\n";
+    out += "# HELP nurbsrt_jobs_finished_total Batch jobs finished since start, by result "
+           "(canceled: deleted while running).\n";
     out += "# TYPE nurbsrt_jobs_finished_total counter\n";
     for (const char* result : {"succeeded", "failed", "canceled"}) {
         const auto it = jobs_finished_.find(result);

@@ -19,8 +19,8 @@ namespace nurbsrt::server {
 void check_render_limits(const ServerConfig& config, const RenderRequest& r);
 
 struct RenderedImage {
-    std::string bytes;          // the encoded image (r.format)
-    std::string stats_json;     // the Statistics object's JSON text (with camera, cache, warnings)
+    std::string bytes;       // the encoded image (r.format)
+    std::string stats_json;  // the Statistics object's JSON text (with camera, cache, warnings)
     bool cache_hit = false;
 };
 

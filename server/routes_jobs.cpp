@@ -76,17 +76,18 @@ json job_json(const JobRecord& j) {
         progress += o.state == "succeeded" || o.state == "failed" ? 1.0 : o.progress;
         outputs.push_back(std::move(out));
     }
-    json body = {{"id", j.id},
-                 {"url", job_url(j.id)},
-                 {"state", j.state},
-                 {"progress", j.outputs.empty() ? 0.0 : progress / static_cast<double>(j.outputs.size())},
-                 {"attempts", j.attempts},
-                 {"created_at", timestamp(j.created_ms)},
-                 {"started_at", timestamp(j.started_ms)},
-                 {"finished_at", timestamp(j.finished_ms)},
-                 {"timings_ms", {{"queued", span(j.created_ms, j.started_ms)}, {"run", span(j.started_ms, j.finished_ms)}}},
-                 {"files", files},
-                 {"outputs", outputs}};
+    json body = {
+        {"id", j.id},
+        {"url", job_url(j.id)},
+        {"state", j.state},
+        {"progress", j.outputs.empty() ? 0.0 : progress / static_cast<double>(j.outputs.size())},
+        {"attempts", j.attempts},
+        {"created_at", timestamp(j.created_ms)},
+        {"started_at", timestamp(j.started_ms)},
+        {"finished_at", timestamp(j.finished_ms)},
+        {"timings_ms", {{"queued", span(j.created_ms, j.started_ms)}, {"run", span(j.started_ms, j.finished_ms)}}},
+        {"files", files},
+        {"outputs", outputs}};
     if (!j.error_code.empty()) body["error"] = {{"code", j.error_code}, {"message", j.error_message}};
     return body;
 }
@@ -111,8 +112,8 @@ void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Res
     for (const auto& [name, part] : req.files) {
         if (name == "file") {
             if (static_cast<int>(inputs.size()) >= ctx.config.max_job_files)
-                throw Error(ErrorCode::limit_exceeded, "more than " + std::to_string(ctx.config.max_job_files) +
-                                                           " files in one job");
+                throw Error(ErrorCode::limit_exceeded,
+                            "more than " + std::to_string(ctx.config.max_job_files) + " files in one job");
             const std::string& b = part.content;
             const int index = static_cast<int>(inputs.size());
             if (b.empty()) throw Error(ErrorCode::invalid_argument, "file " + std::to_string(index) + " is empty");
@@ -149,7 +150,9 @@ std::string make_cursor(bool newest_first, int64_t seq) {
 }
 
 int64_t parse_cursor(const std::string& c, bool newest_first) {
-    const auto bad = [] { return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page"); };
+    const auto bad = [] {
+        return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
+    };
     if (c.size() < 2 || c.size() > 17 || c[0] != (newest_first ? 'n' : 'o')) throw bad();
     int64_t v = 0;
     for (size_t i = 1; i < c.size(); ++i) {
@@ -183,7 +186,8 @@ void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Respo
         state = req.get_param_value("state");
         bool known = false;
         for (const char* s : kJobStates) known = known || *state == s;
-        if (!known) throw Error(ErrorCode::invalid_argument, "'state' must be queued, running, succeeded, failed or canceled");
+        if (!known)
+            throw Error(ErrorCode::invalid_argument, "'state' must be queued, running, succeeded, failed or canceled");
     }
     std::optional<int64_t> after;
     if (req.has_param("cursor")) after = parse_cursor(req.get_param_value("cursor"), newest);

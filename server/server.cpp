@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -204,6 +205,11 @@ int run_server(const ServerConfig& config) {
     done = true;
     signal_waiter.join();
     jobs.stop();
+    // A canceled render (a job's, stopped just now, or one past its time limit)
+    // ends on its own thread at its next block of rows, holding its worker
+    // ticket until then: wait for those threads before the gate, the cache and
+    // the rest of the context go away under them.
+    for (int i = 0; i < 300 && ctx.gate.active() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     log_event("stopped");
     return ok ? 0 : 1;
 }

@@ -5,13 +5,15 @@ error before 202; DELETE of a queued and a running job; the job queue bound;
 retention; and recovery after the service is killed (SIGKILL) under a job."""
 import http.client
 import json
+import os
 import pathlib
+import signal
 import struct
 import subprocess
 import time
 import urllib.parse
 import zlib
-import os
+
 
 import pytest
 import requests
@@ -338,16 +340,22 @@ def test_validation_errors_before_202(url):
 
 def test_job_limits_and_queue_bound(own_server):
     s = own_server(args=["--max-job-files", "2", "--max-job-outputs", "3", "--max-queued-jobs", "1",
-                         "--workers", "1", "--job-runners", "1", "--render-threads", "1"])
+                         "--workers", "1", "--job-runners", "1", "--render-threads", "1", "--queue-timeout", "0.5"])
     step = SCREW.read_bytes()
     render = {"file": 0, "type": "render", "options": {"width": 16, "height": 16}}
     check_problem(submit(s.url, [("a.step", step)] * 3, {"outputs": [dict(render, file=i) for i in range(3)]}),
                   413, "limit_exceeded")
     check_problem(submit(s.url, [("a.step", step)], {"outputs": [render] * 4}), 413, "limit_exceeded")
     # One slow job runs, one waits: the next is turned away with Retry-After.
-    slow = {"outputs": [{"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}}]}
+    slow = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}}]}
     running = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], slow))
-    wait_for(s.url, running["id"], lambda j: j["state"] == "running", what="running")
+    wait_for(s.url, running["id"], lambda j: j["outputs"][0]["state"] == "running", what="running")
+    # The job's render holds the only worker of the shared admission gate: a synchronous render waits
+    # for it and gives up after --queue-timeout.
+    check_problem(requests.post(s.url + "/v1/renders", params={"width": 16, "height": 16}, data=step,
+                                headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT),
+                  503, "overloaded")
+    assert "nurbsrt_work_active 1\n" in requests.get(s.url + "/metrics", timeout=TIMEOUT).text
     queued = accepted(submit(s.url, [("a.step", step)], {"outputs": [render]}))
     r = submit(s.url, [("a.step", step)], {"outputs": [render]})
     check_problem(r, 503, "overloaded")
@@ -363,10 +371,12 @@ def test_job_limits_and_queue_bound(own_server):
 
 def test_delete_running_job(own_server):
     s = own_server(args=["--workers", "1", "--job-runners", "1", "--render-threads", "1"])
-    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}},
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}},
                         {"file": 0, "type": "conversion", "format": "step"}]}
     job = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], spec))
-    job = wait_for(s.url, job["id"], lambda j: j["outputs"][0]["state"] == "running", what="a running render")
+    job = wait_for(s.url, job["id"], lambda j: j["outputs"][0]["state"] == "running" and j["progress"] > 0,
+                   what="a render with progress")
+    assert 0 < job["outputs"][0]["progress"] < 1
     r = requests.delete(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT)
     assert r.status_code == 202, r.text[:300]  # running: canceled now, removed once the render stops
     body = r.json()
@@ -393,12 +403,13 @@ def test_delete_running_job(own_server):
 # ---- retention ---------------------------------------------------------------------------------------------
 
 def test_finished_jobs_expire(own_server):
-    s = own_server(args=["--job-retention", "1"])
+    s = own_server(args=["--job-retention", "2"])
     job = accepted(submit(s.url, [("s.step", SCREW.read_bytes())],
                           {"outputs": [{"file": 0, "type": "conversion", "format": "iges"}]}))
-    wait_finished(s.url, job["id"])
-    assert (s.data_dir / "jobs" / job["id"]).is_dir()
-    wait_gone(s.url, job["id"], timeout=10)
+    job = wait_finished(s.url, job["id"])
+    assert job["state"] == "succeeded"
+    download(s.url, job["outputs"][0])  # still there right after it finished
+    wait_gone(s.url, job["id"], timeout=15)
     assert not (s.data_dir / "jobs" / job["id"]).exists()
 
 
@@ -406,7 +417,7 @@ def test_finished_jobs_expire(own_server):
 
 SLOW_ARGS = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
 SLOW_SPEC = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"},
-                         {"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}}]}
+                         {"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}}]}
 
 
 def kill_while_rendering(s, job_id, attempt):
@@ -431,7 +442,7 @@ def test_sigkill_then_restart_reruns_the_job(own_server, tmp_path):
     assert job["attempts"] == 2
     assert job["outputs"][0]["finished_at"] == conversion["finished_at"]  # kept, not converted again
     assert download(s2.url, job["outputs"][0])[72:73] == b"S"  # IGES: the first record is the Start section
-    assert png_size(download(s2.url, job["outputs"][1])) == (2000, 2000)
+    assert png_size(download(s2.url, job["outputs"][1])) == (1600, 1600)
 
 
 def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_path):
@@ -451,3 +462,28 @@ def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_pat
     assert download(s3.url, conv)[72:73] == b"S"  # the finished output keeps its IGES artifact
     assert rend["state"] == "failed" and rend["error"]["code"] == "interrupted"
     healthy(s3.url)
+
+
+def test_graceful_stop_requeues_without_counting_the_run(own_server, tmp_path):
+    data = tmp_path / "data"
+    s1 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = accepted(submit(s1.url, [("s.step", SCREW.read_bytes())], SLOW_SPEC))
+    wait_for(s1.url, job["id"], lambda j: j["outputs"][1]["state"] == "running", what="rendering")
+    t0 = time.monotonic()
+    s1.proc.send_signal(signal.SIGTERM)
+    assert s1.proc.wait(timeout=20) == 0
+    assert time.monotonic() - t0 < 5  # the render was canceled, not waited for
+    s2 = own_server(args=SLOW_ARGS, data_dir=data)
+    job = wait_finished(s2.url, job["id"])
+    assert job["state"] == "succeeded" and job["attempts"] == 1
+    assert png_size(download(s2.url, job["outputs"][1])) == (1600, 1600)
+
+
+def test_corrupt_job_database_stops_the_start_with_a_clear_error(tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "jobs.db").write_bytes(b"this is no database" * 500)
+    r = subprocess.run([os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--data-dir", str(data)],
+                       capture_output=True, timeout=30)
+    assert r.returncode != 0
+    assert b"jobs.db" in r.stderr and b"not a database" in r.stderr, r.stderr[-500:]

@@ -1,0 +1,115 @@
+// The job description of POST /v1/jobs (server/job_spec.h): outputs numbered
+// with generated artifact names and content types, files by index or name,
+// every mistake rejected with the right code; and the strict name patterns
+// that keep requests from naming anything but a job's own artifacts.
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "renderer/error.h"
+#include "server/job_spec.h"
+
+using nurbsrt::Error;
+using nurbsrt::ErrorCode;
+using namespace nurbsrt::server;
+
+namespace {
+
+std::vector<JobInput> two_inputs() { return {{0, "bearing.iges", "IGES", 10}, {1, "screw.step", "STEP", 20}}; }
+
+ErrorCode code_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.code();
+    }
+    ADD_FAILURE() << "no nurbsrt::Error thrown";
+    return ErrorCode::internal;
+}
+
+TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
+    ServerConfig config;
+    const auto outs = parse_job_spec(R"({"outputs": [
+        {"file": 0, "type": "render", "options": {"width": 64, "height": 48}},
+        {"file": "screw.step", "type": "render", "options": {"format": "exr"}},
+        {"file": 1, "type": "conversion", "format": "igs"},
+        {"file": 0, "type": "conversion", "format": "stl"},
+        {"file": 0, "type": "conversion", "format": "glb"},
+        {"file": 1, "type": "conversion", "format": "json"},
+        {"file": 1, "type": "conversion", "format": "step"}]})",
+                                     two_inputs(), config);
+    ASSERT_EQ(outs.size(), 7u);
+    const std::vector<std::string> names = {"0-render-0.png",     "1-render-1.exr",     "1-conversion-2.igs",
+                                            "0-conversion-3.stl", "0-conversion-4.glb", "1-conversion-5.json",
+                                            "1-conversion-6.step"};
+    const std::vector<std::string> types = {"image/png",  "image/x-exr",       "model/iges",      "model/stl",
+                                            "model/gltf-binary", "application/json", "model/step"};
+    for (size_t i = 0; i < outs.size(); ++i) {
+        EXPECT_EQ(outs[i].index, static_cast<int>(i));
+        EXPECT_EQ(outs[i].artifact, names[i]);
+        EXPECT_EQ(outs[i].content_type, types[i]);
+        EXPECT_TRUE(valid_artifact_name(outs[i].artifact)) << outs[i].artifact;
+    }
+    EXPECT_EQ(outs[1].file, 1);
+    EXPECT_EQ(outs[2].options_json, R"({"format":"iges"})");  // alias normalised
+    EXPECT_EQ(artifact_format("1-conversion-2.igs"), "iges");
+    EXPECT_EQ(artifact_format("0-render-0.jpg"), "jpeg");
+}
+
+TEST(JobSpec, MistakesAreRejected) {
+    ServerConfig config;
+    config.max_job_outputs = 2;
+    config.max_dimension = 1000;
+    const auto in = two_inputs();
+    auto parse = [&](const char* json) { return code_of([&] { parse_job_spec(json, in, config); }); };
+    const char* both = R"({"file": 0, "type": "render"}, {"file": 1, "type": "render"})";
+    EXPECT_NO_THROW(parse_job_spec(std::string("{\"outputs\": [") + both + "]}", in, config));
+    EXPECT_EQ(parse("[]"), ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": []})"), ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render"}]})"), ErrorCode::invalid_argument);  // file 1 unused
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render"}, {"file": 1, "type": "render"},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::limit_exceeded);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 2, "type": "render"}, {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": -1, "type": "render"}, {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": "x.igs", "type": "render"}, {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render", "options": {"width": 2000}},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::limit_exceeded);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render", "options": {"bogus": 1}},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "dwg"},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "step", "options": {}},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render"}, {"file": 1, "type": "render"}], "x": 1})"),
+              ErrorCode::invalid_argument);
+    // A filename shared by two parts is ambiguous.
+    std::vector<JobInput> same = {{0, "a.step", "STEP", 1}, {1, "a.step", "STEP", 1}};
+    EXPECT_EQ(code_of([&] {
+                  parse_job_spec(R"({"outputs": [{"file": "a.step", "type": "render"}, {"file": 1, "type": "render"}]})",
+                                 same, config);
+              }),
+              ErrorCode::invalid_argument);
+}
+
+TEST(JobSpec, NamePatternsAreStrict) {
+    EXPECT_TRUE(valid_artifact_name("0-render-0.png"));
+    EXPECT_TRUE(valid_artifact_name("12-conversion-345.step"));
+    for (const char* bad : {"", "input-0.cad", "../jobs.db", "0-render-0.png/../x", "0-render-0.png\n",
+                            "0-render-0.gif", "0-Render-0.png", "/0-render-0.png", "0-render-.png",
+                            "partial-0-render-0.png", "123456-render-0.png", "0-render-0.png.exe"})
+        EXPECT_FALSE(valid_artifact_name(bad)) << bad;
+    EXPECT_TRUE(valid_job_id("0123456789abcdef0123456789abcdef"));
+    EXPECT_FALSE(valid_job_id("0123456789ABCDEF0123456789abcdef"));
+    EXPECT_FALSE(valid_job_id("../../../../../../../../jobs.db.."));
+    EXPECT_FALSE(valid_job_id("0123456789abcdef"));
+}
+
+}  // namespace
