@@ -4,6 +4,7 @@
 
 #include <chrono>
 
+#include "server/context.h"
 #include "server/problem.h"
 
 namespace nurbsrt::server {
@@ -90,6 +91,16 @@ Upload read_upload(const httplib::Request& req) {
     }
     up.options_json = options.dump();
     return up;
+}
+
+std::string without_service_paths(std::string message, const ServerContext& ctx) {
+    std::string data = ctx.config.data_dir;
+    while (data.size() > 1 && data.back() == '/') data.pop_back();
+    // Longest first: the scratch dir usually lies inside the data dir.
+    for (const std::string& dir : {ctx.scratch.path(), data})
+        if (!dir.empty())
+            for (size_t at; (at = message.find(dir + "/")) != std::string::npos;) message.erase(at, dir.size() + 1);
+    return message;
 }
 
 }  // namespace nurbsrt::server

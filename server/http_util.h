@@ -12,6 +12,8 @@
 
 namespace nurbsrt::server {
 
+struct ServerContext;
+
 // The request id of the request being handled (set before routing).
 std::string request_id(const httplib::Response& res);
 
@@ -29,6 +31,11 @@ RequestNote take_request_note();
 // Fills `res` with the problem+json body and status for `code` (plus
 // Retry-After for overloaded).
 void send_problem(httplib::Response& res, ErrorCode code, const std::string& detail, int retry_after_s = 0);
+
+// `message` without the service's own directories (the data dir, the scratch
+// dir): an error from a child process or the file system may name the private
+// path of an upload, which is none of the client's business.
+std::string without_service_paths(std::string message, const ServerContext& ctx);
 
 // True when the client asked for JSON (Accept contains application/json).
 bool wants_json(const httplib::Request& req);

@@ -75,7 +75,7 @@ void add_conversion_routes(httplib::Server& svr, ServerContext& ctx) {
         try {
             handle_conversion(ctx, req, res);
         } catch (const Error& e) {
-            send_problem(res, e.code(), e.what(), ctx.config.retry_after_s);
+            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
         }
     });
 }

@@ -265,7 +265,7 @@ httplib::Server::Handler guarded(ServerContext& ctx, F f) {
         try {
             f(ctx, req, res);
         } catch (const Error& e) {
-            send_problem(res, e.code(), e.what(), ctx.config.retry_after_s);
+            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
         }
     };
 }
