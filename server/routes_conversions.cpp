@@ -54,6 +54,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                      {"output_format", conversion_format_name(report.output)},
                                      {"faces", report.faces},
                                      {"triangles", report.triangles},
+                                     {"unmeshed_faces", report.unmeshed_faces},
                                      {"content_type", content_type},
                                      {"data_base64", base64_encode(data)},
                                      {"timings_ms", {{"read", report.read_ms},

@@ -121,6 +121,37 @@ TEST(Cli, ConvertRoundTripKeepsFaces) {
     fs::remove_all(dir);
 }
 
+// The mesh and JSON outputs by extension: each file starts as its format says,
+// and the message names the format and the triangle count.
+TEST(Cli, ConvertToMeshAndJsonOutputs) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-conv2-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    auto head = [](const fs::path& p, size_t n) {
+        std::ifstream in(p, std::ios::binary);
+        std::string s(n, '\0');
+        in.read(s.data(), static_cast<std::streamsize>(n));
+        return s.substr(0, static_cast<size_t>(in.gcount()));
+    };
+    const CliRun stl = run_nurbsrt("convert " + kScrew + " " + (dir / "s.STL").string());
+    ASSERT_EQ(stl.status, 0) << stl.err;
+    EXPECT_NE(stl.err.find("(STL, "), std::string::npos) << stl.err;
+    EXPECT_NE(stl.err.find(" triangles)"), std::string::npos) << stl.err;
+    EXPECT_GT(fs::file_size(dir / "s.STL"), 84u);
+    const CliRun glb = run_nurbsrt("convert " + kScrew + " " + (dir / "s.glb").string());
+    ASSERT_EQ(glb.status, 0) << glb.err;
+    EXPECT_EQ(head(dir / "s.glb", 4), "glTF");
+    const CliRun js = run_nurbsrt("convert " + kScrew + " " + (dir / "s.json").string());
+    ASSERT_EQ(js.status, 0) << js.err;
+    std::ifstream in(dir / "s.json");
+    const nlohmann::json doc = nlohmann::json::parse(in);
+    EXPECT_EQ(doc["patches"].get<int>(), 10);
+    EXPECT_EQ(doc["faces"].size(), 10u);
+    const CliRun help = run_nurbsrt("convert --help");
+    for (const char* ext : {".stl", ".glb", ".json", "Y-up"})
+        EXPECT_NE(help.out.find(ext), std::string::npos) << ext;
+    fs::remove_all(dir);
+}
+
 }  // namespace
 
 namespace {

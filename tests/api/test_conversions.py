@@ -105,7 +105,21 @@ def test_stl(url, model):
                       timeout=TIMEOUT).json()
     validate(j, "ConversionResponse")
     assert (j["output_format"], j["content_type"], j["triangles"]) == ("STL", "model/stl", len(tris))
+    assert j["unmeshed_faces"] == 0
     assert j["timings_ms"]["mesh"] > 0
+
+
+def test_stl_reports_faces_it_could_not_mesh(url):
+    """trj3_s1-al-214.stp has 8 faces with broken trim loops that BRepMesh cannot
+    triangulate (the import falls back to uv grids for them): the answer says so."""
+    model = MODELS / "step" / "trj3_s1-al-214.stp"
+    if not model.is_file():
+        pytest.skip(f"{model} is absent")
+    j = requests.post(url + "/v1/conversions", data=model.read_bytes(), params={"format": "stl"},
+                      headers={"Content-Type": "application/octet-stream", "Accept": "application/json"},
+                      timeout=TIMEOUT).json()
+    validate(j, "ConversionResponse")
+    assert j["unmeshed_faces"] == 8 and j["faces"] == 94 and j["triangles"] > 0
 
 
 @pytest.mark.parametrize("model", real_models())
