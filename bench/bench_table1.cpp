@@ -1,0 +1,88 @@
+// The paper's Table 1 (PAPER.md section 3): per scene, `proposed` (eq. 9-11)
+// against `martin` (Martin et al. 2000) at one ray per pixel on the SAME
+// preliminary map (render options identical except the method; the map is
+// deterministic). Newton-stage and whole-frame times are medians over ctx.runs
+// runs, the two methods interleaved and their order alternated from run to run,
+// so that drift of a shared machine hits both alike. The speed-up is the paper's:
+// the time saved as a percentage of Martin's time.
+#include "bench/bench_context.h"
+
+namespace nurbsrt::bench {
+namespace {
+
+nlohmann::json method_json(const std::vector<RenderStats>& runs) {
+    std::vector<double> newton, frame, map, shade;
+    for (const RenderStats& s : runs) {
+        newton.push_back(s.newton_ms);
+        frame.push_back(s.total_ms);
+        map.push_back(s.preliminary_map_ms);
+        shade.push_back(s.shade_ms);
+    }
+    // Iterations, outcomes and hits do not depend on the run (deterministic frame).
+    const RenderStats& s = runs.back();
+    return {{"newton_ms", median(newton)},
+            {"frame_ms", median(frame)},
+            {"preliminary_map_ms", median(map)},
+            {"shade_ms", median(shade)},
+            {"newton_ms_runs", newton},
+            {"frame_ms_runs", frame},
+            {"mean_iterations", s.mean_iterations},
+            {"primary_solves", primary_solves(s)},
+            {"converged", s.converged},
+            {"trimmed", s.trimmed},
+            {"failures", newton_failures(s)},
+            {"failures_by_criterion",
+             {{"diverged_13", s.diverged},
+              {"singular_14", s.singular},
+              {"max_iterations", s.max_iterations},
+              {"left_domain", s.left_domain},
+              {"behind_eye", s.behind_eye}}},
+            {"rescued", s.fallback},
+            {"pixels_hit", s.pixels_hit},
+            {"holes", s.holes}};
+}
+
+}  // namespace
+
+void run_table1(BenchContext& ctx) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (BenchScene& sc : ctx.scenes) {
+        const Camera cam(ctx.camera(sc, ctx.size));
+        const RenderOptions opt[2] = {ctx.render_options(NewtonMethod::proposed),
+                                      ctx.render_options(NewtonMethod::martin)};
+        // One untimed frame per method: first-use costs (GL context, page faults).
+        for (const RenderOptions& o : opt) render(sc.scene, cam, o);
+        std::vector<RenderStats> runs[2];
+        for (int r = 0; r < ctx.runs; ++r) {
+            for (int k = 0; k < 2; ++k) {
+                const int m = (r % 2 == 0) ? k : 1 - k;  // P M, M P, P M, ...
+                ctx.say("table1 %s: run %d/%d %s", sc.key.c_str(), r + 1, ctx.runs, m == 0 ? "proposed" : "martin");
+                RenderResult res = render(sc.scene, cam, opt[m]);
+                runs[m].push_back(res.stats);
+                if (m == 0) {
+                    sc.exact_frame_ms.push_back(res.stats.total_ms);
+                    sc.exact = std::make_shared<RenderResult>(std::move(res));  // the peers' reference frame
+                }
+            }
+        }
+        nlohmann::json row;
+        row["scene"] = sc.key;
+        row["title"] = sc.title;
+        row["faces"] = sc.scene.faces.size();
+        row["proposed"] = method_json(runs[0]);
+        row["martin"] = method_json(runs[1]);
+        row["speedup_newton_pct"] = speedup_pct(row["proposed"]["newton_ms"], row["martin"]["newton_ms"]);
+        row["speedup_frame_pct"] = speedup_pct(row["proposed"]["frame_ms"], row["martin"]["frame_ms"]);
+        // Per-run ratios of interleaved neighbours: how much of the speed-up is noise.
+        std::vector<double> per_run;
+        for (int r = 0; r < ctx.runs; ++r) per_run.push_back(speedup_pct(runs[0][r].newton_ms, runs[1][r].newton_ms));
+        row["speedup_newton_pct_runs"] = per_run;
+        row["speedup_newton_pct_min"] = percentile(per_run, 0.0);
+        row["speedup_newton_pct_max"] = max_of(per_run);
+        rows.push_back(row);
+    }
+    ctx.doc["table1"] = {{"width", ctx.size}, {"height", ctx.size}, {"runs", ctx.runs},
+                         {"threads", ctx.opt.threads}, {"map_precision", "float32"}, {"rows", rows}};
+}
+
+}  // namespace nurbsrt::bench
