@@ -1,5 +1,7 @@
 // Scenes, camera, options and statistics shared by the bench sections (see
 // bench_context.h).
+#include <time.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,6 +9,12 @@
 #include "importer/importer.h"
 
 namespace nurbsrt::bench {
+
+double process_cpu_ms() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
 
 std::vector<Affine> grid_placements(const BBox& one, int n) {
     const Vec3 size = one.hi - one.lo;
@@ -68,6 +76,21 @@ const RenderResult& exact_render(BenchContext& ctx, BenchScene& s) {
         s.exact = r;
     }
     return *s.exact;
+}
+
+std::vector<uint8_t> interior_mask(const RenderImage& im) {
+    const int W = im.width, H = im.height;
+    std::vector<uint8_t> m(static_cast<size_t>(W) * H, 0);
+    for (int j = 1; j + 1 < H; ++j)
+        for (int i = 1; i + 1 < W; ++i) {
+            const uint32_t f = im.face[static_cast<size_t>(j) * W + i];
+            bool same = f != 0;
+            for (int dj = -1; dj <= 1 && same; ++dj)
+                for (int di = -1; di <= 1 && same; ++di)
+                    same = im.face[static_cast<size_t>(j + dj) * W + i + di] == f;
+            m[static_cast<size_t>(j) * W + i] = same;
+        }
+    return m;
 }
 
 double median(std::vector<double> xs) { return percentile(std::move(xs), 0.5); }

@@ -23,6 +23,9 @@ using Clock = std::chrono::steady_clock;
 inline double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
+// CPU time of the whole process (all threads), ms: CPU over wall time of a frame
+// shows how many cores it really got on a shared machine.
+double process_cpu_ms();
 
 // A scene of the benchmark: one CAD file, placed once or several times.
 struct BenchScene {
@@ -48,7 +51,8 @@ BenchScene load_bench_scene(const std::string& key, const std::string& title, co
 
 struct BenchContext {
     BenchOptions opt;
-    int runs = 5;
+    int runs = 9;                 // minimum timed runs per figure
+    double min_ms = 0;            // Table 1 / precision: run on until each variant has this much frame time
     int size = 512;
     std::string models_dir;       // where the scenes came from
     bool fallback_models = false; // OCCT's sample files instead of ../shared/models
@@ -73,6 +77,12 @@ struct BenchContext {
 // The scene's exact frame (rendered on first use, timed over ctx.runs runs when
 // Table 1 did not already time it).
 const RenderResult& exact_render(BenchContext& ctx, BenchScene& s);
+
+// Pixels of an exact frame away from every edge: hit, and all 8 neighbours hit the
+// same face. At a silhouette or a face border the pixel centre may legitimately
+// land on either side within the trim and intersection tolerances, so errors
+// there measure edge placement, not surface accuracy; reported separately.
+std::vector<uint8_t> interior_mask(const RenderImage& im);
 
 // Statistics over a sample (copies; empty input gives 0).
 double median(std::vector<double> xs);

@@ -47,7 +47,7 @@ void machine(std::string& o, const json& doc) {
     o += " (1 min).\n\n";
     const json& st = doc["settings"];
     o += "Settings: " + std::to_string(n(st, "width")) + "x" + std::to_string(n(st, "height")) +
-         ", one ray per pixel, iso view (perspective), " + std::to_string(n(st, "runs")) + " timed runs per figure, " +
+         ", one ray per pixel, iso view (perspective), " + "at least " + std::to_string(n(st, "runs")) + " timed runs per figure, " +
          std::to_string(n(st, "threads")) + " render thread(s); models from `" + s(st, "models_dir") + "`" +
          (st.value("fallback_models", false) ? " (OCCT's samples: ../shared/models was not found)" : "") + ".\n\n";
     o += "| scene | stands for | file | copies | faces | import ms |\n|---|---|---|---:|---:|---:|\n";
@@ -60,18 +60,19 @@ void machine(std::string& o, const json& doc) {
 
 void table1(std::string& o, const json& t) {
     o += "## Table 1: proposed (eq. 9-11) vs Martin et al., same preliminary map\n\n";
-    o += "Medians of " + std::to_string(n(t, "runs")) + " interleaved runs, " + std::to_string(n(t, "width")) + "x" +
+    o += "Medians of interleaved runs (at least " + std::to_string(n(t, "min_runs")) + ", more until each method has " +
+         num(d(t, "min_ms") / 1e3, 0) + " s of frames), " + std::to_string(n(t, "width")) + "x" +
          std::to_string(n(t, "height")) + ", " + std::to_string(n(t, "threads")) +
-         " thread(s). Speed-up as the paper computes it: 100 (t_Martin - t_proposed) / t_Martin; "
-         "the range is that of the per-run ratios of neighbouring runs.\n\n";
-    o += "| scene | proposed Newton ms | Martin Newton ms | speed-up Newton % (range) | proposed frame ms | Martin "
+         " thread(s). Speed-up as the paper computes it: 100 (t_Martin - t_proposed) / t_Martin, from the medians; "
+         "in brackets the middle half (25th..75th percentile) of the speed-ups of each pair of neighbouring runs.\n\n";
+    o += "| scene | runs | proposed Newton ms | Martin Newton ms | speed-up Newton % (p25..p75) | proposed frame ms | Martin "
          "frame ms | speed-up frame % | mean iterations P / M | Newton failures P / M | rescued P / M |\n";
-    o += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    o += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : t["rows"]) {
         const json &p = r["proposed"], &m = r["martin"];
-        o += "| " + s(r, "title") + " | " + ms(d(p, "newton_ms")) + " | " + ms(d(m, "newton_ms")) + " | " +
-             num(d(r, "speedup_newton_pct"), 1) + " (" + num(d(r, "speedup_newton_pct_min"), 1) + " .. " +
-             num(d(r, "speedup_newton_pct_max"), 1) + ") | " + ms(d(p, "frame_ms")) + " | " + ms(d(m, "frame_ms")) +
+        o += "| " + s(r, "title") + " | " + std::to_string(n(r, "runs")) + " | " + ms(d(p, "newton_ms")) + " | " + ms(d(m, "newton_ms")) + " | " +
+             num(d(r, "speedup_newton_pct"), 1) + " (" + num(d(r, "speedup_newton_pct_p25"), 1) + " .. " +
+             num(d(r, "speedup_newton_pct_p75"), 1) + ") | " + ms(d(p, "frame_ms")) + " | " + ms(d(m, "frame_ms")) +
              " | " + num(d(r, "speedup_frame_pct"), 1) + " | " + num(d(p, "mean_iterations"), 2) + " / " +
              num(d(m, "mean_iterations"), 2) + " | " + std::to_string(n(p, "failures")) + " / " +
              std::to_string(n(m, "failures")) + " | " + std::to_string(n(p, "rescued")) + " / " +
@@ -98,13 +99,16 @@ void precision(std::string& o, const json& t) {
 
 void occt(std::string& o, const json& t) {
     o += "## Exact peer: OCCT IntCurvesFace_ShapeIntersector on the same pixel rays\n\n";
-    o += "A uniform random subset of the frame's pixel rays; OCCT's time per ray times the pixel count plus its "
+    o += "A uniform random subset of the frame's pixel rays (interior: those whose 8 neighbours in our frame hit "
+         "the same face, i.e. away from silhouettes and face borders); OCCT's time per ray times the pixel count plus its "
          "set-up (Load) is its frame time. Ours: whole frame (map + Newton + rescue + shading), " +
          std::to_string(n(t, "threads_ours")) + " thread(s); OCCT: 1 thread. |dt| is the hit distance difference "
          "over the bounding-box diagonal where both hit.\n\n";
     o += "| scene | rays | OCCT us/ray | OCCT frame ms (extrap.) | ours frame ms | OCCT / ours | hit agreement % | "
-         "ours-only / OCCT-only | face agreement % | abs(dt)/diag median / p99 / max | within 1e-6 % |\n";
-    o += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+         "ours-only / OCCT-only | face agreement % | abs(dt)/diag median / p99 / max | within 1e-6 % | interior "
+         "rays: hit agreement % | interior abs(dt)/diag p99 / max | interior abs(dt) > 1e-6 diag: ours nearer / OCCT "
+         "nearer |\n";
+    o += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : t["rows"])
         o += "| " + s(r, "scene") + " | " + std::to_string(n(r, "rays")) + " | " + num(d(r, "occt_us_per_ray"), 1) +
              " | " + ms(d(r, "occt_frame_ms_extrapolated")) + " | " + ms(d(r, "ours_frame_ms")) + " | " +
@@ -112,7 +116,10 @@ void occt(std::string& o, const json& t) {
              std::to_string(n(r, "ours_only_hits")) + " / " + std::to_string(n(r, "occt_only_hits")) + " | " +
              num(d(r, "face_agreement_pct"), 2) + " | " + sci(d(r, "dt_rel_median")) + " / " +
              sci(d(r, "dt_rel_p99")) + " / " + sci(d(r, "dt_rel_max")) + " | " + num(d(r, "dt_within_1e-6_pct"), 2) +
-             " |\n";
+             " | " + std::to_string(n(r, "interior_rays")) + ": " + num(d(r, "interior_hit_agreement_pct"), 2) +
+             " | " + sci(d(r, "interior_dt_rel_p99")) + " / " + sci(d(r, "interior_dt_rel_max")) + " | " +
+             std::to_string(n(r, "interior_dt_over_1e-6_ours_nearer")) + " / " +
+             std::to_string(n(r, "interior_dt_over_1e-6_occt_nearer")) + " |\n";
     o += "\n";
 }
 
@@ -135,9 +142,9 @@ void tessellation(std::string& o, const json& doc, const json& t) {
              " ms of NURBS conversion and map meshing at import; Newton tolerance " + sci(d(ours, "tolerance_rel")) +
              " x diag.\n\n";
         o += "| deflection | triangles | mesh ms | raster ms | raster total ms | dz median | dz p99 | dz max | "
-             "disagreement %";
+             "interior dz p99 | disagreement %";
         if (embree) o += " | Embree build ms | Embree render ms | Embree total ms | Embree dz median";
-        o += " |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:";
+        o += " |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:";
         if (embree) o += "|---:|---:|---:|---:";
         o += "|\n";
         for (const json& lv : r["levels"]) {
@@ -145,7 +152,7 @@ void tessellation(std::string& o, const json& doc, const json& t) {
             o += "| " + sci(d(lv, "relative_deflection")) + " | " + std::to_string(n(lv, "triangles")) + " | " +
                  ms(d(lv, "mesh_ms")) + " | " + ms(d(ra, "render_ms")) + " | " + ms(d(ra, "total_ms")) + " | " +
                  sci(d(ra, "dz_rel_median")) + " | " + sci(d(ra, "dz_rel_p99")) + " | " + sci(d(ra, "dz_rel_max")) +
-                 " | " + num(d(ra, "hit_disagreement_pct"), 2);
+                 " | " + sci(d(ra, "interior_dz_rel_p99")) + " | " + num(d(ra, "hit_disagreement_pct"), 2);
             if (embree && lv.contains("embree")) {
                 const json& e = lv["embree"];
                 o += " | " + ms(d(e, "build_ms")) + " | " + ms(d(e, "render_ms")) + " | " + ms(d(e, "total_ms")) +
@@ -165,7 +172,8 @@ void tessellation(std::string& o, const json& doc, const json& t) {
             o += "At equal time the finest mesh (deflection " + sci(d(*at_time, "relative_deflection")) + ", " +
                  ms(d((*at_time)["raster"], "total_ms")) + " ms) has depth error median " +
                  sci(d((*at_time)["raster"], "dz_rel_median")) + ", p99 " +
-                 sci(d((*at_time)["raster"], "dz_rel_p99")) + " x diag. ";
+                 sci(d((*at_time)["raster"], "dz_rel_p99")) + " (interior " +
+                 sci(d((*at_time)["raster"], "interior_dz_rel_p99")) + ") x diag. ";
         else
             o += "Even the coarsest mesh is slower than that. ";
         if (!r["levels"].empty()) {
@@ -176,13 +184,14 @@ void tessellation(std::string& o, const json& doc, const json& t) {
                 o += ", Embree " + ms(d(finest["embree"], "render_ms")) + " ms (+" +
                      ms(d(finest["embree"], "build_ms")) + " ms BVH)";
             o += ". Accuracy of the finest mesh: median " + sci(d(finest["raster"], "dz_rel_median")) + ", p99 " +
-                 sci(d(finest["raster"], "dz_rel_p99")) + " x diag";
+                 sci(d(finest["raster"], "dz_rel_p99")) + " (interior " + sci(d(finest["raster"], "interior_dz_rel_p99")) +
+                 ") x diag";
         }
         if (doc.contains("occt"))
             for (const json& q : doc["occt"]["rows"])
                 if (s(q, "scene") == key)
                     o += "; ours against OCCT's exact hits: median " + sci(d(q, "dt_rel_median")) + ", p99 " +
-                         sci(d(q, "dt_rel_p99")) + " x diag";
+                         sci(d(q, "dt_rel_p99")) + " (interior " + sci(d(q, "interior_dt_rel_p99")) + ") x diag";
         o += ".\n\n";
     }
 }
@@ -207,13 +216,15 @@ void scaling(std::string& o, const json& t) {
              " | " + ms(d(x, "preliminary_map_ms")) + " | " + std::to_string(n(x, "pixels_hit")) + " | " +
              num(d(x, "mean_iterations"), 2) + " | " + num(d(x, "newton_ns_per_primary_solve"), 0) + " |\n";
     const json& th = t["threads_scaling"];
-    o += "\nThreads (interleaved runs; " + std::to_string(n(th, "hardware_threads")) + " hardware threads):\n\n";
-    o += "| scene | frame ms, 1 thread | frame ms, 2 threads | frame speed-up | Newton speed-up |\n"
-         "|---|---:|---:|---:|---:|\n";
+    o += "\nThreads (interleaved runs; " + std::to_string(n(th, "hardware_threads")) +
+         " hardware threads; CPU/wall is the process CPU time over the wall time of a frame: the cores it really got):"
+         "\n\n";
+    o += "| scene | frame ms, 1 thread | frame ms, 2 threads | frame speed-up | Newton speed-up | CPU/wall, 2 threads "
+         "|\n|---|---:|---:|---:|---:|---:|\n";
     for (const json& x : th["rows"])
         o += "| " + s(x, "scene") + " | " + ms(d(x["threads_1"], "frame_ms")) + " | " +
              ms(d(x["threads_2"], "frame_ms")) + " | " + num(d(x, "frame_speedup"), 2) + "x | " +
-             num(d(x, "newton_speedup"), 2) + "x |\n";
+             num(d(x, "newton_speedup"), 2) + "x | " + num(d(x["threads_2"], "cpu_over_wall"), 2) + " |\n";
     o += "\n";
 }
 

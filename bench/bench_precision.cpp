@@ -1,6 +1,8 @@
 // Map precision: the float (u, v) of our preliminary map against the paper's
 // 8-bit quantized starts (eq. 4), for both Newton methods: iterations, failures
 // and Newton time (medians over interleaved runs, as in Table 1).
+#include <algorithm>
+
 #include "bench/bench_context.h"
 
 namespace nurbsrt::bench {
@@ -13,16 +15,20 @@ void run_precision(BenchContext& ctx) {
         for (NewtonMethod method : {NewtonMethod::proposed, NewtonMethod::martin}) {
             std::vector<RenderStats> runs[2];
             for (MapPrecision p : precs) render(sc.scene, cam, ctx.render_options(method, p));  // warm-up
-            for (int r = 0; r < ctx.runs; ++r)
+            double spent[2] = {0, 0};
+            constexpr int kMaxRuns = 100;
+            for (int r = 0; r < kMaxRuns && (r < ctx.runs || std::min(spent[0], spent[1]) < ctx.min_ms); ++r)
                 for (int k = 0; k < 2; ++k) {
                     const int m = (r % 2 == 0) ? k : 1 - k;
-                    ctx.say("precision %s %s: run %d/%d %s", sc.key.c_str(), newton_method_name(method), r + 1,
+                    ctx.say("precision %s %s: run %d (min %d) %s", sc.key.c_str(), newton_method_name(method), r + 1,
                             ctx.runs, map_precision_name(precs[m]));
                     runs[m].push_back(render(sc.scene, cam, ctx.render_options(method, precs[m])).stats);
+                    spent[m] += runs[m].back().total_ms;
                 }
             nlohmann::json row;
             row["scene"] = sc.key;
             row["method"] = newton_method_name(method);
+            row["runs"] = runs[0].size();
             for (int m = 0; m < 2; ++m) {
                 std::vector<double> newton, frame;
                 for (const RenderStats& s : runs[m]) newton.push_back(s.newton_ms), frame.push_back(s.total_ms);
@@ -42,7 +48,7 @@ void run_precision(BenchContext& ctx) {
             rows.push_back(row);
         }
     }
-    ctx.doc["precision"] = {{"width", ctx.size}, {"height", ctx.size}, {"runs", ctx.runs},
+    ctx.doc["precision"] = {{"width", ctx.size}, {"height", ctx.size}, {"min_runs", ctx.runs}, {"min_ms", ctx.min_ms},
                             {"threads", ctx.opt.threads}, {"rows", rows}};
 }
 

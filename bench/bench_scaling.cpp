@@ -12,13 +12,20 @@ namespace nurbsrt::bench {
 namespace {
 
 struct Timed {
-    std::vector<double> frame, newton, map;
+    std::vector<double> frame, newton, map, cpu;
     RenderStats last;
     void add(const RenderStats& s) {
         frame.push_back(s.total_ms);
         newton.push_back(s.newton_ms);
         map.push_back(s.preliminary_map_ms);
         last = s;
+    }
+    // Times one frame, with the process CPU time it used.
+    void run(const BenchScene& sc, const Camera& cam, const RenderOptions& o) {
+        const double c0 = process_cpu_ms();
+        const RenderStats s = render(sc.scene, cam, o).stats;
+        cpu.push_back(process_cpu_ms() - c0);
+        add(s);
     }
     nlohmann::json json() const {
         const double solves = static_cast<double>(primary_solves(last));
@@ -29,14 +36,15 @@ struct Timed {
                 {"pixels_hit", last.pixels_hit},
                 {"map_triangles", last.map_triangles},
                 {"mean_iterations", last.mean_iterations},
-                {"newton_ns_per_primary_solve", solves > 0 ? 1e6 * median(newton) / solves : 0.0}};
+                {"newton_ns_per_primary_solve", solves > 0 ? 1e6 * median(newton) / solves : 0.0},
+                {"cpu_over_wall", median(frame) > 0 && !cpu.empty() ? median(cpu) / median(frame) : 0.0}};
     }
 };
 
 Timed time_frames(const BenchScene& sc, const Camera& cam, const RenderOptions& o, int runs) {
     render(sc.scene, cam, o);  // warm-up (map context and FBO of this size)
     Timed t;
-    for (int r = 0; r < runs; ++r) t.add(render(sc.scene, cam, o).stats);
+    for (int r = 0; r < runs; ++r) t.run(sc, cam, o);
     return t;
 }
 
@@ -100,7 +108,7 @@ void run_scaling(BenchContext& ctx) {
             for (int k = 0; k < 2; ++k) {
                 const int m = (r % 2 == 0) ? k : 1 - k;
                 ctx.say("scaling threads %s: run %d/%d, %d thread(s)", sc.key.c_str(), r + 1, ctx.runs, m + 1);
-                t[m].add(render(sc.scene, cam, ctx.render_options(NewtonMethod::proposed, MapPrecision::float32, m + 1)).stats);
+                t[m].run(sc, cam, ctx.render_options(NewtonMethod::proposed, MapPrecision::float32, m + 1));
             }
         const double f1 = median(t[0].frame), f2 = median(t[1].frame);
         const double n1 = median(t[0].newton), n2 = median(t[1].newton);

@@ -15,20 +15,26 @@ namespace nurbsrt::bench {
 namespace {
 
 // Depth error of a mesh image against the exact frame.
-nlohmann::json compare(const std::vector<float>& t_mesh, const RenderImage& exact, double diag) {
-    std::vector<double> err;
+nlohmann::json compare(const std::vector<float>& t_mesh, const RenderImage& exact, const std::vector<uint8_t>& inner,
+                       double diag) {
+    std::vector<double> err, err_inner;
     long mesh_only = 0, exact_only = 0, either = 0;
     for (size_t p = 0; p < t_mesh.size(); ++p) {
         const bool a = std::isfinite(t_mesh[p]), b = exact.face[p] != 0;
         if (a || b) ++either;
-        if (a && b) err.push_back(std::fabs(static_cast<double>(t_mesh[p]) - exact.z[p]) / diag);
-        else if (a) ++mesh_only;
+        if (a && b) {
+            err.push_back(std::fabs(static_cast<double>(t_mesh[p]) - exact.z[p]) / diag);
+            if (inner[p]) err_inner.push_back(err.back());
+        } else if (a) ++mesh_only;
         else if (b) ++exact_only;
     }
     return {{"both_hit", err.size()},
             {"dz_rel_median", median(err)},
             {"dz_rel_p99", percentile(err, 0.99)},
             {"dz_rel_max", max_of(err)},
+            {"interior_dz_rel_median", median(err_inner)},
+            {"interior_dz_rel_p99", percentile(err_inner, 0.99)},
+            {"interior_dz_rel_max", max_of(err_inner)},
             {"mesh_only_hits", mesh_only},
             {"exact_only_hits", exact_only},
             {"hit_disagreement_pct", either ? 100.0 * (mesh_only + exact_only) / either : 0.0}};
@@ -61,6 +67,7 @@ void run_tessellation(BenchContext& ctx) {
         const RenderResult& exact = exact_render(ctx, sc);
         const Camera cam(ctx.camera(sc, ctx.size));
         const double diag = sc.scene.bbox.diagonal();
+        const std::vector<uint8_t> inner = interior_mask(exact.image);
         ctx.say("tessellation %s: reading", sc.key.c_str());
         Tessellator tess(sc.file, sc.placements);
         nlohmann::json levels = nlohmann::json::array();
@@ -80,12 +87,12 @@ void run_tessellation(BenchContext& ctx) {
                 img = raster.render(t.mesh, cam);
                 raster_ms.push_back(ms_since(t0));
             }
-            lv["raster"] = compare(img.t, exact.image, diag);
+            lv["raster"] = compare(img.t, exact.image, inner, diag);
             lv["raster"]["render_ms"] = median(raster_ms);
             lv["raster"]["total_ms"] = t.mesh_ms + t.extract_ms + median(raster_ms);
             if (embree_available()) {
                 const EmbreeFrame e = embree_render(t.mesh, cam, ctx.opt.threads);
-                lv["embree"] = compare(e.t, exact.image, diag);
+                lv["embree"] = compare(e.t, exact.image, inner, diag);
                 lv["embree"]["build_ms"] = e.build_ms;
                 lv["embree"]["render_ms"] = e.render_ms;
                 lv["embree"]["total_ms"] = t.mesh_ms + t.extract_ms + e.build_ms + e.render_ms;
