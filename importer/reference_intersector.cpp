@@ -15,6 +15,7 @@
 #include <gp_Trsf.hxx>
 
 #include <chrono>
+#include <cmath>
 
 #include "importer/occt_shape.h"
 #include "renderer/error.h"
@@ -25,15 +26,19 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
+// A placement as an OCCT location: only rigid motions (A orthonormal, det +1)
+// qualify, since TopoDS forbids scaled or mirrored locations and gp_Trsf would
+// silently orthogonalize anything else.
 gp_Trsf to_trsf(const Affine& a) {
-    gp_Trsf t;
     const auto& m = a.m;
-    try {
-        t.SetValues(m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9], m[10], m[11]);
-    } catch (const Standard_Failure& e) {
-        throw Error(ErrorCode::invalid_argument,
-                    std::string("reference intersector: placement is not a similarity: ") + e.GetMessageString());
-    }
+    const Vec3 c[3] = {{m[0], m[4], m[8]}, {m[1], m[5], m[9]}, {m[2], m[6], m[10]}};
+    bool rigid = a.determinant() > 0;
+    for (int i = 0; i < 3 && rigid; ++i)
+        for (int j = 0; j < 3 && rigid; ++j) rigid = std::abs(dot(c[i], c[j]) - (i == j ? 1.0 : 0.0)) < 1e-9;
+    if (!rigid)
+        throw Error(ErrorCode::invalid_argument, "reference intersector: a placement must be a rigid motion");
+    gp_Trsf t;
+    t.SetValues(m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9], m[10], m[11]);
     return t;
 }
 

@@ -37,7 +37,7 @@ public:
     // Reads `path` (STEP/IGES by content). `placements`: one copy of the shape per
     // transform, faces numbered copy after copy like append_scene (empty: the file
     // as it is). Throws nurbsrt::Error (reading; invalid_argument for a placement
-    // that is not a rigid motion with uniform scale, which OCCT locations cannot hold).
+    // that is not a rigid motion: OCCT locations cannot scale, mirror or shear).
     explicit ReferenceIntersector(const std::string& path, const std::vector<Affine>& placements = {},
                                   double tolerance = kDefaultTolerance);
     // On a model already read (tests that also settle disputes on its faces).
