@@ -30,8 +30,12 @@ void run_precision(BenchContext& ctx) {
             row["method"] = newton_method_name(method);
             row["runs"] = runs[0].size();
             for (int m = 0; m < 2; ++m) {
-                std::vector<double> newton, frame;
-                for (const RenderStats& s : runs[m]) newton.push_back(s.newton_ms), frame.push_back(s.total_ms);
+                std::vector<double> newton, primary, frame;
+                for (const RenderStats& s : runs[m]) {
+                    newton.push_back(s.newton_ms);
+                    primary.push_back(s.newton_primary_ms);
+                    frame.push_back(s.total_ms);
+                }
                 const RenderStats& s = runs[m].back();
                 row[map_precision_name(precs[m])] = {{"mean_iterations", s.mean_iterations},
                                                     {"failures", newton_failures(s)},
@@ -39,6 +43,7 @@ void run_precision(BenchContext& ctx) {
                                                     {"rescued", s.fallback},
                                                     {"pixels_hit", s.pixels_hit},
                                                     {"newton_ms", median(newton)},
+                                                    {"newton_primary_ms", median(primary)},
                                                     {"frame_ms", median(frame)}};
             }
             row["newton_time_ratio_rgb8_over_float"] =

@@ -12,11 +12,12 @@ namespace nurbsrt::bench {
 namespace {
 
 struct Timed {
-    std::vector<double> frame, newton, map, cpu;
+    std::vector<double> frame, newton, primary, map, cpu;
     RenderStats last;
     void add(const RenderStats& s) {
         frame.push_back(s.total_ms);
         newton.push_back(s.newton_ms);
+        primary.push_back(s.newton_primary_ms);
         map.push_back(s.preliminary_map_ms);
         last = s;
     }
@@ -36,7 +37,10 @@ struct Timed {
                 {"pixels_hit", last.pixels_hit},
                 {"map_triangles", last.map_triangles},
                 {"mean_iterations", last.mean_iterations},
+                {"newton_primary_ms", median(primary)},
+                {"rescue_ms", median(newton) - median(primary)},
                 {"newton_ns_per_primary_solve", solves > 0 ? 1e6 * median(newton) / solves : 0.0},
+                {"primary_ns_per_solve", solves > 0 ? 1e6 * median(primary) / solves : 0.0},
                 {"cpu_over_wall", median(frame) > 0 && !cpu.empty() ? median(cpu) / median(frame) : 0.0}};
     }
 };

@@ -242,6 +242,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         }
     });
     throw_if_canceled(options);
+    st.newton_primary_ms = ms_since(t0);
 
     // Rescue of pixels without a first-pass hit. Reads only the map and first-pass
     // data, so every pixel's result is independent of the thread count.

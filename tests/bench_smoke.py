@@ -104,13 +104,15 @@ def main():
     for r in rows:
         w = f"table1 {r['scene']}"
         for meth in ("proposed", "martin"):
-            for f in ("newton_ms", "frame_ms", "preliminary_map_ms", "mean_iterations", "pixels_hit",
-                      "primary_solves"):
+            for f in ("newton_ms", "newton_primary_ms", "frame_ms", "preliminary_map_ms", "mean_iterations",
+                      "pixels_hit", "primary_solves"):
                 positive(r, f"{meth}.{f}", w)
             for f in ("failures", "rescued", "converged", "trimmed"):
                 count(r, f"{meth}.{f}", w)
             check(len(r[meth]["newton_ms_runs"]) == r["runs"] >= runs, f"{w}: {meth} runs")
-            check(r[meth]["frame_ms"] >= r[meth]["newton_ms"], f"{w}: {meth} frame shorter than its Newton stage")
+            check(r[meth]["frame_ms"] >= r[meth]["newton_ms"] >= r[meth]["newton_primary_ms"],
+                  f"{w}: {meth}: frame >= Newton stage >= its first pass")
+            nonneg(r, f"{meth}.rescue_ms", w)
         for f in ("speedup_newton_pct", "speedup_frame_pct"):
             check(-1000 < r[f] < 100, f"{w}: {f} = {r[f]}")
 
