@@ -13,5 +13,6 @@ void add_render_command(CLI::App& app);
 void add_import_worker_command(CLI::App& app);
 void add_convert_worker_command(CLI::App& app);
 void add_serve_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
 
 }  // namespace nurbsrt::cli

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
     nurbsrt::cli::add_info_command(app);
     nurbsrt::cli::add_convert_command(app);
     nurbsrt::cli::add_serve_command(app);
+    nurbsrt::cli::add_bench_command(app);
     nurbsrt::cli::add_import_worker_command(app);
     nurbsrt::cli::add_convert_worker_command(app);
 

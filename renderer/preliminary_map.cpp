@@ -1,7 +1,6 @@
 // Preliminary map with OSMesa (see preliminary_map.h).
 #include "renderer/preliminary_map.h"
 
-#include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
 
@@ -10,6 +9,7 @@
 #include <string>
 
 #include "renderer/error.h"
+#include "renderer/gl_context.h"
 
 namespace nurbsrt {
 
@@ -52,20 +52,6 @@ void main() {
     throw Error(ErrorCode::internal, "preliminary map: " + what);
 }
 
-GLuint compile(GLenum type, const char* src) {
-    const GLuint sh = glCreateShader(type);
-    glShaderSource(sh, 1, &src, nullptr);
-    glCompileShader(sh);
-    GLint ok = 0;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[1024] = {};
-        glGetShaderInfoLog(sh, sizeof log, nullptr, log);
-        fail(std::string("shader compilation failed: ") + log);
-    }
-    return sh;
-}
-
 struct Vertex {
     float clip[4];
     float uv[2];
@@ -75,30 +61,13 @@ struct Vertex {
 }  // namespace
 
 struct MapRenderer::Impl {
-    OSMesaContext ctx = nullptr;
-    unsigned char dummy[4 * 4 * 4] = {};  // default framebuffer (unused: we draw into the FBO)
+    GlContext gl;
     GLuint program = 0, vao = 0, vbo = 0, ebo = 0;
     GLuint fbo = 0, tex_face = 0, tex_uv = 0, rb_depth = 0;
     int fb_w = 0, fb_h = 0;
 
     Impl() {
-        const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0,
-                               OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                               OSMESA_CONTEXT_MAJOR_VERSION, 4, OSMESA_CONTEXT_MINOR_VERSION, 5, 0};
-        ctx = OSMesaCreateContextAttribs(attribs, nullptr);
-        if (!ctx) fail("OSMesaCreateContextAttribs (OpenGL 4.5 core) failed");
-        make_current();
-        const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader);
-        const GLuint fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
-        program = glCreateProgram();
-        glAttachShader(program, vs);
-        glAttachShader(program, fs);
-        glLinkProgram(program);
-        glDeleteShader(vs);
-        glDeleteShader(fs);
-        GLint ok = 0;
-        glGetProgramiv(program, GL_LINK_STATUS, &ok);
-        if (!ok) fail("shader link failed");
+        program = gl.link_program(kVertexShader, kFragmentShader, "preliminary map");
         glGenVertexArrays(1, &vao);
         glGenBuffers(1, &vbo);
         glGenBuffers(1, &ebo);
@@ -114,19 +83,15 @@ struct MapRenderer::Impl {
     }
 
     ~Impl() {
-        if (!ctx) return;
         make_current();
         release_fbo();
         glDeleteBuffers(1, &vbo);
         glDeleteBuffers(1, &ebo);
         glDeleteVertexArrays(1, &vao);
         glDeleteProgram(program);
-        OSMesaDestroyContext(ctx);
     }
 
-    void make_current() {
-        if (!OSMesaMakeCurrent(ctx, dummy, GL_UNSIGNED_BYTE, 4, 4)) fail("OSMesaMakeCurrent failed");
-    }
+    void make_current() { gl.make_current(); }
 
     void release_fbo() {
         if (!fbo) return;

@@ -242,6 +242,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         }
     });
     throw_if_canceled(options);
+    st.newton_primary_ms = ms_since(t0);
 
     // Rescue of pixels without a first-pass hit. Reads only the map and first-pass
     // data, so every pixel's result is independent of the thread count.
@@ -261,6 +262,31 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     enum : uint8_t { kNoRescue, kRescueNeighbour, kRescueSilhouette, kRescueGeneral, kRescueTrimTol };
     std::vector<uint8_t> rescued(npx, kNoRescue);
     // One pixel's rescue from the hits `src` (and the map); returns its kind, or kNoRescue.
+    // Screen positions (sx, sy) of each face's map-mesh vertices for the general
+    // fallback's nearest-vertex start, projected once per face and frame on first
+    // use instead of once per rescued pixel: the scan is O(vertices) and a face of
+    // the ducks has ~4000, which made this search most of the rescue's time
+    // (`nurbsrt bench`, docs/BENCHMARKS.md). Same arithmetic as projecting in place
+    // (X/D, Y/D of Camera::project_h), so the chosen vertex is unchanged; NaN marks
+    // a vertex behind the eye.
+    struct MeshScreen {
+        std::once_flag once;
+        std::vector<Vec2> pts;
+    };
+    const std::unique_ptr<MeshScreen[]> mesh_screen(new MeshScreen[nfaces]);
+    auto mesh_screen_points = [&](uint32_t id) -> const std::vector<Vec2>& {
+        MeshScreen& ms = mesh_screen[id - 1];
+        std::call_once(ms.once, [&] {
+            const FaceMesh& mesh = scene.faces[id - 1].mesh;
+            const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
+            ms.pts.resize(n);
+            for (size_t m = 0; m < n; ++m) {
+                const Vec4 ph = camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
+                ms.pts[m] = camera.depth(ph) > 0 ? Vec2{ph.x / ph.z, ph.y / ph.z} : Vec2{NAN, NAN};
+            }
+        });
+        return ms.pts;
+    };
     auto rescue_pixel = [&](int i, int j, const std::vector<PixelHit>& src, PixelHit& out) -> uint8_t {
         struct Start {
             uint32_t id;
@@ -350,13 +376,12 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                         }
                     // The face's mesh vertex nearest to the pixel on screen (in front of the eye).
                     const FaceMesh& mesh = scene.faces[id - 1].mesh;
+                    const std::vector<Vec2>& pts = mesh_screen_points(id);
                     double bd = HUGE_VAL;
                     size_t bv = mesh.uv.size();
-                    for (size_t m = 0; m < mesh.xyz.size() && m < mesh.uv.size(); ++m) {
-                        const Vec4 ph = camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
-                        if (!(camera.depth(ph) > 0)) continue;
-                        const double dx = ph.x / ph.z - sp.sx, dy = ph.y / ph.z - sp.sy, dd = dx * dx + dy * dy;
-                        if (dd < bd) {
+                    for (size_t m = 0; m < pts.size(); ++m) {
+                        const double dx = pts[m].x - sp.sx, dy = pts[m].y - sp.sy, dd = dx * dx + dy * dy;
+                        if (dd < bd) {  // false for NaN: a vertex behind the eye
                             bd = dd;
                             bv = m;
                         }

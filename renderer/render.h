@@ -70,6 +70,10 @@ struct RenderStats {
     uint64_t rescue_neighbour = 0, rescue_silhouette = 0, rescue_general = 0, rescue_trim_tolerance = 0;
     uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
     double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, total_ms = 0;
+    // The part of newton_ms spent in the first pass: per-face set-up and one solve
+    // per map pixel from its start, with the trim test (what the paper's Table 1
+    // compares); the rest of newton_ms is the rescue of failed pixels.
+    double newton_primary_ms = 0;
 };
 
 struct RenderResult {

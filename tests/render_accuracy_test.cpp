@@ -43,13 +43,10 @@
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRep_Tool.hxx>
-#include <IntCurvesFace_ShapeIntersector.hxx>
 #include <Precision.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
-#include <gp_Dir.hxx>
-#include <gp_Lin.hxx>
 #include <gp_Pnt.hxx>
 
 #include <algorithm>
@@ -68,6 +65,7 @@
 
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
+#include "importer/reference_intersector.h"
 #include "renderer/camera.h"
 #include "renderer/newton.h"
 #include "renderer/preliminary_map.h"
@@ -237,12 +235,8 @@ bool near_edge(const RenderImage& im, int i, int j) {
     return !(uniform && count == 8);
 }
 
-struct OcctHit {
-    bool error = false;  // the intersector threw on this ray: no reference, sample excluded
-    bool hit = false;
-    double t = kInf;
-    int face = 0;  // face index of the contract (model.faces.FindIndex)
-};
+// The intersector's answer for one ray (importer/reference_intersector.h).
+using OcctHit = ReferenceHit;
 
 // Distance from p to the trimmed face (DistShapeShape vertex-face); +inf on failure.
 double dist_to_face(const TopoDS_Face& f, const gp_Pnt& p) {
@@ -332,34 +326,13 @@ struct Context {
     const Camera& camera;
     double diag;
     std::string label;  // model / view / method
-    IntCurvesFace_ShapeIntersector& inter;
+    ReferenceIntersector& inter;
 };
 
-// The nearest OCCT hit on the contract ray of pixel (i, j).
-OcctHit cast(IntCurvesFace_ShapeIntersector& inter, const occt::OcctModel& model, const Camera& camera, int i, int j,
-             double t_max) {
-    OcctHit h;
-    const Ray r = camera.pixel_ray(i, j);
-    try {
-        inter.Perform(gp_Lin(gp_Pnt(r.origin.x, r.origin.y, r.origin.z), gp_Dir(r.dir.x, r.dir.y, r.dir.z)), 0.0,
-                      t_max);
-    } catch (const Standard_Failure&) {
-        // Seen: Standard_NullObject on a few rays of trj8. No reference for this
-        // pixel; reload so that a possibly inconsistent state is not reused.
-        h.error = true;
-        inter.Load(model.shape, kIntersectorTol);
-        return h;
-    }
-    if (!inter.IsDone()) return h;
-    for (int k = 1; k <= inter.NbPnt(); ++k) {
-        const double w = inter.WParameter(k);
-        if (w > 0 && w < h.t) {
-            h.hit = true;
-            h.t = w;
-            h.face = model.faces.FindIndex(inter.Face(k));
-        }
-    }
-    return h;
+// The nearest OCCT hit on the contract ray of pixel (i, j) (the intersector
+// reloads itself after a ray it throws on: seen, Standard_NullObject on trj8).
+OcctHit cast(ReferenceIntersector& inter, const Camera& camera, int i, int j, double t_max) {
+    return inter.cast(camera.pixel_ray(i, j), t_max);
 }
 double ray_limit(const Scene& scene, const Camera& camera) {
     return 4.0 * scene.bbox.diagonal() + length(camera.spec().eye - scene.bbox.center());
@@ -383,7 +356,7 @@ bool near_true_edge(const Context& c, const Sample& s) {
         for (int di = -1; di <= 1; ++di) {
             const int a = s.i + di, b = s.j + dj;
             if ((!di && !dj) || a < 0 || b < 0 || a >= c.camera.width() || b >= c.camera.height()) continue;
-            const OcctHit n = cast(c.inter, c.model, c.camera, a, b, t_max);
+            const OcctHit n = cast(c.inter, c.camera, a, b, t_max);
             if (n.error) continue;
             if (n.hit != s.occt.hit || n.face != s.occt.face) return true;
             if (n.hit && std::fabs(n.t - s.occt.t) > kJumpFootprints * footprint(s.occt.t)) return true;
@@ -649,8 +622,7 @@ TEST_P(RenderAccuracy, PixelRaysMatchIntCurvesFace) {
     const double diag = scene.bbox.diagonal();
     ASSERT_GT(diag, 0);
 
-    IntCurvesFace_ShapeIntersector inter;
-    inter.Load(model.shape, kIntersectorTol);
+    ReferenceIntersector inter(model, kIntersectorTol);
 
     std::cout << "[ accuracy ] " << a.name << ": " << scene.faces.size() << " faces, diag " << diag
               << " mm, import+read " << std::fixed << std::setprecision(2) << import_s << " s"
@@ -681,7 +653,7 @@ TEST_P(RenderAccuracy, PixelRaysMatchIntCurvesFace) {
         std::vector<OcctHit> ref(pix.size());
         const double t_max = ray_limit(scene, camera);
         for (size_t k = 0; k < pix.size(); ++k) {
-            ref[k] = cast(inter, model, camera, pix[k] % kImageW, pix[k] / kImageW, t_max);
+            ref[k] = cast(inter, camera, pix[k] % kImageW, pix[k] / kImageW, t_max);
             if (ref[k].error)
                 std::cout << "[ accuracy ] " << a.name << "/" << view_label << ": IntCurvesFace threw at px("
                           << pix[k] % kImageW << "," << pix[k] / kImageW << "): sample excluded\n";

@@ -1,0 +1,115 @@
+// Scenes, camera, options and statistics shared by the bench sections (see
+// bench_context.h).
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "bench/bench_context.h"
+#include "importer/importer.h"
+
+namespace nurbsrt::bench {
+
+double process_cpu_ms() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
+std::vector<Affine> grid_placements(const BBox& one, int n) {
+    const Vec3 size = one.hi - one.lo;
+    const double step = 1.25 * std::max({size.x, size.y, size.z});
+    std::vector<Affine> out;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            for (int k = 0; k < n; ++k) out.push_back(Affine::translation({i * step, j * step, k * step}));
+    return out;
+}
+
+BenchScene load_bench_scene(const std::string& key, const std::string& title, const std::string& file, int grid_n) {
+    BenchScene s;
+    s.key = key;
+    s.title = title;
+    s.file = file;
+    const auto t0 = Clock::now();
+    Scene one = import_file(file);
+    s.import_ms = ms_since(t0);
+    s.convert_and_map_mesh_ms = one.timings.nurbs_convert_ms + one.timings.mesh_ms;
+    if (grid_n <= 1) {
+        s.scene = std::move(one);
+        return s;
+    }
+    s.placements = grid_placements(one.bbox, grid_n);
+    for (const Affine& a : s.placements) {
+        Scene copy = one;
+        transform_scene(copy, a);
+        append_scene(s.scene, copy);
+    }
+    s.scene.source_name = one.source_name;
+    return s;
+}
+
+CameraSpec BenchContext::camera(const BenchScene& s, int sz) const {
+    CameraSpec base;
+    base.width = base.height = sz;
+    base.projection = Projection::perspective;
+    return fit_view("iso", s.scene, base);
+}
+
+RenderOptions BenchContext::render_options(NewtonMethod method, MapPrecision precision, int threads) const {
+    RenderOptions o;
+    o.method = method;
+    o.map_precision = precision;
+    o.threads = threads > 0 ? threads : opt.threads;
+    return o;  // newton.eps 0: the default relative tolerance, identical for both methods
+}
+
+const RenderResult& exact_render(BenchContext& ctx, BenchScene& s) {
+    if (!s.exact) {
+        const Camera cam(ctx.camera(s, ctx.size));
+        const RenderOptions o = ctx.render_options(NewtonMethod::proposed);
+        std::shared_ptr<RenderResult> r;
+        for (int k = 0; k < ctx.runs; ++k) {
+            r = std::make_shared<RenderResult>(render(s.scene, cam, o));
+            s.exact_frame_ms.push_back(r->stats.total_ms);
+        }
+        s.exact = r;
+    }
+    return *s.exact;
+}
+
+std::vector<uint8_t> interior_mask(const RenderImage& im) {
+    const int W = im.width, H = im.height;
+    std::vector<uint8_t> m(static_cast<size_t>(W) * H, 0);
+    for (int j = 1; j + 1 < H; ++j)
+        for (int i = 1; i + 1 < W; ++i) {
+            const uint32_t f = im.face[static_cast<size_t>(j) * W + i];
+            bool same = f != 0;
+            for (int dj = -1; dj <= 1 && same; ++dj)
+                for (int di = -1; di <= 1 && same; ++di)
+                    same = im.face[static_cast<size_t>(j + dj) * W + i + di] == f;
+            m[static_cast<size_t>(j) * W + i] = same;
+        }
+    return m;
+}
+
+double median(std::vector<double> xs) { return percentile(std::move(xs), 0.5); }
+
+double percentile(std::vector<double> xs, double p) {
+    if (xs.empty()) return 0;
+    std::sort(xs.begin(), xs.end());
+    if (p == 0.5 && xs.size() % 2 == 0) return 0.5 * (xs[xs.size() / 2 - 1] + xs[xs.size() / 2]);
+    const size_t k = static_cast<size_t>(std::ceil(p * static_cast<double>(xs.size())));
+    return xs[std::min(xs.size() - 1, k == 0 ? 0 : k - 1)];
+}
+
+double max_of(const std::vector<double>& xs) { return xs.empty() ? 0 : *std::max_element(xs.begin(), xs.end()); }
+
+uint64_t newton_failures(const RenderStats& s) {
+    return s.diverged + s.singular + s.max_iterations + s.left_domain + s.behind_eye;
+}
+uint64_t primary_solves(const RenderStats& s) { return s.converged + s.trimmed + newton_failures(s); }
+
+double speedup_pct(double proposed, double martin) { return martin > 0 ? 100.0 * (martin - proposed) / martin : 0; }
+
+}  // namespace nurbsrt::bench

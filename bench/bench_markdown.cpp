@@ -1,0 +1,263 @@
+// The Markdown report of a `nurbsrt bench` JSON document: every figure comes
+// from the document, so the report and the JSON never disagree.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/bench.h"
+
+namespace nurbsrt::bench {
+namespace {
+
+using nlohmann::json;
+
+std::string num(double x, int prec = 1) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.*f", prec, x);
+    return b;
+}
+std::string sci(double x) {
+    if (x == 0) return "0";
+    char b[64];
+    std::snprintf(b, sizeof b, "%.1e", x);
+    return b;
+}
+std::string ms(double x) { return x >= 100 ? num(x, 0) : x >= 10 ? num(x, 1) : num(x, 2); }
+double d(const json& j, const char* k) { return j.contains(k) && j[k].is_number() ? j[k].get<double>() : 0.0; }
+long long n(const json& j, const char* k) { return j.contains(k) && j[k].is_number() ? j[k].get<long long>() : 0; }
+std::string s(const json& j, const char* k) { return j.contains(k) && j[k].is_string() ? j[k].get<std::string>() : ""; }
+
+std::string title_of(const json& doc, const std::string& key) {
+    for (const json& sc : doc["scenes"])
+        if (s(sc, "key") == key) return s(sc, "title");
+    return key;
+}
+
+void machine(std::string& o, const json& doc) {
+    const json& m = doc["machine"];
+    o += "Machine: **" + s(m, "cpu") + "**, " + std::to_string(n(m, "online_cpus")) + " CPUs online, " +
+         s(m, "memory_total") + " RAM, " + s(m, "kernel") + "; " + s(m, "compiler") + ", " + s(m, "build_type") +
+         " build. Run " + s(m, "date_utc") + " (UTC), " + num(d(doc, "elapsed_s"), 0) + " s.";
+    if (m.contains("load_average") && m["load_average"].size() == 3)
+        o += " Load average at start " + num(m["load_average"][0].get<double>(), 2);
+    if (m.contains("load_average_end") && m["load_average_end"].size() == 3)
+        o += ", at end " + num(m["load_average_end"][0].get<double>(), 2);
+    o += " (1 min).\n\n";
+    const json& st = doc["settings"];
+    o += "Settings: " + std::to_string(n(st, "width")) + "x" + std::to_string(n(st, "height")) +
+         ", one ray per pixel, iso view (perspective), " + "at least " + std::to_string(n(st, "runs")) + " timed runs per figure, " +
+         std::to_string(n(st, "threads")) + " render thread(s); models from `" + s(st, "models_dir") + "`" +
+         (st.value("fallback_models", false) ? " (OCCT's samples: ../shared/models was not found)" : "") + ".\n\n";
+    o += "| scene | stands for | file | copies | faces | import ms |\n|---|---|---|---:|---:|---:|\n";
+    for (const json& sc : doc["scenes"])
+        o += "| " + s(sc, "key") + " | " + s(sc, "title") + " | `" + s(sc, "file") + "` | " +
+             std::to_string(n(sc, "copies")) + " | " + std::to_string(n(sc, "faces")) + " | " +
+             ms(d(sc, "import_ms")) + " |\n";
+    o += "\n";
+}
+
+void table1(std::string& o, const json& t) {
+    o += "## Table 1: proposed (eq. 9-11) vs Martin et al., same preliminary map\n\n";
+    o += "Medians of interleaved runs (at least " + std::to_string(n(t, "min_runs")) +
+         (d(t, "min_ms") > 0 ? ", more until each method has " + num(d(t, "min_ms") / 1e3, 0) + " s of frames" : "") +
+         "), " + std::to_string(n(t, "width")) + "x" +
+         std::to_string(n(t, "height")) + ", " + std::to_string(n(t, "threads")) +
+         " thread(s). Speed-up as the paper computes it: 100 (t_Martin - t_proposed) / t_Martin, from the medians; "
+         "in brackets the middle half (25th..75th percentile) of the speed-ups of each pair of neighbouring runs. "
+         "Interference from other work only adds time, so the speed-up of the fastest runs (minima) and of the "
+         "process CPU time per frame are given too.\n\n";
+    o += "| scene | runs | proposed Newton ms | Martin Newton ms | speed-up Newton % (pairs p25..p75) | proposed "
+         "frame ms | Martin frame ms | speed-up frame % |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& r : t["rows"]) {
+        const json &p = r["proposed"], &m = r["martin"];
+        o += "| " + s(r, "title") + " | " + std::to_string(n(r, "runs")) + " | " + ms(d(p, "newton_ms")) + " | " +
+             ms(d(m, "newton_ms")) + " | **" + num(d(r, "speedup_newton_pct"), 1) + "** (" +
+             num(d(r, "speedup_newton_pct_p25"), 1) + " .. " + num(d(r, "speedup_newton_pct_p75"), 1) + ") | " +
+             ms(d(p, "frame_ms")) + " | " + ms(d(m, "frame_ms")) + " | " + num(d(r, "speedup_frame_pct"), 1) + " |\n";
+    }
+    o += "\nThe Newton stage split into its first pass (per-face set-up and one solve per map pixel with the trim "
+         "test: what the paper compares) and the rescue of failed pixels (neighbour, silhouette and general "
+         "fallback; not in the paper), with the robust figures and the solver statistics (P = proposed, M = "
+         "Martin):\n\n";
+    o += "| scene | primary pass ms P / M | speed-up primary % | rescue ms P / M | speed-up of minima % | speed-up "
+         "frame CPU % | mean iterations P / M | Newton failures P / M | rescued P / M |\n"
+         "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& r : t["rows"]) {
+        const json &p = r["proposed"], &m = r["martin"];
+        o += "| " + s(r, "title") + " | " + ms(d(p, "newton_primary_ms")) + " / " + ms(d(m, "newton_primary_ms")) +
+             " | **" + num(d(r, "speedup_primary_pct"), 1) + "** | " + ms(d(p, "rescue_ms")) + " / " +
+             ms(d(m, "rescue_ms")) + " | " + num(d(r, "speedup_newton_min_pct"), 1) + " | " +
+             num(d(r, "speedup_frame_cpu_pct"), 1) + " | " + num(d(p, "mean_iterations"), 2) + " / " +
+             num(d(m, "mean_iterations"), 2) + " | " + std::to_string(n(p, "failures")) + " / " +
+             std::to_string(n(m, "failures")) + " | " + std::to_string(n(p, "rescued")) + " / " +
+             std::to_string(n(m, "rescued")) + " |\n";
+    }
+    o += "\nThe paper (Xeon 3.2 GHz, 2010): Mobile phone 4.297 s vs 5.422 s (20.75 %), Machine component 1.890 vs "
+         "2.203 s (14.21 %), 27 Ducks 9.0 vs 11.86 s (24.11 %), whole rendering time.\n\n";
+}
+
+void precision(std::string& o, const json& t) {
+    o += "## Map precision: float (u, v) vs the paper's 8-bit starts (eq. 4)\n\n";
+    o += "| scene | method | mean iterations float / rgb8 | Newton failures float / rgb8 | rescued float / rgb8 | "
+         "Newton ms float / rgb8 | primary pass ms float / rgb8 | rgb8 / float Newton time |\n"
+         "|---|---|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& r : t["rows"]) {
+        const json &f = r["float32"], &q = r["rgb8"];
+        o += "| " + s(r, "scene") + " | " + s(r, "method") + " | " + num(d(f, "mean_iterations"), 2) + " / " +
+             num(d(q, "mean_iterations"), 2) + " | " + std::to_string(n(f, "failures")) + " / " +
+             std::to_string(n(q, "failures")) + " | " + std::to_string(n(f, "rescued")) + " / " +
+             std::to_string(n(q, "rescued")) + " | " + ms(d(f, "newton_ms")) + " / " + ms(d(q, "newton_ms")) + " | " +
+             ms(d(f, "newton_primary_ms")) + " / " + ms(d(q, "newton_primary_ms")) + " | " +
+             num(d(r, "newton_time_ratio_rgb8_over_float"), 2) + " |\n";
+    }
+    o += "\n";
+}
+
+void occt(std::string& o, const json& t) {
+    o += "## Exact peer: OCCT IntCurvesFace_ShapeIntersector on the same pixel rays\n\n";
+    o += "A uniform random subset of the frame's pixel rays (interior: those whose 8 neighbours in our frame hit "
+         "the same face, i.e. away from silhouettes and face borders); OCCT's time per ray times the pixel count plus its "
+         "set-up (Load) is its frame time. Ours: whole frame (map + Newton + rescue + shading), " +
+         std::to_string(n(t, "threads_ours")) + " thread(s); OCCT: 1 thread. |dt| is the hit distance difference "
+         "over the bounding-box diagonal where both hit.\n\n";
+    o += "| scene | rays | OCCT us/ray | OCCT frame ms (extrap.) | ours frame ms | OCCT / ours | hit agreement % | "
+         "ours-only / OCCT-only | face agreement % | abs(dt)/diag median / p99 / max | within 1e-6 % | interior "
+         "rays: hit agreement % | interior abs(dt)/diag p99 / max | interior abs(dt) > 1e-6 diag: ours nearer / OCCT "
+         "nearer |\n";
+    o += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& r : t["rows"])
+        o += "| " + s(r, "scene") + " | " + std::to_string(n(r, "rays")) + " | " + num(d(r, "occt_us_per_ray"), 1) +
+             " | " + ms(d(r, "occt_frame_ms_extrapolated")) + " | " + ms(d(r, "ours_frame_ms")) + " | " +
+             num(d(r, "occt_over_ours"), 1) + "x | " + num(d(r, "hit_agreement_pct"), 2) + " | " +
+             std::to_string(n(r, "ours_only_hits")) + " / " + std::to_string(n(r, "occt_only_hits")) + " | " +
+             num(d(r, "face_agreement_pct"), 2) + " | " + sci(d(r, "dt_rel_median")) + " / " +
+             sci(d(r, "dt_rel_p99")) + " / " + sci(d(r, "dt_rel_max")) + " | " + num(d(r, "dt_within_1e-6_pct"), 2) +
+             " | " + std::to_string(n(r, "interior_rays")) + ": " + num(d(r, "interior_hit_agreement_pct"), 2) +
+             " | " + sci(d(r, "interior_dt_rel_p99")) + " / " + sci(d(r, "interior_dt_rel_max")) + " | " +
+             std::to_string(n(r, "interior_dt_over_1e-6_ours_nearer")) + " / " +
+             std::to_string(n(r, "interior_dt_over_1e-6_occt_nearer")) + " |\n";
+    o += "\n";
+}
+
+void tessellation(std::string& o, const json& doc, const json& t) {
+    const bool embree = t.value("embree", false);
+    o += "## Tessellating peer: BRepMesh + rasterization (OSMesa)" + std::string(embree ? " and Embree" : "") +
+         "\n\n";
+    o += "Deflection relative to the bounding-box diagonal, angular deflection " +
+         num(d(t, "angular_deflection_rad"), 2) +
+         " rad. Time = BRepMesh + copying the mesh out + rendering (rasterization: upload, draw, read back). "
+         "dz = abs(t_mesh - t_exact)/diag where both hit our exact frame; disagreement = pixels hit by only one, "
+         "over pixels hit by either (mostly the silhouette).";
+    if (!embree) o += " Embree was not built in (no libembree-dev at configure time).";
+    o += "\n\n";
+    for (const json& r : t["rows"]) {
+        const json& ours = r["ours"];
+        const std::string key = s(r, "scene");
+        o += "**" + title_of(doc, key) + "** (" + key + "): ours (exact) frame " + ms(d(ours, "frame_ms")) +
+             " ms, plus " + ms(d(ours, "convert_and_map_mesh_ms")) +
+             " ms of NURBS conversion and map meshing at import; Newton tolerance " + sci(d(ours, "tolerance_rel")) +
+             " x diag.\n\n";
+        o += "| deflection | triangles | mesh ms | raster ms | raster total ms | dz median | dz p99 | dz max | "
+             "interior dz p99 | disagreement %";
+        if (embree) o += " | Embree build ms | Embree render ms | Embree total ms | Embree dz median";
+        o += " |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:";
+        if (embree) o += "|---:|---:|---:|---:";
+        o += "|\n";
+        for (const json& lv : r["levels"]) {
+            const json& ra = lv["raster"];
+            o += "| " + sci(d(lv, "relative_deflection")) + " | " + std::to_string(n(lv, "triangles")) + " | " +
+                 ms(d(lv, "mesh_ms")) + " | " + ms(d(ra, "render_ms")) + " | " + ms(d(ra, "total_ms")) + " | " +
+                 sci(d(ra, "dz_rel_median")) + " | " + sci(d(ra, "dz_rel_p99")) + " | " + sci(d(ra, "dz_rel_max")) +
+                 " | " + sci(d(ra, "interior_dz_rel_p99")) + " | " + num(d(ra, "hit_disagreement_pct"), 2);
+            if (embree && lv.contains("embree")) {
+                const json& e = lv["embree"];
+                o += " | " + ms(d(e, "build_ms")) + " | " + ms(d(e, "render_ms")) + " | " + ms(d(e, "total_ms")) +
+                     " | " + sci(d(e, "dz_rel_median"));
+            }
+            o += " |\n";
+        }
+        // Equal time: the finest mesh whose first frame (BRepMesh + extract + raster)
+        // costs no more than ours (NURBS conversion + map mesh + frame): what a mesh
+        // renderer gets for our time. Both exclude reading the file.
+        const double ours_first = d(ours, "frame_ms") + d(ours, "convert_and_map_mesh_ms");
+        const json* at_time = nullptr;
+        for (const json& lv : r["levels"])
+            if (d(lv["raster"], "total_ms") <= ours_first) at_time = &lv;
+        o += "\nFirst frame after reading the file: ours " + ms(ours_first) + " ms. ";
+        if (at_time)
+            o += "At equal time the finest mesh (deflection " + sci(d(*at_time, "relative_deflection")) + ", " +
+                 ms(d((*at_time)["raster"], "total_ms")) + " ms) has depth error median " +
+                 sci(d((*at_time)["raster"], "dz_rel_median")) + ", p99 " +
+                 sci(d((*at_time)["raster"], "dz_rel_p99")) + " (interior " +
+                 sci(d((*at_time)["raster"], "interior_dz_rel_p99")) + ") x diag. ";
+        else
+            o += "Even the coarsest mesh is slower than that. ";
+        if (!r["levels"].empty()) {
+            const json& finest = r["levels"].back();
+            o += "Further frames of the same model (camera moved, mesh kept): ours " + ms(d(ours, "frame_ms")) +
+                 " ms, rasterizing the finest mesh " + ms(d(finest["raster"], "render_ms")) + " ms";
+            if (finest.contains("embree"))
+                o += ", Embree " + ms(d(finest["embree"], "render_ms")) + " ms (+" +
+                     ms(d(finest["embree"], "build_ms")) + " ms BVH)";
+            o += ". Accuracy of the finest mesh: median " + sci(d(finest["raster"], "dz_rel_median")) + ", p99 " +
+                 sci(d(finest["raster"], "dz_rel_p99")) + " (interior " + sci(d(finest["raster"], "interior_dz_rel_p99")) +
+                 ") x diag";
+        }
+        if (doc.contains("occt"))
+            for (const json& q : doc["occt"]["rows"])
+                if (s(q, "scene") == key)
+                    o += "; ours against OCCT's exact hits: median " + sci(d(q, "dt_rel_median")) + ", p99 " +
+                         sci(d(q, "dt_rel_p99")) + " (interior " + sci(d(q, "interior_dt_rel_p99")) + ") x diag";
+        o += ".\n\n";
+    }
+}
+
+void scaling(std::string& o, const json& t) {
+    o += "## Scaling (`proposed`)\n\n";
+    const json& r = t["resolution"];
+    o += "Resolution (" + s(r, "scene") + ", " + std::to_string(n(t, "threads")) + " thread(s)):\n\n";
+    o += "| size | frame ms | Newton ms | map ms | ns per pixel | pixels hit | runs |\n"
+         "|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& x : r["rows"])
+        o += "| " + std::to_string(n(x, "size")) + "^2 | " + ms(d(x, "frame_ms")) + " | " + ms(d(x, "newton_ms")) +
+             " | " + ms(d(x, "preliminary_map_ms")) + " | " + num(d(x, "ns_per_pixel"), 0) + " | " +
+             std::to_string(n(x, "pixels_hit")) + " | " + std::to_string(n(x, "runs")) + " |\n";
+    const json& p = t["patches"];
+    o += "\nPatches (" + std::to_string(n(p, "width")) + "x" + std::to_string(n(p, "height")) + "):\n\n";
+    o += "| scene | patches | map triangles | frame ms | Newton ms | of which rescue ms | map ms | pixels hit | mean "
+         "iterations | primary pass ns per solve |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& x : p["rows"])
+        o += "| " + s(x, "scene") + " | " + std::to_string(n(x, "patches")) + " | " +
+             std::to_string(n(x, "map_triangles")) + " | " + ms(d(x, "frame_ms")) + " | " + ms(d(x, "newton_ms")) +
+             " | " + ms(d(x, "rescue_ms")) + " | " + ms(d(x, "preliminary_map_ms")) + " | " +
+             std::to_string(n(x, "pixels_hit")) + " | " + num(d(x, "mean_iterations"), 2) + " | " +
+             num(d(x, "primary_ns_per_solve"), 0) + " |\n";
+    const json& th = t["threads_scaling"];
+    o += "\nThreads (interleaved runs; " + std::to_string(n(th, "hardware_threads")) +
+         " hardware threads; CPU/wall is the process CPU time over the wall time of a frame: the cores it really got):"
+         "\n\n";
+    o += "| scene | frame ms, 1 thread | frame ms, 2 threads | frame speed-up | Newton speed-up | CPU/wall, 2 threads "
+         "|\n|---|---:|---:|---:|---:|---:|\n";
+    for (const json& x : th["rows"])
+        o += "| " + s(x, "scene") + " | " + ms(d(x["threads_1"], "frame_ms")) + " | " +
+             ms(d(x["threads_2"], "frame_ms")) + " | " + num(d(x, "frame_speedup"), 2) + "x | " +
+             num(d(x, "newton_speedup"), 2) + "x | " + num(d(x["threads_2"], "cpu_over_wall"), 2) + " |\n";
+    o += "\n";
+}
+
+}  // namespace
+
+std::string bench_markdown(const json& doc) {
+    std::string o = "# nurbsrt bench (" + s(doc, "mode") + ")\n\n";
+    machine(o, doc);
+    if (doc.contains("table1")) table1(o, doc["table1"]);
+    if (doc.contains("precision")) precision(o, doc["precision"]);
+    if (doc.contains("occt")) occt(o, doc["occt"]);
+    if (doc.contains("tessellation")) tessellation(o, doc, doc["tessellation"]);
+    if (doc.contains("scaling")) scaling(o, doc["scaling"]);
+    return o;
+}
+
+}  // namespace nurbsrt::bench
