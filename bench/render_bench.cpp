@@ -14,6 +14,8 @@
 //   build/nurbsrt_bench --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 // Models come from ../shared/models (NURBSRT_MODELS overrides); scenes whose
 // files are missing are skipped with a message.
+// `nurbsrt bench` (bench/bench_*.cpp) is the full report with peers and scaling;
+// this binary is for profiling the Newton stage in isolation.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>

@@ -50,7 +50,8 @@ void add_bench_command(CLI::App& app) {
     cmd->add_option("--models", o->models_dir,
                     "the shared models directory (default: $NURBSRT_MODELS, else ../shared/models from the "
                     "working directory, then beside the source tree)");
-    cmd->add_option("--runs", o->runs, "timed runs per figure (default 9, --quick 2)")->check(CLI::Range(1, 100));
+    cmd->add_option("--runs", o->runs, "minimum timed runs per figure (default 9, --quick 2); a full run's Table 1 and "
+                    "precision figures go on until each variant has 4 s of frames")->check(CLI::Range(1, 100));
     cmd->add_option("--threads", o->threads, "render threads for all but the thread-scaling figures")
         ->check(CLI::Range(1, 1024))->capture_default_str();
     cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")
