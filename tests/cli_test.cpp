@@ -178,6 +178,9 @@ TEST(CliRender, WritesImageAovAndContractStats) {
         EXPECT_TRUE(j["newton"].contains(k)) << k;
     for (const char* k : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"})
         EXPECT_TRUE(j["timings_ms"].contains(k)) << k;
+    // The first pass is part of the Newton stage.
+    EXPECT_GT(j["newton"]["primary_pass_ms"].get<double>(), 0.0);
+    EXPECT_LE(j["newton"]["primary_pass_ms"].get<double>(), j["timings_ms"]["newton"].get<double>());
     EXPECT_EQ(j["width"], 96);
     EXPECT_EQ(j["faces"], 10);
     EXPECT_GT(j["pixels_hit"].get<int>(), 500);  // a front view of the screw fills a good part of the frame
