@@ -5,11 +5,15 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# libfontconfig-dev: OCCT's CMake target TKService (pulled in through TKXCAF/TKRWMesh)
+# links "-lfontconfig" by name, but no OCCT package depends on the -dev package, so a
+# fresh Debian 12 (the Docker build stage) fails to link without it.
 PACKAGES=(
   cmake ninja-build pkg-config g++ git ca-certificates
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev occt-misc libtbb-dev
+  libfontconfig-dev
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
   libsqlite3-dev sqlite3
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
