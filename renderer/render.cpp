@@ -454,6 +454,57 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                 fresh.push_back(cand[q]);
             }
         }
+        throw_if_canceled(options);
+
+        // Nearer sheet: where a surface folds over itself (or two faces lie closer
+        // than the map mesh's deflection), the map can hand a pixel the farther of two
+        // sheets, and Newton converges there; it shows as an isolated depth spike: a
+        // hit deeper than the mean of both neighbours of a horizontal or vertical pair
+        // by more than kSpike. Such pixels are solved again from those neighbours'
+        // faces and (u, v); a hit on the pixel's own ray that is nearer by more than
+        // kNearer (far above the Newton tolerance, so the same root never counts)
+        // replaces it: the nearest intersection is the visible one. Reads only the
+        // hits so far, so the result stays independent of the thread count.
+        const double diag = std::max(scene.bbox.diagonal(), 1e-300);
+        const double kSpike = 1e-5 * diag, kNearer = 1e-6 * diag;
+        // A run of several pixels on the far sheet is peeled from its ends, one pixel
+        // per pass, until a pass changes nothing.
+        std::vector<PixelHit> nearer(npx);
+        for (int pass = 0; pass < 32; ++pass) {
+            std::fill(nearer.begin(), nearer.end(), PixelHit{});
+            parallel_rows(H, arena, nullptr, options, [&](int j) {
+                for (int i = 0; i < W; ++i) {
+                    const size_t k = map.index(i, j);
+                    const PixelHit& p = final_hits[k];
+                    if (!p.face) continue;
+                    PixelHit best = p;
+                    const int pairs[2][4] = {{i - 1, j, i + 1, j}, {i, j - 1, i, j + 1}};
+                    for (const auto& q : pairs) {
+                        if (q[0] < 0 || q[1] < 0 || q[2] >= W || q[3] >= H) continue;
+                        const PixelHit& a = final_hits[map.index(q[0], q[1])];
+                        const PixelHit& b = final_hits[map.index(q[2], q[3])];
+                        if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + kSpike)) continue;
+                        for (const PixelHit* n : {&a, &b}) {
+                            PixelHit h;
+                            if (n->t < p.t - kNearer &&
+                                solver.solve(n->face, i, j, n->u, n->v, robust, false, h) == kConverged &&
+                                h.t < best.t - kNearer)
+                                best = h;
+                        }
+                    }
+                    if (best.face != p.face || best.t != p.t) nearer[k] = best;
+                }
+            });
+            throw_if_canceled(options);
+            uint64_t changed = 0;
+            for (size_t k = 0; k < npx; ++k)
+                if (nearer[k].face) {
+                    final_hits[k] = nearer[k];
+                    ++changed;
+                }
+            st.rescue_nearer += changed;
+            if (!changed) break;
+        }
     } else {
         progress.add(H);
     }

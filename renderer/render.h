@@ -68,6 +68,10 @@ struct RenderStats {
     // a crack pixel between faces filled by a hit just outside a trim loop, within
     // the face's trim tolerance.
     uint64_t rescue_neighbour = 0, rescue_silhouette = 0, rescue_general = 0, rescue_trim_tolerance = 0;
+    // Hit pixels whose hit was replaced by a nearer one on the same ray, found from a
+    // neighbour's face and (u, v) where the pixel was a depth spike (a surface folded
+    // over itself within the map mesh's deflection). Not part of `fallback`.
+    uint64_t rescue_nearer = 0;
     uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
     double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, total_ms = 0;
     // The part of newton_ms spent in the first pass: per-face set-up and one solve

@@ -37,6 +37,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
           {"silhouette", s.rescue_silhouette},
           {"general", s.rescue_general},
           {"trim_tolerance", s.rescue_trim_tolerance},
+          {"nearer_sheet", s.rescue_nearer},
           {"holes", s.holes}}},
         {"timings_ms",
          {{"read", import.read_ms},

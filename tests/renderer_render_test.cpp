@@ -220,6 +220,59 @@ TEST(RendererRender, RescueClosesCracksBetweenAdjacentFaces) {
 // A sphere octant with a 2 x 2 mesh: the map's silhouette is the chords', far
 // inside the exact one; the silhouette extension must recover every pixel whose
 // ray hits the exact surface, and nothing else.
+// A face whose map mesh lies behind another face's where the surfaces are closer
+// than the mesh's deflection (a fold, or two nearly coincident faces): the map
+// hands those pixels the farther face and Newton converges there. The
+// nearer-sheet pass must find the front face from the neighbouring pixels.
+TEST(RendererRender, NearerSheetReplacesAFartherHit) {
+    const AnalyticPatch front = plane_patch();
+    CameraSpec spec = front.view;
+    spec.width = 160;
+    spec.height = 120;
+    const Camera cam(spec);
+    const double gap = 0.01;  // the back face lies this far behind the front one
+    Scene scene;
+    Face a = make_face(front, 1, 8);
+    // Push the middle mesh vertex of the front face far behind both faces: around
+    // it the map sees the back face.
+    const size_t mid = 4 * 9 + 4;
+    a.mesh.xyz[mid] = a.mesh.xyz[mid] + 0.3 * cam.forward();
+    AnalyticPatch back = front;
+    for (Vec4& c : back.surface.cp) c = Vec4{c.x + gap * cam.forward().x * c.w, c.y + gap * cam.forward().y * c.w,
+                                             c.z + gap * cam.forward().z * c.w, c.w};
+    back.box = BBox{};
+    finish_box(back);
+    scene.faces = {a, make_face(back, 2, 8)};
+    scene.bbox.extend(front.box);
+    scene.bbox.extend(back.box);
+
+    for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
+        RenderOptions off;
+        off.method = m;
+        off.rescue = false;
+        const RenderResult plain = render(scene, cam, off);
+        size_t back_pixels = 0;
+        for (uint32_t f : plain.image.face) back_pixels += f == 2;
+        ASSERT_GT(back_pixels, 10u) << "the set-up must put the back face into the map";
+
+        RenderOptions on;
+        on.method = m;
+        const RenderResult r = render(scene, cam, on);
+        EXPECT_GT(r.stats.rescue_nearer, 0u);
+        size_t checked = 0;
+        for (int j = 0; j < spec.height; ++j)
+            for (int i = 0; i < spec.width; ++i) {
+                const size_t k = static_cast<size_t>(j) * spec.width + i;
+                const std::optional<double> t = front.hit(cam.pixel_ray(i, j));
+                if (!t || r.image.face[k] == 0) continue;  // silhouette pixels: other tests
+                ++checked;
+                EXPECT_EQ(r.image.face[k], 1u) << "pixel " << i << "," << j;
+                EXPECT_NEAR(r.image.z[k], *t, 1e-5 * *t) << "pixel " << i << "," << j;
+            }
+        EXPECT_GT(checked, 1000u);
+    }
+}
+
 TEST(RendererRender, SilhouetteMatchesAnalyticSphere) {
     const AnalyticPatch sphere = sphere_patch(1.5);
     Scene scene;
