@@ -468,42 +468,72 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         const double diag = std::max(scene.bbox.diagonal(), 1e-300);
         const double kSpike = 1e-5 * diag, kNearer = 1e-6 * diag;
         // A run of several pixels on the far sheet is peeled from its ends, one pixel
-        // per pass, until a pass changes nothing.
+        // per pass: after the first pass (every pixel), only the 4-neighbours of the
+        // pixels the last pass changed are examined again.
+        auto nearer_hit = [&](int i, int j, PixelHit& out) {
+            const PixelHit& p = final_hits[map.index(i, j)];
+            if (!p.face) return false;
+            PixelHit best = p;
+            const int pairs[2][4] = {{i - 1, j, i + 1, j}, {i, j - 1, i, j + 1}};
+            for (const auto& q : pairs) {
+                if (q[0] < 0 || q[1] < 0 || q[2] >= W || q[3] >= H) continue;
+                const PixelHit& a = final_hits[map.index(q[0], q[1])];
+                const PixelHit& b = final_hits[map.index(q[2], q[3])];
+                if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + kSpike)) continue;
+                // Only from a neighbour on another face, or on another sheet of the same
+                // face: its (u, v) jumps (3x farther from the pixel's than the opposite
+                // neighbour's). A smoothly curved concave sheet, where depth also rises
+                // above the pair's mean, changes (u, v) evenly and is not solved again.
+                auto uv_dist2 = [&](const PixelHit& x) {
+                    const double du = double(x.u) - p.u, dv = double(x.v) - p.v;
+                    return du * du + dv * dv;
+                };
+                for (const PixelHit* n : {&a, &b}) {
+                    const PixelHit& other = n == &a ? b : a;
+                    const bool jump = n->face != p.face || other.face != p.face || uv_dist2(*n) > 9.0 * uv_dist2(other);
+                    PixelHit h;
+                    if (jump && n->t < p.t - kNearer &&
+                        solver.solve(n->face, i, j, n->u, n->v, solver.params, false, h) == kConverged &&
+                        h.t < best.t - kNearer)
+                        best = h;
+                }
+            }
+            if (best.face == p.face && best.t == p.t) return false;
+            out = best;
+            return true;
+        };
         std::vector<PixelHit> nearer(npx);
+        std::vector<uint8_t> changed(npx, 0);
+        parallel_rows(H, arena, nullptr, options, [&](int j) {
+            for (int i = 0; i < W; ++i) changed[map.index(i, j)] = nearer_hit(i, j, nearer[map.index(i, j)]);
+        });
+        std::vector<size_t> fresh_near, cand_near;
         for (int pass = 0; pass < 32; ++pass) {
-            std::fill(nearer.begin(), nearer.end(), PixelHit{});
-            parallel_rows(H, arena, nullptr, options, [&](int j) {
-                for (int i = 0; i < W; ++i) {
-                    const size_t k = map.index(i, j);
-                    const PixelHit& p = final_hits[k];
-                    if (!p.face) continue;
-                    PixelHit best = p;
-                    const int pairs[2][4] = {{i - 1, j, i + 1, j}, {i, j - 1, i, j + 1}};
-                    for (const auto& q : pairs) {
-                        if (q[0] < 0 || q[1] < 0 || q[2] >= W || q[3] >= H) continue;
-                        const PixelHit& a = final_hits[map.index(q[0], q[1])];
-                        const PixelHit& b = final_hits[map.index(q[2], q[3])];
-                        if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + kSpike)) continue;
-                        for (const PixelHit* n : {&a, &b}) {
-                            PixelHit h;
-                            if (n->t < p.t - kNearer &&
-                                solver.solve(n->face, i, j, n->u, n->v, robust, false, h) == kConverged &&
-                                h.t < best.t - kNearer)
-                                best = h;
-                        }
-                    }
-                    if (best.face != p.face || best.t != p.t) nearer[k] = best;
-                }
-            });
             throw_if_canceled(options);
-            uint64_t changed = 0;
+            fresh_near.clear();
             for (size_t k = 0; k < npx; ++k)
-                if (nearer[k].face) {
+                if (changed[k]) {
                     final_hits[k] = nearer[k];
-                    ++changed;
+                    changed[k] = 0;
+                    fresh_near.push_back(k);
                 }
-            st.rescue_nearer += changed;
-            if (!changed) break;
+            st.rescue_nearer += fresh_near.size();
+            if (fresh_near.empty()) break;
+            cand_near.clear();
+            for (const size_t k : fresh_near) {
+                const int i = static_cast<int>(k % W), j = static_cast<int>(k / W);
+                const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+                for (const auto& q : nb)
+                    if (q[0] >= 0 && q[1] >= 0 && q[0] < W && q[1] < H) cand_near.push_back(map.index(q[0], q[1]));
+            }
+            std::sort(cand_near.begin(), cand_near.end());
+            cand_near.erase(std::unique(cand_near.begin(), cand_near.end()), cand_near.end());
+            arena.execute([&] {
+                tbb::parallel_for(size_t(0), cand_near.size(), [&](size_t q) {
+                    const size_t k = cand_near[q];
+                    changed[k] = nearer_hit(static_cast<int>(k % W), static_cast<int>(k / W), nearer[k]);
+                });
+            });
         }
     } else {
         progress.add(H);
