@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <future>
 #include <thread>
@@ -60,8 +61,10 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> sce
     std::thread([task] { (*task)(); }).detach();
     const auto deadline = clock_type::now() + std::chrono::duration_cast<clock_type::duration>(
                                                   std::chrono::duration<double>(ctx.config.render_timeout_s));
-    // Short waits so that an external cancel is seen promptly.
-    while (result.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+    // Short waits so that an external cancel is seen promptly, never past the
+    // deadline (a 50 ms step would let a short limit pass unnoticed).
+    while (result.wait_until(std::min(clock_type::now() + std::chrono::milliseconds(50), deadline)) !=
+           std::future_status::ready) {
         if (external_cancel && external_cancel->load()) {
             cancel->store(true);
             throw Error(ErrorCode::canceled, "the render was canceled");
@@ -69,7 +72,7 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> sce
         if (clock_type::now() >= deadline) {
             cancel->store(true);
             char msg[128];
-            std::snprintf(msg, sizeof msg, "the render did not finish within %.0f s", ctx.config.render_timeout_s);
+            std::snprintf(msg, sizeof msg, "the render did not finish within %g s", ctx.config.render_timeout_s);
             throw Error(ErrorCode::render_timeout, msg);
         }
     }
