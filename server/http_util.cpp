@@ -6,6 +6,7 @@
 
 #include "server/context.h"
 #include "server/problem.h"
+#include "server/redact.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -93,14 +94,12 @@ Upload read_upload(const httplib::Request& req) {
     return up;
 }
 
-std::string without_service_paths(std::string message, const ServerContext& ctx) {
+std::string without_service_paths(const std::string& message, const ServerContext& ctx) {
     std::string data = ctx.config.data_dir;
     while (data.size() > 1 && data.back() == '/') data.pop_back();
     // Longest first: the scratch dir usually lies inside the data dir.
-    for (const std::string& dir : {ctx.scratch.path(), data})
-        if (!dir.empty())
-            for (size_t at; (at = message.find(dir + "/")) != std::string::npos;) message.erase(at, dir.size() + 1);
-    return message;
+    auto dir_prefix = [](const std::string& d) { return d.empty() ? d : d + "/"; };  // "" erases nothing
+    return without_prefixes(message, {dir_prefix(ctx.scratch.path()), dir_prefix(data)});
 }
 
 }  // namespace nurbsrt::server

@@ -35,7 +35,7 @@ void send_problem(httplib::Response& res, ErrorCode code, const std::string& det
 // `message` without the service's own directories (the data dir, the scratch
 // dir): an error from a child process or the file system may name the private
 // path of an upload, which is none of the client's business.
-std::string without_service_paths(std::string message, const ServerContext& ctx);
+std::string without_service_paths(const std::string& message, const ServerContext& ctx);
 
 // True when the client asked for JSON (Accept contains application/json).
 bool wants_json(const httplib::Request& req);

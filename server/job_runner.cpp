@@ -19,6 +19,7 @@
 #include "renderer/error.h"
 #include "server/context.h"
 #include "server/job_spec.h"
+#include "server/redact.h"
 #include "server/render_options.h"
 #include "server/render_service.h"
 #include "server/request_log.h"
@@ -64,10 +65,8 @@ std::string input_name(int index) { return "input-" + std::to_string(index) + ".
 
 // An error message for the client: the service's own paths (the job and
 // scratch directories) are cut out, leaving the generated file names.
-std::string without_paths(std::string message, const std::string& dir, const std::string& scratch) {
-    for (const std::string& p : {dir + "/partial-", dir + "/", scratch + "/"})
-        for (size_t at; (at = message.find(p)) != std::string::npos;) message.erase(at, p.size());
-    return message;
+std::string without_paths(const std::string& message, const std::string& dir, const std::string& scratch) {
+    return without_prefixes(message, {dir + "/partial-", dir + "/", scratch + "/"});
 }
 
 }  // namespace
