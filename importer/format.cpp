@@ -120,6 +120,18 @@ ConversionFormat conversion_format_from_name(const std::string& name) {
     return ConversionFormat::unknown;
 }
 
+const char* conversion_format_short_name(ConversionFormat f) {
+    switch (f) {
+        case ConversionFormat::step: return "step";
+        case ConversionFormat::iges: return "iges";
+        case ConversionFormat::stl: return "stl";
+        case ConversionFormat::glb: return "glb";
+        case ConversionFormat::nurbs_json: return "json";
+        case ConversionFormat::unknown: break;
+    }
+    return "";
+}
+
 const char* conversion_format_name(ConversionFormat f) {
     switch (f) {
         case ConversionFormat::step: return "STEP";

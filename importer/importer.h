@@ -51,6 +51,8 @@ enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json };
 ConversionFormat conversion_format_from_extension(const std::string& path);
 // By the short names of the API and CLI: step|stp, iges|igs, stl, glb, json; unknown otherwise.
 ConversionFormat conversion_format_from_name(const std::string& name);
+// The canonical short name: "step", "iges", "stl", "glb", "json" ("" for unknown).
+const char* conversion_format_short_name(ConversionFormat f);
 // "STEP", "IGES", "STL", "GLB", "NURBS-JSON"
 const char* conversion_format_name(ConversionFormat f);
 // ".step", ".igs", ".stl", ".glb", ".json"

@@ -4,6 +4,7 @@
 
 #include <regex>
 
+#include "importer/importer.h"
 #include "renderer/error.h"
 #include "server/render_options.h"
 #include "server/render_service.h"
@@ -14,11 +15,6 @@ namespace {
 using nlohmann::json;
 
 [[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
-
-const ConversionFormat kConversionFormats[] = {
-    {"step", ".step", "model/step"},      {"iges", ".igs", "model/iges"},        {"stl", ".stl", "model/stl"},
-    {"glb", ".glb", "model/gltf-binary"}, {"json", ".json", "application/json"},
-};
 
 // The input an output refers to: its index among the `file` parts, or its
 // filename when that names exactly one of them.
@@ -46,13 +42,6 @@ int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::
 }
 
 }  // namespace
-
-const ConversionFormat* conversion_format(const std::string& name) {
-    const std::string n = name == "stp" ? "step" : name == "igs" ? "iges" : name;
-    for (const ConversionFormat& f : kConversionFormats)
-        if (n == f.name) return &f;
-    return nullptr;
-}
 
 std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs,
                                       const ServerConfig& config) {
@@ -101,11 +90,11 @@ std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::ve
                     bad(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
             if (!o.contains("format") || !o["format"].is_string())
                 bad(where + ": a conversion needs 'format' (step, iges, stl, glb or json)");
-            const ConversionFormat* f = conversion_format(o["format"].get<std::string>());
-            if (!f) bad(where + ": 'format' must be one of step, iges, stl, glb, json");
-            out.options_json = json{{"format", f->name}}.dump();
-            extension = f->extension;
-            out.content_type = f->content_type;
+            const ConversionFormat f = conversion_format_from_name(o["format"].get<std::string>());
+            if (f == ConversionFormat::unknown) bad(where + ": 'format' must be one of step, iges, stl, glb, json");
+            out.options_json = json{{"format", conversion_format_short_name(f)}}.dump();
+            extension = conversion_format_extension(f);
+            out.content_type = conversion_format_content_type(f);
         } else {
             bad(where + ": 'type' must be render or conversion");
         }

@@ -13,16 +13,6 @@
 
 namespace nurbsrt::server {
 
-// Output formats of conversion outputs: step, iges, stl, glb, json (the
-// converter picks the format from the artifact's extension).
-struct ConversionFormat {
-    const char* name;          // step
-    const char* extension;     // .step
-    const char* content_type;  // model/step
-};
-// nullptr for an unknown name; accepts the aliases stp, igs.
-const ConversionFormat* conversion_format(const std::string& name);
-
 // Parses `job_json` ({"outputs": [{"file": 0 | "name.igs", "type": "render",
 // "options": {...}} | {"file": ..., "type": "conversion", "format": "step"}]})
 // for these inputs. Throws Error(invalid_argument) naming the problem,
