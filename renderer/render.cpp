@@ -502,38 +502,48 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             out = best;
             return true;
         };
-        std::vector<PixelHit> nearer(npx);
-        std::vector<uint8_t> changed(npx, 0);
+        // Replacements are collected per row (almost always none) and applied
+        // between passes, so no frame-sized buffer is needed for a handful of pixels.
+        struct Update {
+            size_t k;
+            PixelHit hit;
+        };
+        std::vector<std::vector<Update>> row_updates(H);
         parallel_rows(H, arena, nullptr, options, [&](int j) {
-            for (int i = 0; i < W; ++i) changed[map.index(i, j)] = nearer_hit(i, j, nearer[map.index(i, j)]);
+            for (int i = 0; i < W; ++i) {
+                PixelHit h;
+                if (nearer_hit(i, j, h)) row_updates[j].push_back({map.index(i, j), h});
+            }
         });
-        std::vector<size_t> fresh_near, cand_near;
-        for (int pass = 0; pass < 32; ++pass) {
+        std::vector<Update> updates;
+        for (const std::vector<Update>& r : row_updates) updates.insert(updates.end(), r.begin(), r.end());
+        std::vector<size_t> cand_near;
+        std::vector<PixelHit> cand_hit;
+        std::vector<uint8_t> cand_changed;
+        for (int pass = 0; pass < 32 && !updates.empty(); ++pass) {
             throw_if_canceled(options);
-            fresh_near.clear();
-            for (size_t k = 0; k < npx; ++k)
-                if (changed[k]) {
-                    final_hits[k] = nearer[k];
-                    changed[k] = 0;
-                    fresh_near.push_back(k);
-                }
-            st.rescue_nearer += fresh_near.size();
-            if (fresh_near.empty()) break;
             cand_near.clear();
-            for (const size_t k : fresh_near) {
-                const int i = static_cast<int>(k % W), j = static_cast<int>(k / W);
+            for (const Update& u : updates) {
+                final_hits[u.k] = u.hit;
+                const int i = static_cast<int>(u.k % W), j = static_cast<int>(u.k / W);
                 const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
                 for (const auto& q : nb)
                     if (q[0] >= 0 && q[1] >= 0 && q[0] < W && q[1] < H) cand_near.push_back(map.index(q[0], q[1]));
             }
+            st.rescue_nearer += updates.size();
             std::sort(cand_near.begin(), cand_near.end());
             cand_near.erase(std::unique(cand_near.begin(), cand_near.end()), cand_near.end());
+            cand_hit.assign(cand_near.size(), PixelHit{});
+            cand_changed.assign(cand_near.size(), 0);
             arena.execute([&] {
                 tbb::parallel_for(size_t(0), cand_near.size(), [&](size_t q) {
                     const size_t k = cand_near[q];
-                    changed[k] = nearer_hit(static_cast<int>(k % W), static_cast<int>(k / W), nearer[k]);
+                    cand_changed[q] = nearer_hit(static_cast<int>(k % W), static_cast<int>(k / W), cand_hit[q]);
                 });
             });
+            updates.clear();
+            for (size_t q = 0; q < cand_near.size(); ++q)
+                if (cand_changed[q]) updates.push_back({cand_near[q], cand_hit[q]});
         }
     } else {
         progress.add(H);
