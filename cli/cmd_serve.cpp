@@ -14,6 +14,7 @@ void add_serve_command(CLI::App& app) {
     auto upload_mb = std::make_shared<double>(static_cast<double>(c->max_upload_bytes) / (1 << 20));
     auto import_memory_mb = std::make_shared<double>(static_cast<double>(c->import_memory_bytes >> 20));
     auto cache_mb = std::make_shared<double>(static_cast<double>(c->cache_bytes >> 20));
+    auto body_rate_kib = std::make_shared<double>(c->min_body_rate_bytes / 1024);
     auto* cmd = app.add_subcommand(
         "serve",
         "Run the HTTP service: POST /v1/renders, POST /v1/conversions, /v1/jobs (batch\n"
@@ -55,6 +56,18 @@ void add_serve_command(CLI::App& app) {
         ->envname("NURBSRT_IMPORT_MEMORY_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--cache-mb", *cache_mb, "scene cache capacity, MiB (0: no cache)")
         ->envname("NURBSRT_CACHE_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--header-timeout", c->header_timeout_s,
+                    "seconds for a request's line and headers to arrive (408 beyond); also the grace\n"
+                    "before --min-body-rate applies")
+        ->envname("NURBSRT_HEADER_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--min-body-rate-kib", *body_rate_kib,
+                    "KiB/s a request body must arrive at on average after the grace (408 below)")
+        ->envname("NURBSRT_MIN_BODY_RATE_KIB")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--max-connections", c->max_connections, "open connections at once; beyond: 503")
+        ->envname("NURBSRT_MAX_CONNECTIONS")->check(CLI::Range(1, 100000))->capture_default_str();
+    cmd->add_option("--max-connections-per-client", c->max_connections_per_client,
+                    "open connections from one client address; beyond: 503")
+        ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")->check(CLI::Range(1, 100000))->capture_default_str();
     cmd->add_option("--api-keys-file", c->api_keys_file,
                     "require 'Authorization: Bearer <key>' with a key from this file (one per line,\n"
                     "'#' comments, at least 16 characters) on every route but /healthz, /readyz and\n"
@@ -71,12 +84,13 @@ void add_serve_command(CLI::App& app) {
     cmd->add_option("--job-retention", c->job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
         ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();
-    cmd->callback([c, upload_mb, import_memory_mb, cache_mb] {
+    cmd->callback([c, upload_mb, import_memory_mb, cache_mb, body_rate_kib] {
         // Keys themselves only from the environment: a command line shows in `ps`.
         if (const char* k = std::getenv("NURBSRT_API_KEYS")) c->api_keys = k;
         c->max_upload_bytes = static_cast<size_t>(*upload_mb * (1 << 20));
         c->import_memory_bytes = static_cast<size_t>(*import_memory_mb * (1 << 20));
         c->cache_bytes = static_cast<size_t>(*cache_mb * (1 << 20));
+        c->min_body_rate_bytes = *body_rate_kib * 1024;
         const int rc = server::run_server(*c);
         if (rc != 0) std::exit(rc);
     });

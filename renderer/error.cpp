@@ -19,6 +19,7 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::render_timeout: return "render_timeout";
         case ErrorCode::canceled: return "canceled";
         case ErrorCode::unauthorized: return "unauthorized";
+        case ErrorCode::request_timeout: return "request_timeout";
         case ErrorCode::interrupted: return "interrupted";
         case ErrorCode::internal: return "internal";
     }

@@ -25,6 +25,7 @@ enum class ErrorCode {
     render_timeout,      // a render exceeded its time limit
     canceled,            // the work was canceled (RenderOptions::cancel, a deleted job)
     unauthorized,        // an API key is configured and the request has none or a wrong one
+    request_timeout,     // the request's headers or body did not arrive in time (server/http_server.h)
     interrupted,         // a job's run was cut short by service restarts too often (server/job_runner.h)
     internal,            // a bug: should never reach a user
 };

@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 # libfontconfig-dev: OCCT's CMake target TKService (pulled in through TKXCAF/TKRWMesh)
 # links "-lfontconfig" by name, but no OCCT package depends on the -dev package, so a
 # fresh Debian 12 (the Docker build stage) fails to link without it.
+# iproute2: the API tests read the service's listen backlog with `ss`.
 PACKAGES=(
   cmake ninja-build pkg-config g++ git ca-certificates
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
@@ -16,6 +17,7 @@ PACKAGES=(
   libfontconfig-dev
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
   libsqlite3-dev sqlite3
+  iproute2
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
 )
 

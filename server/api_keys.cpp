@@ -45,6 +45,7 @@ void ApiKeys::add_file(const std::string& path) {
     if (!in) throw Error(ErrorCode::invalid_argument, "cannot read the API keys file " + path);
     std::string line;
     int n = 0;
+    const size_t before = keys_.size();
     while (std::getline(in, line)) {
         ++n;
         const std::string_view t = trim(line);
@@ -52,15 +53,24 @@ void ApiKeys::add_file(const std::string& path) {
         add(t, path + ":" + std::to_string(n));
     }
     if (in.bad()) throw Error(ErrorCode::invalid_argument, "cannot read the API keys file " + path);
+    // Fail closed: a keys file that is empty, or only comments (a deployment
+    // whose secret did not get mounted), must not start an open service.
+    if (keys_.size() == before)
+        throw Error(ErrorCode::invalid_argument, "the API keys file " + path +
+                                                     " holds no key: refusing to start without authentication");
 }
 
 void ApiKeys::add_list(std::string_view list) {
+    const size_t before = keys_.size();
     while (!list.empty()) {
         const size_t comma = list.find(',');
         add(list.substr(0, comma), "NURBSRT_API_KEYS");
         if (comma == std::string_view::npos) break;
         list.remove_prefix(comma + 1);
     }
+    if (keys_.size() == before)  // set but empty (or only commas): fail closed as for the file
+        throw Error(ErrorCode::invalid_argument,
+                    "NURBSRT_API_KEYS is set but holds no key: refusing to start without authentication");
 }
 
 bool ApiKeys::accepts(std::string_view authorization) const {

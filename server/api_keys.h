@@ -16,7 +16,8 @@ class ApiKeys {
 public:
     // Adds the keys of a file / of a comma-separated list. Throws
     // Error(invalid_argument) for an unreadable file or a key that is too short
-    // (< 16 characters) or contains whitespace or control characters.
+    // (< 16 characters) or contains whitespace or control characters, and for a
+    // file or list that holds no key at all (auth fails closed, never open).
     void add_file(const std::string& path);
     void add_list(std::string_view comma_separated);
 

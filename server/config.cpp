@@ -20,6 +20,11 @@ void ServerConfig::validate() const {
     if (max_faces < 1) fail("max faces must be positive");
     if (!(render_timeout_s > 0)) fail("render timeout must be positive");
     if (!(import_timeout_s > 0)) fail("import timeout must be positive");
+    if (!(header_timeout_s > 0)) fail("header timeout must be positive");
+    if (!(min_body_rate_bytes > 0)) fail("minimum body rate must be positive");
+    if (max_connections < 1 || max_connections > 100000) fail("max connections must be in 1..100000");
+    if (max_connections_per_client < 1 || max_connections_per_client > max_connections)
+        fail("max connections per client must be in 1..max connections");
     if (job_runners < 1 || job_runners > 256) fail("job runners must be in 1..256");
     if (max_queued_jobs < 1) fail("max queued jobs must be positive");
     if (max_job_files < 1 || max_job_files > 10000) fail("max job files must be in 1..10000");

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 
 namespace nurbsrt::server {
@@ -32,10 +33,18 @@ struct ServerConfig {
 
     size_t cache_bytes = size_t(512) << 20;  // scene cache capacity (0: no cache)
 
+    // Connections (server/http_server.h): slow or numerous clients cost only themselves.
+    double header_timeout_s = 10;              // request line + headers; also the body's grace
+    double min_body_rate_bytes = 64 * 1024;    // average upload rate a body must keep
+    int max_connections = 512;                 // open at once; beyond: 503
+    int max_connections_per_client = 128;      // per client address; beyond: 503
+
     // API keys (server/api_keys.h): a file of keys, and/or a comma-separated list
-    // (from the environment only). None configured: no authentication.
+    // (from the environment only). Neither configured: no authentication. Either
+    // configured but holding no key is a start-up error (fail closed), never an
+    // open service.
     std::string api_keys_file;
-    std::string api_keys;
+    std::optional<std::string> api_keys;  // set when NURBSRT_API_KEYS is in the environment, even empty
     // Batch jobs (POST /v1/jobs): kept in DATA_DIR/jobs.db and DATA_DIR/jobs/.
     int job_runners = 2;             // jobs run at once (their outputs still pass the admission gate)
     int max_queued_jobs = 100;       // jobs waiting; beyond -> 503

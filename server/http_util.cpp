@@ -52,6 +52,13 @@ void send_problem(httplib::Response& res, ErrorCode code, const std::string& det
     note_problem_code(error_code_name(code));
 }
 
+void send_problem_with_status(httplib::Response& res, int status, ErrorCode code, const std::string& detail) {
+    const Problem p = make_problem(code, detail, request_id(res), status);
+    res.status = p.status;
+    res.set_content(p.body, kProblemContentType);
+    note_problem_code(error_code_name(code));
+}
+
 bool wants_json(const httplib::Request& req) {
     return lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
 }

@@ -31,6 +31,9 @@ RequestNote take_request_note();
 // Fills `res` with the problem+json body and status for `code` (plus
 // Retry-After for overloaded).
 void send_problem(httplib::Response& res, ErrorCode code, const std::string& detail, int retry_after_s = 0);
+// The same with an HTTP status other than the code's own (405, 414, 431, ...),
+// which the body's `status` repeats.
+void send_problem_with_status(httplib::Response& res, int status, ErrorCode code, const std::string& detail);
 
 // `message` without the service's own directories (the data dir, the scratch
 // dir): an error from a child process or the file system may name the private

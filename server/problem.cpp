@@ -9,6 +9,7 @@ int http_status(ErrorCode code) {
         case ErrorCode::invalid_argument: return 400;
         case ErrorCode::unauthorized: return 401;
         case ErrorCode::not_found: return 404;
+        case ErrorCode::request_timeout: return 408;
         case ErrorCode::canceled: return 409;                // the resource's work was canceled
         case ErrorCode::limit_exceeded: return 413;          // upload, pixels, faces, memory
         case ErrorCode::unsupported_format: return 415;
@@ -32,6 +33,7 @@ const char* problem_title(ErrorCode code) {
         case ErrorCode::invalid_argument: return "Invalid request";
         case ErrorCode::unauthorized: return "Unauthorized";
         case ErrorCode::not_found: return "Not found";
+        case ErrorCode::request_timeout: return "Request timeout";
         case ErrorCode::canceled: return "Canceled";
         case ErrorCode::limit_exceeded: return "Limit exceeded";
         case ErrorCode::unsupported_format: return "Unsupported format";
@@ -50,8 +52,8 @@ const char* problem_title(ErrorCode code) {
     return "Internal error";
 }
 
-Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id) {
-    const int status = http_status(code);
+Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id, int status) {
+    if (status == 0) status = http_status(code);
     const nlohmann::json j = {
         {"type", std::string("urn:nurbsrt:error:") + error_code_name(code)},
         {"title", problem_title(code)},

@@ -19,7 +19,9 @@ struct Problem {
     std::string body;  // the problem+json document
 };
 
-// `detail` is a human-readable explanation for this occurrence.
-Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id);
+// `detail` is a human-readable explanation for this occurrence. `status`: the
+// HTTP status when it is not the code's own (431 for limit_exceeded, 405 for
+// not_found, ...); the body's `status` always equals the response's.
+Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id, int status = 0);
 
 }  // namespace nurbsrt::server

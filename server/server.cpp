@@ -7,16 +7,20 @@
 
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <thread>
 
 #include "renderer/error.h"
 #include "server/api_keys.h"
 #include "server/context.h"
+#include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/job_runner.h"
 #include "server/problem.h"
@@ -43,11 +47,71 @@ std::string route_of(const httplib::Request& req) {
 ErrorCode code_for_status(int status) {
     switch (status) {
         case 404: case 405: return ErrorCode::not_found;
-        case 413: return ErrorCode::limit_exceeded;
+        case 408: return ErrorCode::request_timeout;
+        case 413: case 431: return ErrorCode::limit_exceeded;
         case 415: return ErrorCode::unsupported_format;
         case 503: return ErrorCode::overloaded;
         default: return status < 500 ? ErrorCode::invalid_argument : ErrorCode::internal;
     }
+}
+
+ConnectionLimits connection_limits(const ServerConfig& config) {
+    ConnectionLimits l;
+    l.header_timeout_s = config.header_timeout_s;
+    l.min_body_rate = config.min_body_rate_bytes;
+    l.max_body_bytes = config.max_upload_bytes;
+    l.max_connections = config.max_connections;
+    l.max_connections_per_client = config.max_connections_per_client;
+    l.retry_after_s = config.retry_after_s;
+    return l;
+}
+
+std::string format_seconds(double s) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g s", s);
+    return text;
+}
+
+bool has_body(const httplib::Request& req) {
+    return req.has_header("Transfer-Encoding") ||
+           (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
+}
+
+// An answer a request gets from its headers alone, before its body is read.
+struct EarlyAnswer {
+    int status;
+    ErrorCode code;
+    std::string detail;
+};
+
+std::optional<EarlyAnswer> check_before_body(const httplib::Request& req, const ServerConfig& config,
+                                             const ApiKeys& keys) {
+    if (keys.enabled() && !ApiKeys::is_public_path(req.path) && !keys.accepts(req.get_header_value("Authorization")))
+        return EarlyAnswer{401, ErrorCode::unauthorized,
+                           req.has_header("Authorization")
+                               ? "the API key is not valid"
+                               : "this service requires an API key: send 'Authorization: Bearer <key>'"};
+    // Compressed request bodies are refused, not inflated: cpp-httplib 0.11
+    // inflates them without any bound (a 2 MB gzip body can expand to GiBs).
+    const std::string encoding = req.get_header_value("Content-Encoding");
+    if (!encoding.empty() && encoding != "identity")
+        return EarlyAnswer{415, ErrorCode::unsupported_format,
+                           "compressed request bodies (Content-Encoding) are not accepted: send the file "
+                           "uncompressed"};
+    // A declared length over the limit is answered now, not after reading (or
+    // waiting for) the whole body.
+    if (req.has_header("Content-Length")) {
+        const std::string text = req.get_header_value("Content-Length");
+        char* end = nullptr;
+        errno = 0;
+        const unsigned long long n = std::strtoull(text.c_str(), &end, 10);
+        const bool valid = !text.empty() && *end == '\0' && errno == 0 && text.find('-') == std::string::npos;
+        if (!valid) return EarlyAnswer{400, ErrorCode::invalid_argument, "the Content-Length header is not a number"};
+        if (n > config.max_upload_bytes)
+            return EarlyAnswer{413, ErrorCode::limit_exceeded,
+                               "the upload exceeds the limit of " + std::to_string(config.max_upload_bytes) + " bytes"};
+    }
+    return std::nullopt;
 }
 
 void write_port_file(const std::string& path, int port) {
@@ -58,6 +122,120 @@ void write_port_file(const std::string& path, int port) {
         if (!out) throw Error(ErrorCode::io, "cannot write port file " + path);
     }
     std::filesystem::rename(tmp, path);
+}
+
+void install_early_answers(GuardedServer& svr, const ServerConfig& config, const ApiKeys& keys) {
+    // An answer before the body is read (auth, encoding, declared size) also
+    // closes the connection: the unread body must not be parsed as a request.
+    // Captured by address: the objects live in run_server, beyond the server.
+    auto answer_early = [cfg = &config, k = &keys](const httplib::Request& req, httplib::Response& res,
+                                                   bool expecting) {
+        const std::optional<EarlyAnswer> a = check_before_body(req, *cfg, *k);
+        if (!a) return false;
+        if (!res.has_header("X-Request-Id")) {
+            const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
+            res.set_header("X-Request-Id", id);
+            note_request_start(id);
+        }
+        if (a->code == ErrorCode::unauthorized) res.set_header("WWW-Authenticate", "Bearer realm=\"nurbsrt\"");
+        send_problem_with_status(res, a->status, a->code, a->detail);
+        if (has_body(req)) {
+            GuardedServer::close_after_response();
+            res.set_header("Connection", "close");
+        }
+        // cpp-httplib writes the answer to an Expect: 100-continue without
+        // adding the body's length itself (its routed answers get one).
+        if (expecting) res.set_header("Content-Length", std::to_string(res.body.size()));
+        return true;
+    };
+    svr.set_pre_routing_handler([answer_early](const httplib::Request& req, httplib::Response& res) {
+        const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
+        res.set_header("X-Request-Id", id);
+        note_request_start(id);
+        return answer_early(req, res, false) ? httplib::Server::HandlerResponse::Handled
+                                      : httplib::Server::HandlerResponse::Unhandled;
+    });
+    // curl and browsers send large uploads with "Expect: 100-continue": answer
+    // those that will be refused before the client sends the body at all.
+    svr.set_expect_100_continue_handler([answer_early](const httplib::Request& req, httplib::Response& res) {
+        return answer_early(req, res, true) ? res.status : 100;
+    });
+}
+
+void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
+    // Statuses set by cpp-httplib itself (404 no route, 413 payload, 400 bad
+    // request line, a body read that failed) get a problem body too; handlers'
+    // own problems are kept. The body's status is always the response's.
+    svr.set_error_handler(httplib::Server::HandlerWithResponse([cfg = &config](const httplib::Request& req,
+                                                                              httplib::Response& res) {
+        const ServerConfig& config = *cfg;
+        if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+        if (!res.has_header("X-Request-Id")) res.set_header("X-Request-Id", new_request_id());
+        // cpp-httplib caps form-urlencoded bodies at 8 KiB and answers 413 itself;
+        // a CAD file sent that way has the wrong content type, not the wrong size.
+        if (res.status == 413 &&
+            req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {
+            send_problem(res, ErrorCode::unsupported_format,
+                         "form-urlencoded bodies are not accepted: send the file raw "
+                         "(application/octet-stream) or as multipart/form-data");
+            return httplib::Server::HandlerResponse::Handled;
+        }
+        const ReadFailure failure = GuardedServer::current_read_failure();
+        if (failure == ReadFailure::header_timeout) {
+            send_problem(res, ErrorCode::request_timeout,
+                         "the request headers did not arrive within " + format_seconds(config.header_timeout_s));
+            return httplib::Server::HandlerResponse::Handled;
+        }
+        if (failure == ReadFailure::body_timeout) {
+            send_problem(res, ErrorCode::request_timeout,
+                         "the request body did not arrive in time (at least " +
+                             std::to_string(static_cast<long long>(config.min_body_rate_bytes / 1024)) +
+                             " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");
+            return httplib::Server::HandlerResponse::Handled;
+        }
+        const int status = failure == ReadFailure::body_too_large     ? 413
+                           : failure == ReadFailure::header_too_large ? 431
+                                                                      : res.status;
+        const std::string detail = status == 413   ? "the upload exceeds the limit of " +
+                                                       std::to_string(config.max_upload_bytes) + " bytes"
+                                   : status == 404 ? "no such resource"
+                                   : status == 405 ? "method not allowed on this resource"
+                                   : status == 414 ? "the request target is too long"
+                                   : status == 431 ? "the request headers exceed " +
+                                                         std::to_string(kMaxRequestHeaderBytes) + " bytes"
+                                                   : "the request could not be handled";
+        send_problem_with_status(res, status, code_for_status(status), detail);
+        return httplib::Server::HandlerResponse::Handled;
+    }));
+    svr.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+        std::string what = "unexpected exception";
+        try {
+            if (ep) std::rethrow_exception(ep);
+        } catch (const std::exception& e) {
+            what = e.what();
+        } catch (...) {
+        }
+        send_problem(res, ErrorCode::internal, what);
+    });
+}
+
+void install_request_log(GuardedServer& svr, ServerContext& ctx) {
+    svr.set_logger([c = &ctx](const httplib::Request& req, const httplib::Response& res) {
+        const RequestNote note = take_request_note();
+        RequestLogEntry e;
+        e.request_id = res.get_header_value("X-Request-Id");
+        e.method = req.method;
+        e.route = route_of(req);
+        e.remote = req.remote_addr;
+        e.status = res.status;
+        e.duration_ms = note.elapsed_s * 1000.0;
+        e.bytes_in = req.body.size();
+        for (const auto& [name, part] : req.files) e.bytes_in += part.content.size();
+        e.bytes_out = res.body.size();
+        e.code = note.code;
+        log_request(e);
+        c->metrics.observe_request(e.route, res.status, note.elapsed_s);
+    });
 }
 
 }  // namespace
@@ -75,87 +253,17 @@ int run_server(const ServerConfig& config) {
 
     ApiKeys keys;
     if (!config.api_keys_file.empty()) keys.add_file(config.api_keys_file);
-    if (!config.api_keys.empty()) keys.add_list(config.api_keys);
+    if (config.api_keys) keys.add_list(*config.api_keys);
 
     ServerContext ctx(config);
     // Opened (and recovered) before listening: a bad job database stops the start.
     JobService jobs(ctx);
     ctx.jobs = &jobs;
-    httplib::Server svr;
-    const size_t threads = static_cast<size_t>(config.workers + config.max_queue + 4);
-    svr.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
-    svr.set_payload_max_length(config.max_upload_bytes);
-    svr.set_read_timeout(30, 0);
-    svr.set_write_timeout(30, 0);
-    svr.set_keep_alive_max_count(20);
+    GuardedServer svr(connection_limits(config));
 
-    svr.set_pre_routing_handler([&keys](const httplib::Request& req, httplib::Response& res) {
-        const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
-        res.set_header("X-Request-Id", id);
-        note_request_start(id);
-        if (keys.enabled() && !ApiKeys::is_public_path(req.path) &&
-            !keys.accepts(req.get_header_value("Authorization"))) {
-            res.set_header("WWW-Authenticate", "Bearer realm=\"nurbsrt\"");
-            send_problem(res, ErrorCode::unauthorized,
-                         req.has_header("Authorization")
-                             ? "the API key is not valid"
-                             : "this service requires an API key: send 'Authorization: Bearer <key>'");
-            return httplib::Server::HandlerResponse::Handled;
-        }
-        return httplib::Server::HandlerResponse::Unhandled;
-    });
-    // Statuses set by cpp-httplib itself (404 no route, 413 payload, 400 bad
-    // request line) get a problem body too; handlers' own problems are kept.
-    svr.set_error_handler(httplib::Server::HandlerWithResponse([&config](const httplib::Request& req,
-                                                                           httplib::Response& res) {
-        if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
-        if (!res.has_header("X-Request-Id")) res.set_header("X-Request-Id", new_request_id());
-        // cpp-httplib caps form-urlencoded bodies at 8 KiB and answers 413 itself;
-        // a CAD file sent that way has the wrong content type, not the wrong size.
-        if (res.status == 413 &&
-            req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {
-            send_problem(res, ErrorCode::unsupported_format,
-                         "form-urlencoded bodies are not accepted: send the file raw "
-                         "(application/octet-stream) or as multipart/form-data");
-            return httplib::Server::HandlerResponse::Handled;
-        }
-        const ErrorCode code = code_for_status(res.status);
-        const int status = res.status;
-        std::string detail = status == 413   ? "the upload exceeds the limit of " +
-                                                 std::to_string(config.max_upload_bytes) + " bytes"
-                             : status == 404 ? "no such resource"
-                             : status == 405 ? "method not allowed on this resource"
-                                             : "the request could not be handled";
-        send_problem(res, code, detail);
-        res.status = status;  // keep cpp-httplib's status (e.g. 405) when it differs from the code's
-        return httplib::Server::HandlerResponse::Handled;
-    }));
-    svr.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
-        std::string what = "unexpected exception";
-        try {
-            if (ep) std::rethrow_exception(ep);
-        } catch (const std::exception& e) {
-            what = e.what();
-        } catch (...) {
-        }
-        send_problem(res, ErrorCode::internal, what);
-    });
-    svr.set_logger([&ctx](const httplib::Request& req, const httplib::Response& res) {
-        const RequestNote note = take_request_note();
-        RequestLogEntry e;
-        e.request_id = res.get_header_value("X-Request-Id");
-        e.method = req.method;
-        e.route = route_of(req);
-        e.remote = req.remote_addr;
-        e.status = res.status;
-        e.duration_ms = note.elapsed_s * 1000.0;
-        e.bytes_in = req.body.size();
-        for (const auto& [name, part] : req.files) e.bytes_in += part.content.size();
-        e.bytes_out = res.body.size();
-        e.code = note.code;
-        log_request(e);
-        ctx.metrics.observe_request(e.route, res.status, note.elapsed_s);
-    });
+    install_early_answers(svr, config, keys);
+    install_error_answers(svr, config);
+    install_request_log(svr, ctx);
 
     add_render_routes(svr, ctx);
     add_conversion_routes(svr, ctx);
@@ -169,6 +277,7 @@ int run_server(const ServerConfig& config) {
     } else if (!svr.bind_to_port(config.host, port)) {
         throw Error(ErrorCode::io, "cannot listen on " + config.host + ":" + std::to_string(port));
     }
+    svr.raise_listen_backlog();
     if (!config.port_file.empty()) write_port_file(config.port_file, port);
 
     const nlohmann::json fields = {{"host", config.host},
@@ -183,6 +292,10 @@ int run_server(const ServerConfig& config) {
                                    {"import_timeout_s", config.import_timeout_s},
                                    {"cache_bytes", config.cache_bytes},
                                    {"api_keys", keys.size()},  // how many, never which
+                                   {"header_timeout_s", config.header_timeout_s},
+                                   {"min_body_rate_bytes", config.min_body_rate_bytes},
+                                   {"max_connections", config.max_connections},
+                                   {"max_connections_per_client", config.max_connections_per_client},
                                    {"job_runners", config.job_runners},
                                    {"max_queued_jobs", config.max_queued_jobs},
                                    {"job_retention_s", config.job_retention_s}};

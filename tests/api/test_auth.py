@@ -56,6 +56,27 @@ def test_short_key_refuses_to_start(tmp_path):
     assert "shorter than 16 characters" in p.stderr
 
 
+def test_keys_configured_but_empty_refuses_to_start(tmp_path):
+    """Auth fails closed: a keys file without a key (only a comment, empty: a
+    secret that did not get mounted) or an empty NURBSRT_API_KEYS stops the start
+    instead of serving everything unauthenticated."""
+    import os
+    import subprocess
+    keys = tmp_path / "keys"
+    cases = [("# only a comment\n\n   \n", None), ("", None), (None, ""), (None, " , ,")]
+    for text, env_keys in cases:
+        args = [os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--data-dir", str(tmp_path / "d")]
+        env = {k: v for k, v in os.environ.items() if k != "NURBSRT_API_KEYS"}
+        if text is not None:
+            keys.write_text(text)
+            args += ["--api-keys-file", str(keys)]
+        if env_keys is not None:
+            env["NURBSRT_API_KEYS"] = env_keys
+        p = subprocess.run(args, capture_output=True, text=True, timeout=60, env=env)
+        assert p.returncode != 0, (text, env_keys, p.stderr[-300:])
+        assert "holds no key" in p.stderr and "refusing to start without authentication" in p.stderr, p.stderr
+
+
 def test_no_keys_configured_needs_none(url):
     r = requests.get(url + "/metrics", timeout=TIMEOUT)
     assert r.status_code == 200
