@@ -54,6 +54,15 @@ void add_serve_command(CLI::App& app) {
         ->envname("NURBSRT_IMPORT_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--import-memory-mb", *import_memory_mb, "memory limit of an import/conversion process, MiB")
         ->envname("NURBSRT_IMPORT_MEMORY_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--import-max-entities", c->import_max_entities,
+                    "most entities a STEP/IGES upload may hold (checked before it is parsed; 422 beyond)")
+        ->envname("NURBSRT_IMPORT_MAX_ENTITIES")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--import-max-list-items", c->import_max_list_items,
+                    "most items in one STEP list or IGES parameter list of an upload (422 beyond)")
+        ->envname("NURBSRT_IMPORT_MAX_LIST_ITEMS")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--import-max-nesting", c->import_max_nesting,
+                    "deepest nesting of parentheses in a STEP upload (422 beyond)")
+        ->envname("NURBSRT_IMPORT_MAX_NESTING")->check(CLI::Range(1, 10000))->capture_default_str();
     cmd->add_option("--cache-mb", *cache_mb, "scene cache capacity, MiB (0: no cache)")
         ->envname("NURBSRT_CACHE_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--header-timeout", c->header_timeout_s,

@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
@@ -11,6 +12,7 @@
 
 #include <chrono>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -22,6 +24,10 @@
 
 namespace nurbsrt {
 namespace {
+
+// How often a running worker's should_stop is asked: a canceled job or a gone
+// client frees its worker within this time (plus the kill).
+constexpr int kStopPollMs = 100;
 
 std::string self_executable() {
     char buf[4096];
@@ -56,10 +62,13 @@ struct ScratchFiles {
 // Waits for `pid` for at most `seconds`; returns true and fills `status` when it
 // exited. Uses a pidfd so the wait is an event, not a polling loop; falls back
 // to short sleeps on kernels without pidfd_open.
-bool wait_with_timeout(pid_t pid, double seconds, int& status) {
+bool wait_with_timeout(pid_t pid, double seconds, int& status, const std::function<bool()>& should_stop,
+                       bool& stopped) {
     using clock = std::chrono::steady_clock;
     const auto deadline = clock::now() + std::chrono::duration<double>(seconds);
     const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid, 0));
+    const long long step_ms = should_stop ? kStopPollMs : 1000;
+    stopped = false;
     for (;;) {
         const pid_t r = waitpid(pid, &status, WNOHANG);
         if (r == pid) {
@@ -71,13 +80,14 @@ bool wait_with_timeout(pid_t pid, double seconds, int& status) {
             throw Error(ErrorCode::internal, std::string("waitpid: ") + std::strerror(errno));
         }
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - clock::now()).count();
-        if (left <= 0) {
+        stopped = should_stop && should_stop();
+        if (left <= 0 || stopped) {
             if (pidfd >= 0) close(pidfd);
             return false;
         }
         if (pidfd >= 0) {
             pollfd p{pidfd, POLLIN, 0};
-            poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000)));
+            poll(&p, 1, static_cast<int>(std::min<long long>(left, step_ms)));
         } else {
             std::this_thread::sleep_for(std::chrono::milliseconds(std::min<long long>(left, 5)));
         }
@@ -149,9 +159,21 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
 
+    // CPU seconds: the wall-clock limit on every core (meshing may run
+    // threads), plus one; the soft limit sends SIGXCPU, the hard one SIGKILL.
+    const double cores = std::max(1u, std::thread::hardware_concurrency());
+    const rlim_t cpu_s = static_cast<rlim_t>(std::ceil(limits.time_limit_s * cores)) + 1;
+    const pid_t parent = getpid();
     const pid_t pid = fork();
     if (pid < 0) throw Error(ErrorCode::internal, std::string("fork: ") + std::strerror(errno));
     if (pid == 0) {
+        // Die with the service (the forking thread waits for us until we end,
+        // so the thread-based death signal fires only when the service dies);
+        // the parent may have died before the prctl: then end now.
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(126);
+        rlimit cpu{cpu_s, cpu_s + 1};
+        setrlimit(RLIMIT_CPU, &cpu);
         if (limits.memory_limit_bytes > 0) {
             rlimit rl{limits.memory_limit_bytes, limits.memory_limit_bytes};
             setrlimit(RLIMIT_AS, &rl);
@@ -170,11 +192,19 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
     }
 
     int status = 0;
-    if (!wait_with_timeout(pid, limits.time_limit_s, status)) {
+    bool stopped = false;
+    if (!wait_with_timeout(pid, limits.time_limit_s, status, limits.should_stop, stopped)) {
         kill(pid, SIGKILL);
         waitpid(pid, &status, 0);
+        if (stopped) throw Error(ErrorCode::canceled, what + " of '" + subject + "' was canceled");
         std::ostringstream msg;
         msg << what << " of '" << subject << "' did not finish within " << limits.time_limit_s << " s";
+        throw Error(ErrorCode::import_timeout, msg.str());
+    }
+    if (WIFSIGNALED(status) && WTERMSIG(status) == SIGXCPU) {
+        std::ostringstream msg;
+        msg << what << " of '" << subject << "' used more CPU time than its limit of " << limits.time_limit_s
+            << " s per core";
         throw Error(ErrorCode::import_timeout, msg.str());
     }
     if (WIFSIGNALED(status)) {
@@ -210,6 +240,12 @@ void apply_fault_hook() {
     }
 }
 
+// Files that are neither STEP nor IGES are left to the worker's own, precise error.
+void prescan_input(const std::string& path, const IsolationLimits& limits) {
+    const CadFormat format = detect_format(path);
+    if (format != CadFormat::unknown) prescan_cad_file(path, format, limits.prescan);
+}
+
 void write_error_file(const std::string& path, ErrorCode code, const std::string& message) {
     std::ofstream e(path, std::ios::binary | std::ios::trunc);
     e << error_code_name(code) << '\n' << message;
@@ -219,6 +255,7 @@ void write_error_file(const std::string& path, ErrorCode code, const std::string
 
 Scene import_isolated(const std::string& path, const ImportOptions& options,
                       const IsolationLimits& limits) {
+    prescan_input(path, limits);
     const std::string exe = limits.worker_executable.empty() ? self_executable() : limits.worker_executable;
     ScratchFiles scratch;
     make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-import");
@@ -230,6 +267,7 @@ Scene import_isolated(const std::string& path, const ImportOptions& options,
 
 ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
                                const IsolationLimits& limits) {
+    prescan_input(in_path, limits);
     const std::string exe = limits.worker_executable.empty() ? self_executable() : limits.worker_executable;
     ScratchFiles scratch;  // here: the worker's report (and its error file)
     make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-convert");

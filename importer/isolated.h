@@ -5,13 +5,18 @@
 // (cli/cmd_import_worker.cpp), under an address-space limit; the parent waits
 // with a wall-clock limit, kills the child when it runs over, and reads the
 // serialized scene (renderer/scene_io.h) or the typed error the child wrote.
+// The child dies with its parent (PR_SET_PDEATHSIG: a killed service leaves no
+// worker writing files behind it) and has a CPU-time limit of the wall-clock
+// limit, so even an orphan cannot run on.
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "importer/importer.h"
+#include "importer/prescan.h"
 
 namespace nurbsrt {
 
@@ -20,6 +25,13 @@ struct IsolationLimits {
     size_t memory_limit_bytes = size_t(8) << 30;      // RLIMIT_AS of the child; 0 = none
     std::string worker_executable;                    // empty: this process's own binary
     std::string scratch_dir;                          // empty: $TMPDIR or /tmp
+    // Polled about every kStopPollMs while the child runs; when it returns true
+    // the child is killed and the call throws Error(canceled) (a deleted job,
+    // a client that went away). Empty: never.
+    std::function<bool()> should_stop;
+    // The input's text is pre-scanned in this process before any child starts
+    // (importer/prescan.h): absurd files are refused with unreadable_file.
+    PrescanLimits prescan;
 };
 
 // Runs import_file(path, options) in a child process. Throws nurbsrt::Error with

@@ -25,6 +25,8 @@ void ServerConfig::validate() const {
     if (max_connections < 1 || max_connections > 100000) fail("max connections must be in 1..100000");
     if (max_connections_per_client < 1 || max_connections_per_client > max_connections)
         fail("max connections per client must be in 1..max connections");
+    if (import_max_entities < 1 || import_max_list_items < 1) fail("import pre-scan limits must be positive");
+    if (import_max_nesting < 1 || import_max_nesting > 10000) fail("import max nesting must be in 1..10000");
     if (job_runners < 1 || job_runners > 256) fail("job runners must be in 1..256");
     if (max_queued_jobs < 1) fail("max queued jobs must be positive");
     if (max_job_files < 1 || max_job_files > 10000) fail("max job files must be in 1..10000");

@@ -30,6 +30,10 @@ struct ServerConfig {
     double render_timeout_s = 120;   // the render itself (Newton, map, shading)
     double import_timeout_s = 120;   // import / conversion child process, wall clock
     size_t import_memory_bytes = size_t(4) << 30;
+    // Pre-scan of an upload's text before any import (importer/prescan.h: why these defaults).
+    size_t import_max_entities = 20'000'000;
+    size_t import_max_list_items = 500'000;
+    int import_max_nesting = 32;
 
     size_t cache_bytes = size_t(512) << 20;  // scene cache capacity (0: no cache)
 

@@ -307,6 +307,17 @@ void GuardedServer::close_after_response() {
     if (t_connection) t_connection->close_requested = true;
 }
 
+std::function<bool()> GuardedServer::client_gone_check() {
+    if (!t_connection) return {};
+    const socket_t sock = t_connection->sock;
+    // POLLRDHUP: the peer closed its side. HTTP/1.1 clients do not half-close
+    // while they wait for an answer, so this means nobody will read it.
+    return [sock] {
+        pollfd p{sock, POLLRDHUP, 0};
+        return ::poll(&p, 1, 0) > 0 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR)) != 0;
+    };
+}
+
 int GuardedServer::open_connections() const {
     std::lock_guard lock(tracker_->mutex);
     return tracker_->total;

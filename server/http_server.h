@@ -25,6 +25,7 @@
 #include <httplib.h>
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -61,6 +62,10 @@ public:
     // (an early answer before the body was read).
     static ReadFailure current_read_failure();
     static void close_after_response();
+    // On a handler's thread: a check, cheap enough to poll, that is true once
+    // the client of the current request has closed or reset its connection (so
+    // its render or conversion can stop). Valid while the handler runs.
+    static std::function<bool()> client_gone_check();
 
     // Connections open now (for metrics and tests).
     int open_connections() const;

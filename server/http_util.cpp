@@ -66,13 +66,23 @@ bool wants_json(const httplib::Request& req) {
 Upload read_upload(const httplib::Request& req) {
     using nlohmann::json;
     json options = json::object();
-    for (const auto& [k, v] : req.params) options[k] = v;
+    for (const auto& [k, v] : req.params) {
+        // A repeated parameter or part is refused, never resolved silently one way.
+        if (options.contains(k))
+            throw Error(ErrorCode::invalid_argument, "query parameter '" + k.substr(0, 64) + "' is given more than once");
+        options[k] = v;
+    }
 
     Upload up;
     if (req.is_multipart_form_data()) {
         const auto file = req.files.find("file");
         if (file == req.files.end())
             throw Error(ErrorCode::invalid_argument, "multipart upload without a 'file' part");
+        for (const char* name : {"file", "options"})
+            if (req.files.count(name) > 1)
+                throw Error(ErrorCode::invalid_argument,
+                            std::string("more than one '") + name + "' part: send one file and one options part "
+                                                                  "(several files: POST /v1/jobs)");
         up.bytes = &file->second.content;
         if (const auto part = req.files.find("options"); part != req.files.end()) {
             const json o = json::parse(part->second.content, nullptr, false);
@@ -104,9 +114,9 @@ Upload read_upload(const httplib::Request& req) {
 std::string without_service_paths(const std::string& message, const ServerContext& ctx) {
     std::string data = ctx.config.data_dir;
     while (data.size() > 1 && data.back() == '/') data.pop_back();
-    // Longest first: the scratch dir usually lies inside the data dir.
+    // Scratch files first: the scratch dir usually lies inside the data dir.
     auto dir_prefix = [](const std::string& d) { return d.empty() ? d : d + "/"; };  // "" erases nothing
-    return without_prefixes(message, {dir_prefix(ctx.scratch.path()), dir_prefix(data)});
+    return without_prefixes(with_scratch_files_named(message, ctx.scratch.path()), {dir_prefix(data)});
 }
 
 }  // namespace nurbsrt::server

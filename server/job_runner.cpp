@@ -64,9 +64,10 @@ void sync_dir(const std::string& dir) {
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
 
 // An error message for the client: the service's own paths (the job and
-// scratch directories) are cut out, leaving the generated file names.
+// scratch directories) are cut out: job files keep their public names
+// (artifacts, input-N.cad), scratch files are named by what they are.
 std::string without_paths(const std::string& message, const std::string& dir, const std::string& scratch) {
-    return without_prefixes(message, {dir + "/partial-", dir + "/", scratch + "/"});
+    return without_prefixes(with_scratch_files_named(message, scratch), {dir + "/partial-", dir + "/"});
 }
 
 }  // namespace
@@ -93,6 +94,12 @@ JobService::JobService(ServerContext& ctx) : ctx_(ctx), jobs_dir_(ctx.config.dat
         if (valid_job_id(name) && !known.count(name)) orphans.push_back(name);
     }
     for (const std::string& id : orphans) remove_files(id);
+    // Partial artifacts of outputs cut short (a killed service): no output runs
+    // before start(), so none of them belongs to anyone.
+    for (const std::string& id : ids) {
+        for (const auto& entry : fs::directory_iterator(job_dir(id), ec))
+            if (entry.path().filename().string().rfind("partial-", 0) == 0) fs::remove(entry.path(), ec);
+    }
     sweep();
 }
 
@@ -327,7 +334,9 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
     } else {
         ConvertReport report;
         try {
-            report = convert_isolated(input, partial, isolation_limits(ctx_));
+            IsolationLimits limits = isolation_limits(ctx_);
+            limits.should_stop = [cancel] { return cancel->load(); };  // a deleted job's child is killed
+            report = convert_isolated(input, partial, limits);
         } catch (const Error& e) {
             ctx_.metrics.count_import_failure(error_code_name(e.code()));
             std::error_code ec;

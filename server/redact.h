@@ -12,4 +12,10 @@ namespace nurbsrt::server {
 // (give a longer prefix before one it contains).
 std::string without_prefixes(std::string message, std::initializer_list<std::string> prefixes);
 
+// `message` with every path of a file in the scratch directory `dir` replaced by
+// what the file is to the client ("the upload", "the converted file", "a scratch
+// file"): the generated names (upload-qM81Gn.cad) mean nothing to a client and
+// are the service's business.
+std::string with_scratch_files_named(std::string message, const std::string& dir);
+
 }  // namespace nurbsrt::server

@@ -50,6 +50,11 @@ Vec3 vec3(const json& v, const std::string& key) {
         bad("option '" + key + "' must be an array of 3 numbers");
     }
     if (!std::isfinite(r.x) || !std::isfinite(r.y) || !std::isfinite(r.z)) bad("option '" + key + "' must be finite");
+    // 1e12 mm is a million km: beyond any part, and far enough from DBL_MAX that
+    // differences of two points stay finite (1e308 overflowed into "must differ").
+    constexpr double kMaxCoordinate = 1e12;
+    if (std::abs(r.x) > kMaxCoordinate || std::abs(r.y) > kMaxCoordinate || std::abs(r.z) > kMaxCoordinate)
+        bad("option '" + key + "' has a coordinate beyond +-1e12 (model units, mm)");
     return r;
 }
 
@@ -92,6 +97,36 @@ json parse_object(const std::string& options_json) {
     return o;
 }
 
+CameraSpec base_spec(const RenderRequest& r) {
+    CameraSpec base;
+    base.width = r.width;
+    base.height = r.height;
+    base.projection = r.projection;
+    if (r.fov_deg) base.fov_deg = *r.fov_deg;
+    return base;
+}
+
+// The request's explicit camera values over a fitted view.
+CameraSpec with_explicit_values(const RenderRequest& r, CameraSpec spec) {
+    if (r.eye) spec.eye = *r.eye;
+    if (r.target) spec.target = *r.target;
+    if (r.up) spec.up = *r.up;
+    if (r.ortho_height) spec.ortho_height = *r.ortho_height;
+    return spec;
+}
+
+// Every camera check that needs no scene (up along the view direction, eye at
+// the target, field of view, orthographic height), made by the renderer's own
+// Camera on the view fitted to a unit box: a job's options are refused before
+// 202 exactly as /v1/renders would refuse them later.
+void check_camera_without_scene(const RenderRequest& r) {
+    BBox unit;
+    unit.extend(Vec3{-1, -1, -1});
+    unit.extend(Vec3{1, 1, 1});
+    const Camera checked(with_explicit_values(r, named_view(r.view, unit, base_spec(r))));
+    (void)checked;
+}
+
 }  // namespace
 
 RenderRequest parse_render_options(const std::string& options_json) {
@@ -125,21 +160,12 @@ RenderRequest parse_render_options(const std::string& options_json) {
             camera_field(r, key, v);
         }
     }
+    check_camera_without_scene(r);
     return r;
 }
 
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
-    CameraSpec base;
-    base.width = r.width;
-    base.height = r.height;
-    base.projection = r.projection;
-    if (r.fov_deg) base.fov_deg = *r.fov_deg;
-    CameraSpec spec = fit_view(r.view, scene, base);
-    if (r.eye) spec.eye = *r.eye;
-    if (r.target) spec.target = *r.target;
-    if (r.up) spec.up = *r.up;
-    if (r.ortho_height) spec.ortho_height = *r.ortho_height;
-    return spec;
+    return with_explicit_values(r, fit_view(r.view, scene, base_spec(r)));
 }
 
 ConversionFormat parse_conversion_format(const std::string& options_json) {

@@ -52,7 +52,8 @@ std::shared_ptr<const Scene> scene_for(ServerContext& ctx, const std::string& by
 // handed out twice.
 RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> scene, const Camera& camera,
                             RenderOptions options, std::shared_ptr<AdmissionGate::Ticket> ticket,
-                            const std::shared_ptr<const std::atomic<bool>>& external_cancel) {
+                            const std::shared_ptr<const std::atomic<bool>>& external_cancel,
+                            const std::function<bool()>& should_stop) {
     auto cancel = std::make_shared<std::atomic<bool>>(false);
     options.cancel = cancel;
     auto task = std::make_shared<std::packaged_task<RenderResult()>>(
@@ -65,7 +66,7 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> sce
     // deadline (a 50 ms step would let a short limit pass unnoticed).
     while (result.wait_until(std::min(clock_type::now() + std::chrono::milliseconds(50), deadline)) !=
            std::future_status::ready) {
-        if (external_cancel && external_cancel->load()) {
+        if ((external_cancel && external_cancel->load()) || (should_stop && should_stop())) {
             cancel->store(true);
             throw Error(ErrorCode::canceled, "the render was canceled");
         }
@@ -109,7 +110,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     if (r.background)
         options.background = {static_cast<float>(r.background->x), static_cast<float>(r.background->y),
                               static_cast<float>(r.background->z)};
-    const RenderResult result = render_bounded(ctx, scene, camera, options, ticket, control.cancel);
+    const RenderResult result = render_bounded(ctx, scene, camera, options, ticket, control.cancel, control.should_stop);
 
     const auto te = clock_type::now();
     {

@@ -28,6 +28,9 @@ struct RenderControl {
     // Set by the caller to stop the render (a deleted job); the render then ends
     // with Error(canceled) at its next block of rows.
     std::shared_ptr<const std::atomic<bool>> cancel;
+    // Polled by the waiting caller's thread (about every 50 ms): true stops the
+    // render the same way (a client that disconnected).
+    std::function<bool()> should_stop;
     // Fraction done in (0, 1], from the rendering threads.
     std::function<void(double)> progress;
     // When the request started (for the `total` timing); default: the call.

@@ -11,6 +11,7 @@
 #include "renderer/error.h"
 #include "server/base64.h"
 #include "server/context.h"
+#include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/render_options.h"
 #include "server/routes.h"
@@ -34,7 +35,9 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     const TempFile out = ctx.scratch.create("converted", conversion_format_extension(format));
     ConvertReport report;
     try {
-        report = convert_isolated(in.path(), out.path(), isolation_limits(ctx));
+        IsolationLimits limits = isolation_limits(ctx);
+        limits.should_stop = GuardedServer::client_gone_check();  // a gone client's conversion is killed
+        report = convert_isolated(in.path(), out.path(), limits);
     } catch (const Error& e) {
         ctx.metrics.count_import_failure(error_code_name(e.code()));
         throw;

@@ -11,6 +11,7 @@
 #include "renderer/error.h"
 #include "server/base64.h"
 #include "server/context.h"
+#include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/render_options.h"
 #include "server/render_service.h"
@@ -32,6 +33,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
 
     RenderControl control;
     control.start = t0;
+    control.should_stop = GuardedServer::client_gone_check();  // a gone client's render stops
     const RenderedImage rendered = render_upload(ctx, bytes, r, admit(ctx), control);
     const std::string& image = rendered.bytes;
     const bool cache_hit = rendered.cache_hit;

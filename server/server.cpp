@@ -44,6 +44,16 @@ std::string route_of(const httplib::Request& req) {
     return "other";
 }
 
+// The methods a known route answers (for 405 and its Allow header); "" for
+// "other" (no such resource: 404).
+const char* allowed_methods(const std::string& route) {
+    if (route == "/v1/renders" || route == "/v1/conversions") return "POST";
+    if (route == "/v1/jobs") return "GET, POST";
+    if (route == "/v1/jobs/{id}") return "GET, DELETE";
+    if (route == "other") return "";
+    return "GET";  // probes, metrics, the API document, artifacts
+}
+
 ErrorCode code_for_status(int status) {
     switch (status) {
         case 404: case 405: return ErrorCode::not_found;
@@ -193,8 +203,12 @@ void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
                              " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");
             return httplib::Server::HandlerResponse::Handled;
         }
+        // A known resource asked with another method: 405 with what it allows.
+        const char* allow = res.status == 404 ? allowed_methods(route_of(req)) : "";
+        if (*allow) res.set_header("Allow", allow);
         const int status = failure == ReadFailure::body_too_large     ? 413
                            : failure == ReadFailure::header_too_large ? 431
+                           : *allow                                   ? 405
                                                                       : res.status;
         const std::string detail = status == 413   ? "the upload exceeds the limit of " +
                                                        std::to_string(config.max_upload_bytes) + " bytes"

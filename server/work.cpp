@@ -21,6 +21,9 @@ IsolationLimits isolation_limits(const ServerContext& ctx) {
     l.time_limit_s = ctx.config.import_timeout_s;
     l.memory_limit_bytes = ctx.config.import_memory_bytes;
     l.scratch_dir = ctx.scratch.path();
+    l.prescan.max_entities = ctx.config.import_max_entities;
+    l.prescan.max_list_items = ctx.config.import_max_list_items;
+    l.prescan.max_nesting = ctx.config.import_max_nesting;
     return l;
 }
 

@@ -15,8 +15,12 @@ TEST(ServicePaths, ErrorMessagesLoseTheDataAndScratchDirectories) {
     ServerContext ctx(c);
     const std::string scratch = ctx.scratch.path();
     ASSERT_EQ(scratch.rfind(dir, 0), 0u) << scratch;
-    EXPECT_EQ(without_service_paths("cannot read " + scratch + "/upload-1.cad: truncated", ctx),
-              "cannot read upload-1.cad: truncated");
+    EXPECT_EQ(without_service_paths("cannot read " + scratch + "/upload-qM81Gn.cad: truncated", ctx),
+              "cannot read the upload: truncated");
+    EXPECT_EQ(without_service_paths("import of '" + scratch + "/upload-x1.cad' into '" + scratch +
+                                        "/nurbsrt-import-AbC' failed; cannot write " + scratch + "/converted-Q.stl",
+                                    ctx),
+              "import of 'the upload' into 'a scratch file' failed; cannot write the converted file");
     EXPECT_EQ(without_service_paths("cannot open " + dir + "/jobs/ab/in-0 and " + dir + "/jobs.db", ctx),
               "cannot open jobs/ab/in-0 and jobs.db");
     EXPECT_EQ(without_service_paths("no path here", ctx), "no path here");
