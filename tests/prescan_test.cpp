@@ -31,6 +31,13 @@ std::string step_with_data(const std::string& data) {
            data + "ENDSEC;\nEND-ISO-10303-21;\n";
 }
 
+// A POLYLINE entity whose point list has `items` items.
+std::string polyline(int items) {
+    std::string line = "#1=POLYLINE('',(";
+    for (int i = 1; i < items; ++i) line += "#2,";
+    return line + "#2));\n";
+}
+
 ErrorCode refusal(const std::string& path, CadFormat f, const PrescanLimits& limits) {
     try {
         prescan_cad_file(path, f, limits);
@@ -55,10 +62,7 @@ TEST(Prescan, StepCountsEntitiesListsAndNesting) {
 }
 
 TEST(Prescan, StepRefusesHugeListsDeepNestingAndTooManyEntities) {
-    std::string big = "#1=POLYLINE('',(";
-    for (int i = 0; i < 2000; ++i) big += "#2,";
-    big += "#2));\n";
-    const std::string list = write_temp("list.step", step_with_data(big));
+    const std::string list = write_temp("list.step", step_with_data(polyline(2001)));
     PrescanLimits limits;
     limits.max_list_items = 1000;
     EXPECT_EQ(refusal(list, CadFormat::step, limits), ErrorCode::unreadable_file);
@@ -83,10 +87,7 @@ TEST(Prescan, StepRefusesHugeListsDeepNestingAndTooManyEntities) {
 }
 
 TEST(Prescan, ImportIsolatedRefusesBeforeAnyChildStarts) {
-    std::string big = "#1=POLYLINE('',(";
-    for (int i = 0; i < 3000; ++i) big += "#2,";
-    big += "#2));\n";
-    const std::string path = write_temp("refused.step", step_with_data(big));
+    const std::string path = write_temp("refused.step", step_with_data(polyline(3001)));
     IsolationLimits limits;
     limits.prescan.max_list_items = 1000;
     limits.worker_executable = "/nonexistent/worker";  // a started child would fail differently
