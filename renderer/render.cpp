@@ -32,9 +32,25 @@ double ms_since(Clock::time_point t0) {
 struct PixelHit {
     uint32_t face = 0;       // 0: no hit
     float u = 0, v = 0;
+    // Unit shading normal (oriented by the face) from the solve's last partials;
+    // (0, 0, 0) where they were degenerate: shading then takes surface_normal's limits.
+    float nx = 0, ny = 0, nz = 0;
     double t = std::numeric_limits<double>::infinity();
     uint8_t iterations = 0;
 };
+
+// Fills a hit of face `id` at (u, v), distance t, normal from the partials there.
+void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, Vec3 Cv, PixelHit& hit) {
+    hit.face = id;
+    hit.u = static_cast<float>(u);
+    hit.v = static_cast<float>(v);
+    hit.t = t;
+    Vec3 n;
+    if (!normal_from_partials(f.surface, Cu, Cv, f.reversed, n)) n = {0, 0, 0};
+    hit.nx = static_cast<float>(n.x);
+    hit.ny = static_cast<float>(n.y);
+    hit.nz = static_cast<float>(n.z);
+}
 
 enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLeftDomain, kBehind, kTrimmed, kNearTrim };
 
@@ -75,10 +91,7 @@ struct Solver {
             if (!near || !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return kTrimmed;
             o = kNearTrim;
         }
-        hit.face = id;
-        hit.u = static_cast<float>(r.u);
-        hit.v = static_cast<float>(r.v);
-        hit.t = r.t;
+        set_hit(scene.faces[id - 1], id, r.u, r.v, r.t, r.Cu, r.Cv, hit);
         return o;
     }
     // Adjacent faces of a CAD model meet only within their edges' tolerance: a ray
@@ -99,10 +112,7 @@ struct Solver {
         const double gap = length(q - t * ray.dir);
         const double band = ff.near_uv * std::max(length(c.Pu), length(c.Pv));
         if (!(t > 0) || !(gap <= band)) return false;
-        hit.face = id;
-        hit.u = static_cast<float>(r.u);
-        hit.v = static_cast<float>(r.v);
-        hit.t = t;
+        set_hit(scene.faces[id - 1], id, r.u, r.v, t, c.Pu, c.Pv, hit);
         return true;
     }
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
@@ -569,7 +579,10 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
             }
             const Face& f = scene.faces[h.face - 1];
             const Vec3 dir = camera.pixel_ray(i, j).dir;
-            Vec3 n = surface_normal(f.surface, h.u, h.v, f.reversed);
+            // The solve's normal (exact at the double-precision hit); the limits
+            // of surface_normal only where its partials were degenerate.
+            Vec3 n{h.nx, h.ny, h.nz};
+            if (n.x == 0 && n.y == 0 && n.z == 0) n = surface_normal(f.surface, h.u, h.v, f.reversed);
             if (dot(n, dir) > 0) n = -n;  // two-sided: light the side facing the viewer
             Color c = f.color;
             if (!f.has_color && f.body < scene.bodies.size() && scene.bodies[f.body].has_color)
