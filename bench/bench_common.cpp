@@ -70,7 +70,7 @@ const RenderResult& exact_render(BenchContext& ctx, BenchScene& s) {
         const RenderOptions o = ctx.render_options(NewtonMethod::proposed);
         std::shared_ptr<RenderResult> r;
         for (int k = 0; k < ctx.runs; ++k) {
-            r = std::make_shared<RenderResult>(render(s.scene, cam, o));
+            r = std::make_shared<RenderResult>(render(s.prepared(), cam, o));
             s.exact_frame_ms.push_back(r->stats.total_ms);
         }
         s.exact = r;

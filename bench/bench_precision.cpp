@@ -14,7 +14,7 @@ void run_precision(BenchContext& ctx) {
         const Camera cam(ctx.camera(sc, ctx.size));
         for (NewtonMethod method : {NewtonMethod::proposed, NewtonMethod::martin}) {
             std::vector<RenderStats> runs[2];
-            for (MapPrecision p : precs) render(sc.scene, cam, ctx.render_options(method, p));  // warm-up
+            for (MapPrecision p : precs) render(sc.prepared(), cam, ctx.render_options(method, p));  // warm-up
             double spent[2] = {0, 0};
             constexpr int kMaxRuns = 100;
             for (int r = 0; r < kMaxRuns && (r < ctx.runs || std::min(spent[0], spent[1]) < ctx.min_ms); ++r)
@@ -22,7 +22,7 @@ void run_precision(BenchContext& ctx) {
                     const int m = (r % 2 == 0) ? k : 1 - k;
                     ctx.say("precision %s %s: run %d (min %d) %s", sc.key.c_str(), newton_method_name(method), r + 1,
                             ctx.runs, map_precision_name(precs[m]));
-                    runs[m].push_back(render(sc.scene, cam, ctx.render_options(method, precs[m])).stats);
+                    runs[m].push_back(render(sc.prepared(), cam, ctx.render_options(method, precs[m])).stats);
                     spent[m] += runs[m].back().total_ms;
                 }
             nlohmann::json row;

@@ -24,7 +24,7 @@ struct Timed {
     // Times one frame, with the process CPU time it used.
     void run(const BenchScene& sc, const Camera& cam, const RenderOptions& o) {
         const double c0 = process_cpu_ms();
-        const RenderStats s = render(sc.scene, cam, o).stats;
+        const RenderStats s = render(sc.prepared(), cam, o).stats;
         cpu.push_back(process_cpu_ms() - c0);
         add(s);
     }
@@ -46,7 +46,7 @@ struct Timed {
 };
 
 Timed time_frames(const BenchScene& sc, const Camera& cam, const RenderOptions& o, int runs) {
-    render(sc.scene, cam, o);  // warm-up (map context and FBO of this size)
+    render(sc.prepared(), cam, o);  // warm-up (map context and FBO of this size)
     Timed t;
     for (int r = 0; r < runs; ++r) t.run(sc, cam, o);
     return t;
@@ -107,7 +107,7 @@ void run_scaling(BenchContext& ctx) {
     for (const BenchScene& sc : ctx.scenes) {
         const Camera cam(ctx.camera(sc, ctx.size));
         Timed t[2];
-        for (int k = 0; k < 2; ++k) render(sc.scene, cam, ctx.render_options(NewtonMethod::proposed, MapPrecision::float32, k + 1));
+        for (int k = 0; k < 2; ++k) render(sc.prepared(), cam, ctx.render_options(NewtonMethod::proposed, MapPrecision::float32, k + 1));
         for (int r = 0; r < ctx.runs; ++r)
             for (int k = 0; k < 2; ++k) {
                 const int m = (r % 2 == 0) ? k : 1 - k;

@@ -64,7 +64,7 @@ void run_table1(BenchContext& ctx) {
         const RenderOptions opt[2] = {ctx.render_options(NewtonMethod::proposed),
                                       ctx.render_options(NewtonMethod::martin)};
         // One untimed frame per method: first-use costs (GL context, page faults).
-        for (const RenderOptions& o : opt) render(sc.scene, cam, o);
+        for (const RenderOptions& o : opt) render(sc.prepared(), cam, o);
         std::vector<RenderStats> runs[2];
         std::vector<double> cpu[2];
         double spent[2] = {0, 0};
@@ -74,7 +74,7 @@ void run_table1(BenchContext& ctx) {
                 const int m = (r % 2 == 0) ? k : 1 - k;  // P M, M P, P M, ...
                 ctx.say("table1 %s: run %d (min %d) %s", sc.key.c_str(), r + 1, ctx.runs, m == 0 ? "proposed" : "martin");
                 const double c0 = process_cpu_ms();
-                RenderResult res = render(sc.scene, cam, opt[m]);
+                RenderResult res = render(sc.prepared(), cam, opt[m]);
                 cpu[m].push_back(process_cpu_ms() - c0);
                 runs[m].push_back(res.stats);
                 spent[m] += res.stats.total_ms;

@@ -50,6 +50,28 @@ Vec4 Camera::project_h(Vec4 pw) const {
     return {k * dot(r_, d), k * dot(u_, d), pw.w, dot(f_, d)};
 }
 
+void Camera::model_partials(const Vec4& P, const Vec4& Pu, const Vec4& Pv, Vec3& Cu, Vec3& Cv) const {
+    // Inverse of project_h relative to the eye: (d, w) with d = S.xyz - w eye.
+    auto unproject = [&](const Vec4& p, Vec3& d, double& w) {
+        if (perspective()) {
+            d = (tan_half_ * p.x) * r_ + (tan_half_ * p.y) * u_ + p.z * f_;
+            w = p.w;
+        } else {
+            const double k = 0.5 * spec_.ortho_height;
+            d = (k * p.x) * r_ + (k * p.y) * u_ + p.w * f_;
+            w = p.z;
+        }
+    };
+    Vec3 d, du, dv;
+    double w, wu, wv;
+    unproject(P, d, w);
+    unproject(Pu, du, wu);
+    unproject(Pv, dv, wv);
+    const Vec3 c = d / w;  // C - eye
+    Cu = (du - wu * c) / w;
+    Cv = (dv - wv * c) / w;
+}
+
 double Camera::hit_distance_from_depth(double depth_along_f, ScreenPoint s) const {
     if (!perspective()) return depth_along_f;
     // dir = (f + tan (sx r + sy u)) / L with L = sqrt(1 + tan^2 (sx^2 + sy^2)), so f.dir = 1/L.

@@ -76,6 +76,14 @@ public:
     // same knots whose (X, Y, D) are the paper's (x, y, w) of eq. (8)-(11).
     Vec4 project_h(Vec4 pw) const;
 
+    // The model-space rational partials C_u, C_v of C = S / w at a point of a
+    // projected surface (project_surface), from its projected homogeneous point P
+    // and partials P_u, P_v: project_h is linear and invertible, so the model
+    // partials are its inverse applied to P_u, P_v, and by the quotient rule
+    // (Piegl & Tiller, The NURBS Book, eq. 4.7) C_u = (d_u - (d / w) w_u) / w with
+    // d = S.xyz - w eye (the eye cancels, so no large coordinates are subtracted).
+    void model_partials(const Vec4& P, const Vec4& Pu, const Vec4& Pv, Vec3& Cu, Vec3& Cv) const;
+
     // Depth along f of a projected homogeneous point (any point of the projected surface).
     double depth(Vec4 projected) const {
         return perspective() ? projected.z / projected.w : projected.w / projected.z;

@@ -47,6 +47,8 @@ void GlContext::make_current() {
         fail("OSMesa", "OSMesaMakeCurrent failed");
 }
 
+void GlContext::release_current() { OSMesaMakeCurrent(nullptr, nullptr, GL_UNSIGNED_BYTE, 0, 0); }
+
 unsigned int GlContext::link_program(const char* vertex_src, const char* fragment_src, const std::string& who) {
     make_current();
     const GLuint vs = compile(GL_VERTEX_SHADER, vertex_src, who);

@@ -19,6 +19,9 @@ public:
 
     // Makes the context current on the calling thread (one thread at a time).
     void make_current();
+    // Makes no context current on the calling thread, so that this context may
+    // next be made current on another thread (a context is current in one thread at most).
+    static void release_current();
     // Compiles and links a vertex + fragment shader program; throws Error(internal)
     // with the compiler's log, prefixed by `who`.
     unsigned int link_program(const char* vertex_src, const char* fragment_src, const std::string& who);

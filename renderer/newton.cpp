@@ -130,6 +130,7 @@ NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera
         res.iterations = it;
         if (r < params.eps) {                                                  // (12)
             res.t = camera.hit_distance_from_depth(camera.depth(d.S), s);
+            camera.model_partials(d.S, d.Su, d.Sv, res.Cu, res.Cv);
             res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
             return res;
         }
@@ -196,6 +197,8 @@ NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u
         res.iterations = it;
         if (r < params.eps) {                                                  // (12)
             res.t = dot(c.P - ray.origin, ray.dir);
+            res.Cu = c.Pu;
+            res.Cv = c.Pv;
             res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
             return res;
         }

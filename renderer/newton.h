@@ -104,6 +104,10 @@ struct NewtonResult {
     double u = 0, v = 0;      // last iterate
     double t = 0;             // hit distance along the pixel ray (valid when converged)
     double residual = 0;      // ||F|| at (u, v), model units
+    // Model-space rational partials of the face's surface at (u, v) when
+    // converged (or behind_eye), from the last iterate's derivatives: the
+    // shading normal needs no second evaluation of the surface.
+    Vec3 Cu, Cv;
 };
 
 // proposed: `projected` is project_surface(camera, face.surface); s is the pixel's

@@ -213,25 +213,36 @@ CartesianDerivs cartesian_d1(const NurbsSurface& s, double u, double v) {
 // not matter), |P_u x P_v| <= kRel * max(|P_u|, |P_v|)^2. Near a true pole at relative
 // parameter distance h the direct cross product has relative error ~ eps / h and the
 // limit formula ~ h, so kRel = 1e-8 keeps either side's error around 1e-8.
-Vec3 surface_normal(const NurbsSurface& s, double u, double v, bool reversed) {
+namespace {
+// The regularity test above and the normal where it passes.
+bool regular_normal(Vec3 Pu, Vec3 Pv, double ru, double rv, Vec3& out) {
     constexpr double kRel = 1e-8;
+    const Vec3 n = cross(Pu, Pv);
+    const double a = length(Pu) * ru, b = length(Pv) * rv;
+    const double big = std::max(a, b);
+    const double nn = length(n) * ru * rv;
+    if (nn > kRel * big * big && std::isfinite(nn)) {
+        out = n / length(n);
+        return true;
+    }
+    return false;
+}
+}  // namespace
+
+bool normal_from_partials(const NurbsSurface& s, Vec3 Cu, Vec3 Cv, bool reversed, Vec3& n) {
+    if (!regular_normal(Cu, Cv, s.u_end() - s.u_begin(), s.v_end() - s.v_begin(), n)) return false;
+    if (reversed) n = -n;
+    return true;
+}
+
+Vec3 surface_normal(const NurbsSurface& s, double u, double v, bool reversed) {
     const double sign_orient = reversed ? -1.0 : 1.0;
     const double u0 = s.u_begin(), u1 = s.u_end(), v0 = s.v_begin(), v1 = s.v_end();
     const double ru = u1 - u0, rv = v1 - v0;
     u = clamp_param(u, u0, u1);
     v = clamp_param(v, v0, v1);
 
-    auto regular = [&](const Cart2& c, Vec3& out) {
-        const Vec3 n = cross(c.Pu, c.Pv);
-        const double a = length(c.Pu) * ru, b = length(c.Pv) * rv;
-        const double big = std::max(a, b);
-        const double nn = length(n) * ru * rv;
-        if (nn > kRel * big * big && std::isfinite(nn)) {
-            out = n / length(n);
-            return true;
-        }
-        return false;
-    };
+    auto regular = [&](const Cart2& c, Vec3& out) { return regular_normal(c.Pu, c.Pv, ru, rv, out); };
 
     const Cart2 c = to_cartesian(eval_dispatch<2>(s, u, v), true);
     Vec3 n;

@@ -45,4 +45,10 @@ CartesianDerivs cartesian_d1(const NurbsSurface& s, double u, double v);
 // limit: the partials are re-evaluated a small step inside the parameter box.
 Vec3 surface_normal(const NurbsSurface& s, double u, double v, bool reversed);
 
+// The unit normal from the rational partials C_u, C_v at a point of s (e.g. a
+// Newton iteration's last derivatives), oriented by `reversed`, when they pass
+// surface_normal's regularity test; false where they do not (a degenerate pole
+// edge, a fold): then surface_normal must take its limits.
+bool normal_from_partials(const NurbsSurface& s, Vec3 Cu, Vec3 Cv, bool reversed, Vec3& n);
+
 }  // namespace nurbsrt

@@ -6,10 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <string>
 
 #include "renderer/error.h"
 #include "renderer/gl_context.h"
+#include "renderer/prepared_scene.h"
 
 namespace nurbsrt {
 
@@ -52,43 +54,62 @@ void main() {
     throw Error(ErrorCode::internal, "preliminary map: " + what);
 }
 
-struct Vertex {
-    float clip[4];
-    float uv[2];
-    uint32_t face;
-};
-
 }  // namespace
 
 struct MapRenderer::Impl {
     GlContext gl;
-    GLuint program = 0, vao = 0, vbo = 0, ebo = 0;
+    GLuint program = 0, vao = 0;
+    // vbo_clip: clip-space positions, rewritten every frame; vbo_uv, vbo_face and
+    // ebo: the map mesh's camera-independent data of PreparedScene `uploaded`.
+    GLuint vbo_clip = 0, vbo_uv = 0, vbo_face = 0, ebo = 0;
+    uint64_t uploaded = 0;  // PreparedScene::id of the static buffers' contents, 0: none
     GLuint fbo = 0, tex_face = 0, tex_uv = 0, rb_depth = 0;
     int fb_w = 0, fb_h = 0;
 
     Impl() {
         program = gl.link_program(kVertexShader, kFragmentShader, "preliminary map");
         glGenVertexArrays(1, &vao);
-        glGenBuffers(1, &vbo);
-        glGenBuffers(1, &ebo);
+        GLuint bufs[4];
+        glGenBuffers(4, bufs);
+        vbo_clip = bufs[0];
+        vbo_uv = bufs[1];
+        vbo_face = bufs[2];
+        ebo = bufs[3];
         glBindVertexArray(vao);
-        glBindBuffer(GL_ARRAY_BUFFER, vbo);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_clip);
         glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<void*>(offsetof(Vertex, clip)));
+        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_uv);
         glEnableVertexAttribArray(1);
-        glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<void*>(offsetof(Vertex, uv)));
+        glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_face);
         glEnableVertexAttribArray(2);
-        glVertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(Vertex), reinterpret_cast<void*>(offsetof(Vertex, face)));
+        glVertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(uint32_t), nullptr);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);  // part of the VAO's state
+        gl.release_current();
+    }
+
+    // The static buffers of `ps`, uploaded unless they already hold them.
+    void upload_static(const PreparedScene& ps) {
+        if (uploaded == ps.id()) return;
+        const MapMesh& m = ps.map_mesh();
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_uv);
+        glBufferData(GL_ARRAY_BUFFER, m.uv.size() * sizeof(float), m.uv.data(), GL_STATIC_DRAW);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_face);
+        glBufferData(GL_ARRAY_BUFFER, m.face.size() * sizeof(uint32_t), m.face.data(), GL_STATIC_DRAW);
+        glBindVertexArray(vao);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, m.indices.size() * sizeof(uint32_t), m.indices.data(), GL_STATIC_DRAW);
+        uploaded = ps.id();
     }
 
     ~Impl() {
         make_current();
         release_fbo();
-        glDeleteBuffers(1, &vbo);
-        glDeleteBuffers(1, &ebo);
+        const GLuint bufs[4] = {vbo_clip, vbo_uv, vbo_face, ebo};
+        glDeleteBuffers(4, bufs);
         glDeleteVertexArrays(1, &vao);
         glDeleteProgram(program);
+        gl.release_current();
     }
 
     void make_current() { gl.make_current(); }
@@ -130,18 +151,15 @@ struct MapRenderer::Impl {
 MapRenderer::MapRenderer() : impl_(std::make_unique<Impl>()) {}
 MapRenderer::~MapRenderer() = default;
 
-PreliminaryMap MapRenderer::render(const Scene& scene, const Camera& camera, MapPrecision precision) {
-    const int W = camera.width(), H = camera.height();
-    GLint max_size = 0;
-    impl_->make_current();
-    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
-    if (W > max_size || H > max_size)
-        throw Error(ErrorCode::limit_exceeded, "preliminary map: image larger than " + std::to_string(max_size));
-    impl_->ensure_fbo(W, H);
+namespace {
 
-    // Depth range along f of all mesh vertices (near/far planes of the map).
+// Near and far depth along f for the map: every mesh vertex's depth with a 1%
+// margin of the depth span, so no triangle is clipped by the depth range
+// (perspective: the near plane stays in front of the eye). far <= near: nothing
+// to draw (empty scene, or all of it behind a perspective eye).
+void depth_range(const Scene& scene, const Camera& camera, double& znear, double& zfar) {
     double zmin = HUGE_VAL, zmax = -HUGE_VAL;
-    size_t nv = 0, ni = 0;
+    size_t nv = 0;
     for (const Face& f : scene.faces) {
         for (const Vec3& p : f.mesh.xyz) {
             const double z = dot(camera.forward(), p - camera.spec().eye);
@@ -149,58 +167,17 @@ PreliminaryMap MapRenderer::render(const Scene& scene, const Camera& camera, Map
             zmax = std::max(zmax, z);
         }
         nv += f.mesh.xyz.size();
-        ni += f.mesh.triangles.size();
     }
-    double zfar = 0, znear = 0;
+    zfar = znear = 0;
     if (nv > 0 && zmax > (camera.perspective() ? 0.0 : -HUGE_VAL)) {
         const double span = std::max(zmax - zmin, 1e-9 * std::max(1.0, std::abs(zmax)));
         zfar = zmax + 0.01 * span;
         znear = camera.perspective() ? std::max(zmin - 0.01 * span, 1e-6 * zfar) : zmin - 0.01 * span;
     }
+}
 
-    std::vector<Vertex> verts;
-    std::vector<uint32_t> idx;
-    if (zfar > znear) {
-        verts.reserve(nv);
-        idx.reserve(ni);
-        for (const Face& f : scene.faces) {
-            const uint32_t base = static_cast<uint32_t>(verts.size());
-            const size_t n = std::min(f.mesh.xyz.size(), f.mesh.uv.size());
-            for (size_t k = 0; k < n; ++k) {
-                const Vec4 c = camera.clip(f.mesh.xyz[k], znear, zfar);
-                verts.push_back({{float(c.x), float(c.y), float(c.z), float(c.w)},
-                                 {float(f.mesh.uv[k].x), float(f.mesh.uv[k].y)}, f.index});
-            }
-            for (size_t k = 0; k + 2 < f.mesh.triangles.size(); k += 3) {
-                const uint32_t a = f.mesh.triangles[k], b = f.mesh.triangles[k + 1], c = f.mesh.triangles[k + 2];
-                if (a >= n || b >= n || c >= n) continue;  // malformed triangle: skip
-                idx.insert(idx.end(), {base + a, base + b, base + c});
-            }
-        }
-    }
-    last_triangles_ = idx.size() / 3;
-
-    glBindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
-    glViewport(0, 0, W, H);
-    glDisable(GL_CULL_FACE);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    const GLuint zero_u[4] = {0, 0, 0, 0};
-    const GLfloat zero_f[4] = {0, 0, 0, 0};
-    const GLfloat one = 1.0f;
-    glClearBufferuiv(GL_COLOR, 0, zero_u);
-    glClearBufferfv(GL_COLOR, 1, zero_f);
-    glClearBufferfv(GL_DEPTH, 0, &one);
-    if (!idx.empty()) {
-        glUseProgram(impl_->program);
-        glBindVertexArray(impl_->vao);
-        glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo);
-        glBufferData(GL_ARRAY_BUFFER, verts.size() * sizeof(Vertex), verts.data(), GL_STREAM_DRAW);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, impl_->ebo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, idx.size() * sizeof(uint32_t), idx.data(), GL_STREAM_DRAW);
-        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(idx.size()), GL_UNSIGNED_INT, nullptr);
-    }
-
+// GL row 0 is the bottom: flip to the contract's row order. rgb8: eq. (4).
+PreliminaryMap read_back(int W, int H, const Scene& scene, MapPrecision precision) {
     PreliminaryMap map;
     map.width = W;
     map.height = H;
@@ -214,7 +191,6 @@ PreliminaryMap MapRenderer::render(const Scene& scene, const Camera& camera, Map
     glReadPixels(0, 0, W, H, GL_RG, GL_FLOAT, uv.data());
     if (glGetError() != GL_NO_ERROR) fail("OpenGL error while rendering");
 
-    // GL row 0 is the bottom: flip to the contract's row order. rgb8: eq. (4).
     map.face.resize(npx);
     map.u.resize(npx);
     map.v.resize(npx);
@@ -236,9 +212,112 @@ PreliminaryMap MapRenderer::render(const Scene& scene, const Camera& camera, Map
     return map;
 }
 
+// Releases the context on every exit of a frame, so the next user may be another thread.
+struct ReleaseOnExit {
+    GlContext& gl;
+    ~ReleaseOnExit() { gl.release_current(); }
+};
+
+}  // namespace
+
+PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera, MapPrecision precision) {
+    const int W = camera.width(), H = camera.height();
+    GLint max_size = 0;
+    impl_->make_current();
+    const ReleaseOnExit release{impl_->gl};
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
+    if (W > max_size || H > max_size)
+        throw Error(ErrorCode::limit_exceeded, "preliminary map: image larger than " + std::to_string(max_size));
+    impl_->ensure_fbo(W, H);
+
+    double znear = 0, zfar = 0;
+    depth_range(ps.scene(), camera, znear, zfar);
+    const MapMesh& mesh = ps.map_mesh();
+    const bool draw = zfar > znear && !mesh.indices.empty();
+    last_triangles_ = draw ? mesh.triangles() : 0;
+
+    glBindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
+    glViewport(0, 0, W, H);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    const GLuint zero_u[4] = {0, 0, 0, 0};
+    const GLfloat zero_f[4] = {0, 0, 0, 0};
+    const GLfloat one = 1.0f;
+    glClearBufferuiv(GL_COLOR, 0, zero_u);
+    glClearBufferfv(GL_COLOR, 1, zero_f);
+    glClearBufferfv(GL_DEPTH, 0, &one);
+    if (draw) {
+        // Positions to clip space on the CPU in double, relative to the eye
+        // (Camera::clip), rounded to float only at the end (see the header).
+        std::vector<float> clip(4 * mesh.xyz.size());
+        for (size_t k = 0; k < mesh.xyz.size(); ++k) {
+            const Vec4 c = camera.clip(mesh.xyz[k], znear, zfar);
+            clip[4 * k] = float(c.x);
+            clip[4 * k + 1] = float(c.y);
+            clip[4 * k + 2] = float(c.z);
+            clip[4 * k + 3] = float(c.w);
+        }
+        impl_->upload_static(ps);
+        glUseProgram(impl_->program);
+        glBindVertexArray(impl_->vao);
+        glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo_clip);
+        glBufferData(GL_ARRAY_BUFFER, clip.size() * sizeof(float), clip.data(), GL_STREAM_DRAW);
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
+    }
+    return read_back(W, H, ps.scene(), precision);
+}
+
+namespace {
+
+// Idle MapRenderers (see the thread rules in the header). Deliberately never
+// destroyed: contexts outlive every render, and destroying OSMesa contexts from a
+// static destructor would race with Mesa's own teardown at exit.
+class MapRendererPool {
+public:
+    std::unique_ptr<MapRenderer> acquire() {
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (!idle_.empty()) {
+                std::unique_ptr<MapRenderer> r = std::move(idle_.back());
+                idle_.pop_back();
+                return r;
+            }
+        }
+        return std::make_unique<MapRenderer>();
+    }
+    void release(std::unique_ptr<MapRenderer> r) {
+        std::lock_guard<std::mutex> lock(m_);
+        idle_.push_back(std::move(r));
+    }
+
+private:
+    std::mutex m_;
+    std::vector<std::unique_ptr<MapRenderer>> idle_;
+};
+
+MapRendererPool& map_renderer_pool() {
+    static MapRendererPool* pool = new MapRendererPool;
+    return *pool;
+}
+
+}  // namespace
+
+PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision) {
+    MapRendererPool& pool = map_renderer_pool();
+    std::unique_ptr<MapRenderer> renderer = pool.acquire();
+    // A renderer whose frame threw goes back too: every error path leaves its
+    // context released and its state reset by the next frame's set-up.
+    struct GiveBack {
+        MapRendererPool& pool;
+        std::unique_ptr<MapRenderer>& r;
+        ~GiveBack() { pool.release(std::move(r)); }
+    } give_back{pool, renderer};
+    return renderer->render(scene, camera, precision);
+}
+
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera, MapPrecision precision) {
-    thread_local MapRenderer renderer;
-    return renderer.render(scene, camera, precision);
+    return render_preliminary_map(prepare(scene), camera, precision);
 }
 
 }  // namespace nurbsrt

@@ -15,10 +15,22 @@
 // (relative to the eye), so large model coordinates lose nothing before the
 // float conversion.
 //
-// Threads: a MapRenderer owns one OSMesa context and is used by one thread at a
-// time; render_preliminary_map() keeps one per calling thread (thread_local).
-// llvmpipe starts its own rasterizer threads per context; LP_NUM_THREADS (read
-// by Mesa at start-up) sets their number, 0 rasterizes in the calling thread.
+// Thread rules (OSMesa: a context is current in at most one thread at a time,
+// and may move between threads when released first):
+//  - A MapRenderer owns one OSMesa context with its compiled shaders, buffers
+//    and framebuffer; it is used by one thread at a time. Each render() makes
+//    its context current and releases it at the end, so any thread may use the
+//    renderer next.
+//  - render_preliminary_map() borrows a MapRenderer from a process-wide pool and
+//    returns it after the frame: contexts are created (and shaders compiled) only
+//    when more maps are drawn at once than ever before, not per frame or per
+//    thread (the server renders each request on a fresh thread).
+//  - A MapRenderer keeps the map mesh's camera-independent vertex data (u, v,
+//    face id, triangle indices) of the last PreparedScene it drew in GPU buffers
+//    (keyed by PreparedScene::id); a frame of the same prepared scene uploads
+//    only the clip-space positions.
+//  - llvmpipe starts its own rasterizer threads per context; LP_NUM_THREADS
+//    (read by Mesa at start-up) sets their number, 0 rasterizes in the calling thread.
 #pragma once
 
 #include <cstdint>
@@ -29,6 +41,8 @@
 #include "renderer/scene.h"
 
 namespace nurbsrt {
+
+class PreparedScene;
 
 enum class MapPrecision : uint8_t {
     float32,  // u, v as interpolated by GL (float)
@@ -45,12 +59,12 @@ struct PreliminaryMap {
 
 class MapRenderer {
 public:
-    MapRenderer();   // creates the OSMesa context; throws Error(internal) on failure
+    MapRenderer();   // creates the OSMesa context, compiles the shaders; throws Error(internal) on failure
     ~MapRenderer();
     MapRenderer(const MapRenderer&) = delete;
     MapRenderer& operator=(const MapRenderer&) = delete;
 
-    PreliminaryMap render(const Scene& scene, const Camera& camera, MapPrecision precision);
+    PreliminaryMap render(const PreparedScene& scene, const Camera& camera, MapPrecision precision);
 
     // Triangles drawn by the last render (for statistics).
     size_t last_triangles() const { return last_triangles_; }
@@ -61,7 +75,10 @@ private:
     size_t last_triangles_ = 0;
 };
 
-// Renders with this thread's own MapRenderer (created on first use).
+// Renders with a MapRenderer borrowed from the process-wide pool (see above).
+PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera,
+                                      MapPrecision precision = MapPrecision::float32);
+// Convenience for one map of a Scene: prepares it first.
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera,
                                       MapPrecision precision = MapPrecision::float32);
 

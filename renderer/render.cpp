@@ -28,28 +28,37 @@ double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-// Everything a pixel solve needs of one face, prepared once per frame.
-struct FaceFrame {
-    NurbsSurface projected;  // proposed: the paper's projection to R^2 (camera.h)
-    TrimTester trim;
-    UvBox box;
-    double near_uv = 0;      // trim-tolerance band for crack filling (see Solver::solve)
-};
-
 // Per-pixel solve result of a pass.
 struct PixelHit {
     uint32_t face = 0;       // 0: no hit
     float u = 0, v = 0;
+    // Unit shading normal (oriented by the face) from the solve's last partials;
+    // (0, 0, 0) where they were degenerate: shading then takes surface_normal's limits.
+    float nx = 0, ny = 0, nz = 0;
     double t = std::numeric_limits<double>::infinity();
     uint8_t iterations = 0;
 };
+
+// Fills a hit of face `id` at (u, v), distance t, normal from the partials there.
+void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, Vec3 Cv, PixelHit& hit) {
+    hit.face = id;
+    hit.u = static_cast<float>(u);
+    hit.v = static_cast<float>(v);
+    hit.t = t;
+    Vec3 n;
+    if (!normal_from_partials(f.surface, Cu, Cv, f.reversed, n)) n = {0, 0, 0};
+    hit.nx = static_cast<float>(n.x);
+    hit.ny = static_cast<float>(n.y);
+    hit.nz = static_cast<float>(n.z);
+}
 
 enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLeftDomain, kBehind, kTrimmed, kNearTrim };
 
 struct Solver {
     const Scene& scene;
     const Camera& camera;
-    const std::vector<FaceFrame>& frames;
+    const std::vector<PreparedFace>& faces;      // camera-independent (prepare())
+    const std::vector<NurbsSurface>& projected;  // proposed: the paper's projection to R^2, per frame
     const RenderOptions& opt;
     NewtonParams params;
 
@@ -60,10 +69,10 @@ struct Solver {
     // so a ray through the sliver between the two polylines is rejected by both (a crack).
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
                   PixelHit& hit) const {
-        const FaceFrame& ff = frames[id - 1];
+        const PreparedFace& ff = faces[id - 1];
         const NewtonResult r =
             opt.method == NewtonMethod::proposed
-                ? newton_proposed(ff.projected, camera, camera.pixel_screen(i, j), u0, v0, ff.box, p)
+                ? newton_proposed(projected[id - 1], camera, camera.pixel_screen(i, j), u0, v0, ff.box, p)
                 : newton_martin(scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, p);
         hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
         if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
@@ -82,10 +91,7 @@ struct Solver {
             if (!near || !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return kTrimmed;
             o = kNearTrim;
         }
-        hit.face = id;
-        hit.u = static_cast<float>(r.u);
-        hit.v = static_cast<float>(r.v);
-        hit.t = r.t;
+        set_hit(scene.faces[id - 1], id, r.u, r.v, r.t, r.Cu, r.Cv, hit);
         return o;
     }
     // Adjacent faces of a CAD model meet only within their edges' tolerance: a ray
@@ -94,7 +100,7 @@ struct Solver {
     // as a near hit when the border point is within the trim band in (u,v) and
     // within the same band in model units (band x surface speed) of the ray.
     bool border_gap_hit(uint32_t id, int i, int j, const NewtonResult& r, PixelHit& hit) const {
-        const FaceFrame& ff = frames[id - 1];
+        const PreparedFace& ff = faces[id - 1];
         const UvBox& b = ff.box;
         if (!(r.u == b.u0 || r.u == b.u1 || r.v == b.v0 || r.v == b.v1)) return false;
         if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
@@ -106,10 +112,7 @@ struct Solver {
         const double gap = length(q - t * ray.dir);
         const double band = ff.near_uv * std::max(length(c.Pu), length(c.Pv));
         if (!(t > 0) || !(gap <= band)) return false;
-        hit.face = id;
-        hit.u = static_cast<float>(r.u);
-        hit.v = static_cast<float>(r.v);
-        hit.t = t;
+        set_hit(scene.faces[id - 1], id, r.u, r.v, t, c.Pu, c.Pv, hit);
         return true;
     }
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
@@ -175,12 +178,20 @@ void parallel_rows(int height, tbb::task_arena& arena, Progress* progress, const
 }  // namespace
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+    const auto t0 = Clock::now();
+    const PreparedScene prepared = prepare(scene, options.threads);
+    const double prepare_ms = ms_since(t0);
+    RenderResult res = render(prepared, camera, options);
+    res.stats.prepare_ms = prepare_ms;
+    res.stats.total_ms += prepare_ms;
+    return res;
+}
+
+RenderResult render(const PreparedScene& prepared, const Camera& camera, const RenderOptions& options) {
     const auto t_total = Clock::now();
+    const Scene& scene = prepared.scene();
     const int W = camera.width(), H = camera.height();
     const size_t npx = static_cast<size_t>(W) * H;
-    for (size_t k = 0; k < scene.faces.size(); ++k)
-        if (scene.faces[k].index != k + 1)
-            throw Error(ErrorCode::invalid_argument, "scene: faces[i].index must be i + 1");
     const int threads = options.threads > 0 ? options.threads
                                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     tbb::task_arena arena(threads);
@@ -196,7 +207,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     // 1-2. Preliminary map (PAPER.md eq. 4).
     auto t0 = Clock::now();
     throw_if_canceled(options);
-    const PreliminaryMap map = render_preliminary_map(scene, camera, options.map_precision);
+    const PreliminaryMap map = render_preliminary_map(prepared, camera, options.map_precision);
     throw_if_canceled(options);
     st.preliminary_map_ms = ms_since(t0);
 
@@ -204,25 +215,14 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     // Progress units: rows of the three per-pixel passes (Newton, rescue, shading).
     Progress progress(options.progress, 3 * static_cast<int64_t>(H));
     t0 = Clock::now();
-    std::vector<FaceFrame> frames(scene.faces.size());
-    const double seam_tol = 1e-7 * std::max(scene.bbox.diagonal(), 1e-300);
+    // The per-face set-up that depends on the camera: proposed's projection of
+    // the control points (the rest was done once by prepare()).
+    std::vector<NurbsSurface> projected(options.method == NewtonMethod::proposed ? scene.faces.size() : 0);
     arena.execute([&] {
-        tbb::parallel_for(size_t(0), scene.faces.size(), [&](size_t k) {
-            const Face& f = scene.faces[k];
-            if (options.method == NewtonMethod::proposed) frames[k].projected = project_surface(camera, f.surface);
-            frames[k].trim = TrimTester(f.loops);
-            // Seam tolerance: far below a pixel, far above the rounding of a closed
-            // surface's two edge curves (they coincide to ~1e-15 when converted
-            // from a periodic surface; files' own closed B-splines to their tolerance).
-            frames[k].box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, seam_tol);
-            // Each of two faces' sampled loops lies within its tolerance of the shared
-            // edge, so a sliver point is within about twice it of either polyline.
-            // Faces built without a tolerance get a rounding-level band.
-            const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
-            frames[k].near_uv = std::max(2.0 * f.trim_tolerance_uv, 1e-9 * diag);
-        });
+        tbb::parallel_for(size_t(0), projected.size(),
+                          [&](size_t k) { projected[k] = project_surface(camera, scene.faces[k].surface); });
     });
-    Solver solver{scene, camera, frames, options, options.newton};
+    Solver solver{scene, camera, prepared.faces(), projected, options, options.newton};
     if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(scene.bbox);
     st.tolerance = solver.params.eps;
     // Rescue solves: clamp-and-continue at face borders, backtracking, a few more steps.
@@ -388,7 +388,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                     }
                     if (bv < mesh.uv.size())
                         attempt(id, static_cast<float>(mesh.uv[bv].x), static_cast<float>(mesh.uv[bv].y));
-                    const UvBox& bx = frames[id - 1].box;  // and the middle of its box
+                    const UvBox& bx = prepared.faces()[id - 1].box;  // and the middle of its box
                     attempt(id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
                 }
                 kind = kRescueGeneral;
@@ -579,7 +579,10 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             }
             const Face& f = scene.faces[h.face - 1];
             const Vec3 dir = camera.pixel_ray(i, j).dir;
-            Vec3 n = surface_normal(f.surface, h.u, h.v, f.reversed);
+            // The solve's normal (exact at the double-precision hit); the limits
+            // of surface_normal only where its partials were degenerate.
+            Vec3 n{h.nx, h.ny, h.nz};
+            if (n.x == 0 && n.y == 0 && n.z == 0) n = surface_normal(f.surface, h.u, h.v, f.reversed);
             if (dot(n, dir) > 0) n = -n;  // two-sided: light the side facing the viewer
             Color c = f.color;
             if (!f.has_color && f.body < scene.bodies.size() && scene.bodies[f.body].has_color)
@@ -636,8 +639,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             if (!img.face[map.index(i, j)] && hit(i - 1, j) && hit(i + 1, j) && hit(i, j - 1) && hit(i, j + 1))
                 ++st.holes;
         }
-    st.map_triangles = 0;
-    for (const Face& f : scene.faces) st.map_triangles += f.mesh.triangles.size() / 3;
+    st.map_triangles = prepared.map_mesh().triangles();
     st.total_ms = ms_since(t_total);
     throw_if_canceled(options);
     progress.finish();

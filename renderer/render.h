@@ -16,6 +16,7 @@
 #include "renderer/camera.h"
 #include "renderer/newton.h"
 #include "renderer/preliminary_map.h"
+#include "renderer/prepared_scene.h"
 #include "renderer/scene.h"
 
 namespace nurbsrt {
@@ -74,6 +75,9 @@ struct RenderStats {
     uint64_t rescue_nearer = 0;
     uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
     double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, total_ms = 0;
+    // prepare() of the Scene when render() was given one (then included in
+    // total_ms); 0 when it was given a PreparedScene.
+    double prepare_ms = 0;
     // The part of newton_ms spent in the first pass: per-face set-up and one solve
     // per map pixel from its start, with the trim test (what the paper's Table 1
     // compares); the rest of newton_ms is the rescue of failed pixels.
@@ -85,6 +89,12 @@ struct RenderResult {
     RenderStats stats;
 };
 
+// One frame of a prepared scene (prepared_scene.h): what a caller that renders
+// many views of one scene pays per view. Several frames of one PreparedScene may
+// run at once, on any threads.
+RenderResult render(const PreparedScene& scene, const Camera& camera, const RenderOptions& options);
+// One frame of a Scene: prepare(scene, options.threads), then the frame above.
+// The same images; stats.prepare_ms says what preparing cost.
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options);
 
 // Writes by extension: .exr -> channels R, G, B, A, Z (float), face (uint32),

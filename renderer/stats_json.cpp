@@ -43,6 +43,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
          {{"read", import.read_ms},
           {"nurbs_convert", import.nurbs_convert_ms},
           {"mesh", import.mesh_ms},
+          {"prepare", s.prepare_ms},
           {"preliminary_map", s.preliminary_map_ms},
           {"newton", s.newton_ms},
           {"shade", s.shade_ms},

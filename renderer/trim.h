@@ -35,6 +35,11 @@ public:
     int cells_u() const { return nu_; }
     int cells_v() const { return nv_; }
     size_t edge_count() const { return edges_.size(); }
+    // Heap memory of the grid and edges (for caches that bound their size).
+    size_t memory_bytes() const {
+        return edges_.capacity() * sizeof(Edge) + (cell_start_.capacity() + cell_edges_.capacity()) * sizeof(uint32_t) +
+               centre_inside_.capacity() + ref_.capacity() * sizeof(Vec2);
+    }
 
 private:
     struct Edge {

@@ -22,21 +22,24 @@ double ms_since(clock_type::time_point t0) {
     return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count();
 }
 
-// The imported scene for these bytes: from the cache, by waiting for a
-// simultaneous request's import of the same bytes, or imported in a child process.
-std::shared_ptr<const Scene> scene_for(ServerContext& ctx, const std::string& bytes, bool& cache_hit) {
+// The imported and prepared scene for these bytes: from the cache, by waiting
+// for a simultaneous request's import of the same bytes, or imported in a child
+// process and prepared here (once, for every later render of the same bytes).
+std::shared_ptr<const PreparedScene> scene_for(ServerContext& ctx, const std::string& bytes, bool& cache_hit) {
     const ImportOptions options;
     SceneCache::Source source = SceneCache::Source::loaded;
     auto scene = ctx.cache.get_or_load(
         scene_cache_key(bytes, options),
         [&] {
             const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
+            std::shared_ptr<const Scene> scene;
             try {
-                return std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
+                scene = std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
             } catch (const Error& e) {
                 ctx.metrics.count_import_failure(error_code_name(e.code()));
                 throw;
             }
+            return std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx.config.render_threads));
         },
         source);
     // A request that waited for another's import of the same bytes paid no import.
@@ -50,7 +53,7 @@ std::shared_ptr<const Scene> scene_for(ServerContext& ctx, const std::string& by
 // (RenderOptions::cancel); it keeps its worker slot (the ticket) until its
 // thread has really stopped, at the next block of rows, so the slot is never
 // handed out twice.
-RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const Scene> scene, const Camera& camera,
+RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const PreparedScene> scene, const Camera& camera,
                             RenderOptions options, std::shared_ptr<AdmissionGate::Ticket> ticket,
                             const std::shared_ptr<const std::atomic<bool>>& external_cancel,
                             const std::function<bool()>& should_stop) {
@@ -97,11 +100,12 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
                             std::shared_ptr<AdmissionGate::Ticket> ticket, const RenderControl& control) {
     const auto t0 = control.start.value_or(clock_type::now());
     RenderedImage out;
-    std::shared_ptr<const Scene> scene = scene_for(ctx, bytes, out.cache_hit);
-    if (scene->faces.size() > ctx.config.max_faces)
-        throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene->faces.size()) +
+    const std::shared_ptr<const PreparedScene> prepared = scene_for(ctx, bytes, out.cache_hit);
+    const Scene& scene = prepared->scene();
+    if (scene.faces.size() > ctx.config.max_faces)
+        throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
-    const Camera camera(camera_spec_for(r, *scene));
+    const Camera camera(camera_spec_for(r, scene));
     RenderOptions options;
     options.method = r.method == "martin" ? NewtonMethod::martin : NewtonMethod::proposed;
     options.map_precision = r.map_precision == "rgb8" ? MapPrecision::rgb8 : MapPrecision::float32;
@@ -110,7 +114,8 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     if (r.background)
         options.background = {static_cast<float>(r.background->x), static_cast<float>(r.background->y),
                               static_cast<float>(r.background->z)};
-    const RenderResult result = render_bounded(ctx, scene, camera, options, ticket, control.cancel, control.should_stop);
+    const RenderResult result =
+        render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop);
 
     const auto te = clock_type::now();
     {
@@ -121,8 +126,9 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const double encode_ms = ms_since(te);
     ticket.reset();
 
-    const ImportTimings import_ms = out.cache_hit ? ImportTimings{} : scene->timings;
+    const ImportTimings import_ms = out.cache_hit ? ImportTimings{} : scene.timings;
     nlohmann::json stats = render_stats_json(result.stats, import_ms, encode_ms, ms_since(t0));
+    stats["timings_ms"]["prepare"] = out.cache_hit ? 0.0 : prepared->prepare_ms();  // paid by this request
     const CameraSpec& cs = camera.spec();
     stats["camera"] = {{"eye", {cs.eye.x, cs.eye.y, cs.eye.z}},
                        {"target", {cs.target.x, cs.target.y, cs.target.z}},
@@ -131,9 +137,10 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
                        {"fov_deg", cs.fov_deg},
                        {"ortho_height", cs.ortho_height}};
     stats["map_precision"] = r.map_precision;
-    stats["warnings"] = scene->warnings;
+    stats["warnings"] = scene.warnings;
     stats["cache"] = out.cache_hit ? "hit" : "miss";
-    for (const char* stage : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"})
+    for (const char* stage :
+         {"read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"})
         ctx.metrics.observe_stage(stage, stats["timings_ms"].value(stage, 0.0) / 1000.0);
     out.stats_json = stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     return out;

@@ -40,7 +40,8 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     const nlohmann::json stats = nlohmann::json::parse(rendered.stats_json);
 
     std::string timing;
-    for (const char* stage : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"}) {
+    for (const char* stage :
+         {"read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"}) {
         const double ms = stats["timings_ms"].value(stage, 0.0);
         char buf[96];
         std::snprintf(buf, sizeof buf, "%s%s;dur=%.3f", timing.empty() ? "" : ", ", stage, ms);

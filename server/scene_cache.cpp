@@ -44,7 +44,11 @@ size_t scene_memory_bytes(const Scene& s) {
     return n;
 }
 
-std::shared_ptr<const Scene> SceneCache::get(const std::string& key) {
+size_t prepared_scene_memory_bytes(const PreparedScene& prepared) {
+    return scene_memory_bytes(prepared.scene()) + prepared.memory_bytes();
+}
+
+std::shared_ptr<const PreparedScene> SceneCache::get(const std::string& key) {
     std::lock_guard<std::mutex> lock(m_);
     const auto it = index_.find(key);
     if (it == index_.end()) return nullptr;
@@ -52,8 +56,8 @@ std::shared_ptr<const Scene> SceneCache::get(const std::string& key) {
     return it->second->scene;
 }
 
-void SceneCache::put(const std::string& key, std::shared_ptr<const Scene> scene) {
-    const size_t size = scene_memory_bytes(*scene);
+void SceneCache::put(const std::string& key, std::shared_ptr<const PreparedScene> scene) {
+    const size_t size = prepared_scene_memory_bytes(*scene);
     std::lock_guard<std::mutex> lock(m_);
     if (const auto it = index_.find(key); it != index_.end()) {
         bytes_ -= it->second->bytes;
@@ -71,10 +75,10 @@ void SceneCache::put(const std::string& key, std::shared_ptr<const Scene> scene)
     }
 }
 
-std::shared_ptr<const Scene> SceneCache::get_or_load(const std::string& key,
-                                                     const std::function<std::shared_ptr<const Scene>()>& load,
+std::shared_ptr<const PreparedScene> SceneCache::get_or_load(const std::string& key,
+                                                     const std::function<std::shared_ptr<const PreparedScene>()>& load,
                                                      Source& source) {
-    std::promise<std::shared_ptr<const Scene>> promise;
+    std::promise<std::shared_ptr<const PreparedScene>> promise;
     {
         std::unique_lock<std::mutex> lock(m_);
         if (const auto it = index_.find(key); it != index_.end()) {
@@ -83,7 +87,7 @@ std::shared_ptr<const Scene> SceneCache::get_or_load(const std::string& key,
             return it->second->scene;
         }
         if (const auto it = loading_.find(key); it != loading_.end()) {
-            std::shared_future<std::shared_ptr<const Scene>> pending = it->second;
+            std::shared_future<std::shared_ptr<const PreparedScene>> pending = it->second;
             lock.unlock();
             source = Source::shared;
             return pending.get();  // rethrows the loader's error
@@ -91,7 +95,7 @@ std::shared_ptr<const Scene> SceneCache::get_or_load(const std::string& key,
         loading_.emplace(key, promise.get_future().share());
     }
     source = Source::loaded;
-    std::shared_ptr<const Scene> scene;
+    std::shared_ptr<const PreparedScene> scene;
     try {
         scene = load();
     } catch (...) {

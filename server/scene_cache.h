@@ -1,7 +1,9 @@
 // Content-addressed cache of imported scenes: key = SHA-256 of the uploaded
-// bytes and the import options, value = the immutable Scene, shared by every
-// render that uses it. Bounded by an estimate of the scenes' memory; least
-// recently used entries go first. Thread-safe.
+// bytes and the import options, value = the immutable Scene together with its
+// PreparedScene (renderer/prepared_scene.h, which owns the Scene), shared by
+// every render that uses it, so a cached render pays only the frame. Bounded by
+// an estimate of the memory of both; least recently used entries go first.
+// Thread-safe.
 #pragma once
 
 #include <cstddef>
@@ -14,6 +16,7 @@
 #include <unordered_map>
 
 #include "importer/importer.h"
+#include "renderer/prepared_scene.h"
 
 namespace nurbsrt::server {
 
@@ -22,15 +25,18 @@ std::string scene_cache_key(const std::string& bytes, const ImportOptions& optio
 
 // Approximate memory held by a scene (its vectors' payloads), for the bound.
 size_t scene_memory_bytes(const Scene& scene);
+// The same for a cache entry: its scene plus the prepared data.
+size_t prepared_scene_memory_bytes(const PreparedScene& prepared);
 
 class SceneCache {
 public:
     explicit SceneCache(size_t capacity_bytes) : capacity_(capacity_bytes) {}
 
-    std::shared_ptr<const Scene> get(const std::string& key);  // nullptr on a miss
+    std::shared_ptr<const PreparedScene> get(const std::string& key);  // nullptr on a miss
     // Inserts (or refreshes) the entry and evicts LRU entries beyond the bound;
-    // a scene larger than the whole capacity is not kept.
-    void put(const std::string& key, std::shared_ptr<const Scene> scene);
+    // a scene larger than the whole capacity is not kept. `scene` must own its
+    // Scene (prepare(std::shared_ptr<const Scene>)).
+    void put(const std::string& key, std::shared_ptr<const PreparedScene> scene);
 
     // How the scene of get_or_load came: from the cache, by waiting for another
     // request's import of the same key, or by running `load` itself.
@@ -39,8 +45,8 @@ public:
     // the same key ("single flight": N simultaneous first renders of one file
     // import it once); the result is put in the cache. When `load` throws, every
     // caller waiting for it gets the same exception and nothing is cached.
-    std::shared_ptr<const Scene> get_or_load(const std::string& key,
-                                             const std::function<std::shared_ptr<const Scene>()>& load,
+    std::shared_ptr<const PreparedScene> get_or_load(const std::string& key,
+                                             const std::function<std::shared_ptr<const PreparedScene>()>& load,
                                              Source& source);
 
     size_t bytes() const;
@@ -50,7 +56,7 @@ public:
 private:
     struct Entry {
         std::string key;
-        std::shared_ptr<const Scene> scene;
+        std::shared_ptr<const PreparedScene> scene;
         size_t bytes = 0;
     };
     const size_t capacity_;
@@ -58,7 +64,7 @@ private:
     std::list<Entry> lru_;  // front = most recently used
     std::unordered_map<std::string, std::list<Entry>::iterator> index_;
     size_t bytes_ = 0;
-    std::unordered_map<std::string, std::shared_future<std::shared_ptr<const Scene>>> loading_;
+    std::unordered_map<std::string, std::shared_future<std::shared_ptr<const PreparedScene>>> loading_;
 };
 
 }  // namespace nurbsrt::server

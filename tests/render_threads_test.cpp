@@ -87,5 +87,27 @@ TEST_P(RenderThreads, OneAndTwoThreadsGiveIdenticalOutput) {
         }
 }
 
+// Prepare once, render many (renderer/prepared_scene.h) on real models: frames of
+// one PreparedScene from several views, with 1 thread, equal fresh single
+// renders of the Scene with 2 threads, bit for bit.
+TEST_P(RenderThreads, PreparedOnceManyViewsEqualFreshRenders) {
+    const ThreadCase& c = GetParam();
+    if (c.path.empty()) GTEST_SKIP() << "../shared/models is absent: skipping " << c.name;
+    const Scene scene = import_file(c.path);
+    const PreparedScene prepared = prepare(scene);
+    CameraSpec base;
+    base.width = 320;
+    base.height = 240;
+    for (const char* view : {"iso", "front", "top", "left"}) {
+        const Camera cam(fit_view(view, scene, base));
+        RenderOptions o1, o2;
+        o1.threads = 1;
+        o2.threads = 2;
+        const RenderResult many = render(prepared, cam, o1), fresh = render(scene, cam, o2);
+        EXPECT_GT(many.stats.pixels_hit, 1000u);
+        expect_same(many, fresh, c.name + "/" + view + "/prepared");
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, RenderThreads, ::testing::ValuesIn(thread_cases()),
                          [](const ::testing::TestParamInfo<ThreadCase>& i) { return i.param.name; });

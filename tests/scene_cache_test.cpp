@@ -15,10 +15,17 @@ using namespace nurbsrt::server;
 
 namespace {
 
-std::shared_ptr<const Scene> scene_with_faces(size_t n) {
+// A prepared scene of n faces without surfaces (an empty parameter box: nothing
+// is evaluated), each trimmed by a square loop, so the prepared data includes trim grids.
+std::shared_ptr<const PreparedScene> scene_with_faces(size_t n) {
     auto s = std::make_shared<Scene>();
     s->faces.resize(n);
-    return s;
+    for (size_t k = 0; k < n; ++k) {
+        Face& f = s->faces[k];
+        f.index = static_cast<uint32_t>(k + 1);
+        f.loops.push_back(TrimLoop{{{0.1, 0.1}, {0.9, 0.1}, {0.9, 0.9}, {0.1, 0.9}}, true});
+    }
+    return std::make_shared<const PreparedScene>(prepare(std::shared_ptr<const Scene>(std::move(s)), 1));
 }
 
 }  // namespace
@@ -33,7 +40,7 @@ TEST(SceneCache, KeyDependsOnBytesAndOptions) {
 }
 
 TEST(SceneCache, EvictsLeastRecentlyUsedBeyondCapacity) {
-    const size_t one = scene_memory_bytes(*scene_with_faces(10));
+    const size_t one = prepared_scene_memory_bytes(*scene_with_faces(10));
     SceneCache cache(2 * one + one / 2);  // room for two
     cache.put("a", scene_with_faces(10));
     cache.put("b", scene_with_faces(10));
@@ -52,7 +59,7 @@ TEST(SceneCache, SimultaneousMissesLoadOnce) {
     SceneCache cache(size_t(64) << 20);
     std::atomic<int> loads{0};
     const int n = 8;
-    std::vector<std::shared_ptr<const Scene>> got(n);
+    std::vector<std::shared_ptr<const PreparedScene>> got(n);
     std::vector<SceneCache::Source> sources(n);
     std::vector<std::thread> threads;
     for (int k = 0; k < n; ++k)
@@ -91,7 +98,7 @@ TEST(SceneCache, FailedLoadReachesEveryWaiterAndIsNotCached) {
             try {
                 cache.get_or_load(
                     "bad",
-                    [&]() -> std::shared_ptr<const Scene> {
+                    [&]() -> std::shared_ptr<const PreparedScene> {
                         ++loads;
                         std::this_thread::sleep_for(std::chrono::milliseconds(200));
                         throw Error(ErrorCode::unreadable_file, "truncated");
@@ -110,4 +117,14 @@ TEST(SceneCache, FailedLoadReachesEveryWaiterAndIsNotCached) {
     EXPECT_NE(cache.get_or_load("bad", [&] { ++loads; return scene_with_faces(1); }, s), nullptr);
     EXPECT_EQ(s, SceneCache::Source::loaded);  // tried again, not a cached failure
     EXPECT_EQ(loads.load(), before + 1);
+}
+
+TEST(SceneCache, CountsThePreparedDataInItsBytes) {
+    const std::shared_ptr<const PreparedScene> p = scene_with_faces(4);
+    EXPECT_GT(p->memory_bytes(), 4 * sizeof(PreparedFace));  // the trim grids are counted
+    EXPECT_EQ(prepared_scene_memory_bytes(*p), scene_memory_bytes(p->scene()) + p->memory_bytes());
+    SceneCache cache(size_t(64) << 20);
+    cache.put("a", p);
+    EXPECT_EQ(cache.bytes(), prepared_scene_memory_bytes(*p));
+    EXPECT_EQ(cache.get("a"), p);
 }

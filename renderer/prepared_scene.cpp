@@ -1,0 +1,113 @@
+// prepare(): the camera-independent part of a frame (see prepared_scene.h).
+#include "renderer/prepared_scene.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "renderer/error.h"
+
+namespace nurbsrt {
+
+namespace {
+
+// Seam test tolerance, relative to the scene's diagonal: far below a pixel, far
+// above the rounding of a closed surface's two edge curves (they coincide to
+// ~1e-15 when converted from a periodic surface; files' own closed B-splines to
+// their tolerance).
+constexpr double kSeamRelativeTolerance = 1e-7;
+// Each of two faces' sampled loops lies within its tolerance of the shared edge,
+// so a sliver point is within about twice it of either polyline.
+constexpr double kTrimBandPerTolerance = 2.0;
+// Faces built without a tolerance get a rounding-level band, relative to the
+// diagonal of their parameter box.
+constexpr double kMinTrimBandRelative = 1e-9;
+
+std::atomic<uint64_t> next_prepared_id{1};
+
+PreparedFace prepare_face(const Face& f, double seam_tol) {
+    PreparedFace pf;
+    pf.trim = TrimTester(f.loops);
+    pf.box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, seam_tol);
+    const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
+    pf.near_uv = std::max(kTrimBandPerTolerance * f.trim_tolerance_uv, kMinTrimBandRelative * diag);
+    return pf;
+}
+
+MapMesh merge_map_meshes(const Scene& scene) {
+    MapMesh m;
+    size_t nv = 0, ni = 0;
+    for (const Face& f : scene.faces) {
+        nv += std::min(f.mesh.xyz.size(), f.mesh.uv.size());
+        ni += f.mesh.triangles.size();
+    }
+    m.xyz.reserve(nv);
+    m.uv.reserve(2 * nv);
+    m.face.reserve(nv);
+    m.indices.reserve(ni);
+    for (const Face& f : scene.faces) {
+        const uint32_t base = static_cast<uint32_t>(m.xyz.size());
+        const size_t n = std::min(f.mesh.xyz.size(), f.mesh.uv.size());
+        for (size_t k = 0; k < n; ++k) {
+            m.xyz.push_back(f.mesh.xyz[k]);
+            m.uv.push_back(static_cast<float>(f.mesh.uv[k].x));
+            m.uv.push_back(static_cast<float>(f.mesh.uv[k].y));
+            m.face.push_back(f.index);
+        }
+        for (size_t k = 0; k + 2 < f.mesh.triangles.size(); k += 3) {
+            const uint32_t a = f.mesh.triangles[k], b = f.mesh.triangles[k + 1], c = f.mesh.triangles[k + 2];
+            if (a >= n || b >= n || c >= n) continue;  // malformed triangle: skip
+            m.indices.insert(m.indices.end(), {base + a, base + b, base + c});
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+struct PreparedSceneBuilder {
+    static PreparedScene build(const Scene& scene, std::shared_ptr<const Scene> owner, int threads) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (size_t k = 0; k < scene.faces.size(); ++k)
+            if (scene.faces[k].index != k + 1)
+                throw Error(ErrorCode::invalid_argument, "scene: faces[i].index must be i + 1");
+        PreparedScene ps;
+        ps.scene_ = &scene;
+        ps.owner_ = std::move(owner);
+        ps.id_ = next_prepared_id.fetch_add(1, std::memory_order_relaxed);
+        ps.faces_.resize(scene.faces.size());
+        const double seam_tol = kSeamRelativeTolerance * std::max(scene.bbox.diagonal(), 1e-300);
+        const int n = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        tbb::task_arena arena(n);
+        arena.execute([&] {
+            tbb::parallel_for(size_t(0), scene.faces.size(),
+                              [&](size_t k) { ps.faces_[k] = prepare_face(scene.faces[k], seam_tol); });
+        });
+        ps.map_ = merge_map_meshes(scene);
+        ps.prepare_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        return ps;
+    }
+};
+
+size_t PreparedScene::memory_bytes() const {
+    size_t n = sizeof(PreparedScene) + faces_.capacity() * sizeof(PreparedFace);
+    for (const PreparedFace& f : faces_) n += f.trim.memory_bytes();
+    n += map_.xyz.capacity() * sizeof(Vec3) + map_.uv.capacity() * sizeof(float) +
+         map_.face.capacity() * sizeof(uint32_t) + map_.indices.capacity() * sizeof(uint32_t);
+    return n;
+}
+
+PreparedScene prepare(const Scene& scene, int threads) { return PreparedSceneBuilder::build(scene, nullptr, threads); }
+
+PreparedScene prepare(std::shared_ptr<const Scene> scene, int threads) {
+    if (!scene) throw Error(ErrorCode::invalid_argument, "prepare: no scene");
+    const Scene& s = *scene;
+    return PreparedSceneBuilder::build(s, std::move(scene), threads);
+}
+
+}  // namespace nurbsrt

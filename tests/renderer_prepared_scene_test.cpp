@@ -1,0 +1,127 @@
+// Prepare once, render many: frames of one PreparedScene from several cameras
+// (and interleaved with another prepared scene, so a GL context's kept map mesh
+// must be replaced and restored) are bit-identical to fresh single renders of
+// the Scene, with 1 and 2 threads and from several threads at once.
+#include <gtest/gtest.h>
+
+#include <thread>
+#include <vector>
+
+#include "renderer/error.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render.h"
+#include "renderer_test_surfaces.h"
+
+using namespace nurbsrt;
+using namespace nurbsrt::testing;
+
+namespace {
+
+// A sphere octant and a cylinder patch trimmed by a triangle loop, side by side.
+Scene two_face_scene() {
+    const AnalyticPatch sphere = sphere_patch(1.5), cyl = cylinder_patch();
+    Scene s;
+    s.faces.push_back(make_face(sphere, 1, 10));
+    Face f = make_face(cyl, 2, 10);
+    TrimLoop loop;
+    loop.outer = true;
+    loop.points = {{0.05, 0.05}, {0.95, 0.1}, {0.4, 0.9}};
+    const double ur = f.u_max - f.u_min, vr = f.v_max - f.v_min;
+    for (Vec2& p : loop.points) p = {f.u_min + p.x * ur, f.v_min + p.y * vr};
+    f.loops = {loop};
+    s.faces.push_back(f);
+    s.bbox.extend(sphere.box);
+    s.bbox.extend(cyl.box);
+    return s;
+}
+
+Scene sphere_scene() {
+    const AnalyticPatch sphere = sphere_patch(0.7);
+    Scene s;
+    s.faces.push_back(make_face(sphere, 1, 6));
+    s.bbox.extend(sphere.box);
+    return s;
+}
+
+std::vector<Camera> cameras(const Scene& s) {
+    std::vector<Camera> out;
+    CameraSpec base;
+    base.width = 96;
+    base.height = 72;
+    for (const char* view : {"iso", "front", "top", "left"}) out.emplace_back(named_view(view, s.bbox, base));
+    base.projection = Projection::orthographic;
+    out.emplace_back(named_view("iso", s.bbox, base));
+    base.width = 40;  // another frame size: the context's framebuffer is remade
+    out.emplace_back(named_view("right", s.bbox, base));
+    return out;
+}
+
+void expect_identical(const RenderResult& a, const RenderResult& b) {
+    EXPECT_TRUE(a.image.rgba == b.image.rgba);
+    EXPECT_TRUE(a.image.z == b.image.z);
+    EXPECT_TRUE(a.image.normal == b.image.normal);
+    EXPECT_TRUE(a.image.face == b.image.face);
+    EXPECT_TRUE(a.image.u == b.image.u);
+    EXPECT_TRUE(a.image.v == b.image.v);
+    EXPECT_TRUE(a.image.iterations == b.image.iterations);
+    EXPECT_EQ(a.stats.pixels_hit, b.stats.pixels_hit);
+    EXPECT_EQ(a.stats.iteration_histogram, b.stats.iteration_histogram);
+    EXPECT_EQ(a.stats.fallback, b.stats.fallback);
+    EXPECT_EQ(a.stats.map_triangles, b.stats.map_triangles);
+}
+
+}  // namespace
+
+TEST(PreparedScene, ManyViewsGiveTheImagesOfFreshRenders) {
+    const Scene scene = two_face_scene(), other = sphere_scene();
+    const PreparedScene prepared = prepare(scene, 2), prepared_other = prepare(other, 1);
+    EXPECT_EQ(&prepared.scene(), &scene);
+    EXPECT_EQ(prepared.faces().size(), 2u);
+    EXPECT_TRUE(prepared.faces()[1].trim.trimmed());
+    EXPECT_GT(prepared.map_mesh().triangles(), 0u);
+    EXPECT_NE(prepared.id(), prepared_other.id());
+    for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin})
+        for (const Camera& cam : cameras(scene)) {
+            SCOPED_TRACE(std::string(newton_method_name(m)) + " " + std::to_string(cam.width()));
+            RenderOptions o1, o2;
+            o1.method = o2.method = m;
+            o1.threads = 1;
+            o2.threads = 2;
+            const RenderResult fresh = render(scene, cam, o1);
+            EXPECT_GT(fresh.stats.pixels_hit, 100u);
+            EXPECT_GE(fresh.stats.prepare_ms, 0.0);
+            const RenderResult a = render(prepared, cam, o1);
+            EXPECT_EQ(a.stats.prepare_ms, 0.0);
+            expect_identical(fresh, a);
+            // Another prepared scene in between: the map's kept buffers change hands.
+            EXPECT_GT(render(prepared_other, cam, o2).stats.pixels_hit, 0u);
+            expect_identical(fresh, render(prepared, cam, o2));
+        }
+}
+
+TEST(PreparedScene, ConcurrentFramesOfOnePreparedScene) {
+    const Scene scene = two_face_scene();
+    const std::shared_ptr<const Scene> owned = std::make_shared<const Scene>(scene);
+    const PreparedScene prepared = prepare(owned);
+    const std::vector<Camera> cams = cameras(scene);
+    std::vector<RenderResult> fresh;
+    for (const Camera& cam : cams) fresh.push_back(render(scene, cam, RenderOptions{}));
+    std::vector<std::vector<RenderResult>> got(3);
+    std::vector<std::thread> threads;
+    for (size_t t = 0; t < got.size(); ++t)
+        threads.emplace_back([&, t] {
+            RenderOptions o;
+            o.threads = 1;
+            for (const Camera& cam : cams) got[t].push_back(render(prepared, cam, o));
+        });
+    for (std::thread& t : threads) t.join();
+    for (const std::vector<RenderResult>& g : got)
+        for (size_t k = 0; k < cams.size(); ++k) expect_identical(fresh[k], g[k]);
+}
+
+TEST(PreparedScene, ChecksFaceNumbering) {
+    Scene s = sphere_scene();
+    s.faces[0].index = 2;
+    EXPECT_THROW(prepare(s), Error);
+    EXPECT_THROW(prepare(std::shared_ptr<const Scene>()), Error);
+}
