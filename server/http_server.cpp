@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -100,6 +101,7 @@ private:
 // One connection's socket, read buffer and state across its requests.
 struct Connection {
     socket_t sock = -1;
+    const std::atomic<socket_t>* listening = nullptr;  // INVALID_SOCKET once the server stops
     std::string remote_ip, local_ip;
     int remote_port = 0, local_port = 0;
     std::array<char, kReadBufferBytes> buffer{};
@@ -228,6 +230,7 @@ private:
 
     bool wait_readable() {
         for (;;) {
+            if (*c_.listening == INVALID_SOCKET) return false;  // stopping: no request waits for its bytes
             const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline() - Clock::now()).count();
             if (left <= 0) {
                 c_.failure = in_headers_ ? ReadFailure::header_timeout : ReadFailure::body_timeout;
@@ -364,6 +367,7 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
 bool GuardedServer::serve_connection(socket_t sock) {
     Connection c;
     c.sock = sock;
+    c.listening = &svr_sock_;
     sockaddr_storage a{};
     socklen_t len = sizeof a;
     if (::getpeername(sock, reinterpret_cast<sockaddr*>(&a), &len) == 0) c.remote_ip = address_of(a, c.remote_port);

@@ -298,3 +298,16 @@ def test_keep_alive_answers_without_delay(url):
 def test_long_target_problem_status(url):
     r = requests.get(url + "/v1/jobs?x=" + "a" * 9000, timeout=TIMEOUT)
     check_problem(r, 414)
+
+
+def test_stop_does_not_wait_for_slow_clients(own_server):
+    """SIGTERM stops the service promptly although a client is still sending
+    its headers (the header deadline is 10 s)."""
+    s = own_server()
+    with connect(s.url) as sock:
+        sock.sendall(b"POST /v1/renders HTTP/1.1\r\nHost: x\r\nX-Slow: ")
+        time.sleep(0.3)
+        t = time.monotonic()
+        s.proc.terminate()
+        s.proc.wait(timeout=30)
+        assert time.monotonic() - t < 3
