@@ -67,7 +67,7 @@ void add_serve_command(CLI::App& app) {
         ->envname("NURBSRT_CACHE_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--header-timeout", c->header_timeout_s,
                     "seconds for a request's line and headers to arrive (408 beyond); also the grace\n"
-                    "before --min-body-rate applies")
+                    "before --min-body-rate-kib applies")
         ->envname("NURBSRT_HEADER_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--min-body-rate-kib", *body_rate_kib,
                     "KiB/s a request body must arrive at on average after the grace (408 below)")
