@@ -115,60 +115,6 @@ bool textbook_step(const SurfaceDerivs& d, ScreenPoint s, double eps_det, Step& 
     return true;
 }
 
-NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
-                             double u0, double v0, const UvBox& box, const NewtonParams& params) {
-    NewtonResult res;
-    double u = u0, v = v0;
-    clamp_to_box(u, v, box);
-    bool clamped_once = false;
-    SurfaceDerivs d = evaluate_d1(projected, u, v);
-    double r = proposed_residual(d.S, camera, s);
-    for (int it = 0;; ++it) {
-        res.u = u;
-        res.v = v;
-        res.residual = r;
-        res.iterations = it;
-        if (r < params.eps) {                                                  // (12)
-            res.t = camera.hit_distance_from_depth(camera.depth(d.S), s);
-            camera.model_partials(d.S, d.Su, d.Sv, res.Cu, res.Cv);
-            res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
-            return res;
-        }
-        if (it == params.max_iterations) {
-            res.status = NewtonStatus::max_iterations;
-            return res;
-        }
-        Step st;
-        if (!proposed_step(d, s, params.eps_det, st)) {                        // (14)
-            res.status = NewtonStatus::singular;
-            return res;
-        }
-        double un = u + st.du, vn = v + st.dv;                                 // (5)
-        if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
-            res.status = NewtonStatus::left_domain;
-            return res;
-        }
-        SurfaceDerivs dn = evaluate_d1(projected, un, vn);
-        double rn = proposed_residual(dn.S, camera, s);
-        // (13); robust: backtrack along the (clamped) step before giving up.
-        for (int half = 0; params.robust && !(rn <= r) && half < 4; ++half) {
-            un = 0.5 * (u + un);
-            vn = 0.5 * (v + vn);
-            dn = evaluate_d1(projected, un, vn);
-            rn = proposed_residual(dn.S, camera, s);
-        }
-        if (!(rn <= r)) {                                                      // (13)
-            res.iterations = it + 1;
-            res.status = NewtonStatus::diverged;
-            return res;
-        }
-        u = un;
-        v = vn;
-        d = dn;
-        r = rn;
-    }
-}
-
 RayPlanes ray_planes(const Ray& ray) {
     const Vec3 dir = ray.dir;
     // Martin et al.: N1 from the two largest components of dir, so it is well defined.
@@ -180,25 +126,32 @@ RayPlanes ray_planes(const Ray& ray) {
     return {n1, n2, -dot(n1, ray.origin), -dot(n2, ray.origin)};
 }
 
-NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params) {
-    const RayPlanes pl = ray_planes(ray);
+namespace {
+
+// The Newton iteration both methods share: the loop, the termination rules
+// (12)-(14), the box handling and the bookkeeping of NewtonResult, written once.
+// `System` plugs in what the papers make differ (as pbrt-v4's NewtonBisection
+// takes its function): a template parameter, so each method's evaluation and
+// step inline into its own copy of the loop, with no indirect call per iteration.
+//   State eval(u, v)                  the surface and F at (u, v); State::r = ||F||,
+//                                     model units (12)
+//   bool step(state, eps_det, Step&)  the method's Newton step; false when
+//                                     singular by (14)
+//   void finish(state, NewtonResult&) t and the model-space partials at the root
+template <class System>
+NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox& box, const NewtonParams& params) {
     NewtonResult res;
     double u = u0, v = v0;
     clamp_to_box(u, v, box);
     bool clamped_once = false;
-    CartesianDerivs c = cartesian_d1(surface, u, v);
-    double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
-    double r = std::hypot(f1, f2);
+    auto s = sys.eval(u, v);
     for (int it = 0;; ++it) {
         res.u = u;
         res.v = v;
-        res.residual = r;
+        res.residual = s.r;
         res.iterations = it;
-        if (r < params.eps) {                                                  // (12)
-            res.t = dot(c.P - ray.origin, ray.dir);
-            res.Cu = c.Pu;
-            res.Cv = c.Pv;
+        if (s.r < params.eps) {                                                // (12)
+            sys.finish(s, res);
             res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
             return res;
         }
@@ -206,44 +159,99 @@ NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u
             res.status = NewtonStatus::max_iterations;
             return res;
         }
-        // J = [N1.C_u  N1.C_v; N2.C_u  N2.C_v] with the rational partials.
-        const double a = dot(pl.n1, c.Pu), b = dot(pl.n1, c.Pv);
-        const double cc = dot(pl.n2, c.Pu), e = dot(pl.n2, c.Pv);
-        const double det = a * e - b * cc;
-        if (!(std::abs(det) > params.eps_det * length(c.Pu) * length(c.Pv))) {  // (14)
+        Step st;
+        if (!sys.step(s, params.eps_det, st)) {                                // (14)
             res.status = NewtonStatus::singular;
             return res;
         }
-        double un = u - (e * f1 - b * f2) / det;                               // -J^{-1} F
-        double vn = v - (-cc * f1 + a * f2) / det;
+        double un = u + st.du, vn = v + st.dv;                                 // (5)
         if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
             res.status = NewtonStatus::left_domain;
             return res;
         }
-        CartesianDerivs cn = cartesian_d1(surface, un, vn);
-        double g1 = dot(pl.n1, cn.P) + pl.d1, g2 = dot(pl.n2, cn.P) + pl.d2;
-        double rn = std::hypot(g1, g2);
-        // (13); robust: backtrack along the (clamped) step before giving up.
-        for (int half = 0; params.robust && !(rn <= r) && half < 4; ++half) {
+        auto sn = sys.eval(un, vn);
+        // (13); robust: backtrack along the (clamped) step before giving up. Four
+        // halvings shrink the step to 1/16: enough to get back under an overshoot
+        // near a silhouette, few enough that a true divergence is declared quickly.
+        for (int half = 0; params.robust && !(sn.r <= s.r) && half < 4; ++half) {
             un = 0.5 * (u + un);
             vn = 0.5 * (v + vn);
-            cn = cartesian_d1(surface, un, vn);
-            g1 = dot(pl.n1, cn.P) + pl.d1;
-            g2 = dot(pl.n2, cn.P) + pl.d2;
-            rn = std::hypot(g1, g2);
+            sn = sys.eval(un, vn);
         }
-        if (!(rn <= r)) {                                                      // (13)
+        if (!(sn.r <= s.r)) {                                                  // (13)
             res.iterations = it + 1;
             res.status = NewtonStatus::diverged;
             return res;
         }
         u = un;
         v = vn;
-        c = cn;
-        f1 = g1;
-        f2 = g2;
-        r = rn;
+        s = sn;
     }
+}
+
+// Sisojevs & Glazs 2010: the patch projected into the image plane, homogeneous
+// (non-rational) derivatives, the step of eq. (9)-(11).
+struct ProposedSystem {
+    const NurbsSurface& projected;
+    const Camera& camera;
+    ScreenPoint s;
+    struct State {
+        SurfaceDerivs d;
+        double r;
+    };
+    State eval(double u, double v) const {
+        const SurfaceDerivs d = evaluate_d1(projected, u, v);
+        return {d, proposed_residual(d.S, camera, s)};
+    }
+    bool step(const State& st, double eps_det, Step& out) const { return proposed_step(st.d, s, eps_det, out); }
+    void finish(const State& st, NewtonResult& res) const {
+        res.t = camera.hit_distance_from_depth(camera.depth(st.d.S), s);
+        camera.model_partials(st.d.S, st.d.Su, st.d.Sv, res.Cu, res.Cv);
+    }
+};
+
+// Martin et al. 2000: the Cartesian surface and its rational partials, the ray
+// as two planes; F = the point's signed distances from the planes.
+struct MartinSystem {
+    const NurbsSurface& surface;
+    const Ray& ray;
+    RayPlanes pl;
+    struct State {
+        CartesianDerivs c;
+        double f1, f2, r;
+    };
+    State eval(double u, double v) const {
+        const CartesianDerivs c = cartesian_d1(surface, u, v);
+        const double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
+        return {c, f1, f2, std::hypot(f1, f2)};
+    }
+    bool step(const State& st, double eps_det, Step& out) const {
+        // J = [N1.C_u  N1.C_v; N2.C_u  N2.C_v] with the rational partials.
+        const CartesianDerivs& c = st.c;
+        const double a = dot(pl.n1, c.Pu), b = dot(pl.n1, c.Pv);
+        const double cc = dot(pl.n2, c.Pu), e = dot(pl.n2, c.Pv);
+        const double det = a * e - b * cc;
+        if (!(std::abs(det) > eps_det * length(c.Pu) * length(c.Pv))) return false;  // (14)
+        out = {-(e * st.f1 - b * st.f2) / det, -(-cc * st.f1 + a * st.f2) / det};   // -J^{-1} F
+        return true;
+    }
+    void finish(const State& st, NewtonResult& res) const {
+        res.t = dot(st.c.P - ray.origin, ray.dir);
+        res.Cu = st.c.Pu;
+        res.Cv = st.c.Pv;
+    }
+};
+
+}  // namespace
+
+NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
+                             double u0, double v0, const UvBox& box, const NewtonParams& params) {
+    return newton_iterate(ProposedSystem{projected, camera, s}, u0, v0, box, params);
+}
+
+NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
+                           const UvBox& box, const NewtonParams& params) {
+    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray)}, u0, v0, box, params);
 }
 
 }  // namespace nurbsrt

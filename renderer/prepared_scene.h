@@ -26,7 +26,7 @@ namespace nurbsrt {
 struct PreparedFace {
     TrimTester trim;
     UvBox box;             // parameter box with seams (face_uv_box)
-    double near_uv = 0;    // trim-tolerance band for crack filling (render.cpp, Solver::solve)
+    double near_uv = 0;    // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
 };
 
 // The preliminary map's mesh: all faces' FaceMesh vertices that have a (u, v),

@@ -26,7 +26,7 @@ struct RenderOptions {
     MapPrecision map_precision = MapPrecision::float32;
     int threads = 0;           // 0: all hardware threads
     NewtonParams newton;       // newton.eps <= 0 (the default): default_newton_eps(scene.bbox)
-    bool rescue = true;        // retry failed pixels with their neighbours' faces (see render.cpp)
+    bool rescue = true;        // retry failed pixels with their neighbours' faces (pass_rescue.cpp)
     Color background{0, 0, 0}; // with alpha 0
     // Called with the fraction done in (0, 1], from the rendering threads (one call
     // at a time, fractions increasing), about every 2% of the frame's rows and once

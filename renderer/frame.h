@@ -1,0 +1,135 @@
+// What the passes of one frame share (render.cpp runs them in order): the frame's
+// inputs (FrameContext), its per-pixel buffers (FrameBuffers), the per-pixel
+// result of a solve (PixelHit), the neighbourhood walk, row-parallel loops with
+// progress and cancellation.
+#pragma once
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <mutex>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "renderer/camera.h"
+#include "renderer/preliminary_map.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render.h"
+#include "renderer/scene.h"
+
+namespace nurbsrt {
+
+// Per-pixel solve result of a pass.
+struct PixelHit {
+    uint32_t face = 0;       // 0: no hit
+    float u = 0, v = 0;
+    // Unit shading normal (oriented by the face) from the solve's last partials;
+    // (0, 0, 0) where they were degenerate: shading then takes surface_normal's limits.
+    float nx = 0, ny = 0, nz = 0;
+    double t = std::numeric_limits<double>::infinity();
+    uint8_t iterations = 0;
+};
+
+// How one solve of a pixel ended (FrameBuffers::outcome for the primary solve):
+// the Newton status, or converged outside the trim (kTrimmed), or outside it but
+// within the face's trim-tolerance band (kNearTrim, rescue only).
+enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLeftDomain, kBehind, kTrimmed, kNearTrim };
+
+// Which rescue gave a pixel its hit (RenderStats::rescue_*).
+enum RescueKind : uint8_t { kNoRescue, kRescueNeighbour, kRescueSilhouette, kRescueGeneral, kRescueTrimTol };
+
+// The frame's per-pixel arrays, row-major like the map (PreliminaryMap::index).
+struct FrameBuffers {
+    explicit FrameBuffers(size_t npx) : first(npx), outcome(npx, kNone), rescued(npx, kNoRescue) {}
+    std::vector<PixelHit> first;    // the primary solve's hit (face 0: none)
+    std::vector<uint8_t> outcome;   // Outcome of the primary solve; kNone where the map has no face
+    std::vector<PixelHit> hits;     // the final hit: `first`, then the rescue and nearer-sheet passes
+    std::vector<uint8_t> rescued;   // RescueKind of the pixel's hit
+};
+
+// Fraction-done reporting for RenderOptions::progress: rows are counted with one
+// relaxed atomic add; a thread that crosses the next ~2% mark reports, serialized
+// by a mutex it only try-locks (a busy reporter just skips one report).
+class Progress {
+public:
+    Progress(const std::function<void(double)>& fn, int64_t total)
+        : fn_(fn), total_(std::max<int64_t>(total, 1)), step_(std::max<int64_t>(total_ / 50, 1)), next_(step_) {}
+    void add(int64_t n);
+    void finish();
+
+private:
+    void report(double f);
+    const std::function<void(double)>& fn_;
+    const int64_t total_, step_;
+    std::atomic<int64_t> done_{0}, next_;
+    std::mutex m_;
+    double last_ = 0;
+};
+
+// RenderOptions::cancel: blocks of rows are skipped once it is set, and the pass
+// then ends with Error(canceled) (a partial pass is never used).
+inline bool canceled(const RenderOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
+void throw_if_canceled(const RenderOptions& o);
+
+// The inputs of one frame, shared read-only by its passes.
+struct FrameContext {
+    const PreparedScene& prepared;
+    const Scene& scene;
+    const Camera& camera;
+    const PreliminaryMap& map;
+    const RenderOptions& options;
+    tbb::task_arena& arena;
+    Progress& progress;
+    int width, height;
+    uint32_t nfaces;
+
+    bool in_frame(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
+    size_t pixels() const { return static_cast<size_t>(width) * height; }
+};
+
+// Calls fn(ni, nj) for every pixel of the (2 radius + 1)^2 square around (i, j)
+// inside the width x height frame, the pixel itself included, rows top to bottom, each left to
+// right (the order decides which start is tried first, so it is fixed). A fn that
+// returns bool stops the walk by returning false.
+template <class F>
+void for_each_neighbour(int width, int height, int i, int j, int radius, F&& fn) {
+    const int j1 = std::min(j + radius, height - 1), i1 = std::min(i + radius, width - 1);
+    for (int nj = std::max(j - radius, 0); nj <= j1; ++nj)
+        for (int ni = std::max(i - radius, 0); ni <= i1; ++ni) {
+            if constexpr (std::is_same_v<std::invoke_result_t<F&, int, int>, bool>) {
+                if (!fn(ni, nj)) return;
+            } else {
+                fn(ni, nj);
+            }
+        }
+}
+
+template <class F>
+void for_each_neighbour(const FrameContext& c, int i, int j, int radius, F&& fn) {
+    for_each_neighbour(c.width, c.height, i, j, radius, std::forward<F>(fn));
+}
+
+// Rows of the frame in parallel, in blocks of kRowGrain rows (a block is the unit
+// of cancellation and progress), fn(j) per row.
+template <class F>
+void parallel_rows(const FrameContext& c, bool report_progress, F&& fn) {
+    // Small blocks balance the uneven cost of rows (rows across silhouettes and
+    // cracks need the rescue) between threads, and bound the work done after a cancel.
+    constexpr int kRowGrain = 4;
+    c.arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, c.height, kRowGrain), [&](const tbb::blocked_range<int>& r) {
+            if (canceled(c.options)) return;
+            for (int j = r.begin(); j < r.end(); ++j) fn(j);
+            if (report_progress) c.progress.add(r.end() - r.begin());
+        });
+    });
+}
+
+}  // namespace nurbsrt

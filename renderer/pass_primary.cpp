@@ -1,0 +1,20 @@
+// The primary pass: one Newton solve per map pixel from the map's (u, v), with
+// the trim test (PAPER.md steps 3-4; Sisojevs & Glazs 2010, Table 1 times this).
+#include "renderer/passes.h"
+
+namespace nurbsrt {
+
+void primary_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b) {
+    const PreliminaryMap& map = c.map;
+    parallel_rows(c, true, [&](int j) {
+        for (int i = 0; i < c.width; ++i) {
+            const size_t k = map.index(i, j);
+            const uint32_t id = map.face[k];
+            if (id == 0 || id > c.nfaces) continue;
+            b.outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], b.first[k]);
+        }
+    });
+    throw_if_canceled(c.options);
+}
+
+}  // namespace nurbsrt

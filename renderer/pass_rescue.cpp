@@ -1,0 +1,273 @@
+// The rescue of pixels without a primary hit. Reads only the map and the hits of
+// the previous state, so every pixel's result is independent of the thread count.
+//  A (neighbour / silhouette): the faces of the 8 neighbours, started from their
+//    converged (u, v) (their hits), then from their map (u, v); the pixel's own map
+//    face is retried from the neighbours' converged (u, v). Pixels the map calls
+//    background are tried the same way when they touch a hit: the exact silhouette
+//    is not the mesh's.
+//  B (general): if A found nothing and the pixel should be covered (its map face
+//    failed, or at least two 4-neighbours are hit), every face of the 5x5
+//    neighbourhood from several starts: the converged (u, v) of its pixels, its
+//    map (u, v), the face's mesh vertex projected nearest to the pixel, and the
+//    middle of the face's parameter box.
+//  Crack pixels (hit on opposite sides, or on 3 of 4 sides) also accept a hit
+//    just outside a trim loop, within the face's tolerance band (Solver::solve).
+// All rescue solves use the robust Newton (newton.h); the nearest hit wins.
+// Then silhouette growth repeats the rescue next to the pixels it filled.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <mutex>
+
+#include "renderer/passes.h"
+
+namespace nurbsrt {
+
+namespace {
+
+// At most this many distinct starts (face, u, v) are solved per rescued pixel. A
+// needs at most 8 + 8 + 2 (each neighbour's hit and map start, the own map start
+// and one own converged start); the rest is B's budget. It bounds a pixel's cost
+// where many small faces meet, and sizes the stack array of tried starts.
+constexpr int kMaxStarts = 64;
+// A's neighbourhood: the 8 pixels around (a hit there is at most a pixel away).
+constexpr int kNeighbourRadius = 1;
+// B's neighbourhood: 5x5, one ring beyond A's, for the faces a pixel-wide sliver
+// of the map (a thin face, a coarse silhouette) hides from the 8 neighbours.
+constexpr int kGeneralRadius = 2;
+// B's faces: at most one per pixel of its 5x5 neighbourhood besides the pixel
+// itself; more distinct faces there are a pathological corner where the start
+// budget (kMaxStarts) would run out anyway.
+constexpr int kMaxGeneralFaces = 24;
+// Silhouette growth passes: each adds one pixel ring outside the map's
+// silhouette; the exact silhouette lies within a few pixels of the mesh's (its
+// deflection), so 64 is never reached in practice and only bounds the work.
+constexpr int kMaxGrowthPasses = 64;
+
+// Screen positions (sx, sy) of each face's map-mesh vertices for B's
+// nearest-vertex start, projected once per face and frame on first use instead of
+// once per rescued pixel: the scan is O(vertices) and a face of the ducks has
+// ~4000, which made this search most of the rescue's time (`nurbsrt bench`). Same
+// arithmetic as projecting in place (X/D, Y/D of Camera::project_h), so the chosen
+// vertex is unchanged; NaN marks a vertex behind the eye.
+class MeshScreenPoints {
+public:
+    explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
+    const std::vector<Vec2>& operator()(uint32_t id) const {
+        Entry& e = faces_[id - 1];
+        std::call_once(e.once, [&] {
+            const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+            const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
+            e.pts.resize(n);
+            for (size_t m = 0; m < n; ++m) {
+                const Vec4 ph = c_.camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
+                e.pts[m] = c_.camera.depth(ph) > 0 ? Vec2{ph.x / ph.z, ph.y / ph.z} : Vec2{NAN, NAN};
+            }
+        });
+        return e.pts;
+    }
+
+private:
+    struct Entry {
+        std::once_flag once;
+        std::vector<Vec2> pts;
+    };
+    const FrameContext& c_;
+    const std::unique_ptr<Entry[]> faces_;
+};
+
+// The rescue of one pixel (i, j) from the hits `src`: the starts tried so far
+// (each distinct start is solved once) and the nearest hits inside the trim and
+// within its tolerance band.
+class PixelRescue {
+public:
+    PixelRescue(const FrameContext& c, const Solver& solver, const std::vector<PixelHit>& src, int i, int j, bool crack)
+        : c_(c), solver_(solver), src_(src), i_(i), j_(j), crack_(crack) {}
+
+    void attempt(uint32_t id, float su, float sv) {
+        if (id == 0 || id > c_.nfaces) return;
+        for (int q = 0; q < ntried_; ++q)
+            if (tried_[q].id == id && tried_[q].u == su && tried_[q].v == sv) return;
+        if (ntried_ == kMaxStarts) return;
+        tried_[ntried_++] = {id, su, sv};
+        PixelHit h;
+        const Outcome o = solver_.solve(id, i_, j_, su, sv, solver_.robust, crack_, h);
+        if (o == kConverged && h.t < best.t) best = h;
+        if (o == kNearTrim && h.t < best_near.t) best_near = h;
+    }
+    // A: converged neighbours first (their uv is on the exact surface, next to this
+    // pixel), one start per face; then the map faces' starts; then the own map face.
+    void neighbour_starts(uint32_t own) {
+        const PreliminaryMap& map = c_.map;
+        uint32_t faces[2 * 8];  // two faces (hit, map) per neighbour at the most
+        int nf = 0;
+        for (int pass = 0; pass < 2; ++pass)
+            for_each_neighbour(c_, i_, j_, kNeighbourRadius, [&](int ni, int nj) {
+                if (ni == i_ && nj == j_) return;
+                const size_t n = map.index(ni, nj);
+                const uint32_t id = pass == 0 ? src_[n].face : map.face[n];
+                if (id == 0 || std::find(faces, faces + nf, id) != faces + nf) return;
+                faces[nf++] = id;
+                if (pass == 0) attempt(id, src_[n].u, src_[n].v);
+                else attempt(id, map.u[n], map.v[n]);
+            });
+        if (!own) return;
+        // The own map start was solved by the primary pass (not robust): retry it robustly.
+        const size_t k = map.index(i_, j_);
+        attempt(own, map.u[k], map.v[k]);
+        for_each_neighbour(c_, i_, j_, kNeighbourRadius, [&](int ni, int nj) {
+            const PixelHit& nh = src_[map.index(ni, nj)];
+            if (nh.face != own) return true;
+            attempt(own, nh.u, nh.v);
+            return false;  // one converged start of the own face is enough
+        });
+    }
+    // B: every face of the 5x5 neighbourhood, from each start it offers.
+    void general_starts(const MeshScreenPoints& screen_points) {
+        const PreliminaryMap& map = c_.map;
+        uint32_t faces[kMaxGeneralFaces];
+        int nf = 0;
+        for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
+            const size_t n = map.index(ni, nj);
+            for (const uint32_t id : {src_[n].face, map.face[n]})
+                if (id && id <= c_.nfaces && nf < kMaxGeneralFaces && std::find(faces, faces + nf, id) == faces + nf)
+                    faces[nf++] = id;
+        });
+        const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
+        for (int q = 0; q < nf; ++q) {
+            const uint32_t id = faces[q];
+            for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
+                const size_t n = map.index(ni, nj);
+                if (src_[n].face == id) attempt(id, src_[n].u, src_[n].v);
+                if (map.face[n] == id) attempt(id, map.u[n], map.v[n]);
+            });
+            // The face's mesh vertex nearest to the pixel on screen (in front of the eye).
+            const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+            const std::vector<Vec2>& pts = screen_points(id);
+            double bd = HUGE_VAL;
+            size_t bv = mesh.uv.size();
+            for (size_t m = 0; m < pts.size(); ++m) {
+                const double dx = pts[m].x - sp.sx, dy = pts[m].y - sp.sy, dd = dx * dx + dy * dy;
+                if (dd < bd) {  // false for NaN: a vertex behind the eye
+                    bd = dd;
+                    bv = m;
+                }
+            }
+            if (bv < mesh.uv.size())
+                attempt(id, static_cast<float>(mesh.uv[bv].x), static_cast<float>(mesh.uv[bv].y));
+            const UvBox& bx = c_.prepared.faces()[id - 1].box;  // and the middle of its box
+            attempt(id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
+        }
+    }
+
+    PixelHit best, best_near;
+
+private:
+    struct Start {
+        uint32_t id;
+        float u, v;
+    };
+    const FrameContext& c_;
+    const Solver& solver_;
+    const std::vector<PixelHit>& src_;
+    const int i_, j_;
+    const bool crack_;
+    Start tried_[kMaxStarts];
+    int ntried_ = 0;
+};
+
+// One pixel's rescue from the hits `src` (and the map); returns its kind, or kNoRescue.
+uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, int i,
+                     int j, const std::vector<PixelHit>& src, PixelHit& out) {
+    const size_t k = c.map.index(i, j);
+    auto hit_at = [&](int a, int b) { return c.in_frame(a, b) && src[c.map.index(a, b)].face != 0; };
+    const uint32_t own = c.map.face[k] <= c.nfaces ? c.map.face[k] : 0;
+    bool touches = false;
+    for_each_neighbour(c, i, j, kNeighbourRadius, [&](int ni, int nj) {
+        touches = hit_at(ni, nj);
+        return !touches;
+    });
+    if (!own && !touches) return kNoRescue;  // plain background
+    const bool l = hit_at(i - 1, j), r = hit_at(i + 1, j), u = hit_at(i, j - 1), d = hit_at(i, j + 1);
+    const int n4 = l + r + u + d;
+    const bool crack = (l && r) || (u && d) || n4 >= 3;
+
+    PixelRescue pr(c, solver, src, i, j, crack);
+    pr.neighbour_starts(own);
+    uint8_t kind = own ? kRescueNeighbour : kRescueSilhouette;
+    if (!pr.best.face && !pr.best_near.face && (own || n4 >= 2)) {
+        pr.general_starts(screen_points);
+        kind = kRescueGeneral;
+    }
+    // A hit inside a trim beats a near-trim one unless the latter is in front
+    // (a crack in a front face must not show the face behind it).
+    PixelHit best = pr.best;
+    if (pr.best_near.face && pr.best_near.t < best.t) {
+        best = pr.best_near;
+        kind = kRescueTrimTol;
+    }
+    if (!best.face) return kNoRescue;
+    out = best;
+    return kind;
+}
+
+// Silhouette growth: where the mesh is coarse, the exact silhouette can lie
+// several pixels outside the map's. Repeat the rescue on the background pixels
+// next to the last pass's new hits until none is added; each pass reads only the
+// previous state, so the result stays thread-independent.
+void grow_silhouettes(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                      FrameBuffers& b) {
+    const int W = c.width;
+    std::vector<size_t> fresh, cand;
+    for (size_t k = 0; k < c.pixels(); ++k)
+        if (b.rescued[k]) fresh.push_back(k);
+    std::vector<uint8_t> queued(c.pixels(), 0);
+    for (int pass = 0; pass < kMaxGrowthPasses && !fresh.empty(); ++pass) {
+        throw_if_canceled(c.options);
+        cand.clear();
+        for (const size_t k : fresh)
+            for_each_neighbour(c, static_cast<int>(k % W), static_cast<int>(k / W), kNeighbourRadius, [&](int ni, int nj) {
+                const size_t n = c.map.index(ni, nj);
+                if (!b.hits[n].face && !queued[n]) {
+                    queued[n] = 1;
+                    cand.push_back(n);
+                }
+            });
+        std::sort(cand.begin(), cand.end());
+        std::vector<PixelHit> got(cand.size());
+        std::vector<uint8_t> kinds(cand.size(), kNoRescue);
+        c.arena.execute([&] {
+            tbb::parallel_for(size_t(0), cand.size(), [&](size_t q) {
+                const size_t k = cand[q];
+                // b.hits is only written after this loop: every pixel reads the previous pass.
+                kinds[q] = rescue_pixel(c, solver, screen_points, static_cast<int>(k % W), static_cast<int>(k / W),
+                                        b.hits, got[q]);
+            });
+        });
+        fresh.clear();
+        for (size_t q = 0; q < cand.size(); ++q) {
+            queued[cand[q]] = 0;
+            if (!kinds[q]) continue;
+            b.hits[cand[q]] = got[q];
+            b.rescued[cand[q]] = kinds[q];
+            fresh.push_back(cand[q]);
+        }
+    }
+    throw_if_canceled(c.options);
+}
+
+}  // namespace
+
+void rescue_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b) {
+    const MeshScreenPoints screen_points(c);
+    parallel_rows(c, true, [&](int j) {
+        for (int i = 0; i < c.width; ++i) {
+            const size_t k = c.map.index(i, j);
+            if (!b.first[k].face) b.rescued[k] = rescue_pixel(c, solver, screen_points, i, j, b.first, b.hits[k]);
+        }
+    });
+    throw_if_canceled(c.options);
+    grow_silhouettes(c, solver, screen_points, b);
+}
+
+}  // namespace nurbsrt

@@ -1,0 +1,79 @@
+// Solver: a pixel's Newton solve of one face and its trim test (see pixel_solver.h).
+#include "renderer/pixel_solver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "renderer/nurbs.h"
+
+namespace nurbsrt {
+
+namespace {
+
+// Fills a hit of face `id` at (u, v), distance t, normal from the partials there.
+void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, Vec3 Cv, PixelHit& hit) {
+    hit.face = id;
+    hit.u = static_cast<float>(u);
+    hit.v = static_cast<float>(v);
+    hit.t = t;
+    Vec3 n;
+    if (!normal_from_partials(f.surface, Cu, Cv, f.reversed, n)) n = {0, 0, 0};
+    hit.nx = static_cast<float>(n.x);
+    hit.ny = static_cast<float>(n.y);
+    hit.nz = static_cast<float>(n.z);
+}
+
+}  // namespace
+
+Outcome Solver::solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
+                      PixelHit& hit) const {
+    const PreparedFace& ff = ctx.prepared.faces()[id - 1];
+    const Camera& camera = ctx.camera;
+    const NewtonResult r =
+        ctx.options.method == NewtonMethod::proposed
+            ? newton_proposed(projected[id - 1], camera, camera.pixel_screen(i, j), u0, v0, ff.box, p)
+            : newton_martin(ctx.scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, p);
+    hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
+    if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
+        border_gap_hit(id, i, j, r, hit))
+        return kNearTrim;
+    switch (r.status) {
+        case NewtonStatus::converged: break;
+        case NewtonStatus::diverged: return kDiverged;
+        case NewtonStatus::singular: return kSingular;
+        case NewtonStatus::max_iterations: return kMaxIter;
+        case NewtonStatus::left_domain: return kLeftDomain;
+        case NewtonStatus::behind_eye: return kBehind;
+    }
+    Outcome o = kConverged;
+    if (!ff.trim.inside({r.u, r.v})) {
+        if (!near || !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return kTrimmed;
+        o = kNearTrim;
+    }
+    set_hit(ctx.scene.faces[id - 1], id, r.u, r.v, r.t, r.Cu, r.Cv, hit);
+    return o;
+}
+
+// Adjacent faces of a CAD model meet only within their edges' tolerance: a ray
+// through the gap makes Newton stop on the face's parameter-box border, short
+// of the ray (the exact hit lies on the surface's extension). Such a stop counts
+// as a near hit when the border point is within the trim band in (u,v) and
+// within the same band in model units (band x surface speed) of the ray.
+bool Solver::border_gap_hit(uint32_t id, int i, int j, const NewtonResult& r, PixelHit& hit) const {
+    const PreparedFace& ff = ctx.prepared.faces()[id - 1];
+    const UvBox& b = ff.box;
+    if (!(r.u == b.u0 || r.u == b.u1 || r.v == b.v0 || r.v == b.v1)) return false;
+    if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
+        return false;
+    const CartesianDerivs c = cartesian_d1(ctx.scene.faces[id - 1].surface, r.u, r.v);
+    const Ray ray = ctx.camera.pixel_ray(i, j);
+    const Vec3 q = c.P - ray.origin;
+    const double t = dot(q, ray.dir);
+    const double gap = length(q - t * ray.dir);
+    const double band = ff.near_uv * std::max(length(c.Pu), length(c.Pv));
+    if (!(t > 0) || !(gap <= band)) return false;
+    set_hit(ctx.scene.faces[id - 1], id, r.u, r.v, t, c.Pu, c.Pv, hit);
+    return true;
+}
+
+}  // namespace nurbsrt

@@ -1,0 +1,34 @@
+// One Newton solve of a face at a pixel, with the trim test: what every pass of
+// the frame that solves (primary, rescue, nearer sheet) calls.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "renderer/frame.h"
+#include "renderer/newton.h"
+
+namespace nurbsrt {
+
+struct Solver {
+    const FrameContext& ctx;
+    const std::vector<NurbsSurface>& projected;  // proposed: the paper's projection to R^2, per frame
+    NewtonParams params;                         // the primary solves (the paper's criteria)
+    NewtonParams robust;                         // the rescue's solves (NewtonParams::robust)
+
+    // One Newton solve of face id at pixel (i, j) from (u0, v0); hit if converged and
+    // inside the trim. With `near`, a hit converged outside the trim but within the
+    // face's trim-tolerance band is also returned (as kNearTrim): the sampled loops of
+    // two faces sharing an edge are each only within that tolerance of the true edge,
+    // so a ray through the sliver between the two polylines is rejected by both (a crack).
+    Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
+                  PixelHit& hit) const;
+    Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
+        return solve(id, i, j, u0, v0, params, false, hit);
+    }
+
+private:
+    bool border_gap_hit(uint32_t id, int i, int j, const NewtonResult& r, PixelHit& hit) const;
+};
+
+}  // namespace nurbsrt
