@@ -45,7 +45,7 @@
 //     diverged is declared (backtracking; Newton overshoots near silhouettes,
 //     where the Jacobian of (3) becomes singular).
 //
-// The loops allocate nothing (nurbs.h evaluation is stack-only up to kMaxFastDegree).
+// The iteration allocates nothing (nurbs.h evaluation is stack-only up to kMaxFastDegree).
 #pragma once
 
 #include <cstdint>

@@ -1,6 +1,6 @@
 // "Identical output for 1 and 2 threads" on real models, end to end as a user runs
 // it (import -> named view -> render): every AOV buffer and every statistic except
-// timings must be bit-identical. The renderer is designed for it (render.cpp: each
+// timings must be bit-identical. The renderer is designed for it (its passes: each
 // pixel's result depends only on the map and the previous pass, never on which
 // thread ran first), and this is what would catch a race or an order dependence.
 #include <gtest/gtest.h>
