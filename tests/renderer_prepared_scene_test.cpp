@@ -11,6 +11,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/render.h"
 #include "renderer_test_surfaces.h"
+#include "tests/support/render_compare.h"
 
 using namespace nurbsrt;
 using namespace nurbsrt::testing;
@@ -56,19 +57,6 @@ std::vector<Camera> cameras(const Scene& s) {
     return out;
 }
 
-void expect_identical(const RenderResult& a, const RenderResult& b) {
-    EXPECT_TRUE(a.image.rgba == b.image.rgba);
-    EXPECT_TRUE(a.image.z == b.image.z);
-    EXPECT_TRUE(a.image.normal == b.image.normal);
-    EXPECT_TRUE(a.image.face == b.image.face);
-    EXPECT_TRUE(a.image.u == b.image.u);
-    EXPECT_TRUE(a.image.v == b.image.v);
-    EXPECT_TRUE(a.image.iterations == b.image.iterations);
-    EXPECT_EQ(a.stats.pixels_hit, b.stats.pixels_hit);
-    EXPECT_EQ(a.stats.iteration_histogram, b.stats.iteration_histogram);
-    EXPECT_EQ(a.stats.fallback, b.stats.fallback);
-    EXPECT_EQ(a.stats.map_triangles, b.stats.map_triangles);
-}
 
 }  // namespace
 
@@ -92,10 +80,10 @@ TEST(PreparedScene, ManyViewsGiveTheImagesOfFreshRenders) {
             EXPECT_GE(fresh.stats.prepare_ms, 0.0);
             const RenderResult a = render(prepared, cam, o1);
             EXPECT_EQ(a.stats.prepare_ms, 0.0);
-            expect_identical(fresh, a);
+            test::expect_identical_renders(fresh, a);
             // Another prepared scene in between: the map's kept buffers change hands.
             EXPECT_GT(render(prepared_other, cam, o2).stats.pixels_hit, 0u);
-            expect_identical(fresh, render(prepared, cam, o2));
+            test::expect_identical_renders(fresh, render(prepared, cam, o2));
         }
 }
 
@@ -116,7 +104,7 @@ TEST(PreparedScene, ConcurrentFramesOfOnePreparedScene) {
         });
     for (std::thread& t : threads) t.join();
     for (const std::vector<RenderResult>& g : got)
-        for (size_t k = 0; k < cams.size(); ++k) expect_identical(fresh[k], g[k]);
+        for (size_t k = 0; k < cams.size(); ++k) test::expect_identical_renders(fresh[k], g[k]);
 }
 
 TEST(PreparedScene, ChecksFaceNumbering) {
