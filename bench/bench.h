@@ -1,5 +1,5 @@
-// `nurbsrt bench`: the paper's Table 1 (PAPER.md, section 3) and the peers and
-// scaling figures of issue 5, measured on this machine and returned as one JSON
+// `nurbsrt bench`: the paper's Table 1 (Sisojevs & Glazs 2010, section 3) and the peers and
+// scaling figures, measured on this machine and returned as one JSON
 // document; the Markdown report is generated from that same document.
 #pragma once
 

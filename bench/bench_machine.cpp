@@ -1,4 +1,4 @@
-// The machine a run's figures come from (issue 5: every figure with its machine):
+// The machine a run's figures come from (every figure comes with its machine):
 // CPU model, cores, load, memory, kernel, date, compiler and build type.
 #include <sys/utsname.h>
 #include <unistd.h>

@@ -24,7 +24,7 @@ struct SceneDef {
     int grid_n;          // n x n x n copies (1: the file as it is)
 };
 
-// Issue 5: the paper's three scenes mapped onto ../shared/models.
+// The paper's three scenes, mapped onto ../shared/models.
 const SceneDef kPaperScenes[] = {
     {"mobile_phone", "Mobile phone", "step/bug27693_cornetta-step.stp", 1},
     {"machine_component", "Machine component", "step/trj8_b1-ec-214.stp", 1},

@@ -1,4 +1,4 @@
-// The paper's Table 1 (PAPER.md section 3): per scene, `proposed` (eq. 9-11)
+// The paper's Table 1 (Sisojevs & Glazs 2010, section 3): per scene, `proposed` (eq. 9-11)
 // against `martin` (Martin et al. 2000) at one ray per pixel on the SAME
 // preliminary map (render options identical except the method; the map is
 // deterministic). Newton-stage and whole-frame times are medians over ctx.runs

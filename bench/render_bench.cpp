@@ -1,5 +1,5 @@
 // Renderer benchmarks (Google Benchmark): the Newton stage of `proposed`
-// (PAPER.md eq. 9-11) against `martin` (Martin et al. 2000) on the same
+// (Sisojevs & Glazs 2010, eq. 9-11) against `martin` (Martin et al. 2000) on the same
 // preliminary map, the paper's Table 1 scenes at 512x512, one ray per pixel.
 //
 // The preliminary map is deterministic (same scene, camera and precision give
@@ -39,7 +39,7 @@ std::string models_dir() {
     return std::string(NURBSRT_SOURCE_DIR) + "/../shared/models";
 }
 
-// The paper's three scenes (issue 5 maps them onto our shared models).
+// The paper's three scenes (mapped onto ../shared/models).
 struct BenchScene {
     const char* name;
     const char* file;   // relative to models_dir()

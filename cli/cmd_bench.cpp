@@ -1,4 +1,4 @@
-// nurbsrt bench: the paper's Table 1 and the peer and scaling figures of issue 5
+// nurbsrt bench: the paper's Table 1 and the peer and scaling figures
 // (bench/bench.h), as Markdown (stdout by default) and JSON.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

@@ -1,6 +1,6 @@
 // The camera and its pixel rays (DESIGN.md "Camera and pixel rays", fixed
 // contract), the named views fitted to a bounding box, and the paper's
-// projection of homogeneous control points to the image plane (PAPER.md,
+// projection of homogeneous control points to the image plane (Sisojevs & Glazs 2010,
 // "Projection to R^2", the x, y, w of eq. 8).
 #pragma once
 

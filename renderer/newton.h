@@ -1,6 +1,6 @@
 // Per-pixel Newton iteration for the ray/patch intersection, two methods:
 //
-//  proposed  (PAPER.md eq. 3, 8-11): on the patch projected into the image plane
+//  proposed  (Sisojevs & Glazs 2010, eq. 3, 8-11): on the patch projected into the image plane
 //            (Camera::project_h; its (X, Y, D) are the paper's (x, y, w)), solve
 //            F(u,v) = (X/D - xR, Y/D - yR) = 0 with the step
 //              (du, dv) = (D / M) (M_U, M_V),                                  (9)
@@ -14,7 +14,7 @@
 //            surface C = S / w, Jacobian from the rational partials
 //            C_u = (S_u.xyz - C S_u.w) / w; step -J^{-1} F.
 //
-// Termination, identical rules for both methods (PAPER.md "Termination Criteria"):
+// Termination, identical rules for both methods (Sisojevs & Glazs 2010, "Termination Criteria"):
 //   (12) success        ||F|| < eps, measured in MODEL units for both methods:
 //                       martin's F is already the distance from C to the ray (two
 //                       orthonormal plane distances); proposed's image-plane residual

@@ -1,5 +1,5 @@
 // The primary pass: one Newton solve per map pixel from the map's (u, v), with
-// the trim test (PAPER.md steps 3-4; Sisojevs & Glazs 2010, Table 1 times this).
+// the trim test (Sisojevs & Glazs 2010, section 2; their Table 1 times this).
 #include "renderer/passes.h"
 
 namespace nurbsrt {

@@ -1,6 +1,6 @@
 // The passes of a frame, in the order render() runs them (render.cpp):
 //   primary_pass       Newton per map pixel from the map's start, trim test
-//                      (PAPER.md steps 3-4; the solves the paper's statistics describe)
+//                      (Sisojevs & Glazs 2010, section 2; the solves the paper's statistics describe)
 //   rescue_pass        pixels without a primary hit, from their neighbours' faces
 //                      and starts; then silhouette growth (pass_rescue.cpp)
 //   nearer_sheet_pass  depth spikes re-solved from their neighbours (pass_nearer.cpp)

@@ -1,4 +1,4 @@
-// The preliminary map (PAPER.md "Preprocessing", eq. 4): every face's (u,v) mesh
+// The preliminary map (Sisojevs & Glazs 2010, "Preprocessing", eq. 4): every face's (u,v) mesh
 // is rasterized with OpenGL into a face-id buffer and a (u,v) buffer, so each
 // pixel gets the face it most likely hits and a start (u0, v0) for Newton.
 //

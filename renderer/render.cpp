@@ -59,7 +59,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     st.threads = threads;
     st.faces = st.patches = scene.faces.size();
 
-    // 1-2. Preliminary map (PAPER.md eq. 4).
+    // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
     auto t0 = Clock::now();
     throw_if_canceled(options);
     const PreliminaryMap map = render_preliminary_map(prepared, camera, options.map_precision);

@@ -15,7 +15,7 @@ namespace nurbsrt {
 // A clamped, non-periodic, tensor-product (rational) B-spline surface
 //   S(u,v) = sum_i sum_j N_i,p(u) N_j,q(v) P^w_ij          (homogeneous form)
 // with P^w_ij = (w_ij x_ij, w_ij y_ij, w_ij z_ij, w_ij); the Cartesian surface
-// is S^w / w (PAPER.md eq. 2). Control points are stored u-major:
+// is S^w / w (Sisojevs & Glazs 2010, eq. 2). Control points are stored u-major:
 // cp[i * num_v + j] for i in [0, num_u), j in [0, num_v).
 struct NurbsSurface {
     int degree_u = 0, degree_v = 0;

@@ -23,7 +23,7 @@
 //    its 8 neighbours' OCCT rays differs in hit/face or jumps in t (near_true_edge),
 //    it is within one pixel of a real edge and moves to the edge band (counted and
 //    printed separately).
-//  * Criteria on the non-edge samples (from the issue):
+//  * Criteria on the non-edge samples:
 //      hit/miss agreement >= 99.9 %;
 //      where both hit, |t_ours - t_occt| <= 1e-6 x bbox diagonal on >= 99.9 %;
 //      face id agrees (or a different face at the same t that our hit point lies on:
@@ -85,13 +85,13 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // ---------------------------------------------------------------------------------
 // Tolerances (each one's reason)
 // ---------------------------------------------------------------------------------
-// The issue's accuracy bound on the hit distance, relative to the bbox diagonal.
+// The accuracy bound on the hit distance, relative to the bbox diagonal.
 // Our Z AOV is float: its quantization (2^-24 relative, t <= ~2 diagonals for the
 // fitted named views) is ~1e-7 of the diagonal, an order below this bound, so
 // reading t from the AOV does not eat the budget. We reconstruct the hit point from
 // the same float t, which is likewise ~1e-7 x diag off along the ray.
 constexpr double kDtRel = 1e-6;
-// The issue's pass rates: at most 1 failing sample per 1000.
+// The pass rates: at most 1 failing sample per 1000.
 constexpr int kPerMille = 1;
 // "Our hit lies on the face": distance from the point to the (trimmed) face at most
 // max(kOnFaceRel x diag, kOnFaceTolFactor x BRep_Tool::Tolerance(face)). The first

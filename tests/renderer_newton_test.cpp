@@ -1,4 +1,4 @@
-// Newton iteration (PAPER.md eq. 5-14 and Martin et al.): accuracy against exact
+// Newton iteration (Sisojevs & Glazs 2010, eq. 5-14 and Martin et al.): accuracy against exact
 // ray intersections of analytic patches, equality of the proposed step with the
 // textbook Newton step, agreement of the two methods, termination criteria.
 #include <gtest/gtest.h>
@@ -51,7 +51,7 @@ TEST(RendererNewton, TestPatchesAreExact) {
         }
 }
 
-// The note in PAPER.md: (du, dv) = (w / M)(M_U, M_V) is exactly -J^{-1} F.
+// Cramer's rule on eq. (6)-(7): (du, dv) = (w / M)(M_U, M_V) is exactly -J^{-1} F.
 TEST(RendererNewton, ProposedStepEqualsTextbookStep) {
     std::mt19937_64 rng(11);
     std::uniform_real_distribution<double> U(0, 1);
