@@ -293,7 +293,6 @@ GuardedServer::GuardedServer(const ConnectionLimits& limits) : limits_(limits), 
     const size_t threads = static_cast<size_t>(limits_.max_connections + kSpareThreads);
     new_task_queue = [threads] { return new ElasticPool(threads); };
     set_payload_max_length(limits_.max_body_bytes);
-    set_keep_alive_max_count(static_cast<size_t>(limits_.max_requests_per_connection));
 }
 
 GuardedServer::~GuardedServer() = default;
@@ -319,11 +318,6 @@ std::function<bool()> GuardedServer::client_gone_check() {
         pollfd p{sock, POLLRDHUP, 0};
         return ::poll(&p, 1, 0) > 0 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR)) != 0;
     };
-}
-
-int GuardedServer::open_connections() const {
-    std::lock_guard lock(tracker_->mutex);
-    return tracker_->total;
 }
 
 bool GuardedServer::process_and_close_socket(socket_t sock) {
@@ -355,7 +349,7 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
         close_lingering(sock);
         return false;
     }
-    const bool ok = serve_connection(sock);
+    const bool ok = serve_connection(sock, client, peer_port);
     {
         std::lock_guard lock(tracker_->mutex);
         --tracker_->total;
@@ -364,14 +358,14 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
     return ok;
 }
 
-bool GuardedServer::serve_connection(socket_t sock) {
+bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip, int remote_port) {
     Connection c;
     c.sock = sock;
     c.listening = &svr_sock_;
+    c.remote_ip = remote_ip;
+    c.remote_port = remote_port;
     sockaddr_storage a{};
     socklen_t len = sizeof a;
-    if (::getpeername(sock, reinterpret_cast<sockaddr*>(&a), &len) == 0) c.remote_ip = address_of(a, c.remote_port);
-    len = sizeof a;
     if (::getsockname(sock, reinterpret_cast<sockaddr*>(&a), &len) == 0) c.local_ip = address_of(a, c.local_port);
     t_connection = &c;
 

@@ -67,12 +67,9 @@ public:
     // its render or conversion can stop). Valid while the handler runs.
     static std::function<bool()> client_gone_check();
 
-    // Connections open now (for metrics and tests).
-    int open_connections() const;
-
 private:
     bool process_and_close_socket(socket_t sock) override;
-    bool serve_connection(socket_t sock);
+    bool serve_connection(socket_t sock, const std::string& remote_ip, int remote_port);
 
     struct Tracker;
     ConnectionLimits limits_;
