@@ -138,8 +138,9 @@ void add_render_command(CLI::App& app) {
 
         const Camera camera(camera_from_args(*a, scene));
         RenderOptions options;
-        options.method = a->method == "martin" ? NewtonMethod::martin : NewtonMethod::proposed;
-        options.map_precision = a->map_precision == "rgb8" ? MapPrecision::rgb8 : MapPrecision::float32;
+        // The option strings were checked by CLI11 (IsMember): parsed here, once.
+        options.method = *parse_newton_method(a->method);
+        options.map_precision = *parse_map_precision(a->map_precision);
         options.threads = a->threads;
         options.newton.eps = a->tolerance * std::max(scene.bbox.diagonal(), 1e-300);
         if (!a->background.empty()) {

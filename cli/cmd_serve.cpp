@@ -14,6 +14,8 @@ void add_serve_command(CLI::App& app) {
     auto upload_mb = std::make_shared<double>(static_cast<double>(c->max_upload_bytes) / (1 << 20));
     auto import_memory_mb = std::make_shared<double>(static_cast<double>(c->import_memory_bytes >> 20));
     auto cache_mb = std::make_shared<double>(static_cast<double>(c->cache_bytes >> 20));
+    auto budget_mb = std::make_shared<double>(0.0);
+    auto render_mb = std::make_shared<double>(static_cast<double>(c->max_render_bytes >> 20));
     auto body_rate_kib = std::make_shared<double>(c->min_body_rate_bytes / 1024);
     auto* cmd = app.add_subcommand(
         "serve",
@@ -30,7 +32,7 @@ void add_serve_command(CLI::App& app) {
         ->envname("NURBSRT_PORT_FILE");
     cmd->add_option("--data-dir", c->data_dir, "data directory (uploads staged in DATA_DIR/tmp; jobs in DATA_DIR/jobs.db, DATA_DIR/jobs/)")
         ->envname("NURBSRT_DATA_DIR")->capture_default_str();
-    cmd->add_option("--workers", c->workers, "renders/conversions running at once")
+    cmd->add_option("--workers", c->workers, "imports/conversions running at once")
         ->envname("NURBSRT_WORKERS")->check(CLI::Range(1, 256))->capture_default_str();
     cmd->add_option("--max-queue", c->max_queue, "requests waiting for a worker; beyond: 503 + Retry-After")
         ->envname("NURBSRT_MAX_QUEUE")->check(CLI::Range(0, 10000))->capture_default_str();
@@ -40,6 +42,17 @@ void add_serve_command(CLI::App& app) {
         ->envname("NURBSRT_RETRY_AFTER")->check(CLI::Range(1, 3600))->capture_default_str();
     cmd->add_option("--render-threads", c->render_threads, "threads per render (0: all cores)")
         ->envname("NURBSRT_RENDER_THREADS")->check(CLI::Range(0, 1024))->capture_default_str();
+    cmd->add_option("--max-renders", c->max_renders, "renders at once, sharing the cores (cheap ones first)")
+        ->envname("NURBSRT_MAX_RENDERS")->check(CLI::Range(1, 256))->capture_default_str();
+    cmd->add_option("--memory-budget-mb", *budget_mb,
+                    "memory of the whole service, MiB: renders wait (or 503) rather than exceed it "
+                    "(0: 3/4 of RAM or of the cgroup limit)")
+        ->envname("NURBSRT_MEMORY_BUDGET_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--max-render-mb", *render_mb, "largest estimated memory of one render, MiB (413 beyond)")
+        ->envname("NURBSRT_MAX_RENDER_MB")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--max-render-cost", c->max_render_cost_s,
+                    "largest estimated work of one render, core-seconds (413 beyond)")
+        ->envname("NURBSRT_MAX_RENDER_COST")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--max-upload-mb", *upload_mb, "largest upload, MiB (413 beyond)")
         ->envname("NURBSRT_MAX_UPLOAD_MB")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--max-dimension", c->max_dimension, "largest image width or height, pixels")
@@ -93,7 +106,9 @@ void add_serve_command(CLI::App& app) {
     cmd->add_option("--job-retention", c->job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
         ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();
-    cmd->callback([c, upload_mb, import_memory_mb, cache_mb, body_rate_kib] {
+    cmd->callback([c, upload_mb, import_memory_mb, cache_mb, body_rate_kib, budget_mb, render_mb] {
+        c->memory_budget_bytes = static_cast<size_t>(*budget_mb * (1 << 20));
+        c->max_render_bytes = static_cast<size_t>(*render_mb * (1 << 20));
         // Keys themselves only from the environment: a command line shows in `ps`.
         if (const char* k = std::getenv("NURBSRT_API_KEYS")) c->api_keys = k;
         c->max_upload_bytes = static_cast<size_t>(*upload_mb * (1 << 20));

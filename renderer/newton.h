@@ -49,6 +49,8 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 #include "renderer/camera.h"
 #include "renderer/nurbs.h"
@@ -58,6 +60,8 @@ namespace nurbsrt {
 
 enum class NewtonMethod : uint8_t { proposed, martin };
 const char* newton_method_name(NewtonMethod m);  // "proposed", "martin"
+// The method of a name as newton_method_name spells it; nullopt for anything else.
+std::optional<NewtonMethod> parse_newton_method(std::string_view name);
 
 enum class NewtonStatus : uint8_t { converged, diverged, singular, max_iterations, left_domain, behind_eye };
 constexpr int kNewtonStatusCount = 6;

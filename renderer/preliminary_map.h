@@ -35,6 +35,8 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "renderer/camera.h"
@@ -49,6 +51,10 @@ enum class MapPrecision : uint8_t {
     rgb8,     // u, v quantized to 8 bits of the face's parameter box (eq. 4)
 };
 const char* map_precision_name(MapPrecision p);  // "float32", "rgb8"
+// The spelling of the CLI and the API options: "float", "rgb8"; parse_map_precision
+// reads it back (nullopt for anything else).
+const char* map_precision_option(MapPrecision p);
+std::optional<MapPrecision> parse_map_precision(std::string_view option);
 
 struct PreliminaryMap {
     int width = 0, height = 0;

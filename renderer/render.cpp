@@ -31,6 +31,15 @@ double ms_since(Clock::time_point t0) {
 // farther from the root (a neighbour's (u, v), a mesh vertex) and backtrack.
 constexpr int kRescueMinIterations = 16;
 
+tbb::task_arena::priority arena_priority(RenderPriority p) {
+    switch (p) {
+        case RenderPriority::low: return tbb::task_arena::priority::low;
+        case RenderPriority::high: return tbb::task_arena::priority::high;
+        case RenderPriority::normal: break;
+    }
+    return tbb::task_arena::priority::normal;
+}
+
 }  // namespace
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
@@ -49,7 +58,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     const int W = camera.width(), H = camera.height();
     const int threads = options.threads > 0 ? options.threads
                                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    tbb::task_arena arena(threads);
+    tbb::task_arena arena(threads, 1, arena_priority(options.priority));
 
     RenderResult res;
     RenderStats& st = res.stats;

@@ -21,12 +21,19 @@
 
 namespace nurbsrt {
 
+enum class RenderPriority : uint8_t { low, normal, high };
+
 struct RenderOptions {
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
     int threads = 0;           // 0: all hardware threads
     NewtonParams newton;       // newton.eps <= 0 (the default): default_newton_eps(scene.bbox)
     bool rescue = true;        // retry failed pixels with their neighbours' faces (pass_rescue.cpp)
+    // Share of the cores against other frames rendering at the same time: the
+    // frame's work runs in its own oneTBB arena of this priority, and the
+    // process's one worker pool serves higher-priority arenas first (a service
+    // puts cheap frames ahead of heavy ones).
+    RenderPriority priority = RenderPriority::normal;
     Color background{0, 0, 0}; // with alpha 0
     // Called with the fraction done in (0, 1], from the rendering threads (one call
     // at a time, fractions increasing), about every 2% of the frame's rows and once

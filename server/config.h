@@ -15,12 +15,18 @@ struct ServerConfig {
     std::string port_file;           // when set, the bound port is written there once listening
     std::string data_dir = "data";   // private temp dir for uploads lives in DATA_DIR/tmp
 
-    // Work: renders and conversions admitted at once, and waiting for a slot.
-    int workers = 2;                 // concurrent renders/conversions
-    int max_queue = 8;               // requests waiting for a worker; beyond -> 503
-    double queue_timeout_s = 30;     // longest wait for a worker; then 503
+    // Work. Imports and conversions (child processes) are admitted by count;
+    // renders by their memory estimate (renderer/frame_cost.h) against the
+    // process's budget, and share the cores: cheap frames go first.
+    int workers = 2;                 // concurrent imports/conversions
+    int max_queue = 8;               // requests waiting in each gate; beyond -> 503
+    double queue_timeout_s = 30;     // longest wait for admission; then 503
     int retry_after_s = 2;           // Retry-After on 503
     int render_threads = 0;          // threads per render (0: all cores)
+    int max_renders = 8;             // renders at once (each also within the memory budget)
+    size_t memory_budget_bytes = 0;  // the whole process (0: 3/4 of RAM or of the cgroup limit)
+    size_t max_render_bytes = size_t(4) << 30;  // one render's estimated memory; beyond -> 413
+    double max_render_cost_s = 900;  // one render's estimated work, core-seconds; beyond -> 413
 
     // Limits, all checked before work starts.
     size_t max_upload_bytes = size_t(64) << 20;
@@ -58,6 +64,11 @@ struct ServerConfig {
 
     // Throws nurbsrt::Error(invalid_argument) with a message naming the setting.
     void validate() const;
+    // memory_budget_bytes, or the automatic budget when it is 0.
+    size_t effective_memory_budget() const;
+    // What the renders may hold together: the budget less the scene cache and
+    // the service's own base (kServiceBaseBytes in config.cpp).
+    size_t render_memory_capacity() const;
 };
 
 }  // namespace nurbsrt::server

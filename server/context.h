@@ -1,4 +1,4 @@
-// What every handler shares: the configuration, the admission gate, the scene
+// What every handler shares: the configuration, the admission gates, the scene
 // cache, the metrics, the scratch directory and the batch jobs. Free of HTTP and JSON headers.
 #pragma once
 
@@ -16,9 +16,14 @@ class JobService;
 
 struct ServerContext {
     explicit ServerContext(const ServerConfig& c)
-        : config(c), gate(c.workers, c.max_queue), cache(c.cache_bytes), scratch(c.data_dir) {}
+        : config(c),
+          gate(c.workers, c.max_queue),
+          render_gate(c.max_renders, c.max_queue, c.render_memory_capacity()),
+          cache(c.cache_bytes),
+          scratch(c.data_dir) {}
     const ServerConfig config;
-    AdmissionGate gate;
+    AdmissionGate gate;         // imports and conversions: child processes, by count
+    AdmissionGate render_gate;  // renders: by estimated memory within the budget
     SceneCache cache;
     Metrics metrics;
     ScratchDir scratch;

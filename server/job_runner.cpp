@@ -289,17 +289,13 @@ void JobService::run_job(JobRecord& job) {
 
 void JobService::run_output(const JobRecord& job, const JobOutput& out,
                             const std::shared_ptr<std::atomic<bool>>& cancel) {
-    // A worker slot, waited for as long as it takes (the job is accepted work
-    // already) in its place in the gate's order; a cancel or a stop leaves the
-    // queue. While the gate's queue is full, the runner tries again shortly.
+    // Admission waits as long as it takes (the job is accepted work already),
+    // in its place in the gates' order; a cancel or a stop leaves the queue.
+    // A render is admitted inside render_upload (import slot, then its memory);
+    // a conversion takes an import/conversion slot here.
+    const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
     std::shared_ptr<AdmissionGate::Ticket> ticket;
-    while (!ticket) {
-        if (cancel->load()) throw Error(ErrorCode::canceled, "the job was canceled");
-        AdmissionGate::Refusal why;
-        ticket = ctx_.gate.enter(std::chrono::hours(24), why, [&cancel] { return cancel->load(); });
-        if (!ticket && why == AdmissionGate::Refusal::queue_full)
-            std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    }
+    if (out.kind != "render") ticket = admit(ctx_, ctx_.gate, 0, patient);
     if (!store_->output_running(job.id, out.index, now_ms())) throw Error(ErrorCode::canceled, "the job was deleted");
     const auto t0 = std::chrono::steady_clock::now();
     const std::string dir = job_dir(job.id);
@@ -314,6 +310,7 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
         RenderControl control;
         control.cancel = cancel;
         control.start = t0;
+        control.patient = true;
         // The callback may run after this job is gone (a canceled render stops
         // at its next block of rows): it holds the store, not `this`.
         auto last = std::make_shared<std::atomic<int>>(0);
@@ -328,7 +325,7 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
                 }
             }
         };
-        const RenderedImage image = render_upload(ctx_, read_file_bytes(input), r, std::move(ticket), control);
+        const RenderedImage image = render_upload(ctx_, read_file_bytes(input), r, control);
         write_file(partial, image.bytes);
         result = nlohmann::json::parse(image.stats_json);
     } else {

@@ -107,10 +107,16 @@ std::string Metrics::exposition(const Gauges& g) const {
     auto gauge = [&](const char* name, const char* help, double v) {
         out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " gauge\n" + name + " " + num(v) + "\n";
     };
-    gauge("nurbsrt_work_active", "Renders and conversions running.", g.active);
-    gauge("nurbsrt_work_queued", "Renders and conversions waiting for a worker.", g.queued);
+    gauge("nurbsrt_work_active", "Imports and conversions running.", g.active);
+    gauge("nurbsrt_work_queued", "Imports and conversions waiting for a worker.", g.queued);
     gauge("nurbsrt_work_max_active", "Configured concurrent work limit.", g.max_active);
     gauge("nurbsrt_work_max_queued", "Configured queue length limit.", g.max_queued);
+    gauge("nurbsrt_renders_active", "Renders running.", g.renders_active);
+    gauge("nurbsrt_renders_queued", "Renders waiting for memory within the budget.", g.renders_queued);
+    gauge("nurbsrt_render_memory_reserved_bytes", "Estimated memory of the renders running.",
+          static_cast<double>(g.render_memory_used));
+    gauge("nurbsrt_render_memory_capacity_bytes", "Memory budget left for renders (budget less cache and base).",
+          static_cast<double>(g.render_memory_capacity));
     gauge("nurbsrt_scene_cache_bytes", "Estimated memory held by cached scenes.", static_cast<double>(g.cache_bytes));
     gauge("nurbsrt_scene_cache_entries", "Cached scenes.", static_cast<double>(g.cache_entries));
     gauge("nurbsrt_scene_cache_capacity_bytes", "Scene cache bound.", static_cast<double>(g.cache_capacity));

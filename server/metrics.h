@@ -23,7 +23,9 @@ public:
 
     // Gauges are sampled by the caller when the text is produced.
     struct Gauges {
-        int active = 0, queued = 0, max_active = 0, max_queued = 0;
+        int active = 0, queued = 0, max_active = 0, max_queued = 0;  // imports and conversions
+        int renders_active = 0, renders_queued = 0;
+        size_t render_memory_used = 0, render_memory_capacity = 0;
         size_t cache_bytes = 0, cache_entries = 0, cache_capacity = 0;
         std::map<std::string, int64_t> jobs_by_state;  // from the job store
     };

@@ -138,9 +138,9 @@ RenderRequest parse_render_options(const std::string& options_json) {
             if (n < 1) bad("option '" + key + "' must be at least 1");
             (key == "width" ? r.width : r.height) = n;
         } else if (key == "method") {
-            r.method = one_of(v, key, {"proposed", "martin"});
+            r.method = *parse_newton_method(one_of(v, key, {"proposed", "martin"}));
         } else if (key == "map_precision") {
-            r.map_precision = one_of(v, key, {"float", "rgb8"});
+            r.map_precision = *parse_map_precision(one_of(v, key, {"float", "rgb8"}));
         } else if (key == "format") {
             const std::string f = one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"});
             if (f == "png") r.format = {"png", ".png", "image/png"};

@@ -24,8 +24,8 @@ struct RenderRequest {
     Projection projection = Projection::perspective;
     std::optional<double> fov_deg, ortho_height;
     std::optional<Vec3> eye, target, up;
-    std::string method = "proposed";         // proposed | martin
-    std::string map_precision = "float";     // float | rgb8
+    NewtonMethod method = NewtonMethod::proposed;
+    MapPrecision map_precision = MapPrecision::float32;
     OutputFormat format{"png", ".png", "image/png"};
     std::optional<Vec3> background;
 };

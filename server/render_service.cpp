@@ -10,6 +10,7 @@
 #include "importer/importer.h"
 #include "importer/isolated.h"
 #include "renderer/error.h"
+#include "renderer/frame_cost.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
 #include "server/work.h"
@@ -22,15 +23,29 @@ double ms_since(clock_type::time_point t0) {
     return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count();
 }
 
+AdmissionWait admission_wait(const RenderControl& control) {
+    AdmissionWait w;
+    w.patient = control.patient;
+    w.give_up = [cancel = control.cancel, stop = control.should_stop] {
+        return (cancel && cancel->load()) || (stop && stop());
+    };
+    return w;
+}
+
 // The imported and prepared scene for these bytes: from the cache, by waiting
 // for a simultaneous request's import of the same bytes, or imported in a child
-// process and prepared here (once, for every later render of the same bytes).
-std::shared_ptr<const PreparedScene> scene_for(ServerContext& ctx, const std::string& bytes, bool& cache_hit) {
+// process (holding an import slot) and prepared here (once, for every later
+// render of the same bytes). `queue_ms` gets the wait for the import slot.
+std::shared_ptr<const PreparedScene> scene_for(ServerContext& ctx, const std::string& bytes,
+                                               const RenderControl& control, bool& cache_hit, double& queue_ms) {
     const ImportOptions options;
     SceneCache::Source source = SceneCache::Source::loaded;
     auto scene = ctx.cache.get_or_load(
         scene_cache_key(bytes, options),
         [&] {
+            const auto tq = clock_type::now();
+            const auto slot = admit(ctx, ctx.gate, 0, admission_wait(control));
+            queue_ms += ms_since(tq);
             const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
             std::shared_ptr<const Scene> scene;
             try {
@@ -46,6 +61,45 @@ std::shared_ptr<const PreparedScene> scene_for(ServerContext& ctx, const std::st
     cache_hit = source != SceneCache::Source::loaded;
     ctx.metrics.count_cache(cache_hit);
     return scene;
+}
+
+// Frames estimated below this many core-seconds are interactive (a thumbnail,
+// a dragged view, up to 800x600 of a typical part): they go ahead of others.
+// Above kHeavyCoreSeconds (2048x1536 of a typical part, or high-degree faces at
+// 1600x1200) a frame yields to everything else.
+constexpr double kInteractiveCoreSeconds = 1.0;
+constexpr double kHeavyCoreSeconds = 5.0;
+
+RenderPriority priority_for(const FrameCost& cost) {
+    if (cost.core_seconds < kInteractiveCoreSeconds) return RenderPriority::high;
+    if (cost.core_seconds > kHeavyCoreSeconds) return RenderPriority::low;
+    return RenderPriority::normal;
+}
+
+const char* priority_name(RenderPriority p) {
+    switch (p) {
+        case RenderPriority::low: return "low";
+        case RenderPriority::high: return "high";
+        case RenderPriority::normal: break;
+    }
+    return "normal";
+}
+
+// Refuses a frame whose estimate exceeds the per-render caps.
+void check_frame_cost(const ServerConfig& c, const FrameCost& cost) {
+    const auto mib = [](size_t b) { return std::to_string((b + (1 << 20) - 1) >> 20); };
+    if (cost.memory_bytes > c.max_render_bytes)
+        throw Error(ErrorCode::limit_exceeded, "the render needs an estimated " + mib(cost.memory_bytes) +
+                                                   " MiB; the limit is " + mib(c.max_render_bytes) +
+                                                   " MiB per render (a smaller image needs less)");
+    if (cost.core_seconds > c.max_render_cost_s) {
+        char msg[200];
+        std::snprintf(msg, sizeof msg,
+                      "the render needs an estimated %.0f core-seconds; the limit is %g per render "
+                      "(a smaller image needs less)",
+                      cost.core_seconds, c.max_render_cost_s);
+        throw Error(ErrorCode::limit_exceeded, msg);
+    }
 }
 
 // Runs the render on its own thread and waits at most the configured time. A
@@ -97,19 +151,30 @@ void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
 }
 
 RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const RenderRequest& r,
-                            std::shared_ptr<AdmissionGate::Ticket> ticket, const RenderControl& control) {
+                            const RenderControl& control) {
     const auto t0 = control.start.value_or(clock_type::now());
     RenderedImage out;
-    const std::shared_ptr<const PreparedScene> prepared = scene_for(ctx, bytes, out.cache_hit);
+    double queue_ms = 0;
+    const std::shared_ptr<const PreparedScene> prepared = scene_for(ctx, bytes, control, out.cache_hit, queue_ms);
     const Scene& scene = prepared->scene();
     if (scene.faces.size() > ctx.config.max_faces)
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
     const Camera camera(camera_spec_for(r, scene));
+    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height);
+    check_frame_cost(ctx.config, cost);
+    const RenderPriority priority = priority_for(cost);
+    AdmissionWait wait = admission_wait(control);
+    if (priority == RenderPriority::high) wait.order = AdmissionGate::Order::may_overtake;
+    const auto tq = clock_type::now();
+    std::shared_ptr<AdmissionGate::Ticket> ticket = admit(ctx, ctx.render_gate, cost.memory_bytes, wait);
+    queue_ms += ms_since(tq);
+
     RenderOptions options;
-    options.method = r.method == "martin" ? NewtonMethod::martin : NewtonMethod::proposed;
-    options.map_precision = r.map_precision == "rgb8" ? MapPrecision::rgb8 : MapPrecision::float32;
+    options.method = r.method;
+    options.map_precision = r.map_precision;
     options.threads = ctx.config.render_threads;
+    options.priority = priority;
     options.progress = control.progress;
     if (r.background)
         options.background = {static_cast<float>(r.background->x), static_cast<float>(r.background->y),
@@ -129,6 +194,10 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const ImportTimings import_ms = out.cache_hit ? ImportTimings{} : scene.timings;
     nlohmann::json stats = render_stats_json(result.stats, import_ms, encode_ms, ms_since(t0));
     stats["timings_ms"]["prepare"] = out.cache_hit ? 0.0 : prepared->prepare_ms();  // paid by this request
+    stats["timings_ms"]["queue"] = queue_ms;
+    stats["estimate"] = {{"memory_mb", double(cost.memory_bytes) / (1 << 20)},
+                         {"core_seconds", cost.core_seconds},
+                         {"priority", priority_name(options.priority)}};
     const CameraSpec& cs = camera.spec();
     stats["camera"] = {{"eye", {cs.eye.x, cs.eye.y, cs.eye.z}},
                        {"target", {cs.target.x, cs.target.y, cs.target.z}},
@@ -136,11 +205,11 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
                        {"projection", camera.perspective() ? "perspective" : "orthographic"},
                        {"fov_deg", cs.fov_deg},
                        {"ortho_height", cs.ortho_height}};
-    stats["map_precision"] = r.map_precision;
+    stats["map_precision"] = map_precision_option(r.map_precision);
     stats["warnings"] = scene.warnings;
     stats["cache"] = out.cache_hit ? "hit" : "miss";
     for (const char* stage :
-         {"read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"})
+         {"queue", "read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"})
         ctx.metrics.observe_stage(stage, stats["timings_ms"].value(stage, 0.0) / 1000.0);
     out.stats_json = stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     return out;

@@ -35,13 +35,20 @@ struct RenderControl {
     std::function<void(double)> progress;
     // When the request started (for the `total` timing); default: the call.
     std::optional<std::chrono::steady_clock::time_point> start;
+    // Accepted batch work: waits for admission as long as it takes (see AdmissionWait).
+    bool patient = false;
 };
 
-// Renders `cad_bytes` (STEP/IGES, already checked by content) with `r`. The
-// ticket is the caller's admission slot; it is held until the render really
-// stops. Throws nurbsrt::Error (import errors, limit_exceeded for too many
-// faces, render_timeout, canceled). Stage times go to the metrics.
+// Renders `cad_bytes` (STEP/IGES, already checked by content) with `r`.
+// Admission happens here, in two steps: an import slot (ctx.gate) when the
+// scene is not cached, then the render's estimated memory and work
+// (estimate_frame_cost) against the per-render caps and the render gate's
+// budget; the render runs at a priority from its estimated work. Each ticket
+// is held until its work really stops. Throws nurbsrt::Error (import errors,
+// limit_exceeded for too many faces or too costly a frame, overloaded,
+// render_timeout, canceled). Stage times go to the metrics; the time spent
+// waiting for admission is the `queue` timing.
 RenderedImage render_upload(ServerContext& ctx, const std::string& cad_bytes, const RenderRequest& r,
-                            std::shared_ptr<AdmissionGate::Ticket> ticket, const RenderControl& control = {});
+                            const RenderControl& control = {});
 
 }  // namespace nurbsrt::server

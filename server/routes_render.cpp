@@ -34,14 +34,14 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     RenderControl control;
     control.start = t0;
     control.should_stop = GuardedServer::client_gone_check();  // a gone client's render stops
-    const RenderedImage rendered = render_upload(ctx, bytes, r, admit(ctx), control);
+    const RenderedImage rendered = render_upload(ctx, bytes, r, control);
     const std::string& image = rendered.bytes;
     const bool cache_hit = rendered.cache_hit;
     const nlohmann::json stats = nlohmann::json::parse(rendered.stats_json);
 
     std::string timing;
     for (const char* stage :
-         {"read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"}) {
+         {"queue", "read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"}) {
         const double ms = stats["timings_ms"].value(stage, 0.0);
         char buf[96];
         std::snprintf(buf, sizeof buf, "%s%s;dur=%.3f", timing.empty() ? "" : ", ", stage, ms);

@@ -20,7 +20,13 @@ void add_service_routes(httplib::Server& svr, ServerContext& ctx) {
                                      {"active", active},
                                      {"queued", queued},
                                      {"max_active", ctx.gate.max_active()},
-                                     {"max_queued", ctx.gate.max_queued()}};
+                                     {"max_queued", ctx.gate.max_queued()},
+                                     {"renders",
+                                      {{"active", ctx.render_gate.active()},
+                                       {"queued", ctx.render_gate.queued()},
+                                       {"max_active", ctx.render_gate.max_active()},
+                                       {"memory_used_mb", double(ctx.render_gate.used_bytes()) / (1 << 20)},
+                                       {"memory_capacity_mb", double(ctx.render_gate.capacity_bytes()) / (1 << 20)}}}};
         res.status = ready ? 200 : 503;
         if (!ready) res.set_header("Retry-After", std::to_string(ctx.config.retry_after_s));
         res.set_content(body.dump(), "application/json");
@@ -31,6 +37,10 @@ void add_service_routes(httplib::Server& svr, ServerContext& ctx) {
         g.queued = ctx.gate.queued();
         g.max_active = ctx.gate.max_active();
         g.max_queued = ctx.gate.max_queued();
+        g.renders_active = ctx.render_gate.active();
+        g.renders_queued = ctx.render_gate.queued();
+        g.render_memory_used = ctx.render_gate.used_bytes();
+        g.render_memory_capacity = ctx.render_gate.capacity_bytes();
         g.cache_bytes = ctx.cache.bytes();
         g.cache_entries = ctx.cache.entries();
         g.cache_capacity = ctx.cache.capacity();

@@ -336,7 +336,8 @@ int run_server(const ServerConfig& config) {
     // ends on its own thread at its next block of rows, holding its worker
     // ticket until then: wait for those threads before the gate, the cache and
     // the rest of the context go away under them.
-    for (int i = 0; i < 300 && ctx.gate.active() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    for (int i = 0; i < 300 && (ctx.gate.active() > 0 || ctx.render_gate.active() > 0); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
     log_event("stopped");
     return ok ? 0 : 1;
 }

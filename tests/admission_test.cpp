@@ -83,3 +83,79 @@ TEST(AdmissionGate, WaiterWithGiveUpKeepsItsPlace) {
 }
 
 }  // namespace
+
+namespace {
+
+constexpr size_t kMiB = size_t(1) << 20;
+
+TEST(AdmissionGate, MemoryCapacityBoundsWhatIsHeldTogether) {
+    AdmissionGate gate(8, 4, 100 * kMiB);
+    AdmissionGate::Refusal why;
+    EXPECT_FALSE(gate.enter(0ms, why, {}, 101 * kMiB));  // never fits: refused without waiting
+    EXPECT_EQ(why, AdmissionGate::Refusal::too_large);
+    auto a = gate.enter(0ms, why, {}, 60 * kMiB);
+    ASSERT_TRUE(a);
+    EXPECT_EQ(gate.used_bytes(), 60 * kMiB);
+    auto small = gate.enter(0ms, why, {}, 40 * kMiB);  // exactly fills the capacity
+    ASSERT_TRUE(small);
+    EXPECT_FALSE(gate.enter(50ms, why, {}, 1));  // full: waits, then times out
+    EXPECT_EQ(why, AdmissionGate::Refusal::queue_timeout);
+    small.reset();
+    EXPECT_EQ(gate.used_bytes(), 60 * kMiB);
+    EXPECT_TRUE(gate.enter(0ms, why, {}, 40 * kMiB));
+}
+
+TEST(AdmissionGate, LargeWaiterIsNotOvertakenBySmallOnes) {
+    AdmissionGate gate(8, 4, 100 * kMiB);
+    AdmissionGate::Refusal why;
+    auto held = gate.enter(0ms, why, {}, 50 * kMiB);
+    ASSERT_TRUE(held);
+    // 80 MiB does not fit beside 50: it waits at the head of the queue ...
+    auto large = std::async(std::launch::async, [&] {
+        AdmissionGate::Refusal w;
+        return gate.enter(10s, w, {}, 80 * kMiB);
+    });
+    wait_queued(gate, 1);
+    // ... and a small request that would fit waits behind it, in order.
+    auto small = std::async(std::launch::async, [&] {
+        AdmissionGate::Refusal w;
+        return gate.enter(10s, w, {}, 10 * kMiB);
+    });
+    wait_queued(gate, 2);
+    EXPECT_EQ(small.wait_for(100ms), std::future_status::timeout);
+    held.reset();
+    auto large_ticket = large.get();
+    ASSERT_TRUE(large_ticket);
+    auto small_ticket = small.get();  // 80 + 10 fit together
+    ASSERT_TRUE(small_ticket);
+    EXPECT_EQ(gate.used_bytes(), 90 * kMiB);
+    EXPECT_EQ(gate.active(), 2);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(AdmissionGate, ShortWorkOvertakesLargeWorkWaitingForMemory) {
+    AdmissionGate gate(8, 4, 100 * kMiB);
+    AdmissionGate::Refusal why;
+    auto running = gate.enter(0ms, why, {}, 70 * kMiB);
+    ASSERT_TRUE(running);
+    auto large = std::async(std::launch::async, [&] {
+        AdmissionGate::Refusal w;
+        return gate.enter(10s, w, {}, 60 * kMiB);  // waits for the running work's memory
+    });
+    wait_queued(gate, 1);
+    // The large waiter cannot start before the running work ends anyway: short
+    // work that fits beside the running one goes ahead instead of waiting.
+    auto small = gate.enter(0ms, why, {}, 20 * kMiB, AdmissionGate::Order::may_overtake);
+    ASSERT_TRUE(small) << static_cast<int>(why);
+    running.reset();  // 20 held: the large one (60) fits now
+    auto large_ticket = large.get();
+    ASSERT_TRUE(large_ticket);
+    // Now 80 of 100 are held; short work of 30 would not fit and waits for memory.
+    EXPECT_FALSE(gate.enter(50ms, why, {}, 30 * kMiB, AdmissionGate::Order::may_overtake));
+    EXPECT_EQ(why, AdmissionGate::Refusal::queue_timeout);
+}
+
+}  // namespace

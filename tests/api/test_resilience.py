@@ -53,7 +53,8 @@ def wait_until(pred, timeout, what):
 
 
 def test_disconnect_cancels_the_render(own_server):
-    s = own_server(args=["--render-threads", "2", "--max-dimension", "8192", "--max-pixels", "40000000"])
+    s = own_server(args=["--render-threads", "2", "--max-dimension", "8192", "--max-pixels", "40000000",
+                         "--max-render-mb", "16384"])
     data = BEARING.read_bytes()
     # Import once (cached), so the request below spends its time rendering.
     r = requests.post(s.url + "/v1/renders", params={"width": 64, "height": 48}, data=data,
@@ -193,3 +194,62 @@ def test_absurd_step_refused_before_parsing(url):
         detail = check_problem(r, 422, "unreadable_file")["detail"]
         assert "a list of more than 500000 items (the limit)" in detail, detail
         assert time.monotonic() - t < 5
+
+
+def processes_mentioning(text):
+    """Live processes whose command line contains `text` (our children carry the data dir's paths)."""
+    found = []
+    for entry in pathlib.Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if text in cmd and alive(int(entry.name)):
+            found.append((int(entry.name), cmd[:200]))
+    return found
+
+
+def test_repeated_sigkill_with_jobs_in_flight_loses_nothing(own_server, tmp_path):
+    """Ten SIGKILL/restart cycles on one data directory, each at a different moment
+    of the work (imports, conversions, renders in flight): afterwards every job
+    ever accepted has a final state (none lost, none stuck; a job interrupted
+    twice fails as `interrupted`, by design), no process of a killed service
+    lives on, and no scratch, partial or orphaned job file is left."""
+    data = tmp_path / "data"
+    args = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
+    spec = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"},
+                        {"file": 0, "type": "render", "options": {"width": 400, "height": 300}}]}
+    accepted_ids = []
+    for cycle in range(10):
+        s = own_server(args=args, data_dir=data)
+        for _ in range(2):
+            accepted_ids.append(accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))["id"])
+        time.sleep(0.2 + 0.13 * cycle)  # a different point of the work each time
+        s.proc.kill()
+        s.proc.wait(timeout=10)
+        wait_until(lambda: not processes_mentioning(str(data)), 2.0,
+                   f"cycle {cycle}: a process of the killed service lives on: {processes_mentioning(str(data))}")
+
+    s = own_server(args=args, data_dir=data)
+    states = {}
+    for job_id in accepted_ids:
+        job = wait_finished(s.url, job_id, timeout=300)
+        states[job_id] = job["state"]
+        assert job["state"] in ("succeeded", "failed"), json.dumps(job)[:600]
+        if job["state"] == "failed":
+            assert job["error"]["code"] == "interrupted", json.dumps(job)[:600]
+        else:
+            assert [o["state"] for o in job["outputs"]] == ["succeeded", "succeeded"]
+    assert "succeeded" in states.values()  # the loop does not just fail everything
+    healthy(s.url)
+    # Nothing stray: no scratch files, no partial artifacts, no directory without its job.
+    assert [p.name for p in (data / "tmp").iterdir()] == []
+    job_dirs = {p.name for p in (data / "jobs").iterdir() if p.is_dir()}
+    assert job_dirs <= set(accepted_ids), job_dirs - set(accepted_ids)
+    assert [str(p) for p in (data / "jobs").rglob("partial-*")] == []
+    assert not children_of(s.proc.pid)
+    print(f"10 SIGKILL cycles: {len(accepted_ids)} jobs, "
+          f"{sum(v == 'succeeded' for v in states.values())} succeeded, "
+          f"{sum(v == 'failed' for v in states.values())} failed as interrupted, 0 lost")

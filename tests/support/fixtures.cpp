@@ -269,6 +269,30 @@ std::string freeform_rational() {
 }
 std::string assembly() { return cached("assembly", "assembly.step", write_assembly); }
 
+std::string dense_bspline(int degree, int poles) {
+    if (degree < 1 || degree > Geom_BSplineSurface::MaxDegree() || poles <= degree)
+        throw std::invalid_argument("dense_bspline: need 1 <= degree <= 25 and poles > degree");
+    const std::string name = "dense_bspline_" + std::to_string(degree) + "_" + std::to_string(poles);
+    return step_fixture(name, [&] {
+        TColgp_Array2OfPnt net(1, poles, 1, poles);
+        const double step = 100.0 / (poles - 1);
+        for (int i = 1; i <= poles; ++i)
+            for (int j = 1; j <= poles; ++j)
+                net(i, j) = gp_Pnt(step * (i - 1), step * (j - 1), 8.0 * std::sin(0.21 * i) * std::cos(0.17 * j));
+        // Clamped uniform knots: end multiplicity degree+1, interior 1, so
+        // poles - degree + 1 distinct values (Piegl & Tiller eq. 2.13).
+        const int distinct = poles - degree + 1;
+        TColStd_Array1OfReal knots(1, distinct);
+        TColStd_Array1OfInteger mults(1, distinct);
+        for (int k = 1; k <= distinct; ++k) {
+            knots(k) = double(k - 1) / (distinct - 1);
+            mults(k) = (k == 1 || k == distinct) ? degree + 1 : 1;
+        }
+        Handle(Geom_BSplineSurface) s = new Geom_BSplineSurface(net, knots, knots, mults, mults, degree, degree);
+        return TopoDS_Shape(BRepBuilderAPI_MakeFace(s, Precision::Confusion()).Face());
+    });
+}
+
 std::string to_iges(const std::string& step_path) {
     const std::string name = "iges:" + step_path;
     const std::string file = fs::path(step_path).stem().string() + "_" +

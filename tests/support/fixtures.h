@@ -44,6 +44,12 @@ std::string freeform_bspline();
 // The same net with non-uniform weights in [0.4, 2.5] (rational), and an
 // elliptical hole. 1 face.
 std::string freeform_rational();
+// A dense, high-degree net for cost and fairness measurements (not in
+// fixture_names(): rendering it is deliberately expensive): one untrimmed
+// non-rational face of degree `degree` x `degree` on `poles` x `poles` poles
+// (uniform clamped knots) over a 100 x 100 square, a smooth height field of
+// amplitude 8. Written once per (degree, poles).
+std::string dense_bspline(int degree, int poles);
 
 // --- assembly -----------------------------------------------------------------
 // XDE document written with STEPCAFControl_Writer: one part (the part of

@@ -1,0 +1,74 @@
+#include "renderer/frame_cost.h"
+
+#include <cstdint>
+
+#include "renderer/frame.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/preliminary_map.h"
+#include "renderer/render.h"
+
+namespace nurbsrt {
+namespace {
+
+// Bytes per pixel of the frame's buffers, all alive at once at the peak
+// (shading, while the solve buffers still exist).
+constexpr size_t kImageBytesPerPixel =
+    4 * sizeof(float) + sizeof(float) + 3 * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t);
+constexpr size_t kSolveBytesPerPixel = 2 * sizeof(PixelHit) + 2 * sizeof(uint8_t);
+// The rescue and nearer-sheet passes' lists, at worst one entry per pixel.
+constexpr size_t kRescueBytesPerPixel = 2 * sizeof(size_t) + sizeof(PixelHit) + 2 * sizeof(uint8_t);
+constexpr size_t kMapBytesPerPixel = sizeof(uint32_t) + 2 * sizeof(float);
+// The GL framebuffer (R32UI id, RG32F (u, v), 32-bit depth) and its readback copy.
+constexpr size_t kFramebufferBytesPerPixel = 2 * (sizeof(uint32_t) + 2 * sizeof(float) + sizeof(float));
+// The encoder's 8-bit RGBA copy and the encoded file (at most as large again).
+constexpr size_t kEncodeBytesPerPixel = 2 * 4;
+// Clip-space position of a map vertex, on the CPU and in the GL buffer.
+constexpr size_t kBytesPerMapVertex = 2 * 4 * sizeof(float);
+// A GL context's fixed cost (llvmpipe state, shader binaries) and the thread stacks.
+constexpr size_t kFixedBytes = size_t(32) << 20;
+
+// Work, in core-seconds of the reference machine (2-core Xeon), fitted to
+// frames of OCCT's screw, a 160-face assembly and a degree-9 face on 200 x 200
+// poles (320x240 to 2048x1536): a pixel's fixed cost (map readback, a solve's
+// set-up, shading) and the cost per basis-function product of its solve
+// (Newton's few iterations each evaluate (p+1)(q+1) products with derivatives).
+constexpr double kSecondsPerPixel = 0.6e-6;
+constexpr double kSecondsPerBasisProduct = 0.055e-6;
+constexpr double kSecondsPerTriangle = 0.2e-6;
+constexpr double kBicubicEvalCost = 16.0;
+
+}  // namespace
+
+FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int height) {
+    const Scene& scene = prepared.scene();
+    const MapMesh& map = prepared.map_mesh();
+    const double pixels = double(width) * double(height);
+
+    // Per-face evaluation cost, weighted by the face's share of map vertices.
+    std::vector<double> weight(scene.faces.size() + 1, 0.0);
+    for (uint32_t f : map.face)
+        if (f < weight.size()) weight[f] += 1.0;
+    double weighted = 0, total_weight = 0, projected_bytes = 0;
+    for (const Face& f : scene.faces) {
+        const NurbsSurface& s = f.surface;
+        const double eval = double(s.degree_u + 1) * double(s.degree_v + 1);
+        const double w = f.index < weight.size() ? weight[f.index] + 1.0 : 1.0;
+        weighted += w * eval;
+        total_weight += w;
+        projected_bytes += double(s.cp.size()) * sizeof(Vec4) + double(s.knots_u.size() + s.knots_v.size()) * sizeof(double);
+    }
+    const double eval_cost = total_weight > 0 ? weighted / total_weight : kBicubicEvalCost;
+
+    FrameCost c;
+    const double per_pixel = kImageBytesPerPixel + kSolveBytesPerPixel + kRescueBytesPerPixel + kMapBytesPerPixel +
+                             kFramebufferBytesPerPixel + kEncodeBytesPerPixel;
+    // Every term above is already a worst case (all candidate lists full), so no slack factor:
+    // measured peaks were 0.4-0.65 of this at 1024x768 and more.
+    const double bytes = pixels * per_pixel + projected_bytes + double(map.xyz.size()) * kBytesPerMapVertex;
+    c.memory_bytes = kFixedBytes + static_cast<size_t>(bytes);
+    c.core_seconds = pixels * (kSecondsPerPixel + kSecondsPerBasisProduct * eval_cost) +
+                     double(map.triangles()) * kSecondsPerTriangle;
+    return c;
+}
+
+}  // namespace nurbsrt
