@@ -27,13 +27,15 @@ constexpr size_t kBytesPerMapVertex = 2 * 4 * sizeof(float);
 // A GL context's fixed cost (llvmpipe state, shader binaries) and the thread stacks.
 constexpr size_t kFixedBytes = size_t(32) << 20;
 
-// Work, in core-seconds of the reference machine (2-core Xeon), fitted to
-// frames of OCCT's screw, a 160-face assembly and a degree-9 face on 200 x 200
-// poles (320x240 to 2048x1536): a pixel's fixed cost (map readback, a solve's
-// set-up, shading) and the cost per basis-function product of its solve
-// (Newton's few iterations each evaluate (p+1)(q+1) products with derivatives).
-constexpr double kSecondsPerPixel = 0.6e-6;
-constexpr double kSecondsPerBasisProduct = 0.055e-6;
+// Work, in core-seconds of the reference machine (2-core Xeon), fitted to the
+// CPU time (not wall time: the machine is shared) of cached frames of OCCT's
+// screw (rational, low degree: 0.52 us per pixel at 320x240, encoding
+// included) and of a degree-9 face on 200 x 200 poles (1.75 us per pixel at
+// 1600x1200): a pixel's fixed cost (map readback, a solve's set-up, shading,
+// encoding) and the cost per basis-function product of its solve (Newton's few
+// iterations each evaluate (p+1)(q+1) products with derivatives).
+constexpr double kSecondsPerPixel = 0.4e-6;
+constexpr double kSecondsPerBasisProduct = 0.0134e-6;
 constexpr double kSecondsPerTriangle = 0.2e-6;
 constexpr double kBicubicEvalCost = 16.0;
 

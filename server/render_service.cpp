@@ -64,11 +64,11 @@ std::shared_ptr<const PreparedScene> scene_for(ServerContext& ctx, const std::st
 }
 
 // Frames estimated below this many core-seconds are interactive (a thumbnail,
-// a dragged view, up to 800x600 of a typical part): they go ahead of others.
-// Above kHeavyCoreSeconds (2048x1536 of a typical part, or high-degree faces at
-// 1600x1200) a frame yields to everything else.
+// a dragged view, up to ~1600x1200 of a typical part): they go ahead of others.
+// Above kHeavyCoreSeconds (several seconds of a core: 3000x2000 of a typical
+// part, high-degree faces at 1600x1200) a frame yields to everything else.
 constexpr double kInteractiveCoreSeconds = 1.0;
-constexpr double kHeavyCoreSeconds = 5.0;
+constexpr double kHeavyCoreSeconds = 2.5;
 
 RenderPriority priority_for(const FrameCost& cost) {
     if (cost.core_seconds < kInteractiveCoreSeconds) return RenderPriority::high;
