@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "cli/commands.h"
+#include "cli/validators.h"
 #include "importer/importer.h"
 
 namespace nurbsrt::cli {
@@ -26,7 +27,8 @@ void add_convert_command(CLI::App& app) {
     auto in = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
     cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
-    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")->required();
+    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")->required()
+        ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
     cmd->callback([in, out] {
         const ConvertReport r = convert_file(*in, *out);
         std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(),

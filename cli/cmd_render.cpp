@@ -13,6 +13,7 @@
 
 #include "cli/commands.h"
 #include "cli/scene_file.h"
+#include "cli/validators.h"
 #include "renderer/error.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
@@ -83,20 +84,25 @@ void add_render_command(CLI::App& app) {
         "  nurbsrt render part.step -o part.png --aov part.exr --stats stats.json --method martin\n"
         "  nurbsrt render part.step -o top.png --view top --ortho-height 120\n"
         "  nurbsrt render part.step -o p.png --eye=-100,50,80 --target 0,0,0 --up 0,0,1 --fov 30");
-    cmd->add_option("MODEL", a->models, "STEP/IGES file(s) or a JSON scene file")->required()
-        ->check(CLI::ExistingFile);
-    cmd->add_option("-o,--output", a->output, "image to write: .png, .jpg, .tif or .exr")->required();
-    cmd->add_option("--aov", a->aov, "also write the AOV EXR (R,G,B,A,Z,face,...)");
-    cmd->add_option("--stats", a->stats, "write statistics and stage timings as JSON ('-' for stdout)");
+    // Checked in the callback, after CLI11 has reported unknown options: with a
+    // CLI11 check here, `--widht 100` would be reported as a missing file "100".
+    cmd->add_option("MODEL", a->models, "STEP/IGES file(s) or a JSON scene file")->required();
+    cmd->add_option("-o,--output", a->output, "image to write: .png, .jpg, .tif or .exr")->required()
+        ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
+    cmd->add_option("--aov", a->aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
+        ->check(output_file_validator({".exr"}));
+    cmd->add_option("--stats", a->stats, "write statistics and stage timings as JSON ('-' for stdout)")
+        ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
     cmd->add_option("--width", a->width, "image width in pixels")->check(CLI::Range(1, 16384))
         ->capture_default_str();
     cmd->add_option("--height", a->height, "image height in pixels")->check(CLI::Range(1, 16384))
         ->capture_default_str();
     cmd->add_option("--view", a->view, "named view fitted to the model: iso, front, back, left, right, top, bottom")
         ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))->capture_default_str();
-    cmd->add_option("--eye", a->eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)");
-    cmd->add_option("--target", a->target, "point looked at, x,y,z");
-    cmd->add_option("--up", a->up, "up vector x,y,z");
+    cmd->add_option("--eye", a->eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
+        ->check(vec3_validator());
+    cmd->add_option("--target", a->target, "point looked at, x,y,z")->check(vec3_validator());
+    cmd->add_option("--up", a->up, "up vector x,y,z")->check(vec3_validator());
     cmd->add_option("--fov", a->fov, "vertical field of view in degrees (perspective)")
         ->check(CLI::Range(0.01, 179.0));
     cmd->add_option("--ortho-height", a->ortho_height, "orthographic view height in model units (implies orthographic)")
@@ -114,7 +120,8 @@ void add_render_command(CLI::App& app) {
                     "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
                     "the bounding-box diagonal (same for both methods)")
         ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
-    cmd->add_option("--background", a->background, "background colour r,g,b in [0,1] (default transparent black)");
+    cmd->add_option("--background", a->background, "background colour r,g,b in [0,1] (default transparent black)")
+        ->check(vec3_validator(true));
     cmd->add_option("--mesh-deflection", a->load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
         ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
@@ -122,9 +129,9 @@ void add_render_command(CLI::App& app) {
     cmd->add_flag("-q,--quiet", a->quiet, "no progress messages on stderr");
 
     cmd->callback([a] {
+        for (const std::string& m : a->models)
+            if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
         const auto t0 = clock_type::now();
-        if (!a->aov.empty() && std::filesystem::path(a->aov).extension() != ".exr")
-            throw Error(ErrorCode::invalid_argument, "--aov needs an .exr file (got '" + a->aov + "')");
         auto say = [&](const char* fmt, auto... xs) {
             if (a->quiet) return;
             std::fprintf(stderr, "nurbsrt: [%8.1f ms] ", ms_since(t0));

@@ -16,7 +16,9 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "nurbsrt 0.1.0");
     app.footer(
         "Exit status: 0 success, 1 the command failed (the message says why, with an\n"
-        "error code such as unreadable_file or no_faces), 2 bad command line.");
+        "error code such as unreadable_file or no_faces), 2 bad command line (unknown\n"
+        "option, bad value, missing input, output path or format we cannot write: all\n"
+        "checked before any import, with a message naming the option).");
     nurbsrt::cli::add_render_command(app);
     nurbsrt::cli::add_info_command(app);
     nurbsrt::cli::add_convert_command(app);

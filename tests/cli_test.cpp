@@ -115,9 +115,11 @@ TEST(Cli, ConvertRoundTripKeepsFaces) {
     EXPECT_EQ(nlohmann::json::parse(a.out)["format"], "IGES");
     EXPECT_EQ(nlohmann::json::parse(a.out)["faces"].get<int>(), 10);
     EXPECT_EQ(nlohmann::json::parse(b.out)["faces"].get<int>(), 10);
+    // An output format we cannot write is a usage error, found before the import.
     const CliRun bad = run_nurbsrt("convert " + kScrew + " " + (dir / "out.xyz").string());
-    EXPECT_EQ(bad.status, 1);
-    EXPECT_NE(bad.err.find("[unsupported_format]"), std::string::npos) << bad.err;
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("OUT: "), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("must end in one of .stp"), std::string::npos) << bad.err;
     fs::remove_all(dir);
 }
 
@@ -208,12 +210,36 @@ TEST(CliRender, SceneFilePlacesCopies) {
 TEST(CliRender, RejectsBadOptions) {
     EXPECT_EQ(run_nurbsrt("render " + kScrew + " -o /tmp/x.png --method newton").status, 2);
     EXPECT_EQ(run_nurbsrt("render " + kScrew + " -o /tmp/x.png --width 0").status, 2);
-    const CliRun aov = run_nurbsrt("render " + kScrew + " -o /tmp/x.png --aov /tmp/x.png");
-    EXPECT_EQ(aov.status, 1);
-    EXPECT_NE(aov.err.find("--aov needs an .exr"), std::string::npos) << aov.err;
-    const CliRun eye = run_nurbsrt("render " + kScrew + " -o /tmp/x.png --eye 1,2");
-    EXPECT_EQ(eye.status, 1);
-    EXPECT_NE(eye.err.find("--eye must be x,y,z"), std::string::npos) << eye.err;
+}
+
+// Every option is checked before any import: a usage error exits 2 with
+// CLI11's message naming the flag, and the import never starts (the progress
+// line "importing" is the first thing a render prints once the options are good).
+TEST(CliRender, BadOptionsFailBeforeTheImport) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-fast-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string out = (dir / "x.png").string();
+    const struct {
+        std::string args, says;
+    } cases[] = {
+        {"-o /nonexistent-dir/a.png", "--output: the directory '/nonexistent-dir' does not exist"},
+        {"-o " + (dir / "a.bmp").string(), "--output: '" + (dir / "a.bmp").string() + "' must end in one of .png"},
+        {"-o " + out + " --aov " + out, "--aov: '" + out + "' must end in one of .exr"},
+        {"-o " + out + " --eye 1,2", "--eye: must be three numbers x,y,z (got '1,2')"},
+        {"-o " + out + " --up 0,0,z", "--up: must be three numbers"},
+        {"-o " + out + " --background 2,0,0", "--background: each component must be in [0, 1]"},
+        {"-o " + out + " --stats " + (dir / "s.txt").string(), "--stats"},
+        {"-o " + out + " --widht 100", "not expected: --widht"},
+        {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},
+    };
+    for (const auto& c : cases) {
+        const CliRun r = run_nurbsrt("render " + kScrew + " " + c.args);
+        EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << "\n" << r.err;
+        EXPECT_EQ(r.err.find("importing"), std::string::npos) << c.args << ": the import started\n" << r.err;
+        EXPECT_FALSE(fs::exists(out)) << c.args;
+    }
+    fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,0 +1,55 @@
+// CLI11 validators for the values the commands check before any work, so that
+// a bad value is a usage error (exit 2, CLI11's message naming the flag) found
+// before an import, not a failure after it.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <initializer_list>
+#include <string>
+#include <unistd.h>
+
+namespace nurbsrt::cli {
+
+// "x,y,z": three numbers; with `unit` each in [0, 1] (colours).
+inline CLI::Validator vec3_validator(bool unit = false) {
+    return CLI::Validator(
+        [unit](std::string& s) -> std::string {
+            double x, y, z;
+            char tail = 0;
+            if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3)
+                return "must be three numbers x,y,z (got '" + s + "')";
+            if (unit && (x < 0 || x > 1 || y < 0 || y > 1 || z < 0 || z > 1))
+                return "each component must be in [0, 1] (got '" + s + "')";
+            return {};
+        },
+        unit ? "R,G,B" : "X,Y,Z");
+}
+
+// A file we are going to write: one of `extensions` (lower case, with the dot),
+// in a directory that exists and that we may write.
+inline CLI::Validator output_file_validator(std::initializer_list<const char*> extensions) {
+    std::string list;
+    for (const char* e : extensions) list += (list.empty() ? "" : ", ") + std::string(e);
+    return CLI::Validator(
+        [exts = std::vector<std::string>(extensions.begin(), extensions.end()), list](std::string& s) -> std::string {
+            namespace fs = std::filesystem;
+            const fs::path p(s);
+            std::string ext = p.extension().string();
+            for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            bool known = false;
+            for (const std::string& e : exts) known = known || ext == e;
+            if (!known) return "'" + s + "' must end in one of " + list;
+            const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+            std::error_code ec;
+            if (!fs::is_directory(dir, ec)) return "the directory '" + dir.string() + "' does not exist";
+            if (::access(dir.c_str(), W_OK) != 0) return "the directory '" + dir.string() + "' is not writable";
+            if (fs::is_directory(p, ec)) return "'" + s + "' is a directory";
+            return {};
+        },
+        "FILE(" + list + ")");
+}
+
+}  // namespace nurbsrt::cli
