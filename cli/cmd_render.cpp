@@ -17,6 +17,7 @@
 #include "renderer/error.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
+#include "server/render_options.h"
 
 namespace nurbsrt::cli {
 namespace {
@@ -39,7 +40,7 @@ Vec3 parse_vec3(const std::string& s, const char* what) {
 struct Args {
     std::vector<std::string> models;
     std::string output, aov, stats;
-    int width = 1024, height = 768;
+    int width = 0, height = 0;  // 0: not given (complete_size)
     std::string view = "iso";
     std::string eye, target, up;
     double fov = 0, ortho_height = 0;
@@ -53,10 +54,17 @@ struct Args {
     bool quiet = false;
 };
 
+// "jpeg" for .jpg/.jpeg, else the extension without its dot (checked by the -o validator).
+std::string output_format_name(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".jpg" || ext == ".jpeg" ? "jpeg" : ext.empty() ? "" : ext.substr(1);
+}
+
 CameraSpec camera_from_args(const Args& a, const Scene& scene) {
     CameraSpec base;
-    base.width = a.width;
-    base.height = a.height;
+    server::complete_size(a.width ? std::optional<int>(a.width) : std::nullopt,
+                          a.height ? std::optional<int>(a.height) : std::nullopt, base.width, base.height);
     base.projection = (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic
                                                                               : Projection::perspective;
     if (a.fov > 0) base.fov_deg = a.fov;
@@ -93,10 +101,10 @@ void add_render_command(CLI::App& app) {
         ->check(output_file_validator({".exr"}));
     cmd->add_option("--stats", a->stats, "write statistics and stage timings as JSON ('-' for stdout)")
         ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
-    cmd->add_option("--width", a->width, "image width in pixels")->check(CLI::Range(1, 16384))
-        ->capture_default_str();
-    cmd->add_option("--height", a->height, "image height in pixels")->check(CLI::Range(1, 16384))
-        ->capture_default_str();
+    cmd->add_option("--width", a->width, "image width in pixels (default 800; given alone, the height keeps 4:3)")
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--height", a->height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
+        ->check(CLI::Range(1, 16384));
     cmd->add_option("--view", a->view, "named view fitted to the model: iso, front, back, left, right, top, bottom")
         ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))->capture_default_str();
     cmd->add_option("--eye", a->eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
@@ -120,8 +128,19 @@ void add_render_command(CLI::App& app) {
                     "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
                     "the bounding-box diagonal (same for both methods)")
         ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
-    cmd->add_option("--background", a->background, "background colour r,g,b in [0,1] (default transparent black)")
-        ->check(vec3_validator(true));
+    cmd->add_option("--background", a->background,
+                    "background: r,g,b (opaque) or r,g,b,a in [0,1], or transparent (default: transparent; "
+                    "opaque white for JPEG)")
+        ->check(CLI::Validator(
+            [](std::string& s) -> std::string {
+                try {
+                    server::parse_background(s, "the value");
+                    return {};
+                } catch (const Error& e) {
+                    return e.what();
+                }
+            },
+            "R,G,B[,A]|transparent"));
     cmd->add_option("--mesh-deflection", a->load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
         ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
@@ -150,11 +169,12 @@ void add_render_command(CLI::App& app) {
         options.map_precision = *parse_map_precision(a->map_precision);
         options.threads = a->threads;
         options.newton.eps = a->tolerance * std::max(scene.bbox.diagonal(), 1e-300);
-        if (!a->background.empty()) {
-            const Vec3 bg = parse_vec3(a->background, "--background");
-            options.background = {static_cast<float>(bg.x), static_cast<float>(bg.y), static_cast<float>(bg.z)};
-        }
-        say("rendering %dx%d with %s", a->width, a->height, a->method.c_str());
+        const server::Background bg = a->background.empty()
+                                          ? server::default_background(output_format_name(a->output))
+                                          : server::parse_background(a->background, "--background");
+        options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
+        options.background_alpha = static_cast<float>(bg.alpha);
+        say("rendering %dx%d with %s", camera.width(), camera.height(), a->method.c_str());
         // Progress on stderr: live on a terminal; otherwise a line per 10% once the
         // render has taken over a second (logs of long renders, quiet for short ones).
         const bool tty = isatty(STDERR_FILENO) != 0;

@@ -42,7 +42,7 @@ void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) 
                 px[0] = options.background.r;
                 px[1] = options.background.g;
                 px[2] = options.background.b;
-                px[3] = 0.0f;
+                px[3] = options.background_alpha;
                 continue;
             }
             const Face& f = scene.faces[h.face - 1];

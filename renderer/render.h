@@ -34,7 +34,8 @@ struct RenderOptions {
     // process's one worker pool serves higher-priority arenas first (a service
     // puts cheap frames ahead of heavy ones).
     RenderPriority priority = RenderPriority::normal;
-    Color background{0, 0, 0}; // with alpha 0
+    Color background{0, 0, 0}; // of pixels no face covers
+    float background_alpha = 0; // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
     // at a time, fractions increasing), about every 2% of the frame's rows and once
     // with 1.0 at the end. Must be cheap; has no effect on the output.

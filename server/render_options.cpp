@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -36,6 +37,22 @@ int integer(const json& v, const std::string& key) {
 std::string text(const json& v, const std::string& key) {
     if (!v.is_string()) bad("option '" + key + "' must be a string");
     return v.get<std::string>();
+}
+
+// A background as a string ("1,1,1", "transparent": query parameters) or an
+// array of 3 (opaque) or 4 numbers.
+Background background(const json& v, const std::string& key) {
+    const std::string what = "option '" + key + "'";
+    if (v.is_string()) return parse_background(v.get<std::string>(), what);
+    if (!v.is_array() || (v.size() != 3 && v.size() != 4)) bad(what + " must be an array of 3 or 4 numbers, or a string");
+    std::string text;
+    for (const json& x : v) {
+        if (!x.is_number()) bad(what + " must be an array of 3 or 4 numbers, or a string");
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%s%.17g", text.empty() ? "" : ",", x.get<double>());
+        text += buf;
+    }
+    return parse_background(text, what);
 }
 
 Vec3 vec3(const json& v, const std::string& key) {
@@ -132,11 +149,12 @@ void check_camera_without_scene(const RenderRequest& r) {
 RenderRequest parse_render_options(const std::string& options_json) {
     const json o = parse_object(options_json);
     RenderRequest r;
+    std::optional<int> width, height;
     for (const auto& [key, v] : o.items()) {
         if (key == "width" || key == "height") {
             const int n = integer(v, key);
             if (n < 1) bad("option '" + key + "' must be at least 1");
-            (key == "width" ? r.width : r.height) = n;
+            (key == "width" ? width : height) = n;
         } else if (key == "method") {
             r.method = *parse_newton_method(one_of(v, key, {"proposed", "martin"}));
         } else if (key == "map_precision") {
@@ -148,10 +166,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
             else if (f == "tiff" || f == "tif") r.format = {"tiff", ".tif", "image/tiff"};
             else r.format = {"exr", ".exr", "image/x-exr"};
         } else if (key == "background") {
-            const Vec3 b = vec3(v, key);
-            if (b.x < 0 || b.x > 1 || b.y < 0 || b.y > 1 || b.z < 0 || b.z > 1)
-                bad("option 'background' must be r,g,b in [0,1]");
-            r.background = b;
+            r.background = background(v, key);
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items()) camera_field(r, ck, cv);
@@ -160,8 +175,37 @@ RenderRequest parse_render_options(const std::string& options_json) {
             camera_field(r, key, v);
         }
     }
+    complete_size(width, height, r.width, r.height);
     check_camera_without_scene(r);
     return r;
+}
+
+Background parse_background(const std::string& s, const std::string& what) {
+    if (s == "transparent") return {};
+    double c[4] = {0, 0, 0, 1};
+    char tail = 0;
+    const int n = std::sscanf(s.c_str(), "%lf,%lf,%lf,%lf%c", &c[0], &c[1], &c[2], &c[3], &tail);
+    if (n != 3 && n != 4)
+        throw Error(ErrorCode::invalid_argument,
+                    what + " must be r,g,b or r,g,b,a in [0,1], or transparent (got '" + s.substr(0, 64) + "')");
+    for (double x : c)
+        if (!(x >= 0 && x <= 1))
+            throw Error(ErrorCode::invalid_argument,
+                        what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
+    return {{c[0], c[1], c[2]}, c[3]};
+}
+
+Background default_background(const std::string& format_name) {
+    if (format_name == "jpeg") return {{1, 1, 1}, 1};
+    return {};
+}
+
+void complete_size(std::optional<int> width, std::optional<int> height, int& out_width, int& out_height) {
+    const auto keep_aspect = [](int given, int from, int to) {
+        return std::max(1, static_cast<int>(std::lround(double(given) * to / from)));
+    };
+    out_width = width ? *width : height ? keep_aspect(*height, kDefaultHeight, kDefaultWidth) : kDefaultWidth;
+    out_height = height ? *height : width ? keep_aspect(*width, kDefaultWidth, kDefaultHeight) : kDefaultHeight;
 }
 
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {

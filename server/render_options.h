@@ -18,8 +18,27 @@ struct OutputFormat {
     std::string content_type;  // image/png, ...
 };
 
+// The background of the image: colour and alpha (0 transparent, 1 opaque).
+struct Background {
+    Vec3 rgb{0, 0, 0};
+    double alpha = 0;
+};
+
+// "transparent", "r,g,b" (opaque) or "r,g,b,a", each in [0, 1]. Throws
+// Error(invalid_argument) naming `what` (the option or flag). Shared by the
+// API and the CLI, so both accept and refuse the same values.
+Background parse_background(const std::string& text, const std::string& what);
+// A format's default: transparent where it has alpha (PNG, TIFF, EXR), opaque
+// white for JPEG, which cannot carry "no background".
+Background default_background(const std::string& format_name);
+
+// The default image size of the API and the CLI; given one side only, the
+// other keeps the default aspect (width 640 alone: 640x480).
+constexpr int kDefaultWidth = 800, kDefaultHeight = 600;
+void complete_size(std::optional<int> width, std::optional<int> height, int& out_width, int& out_height);
+
 struct RenderRequest {
-    int width = 800, height = 600;
+    int width = kDefaultWidth, height = kDefaultHeight;
     std::string view = "iso";
     Projection projection = Projection::perspective;
     std::optional<double> fov_deg, ortho_height;
@@ -27,7 +46,7 @@ struct RenderRequest {
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
     OutputFormat format{"png", ".png", "image/png"};
-    std::optional<Vec3> background;
+    std::optional<Background> background;  // unset: default_background(format)
 };
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).

@@ -176,9 +176,9 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     options.threads = ctx.config.render_threads;
     options.priority = priority;
     options.progress = control.progress;
-    if (r.background)
-        options.background = {static_cast<float>(r.background->x), static_cast<float>(r.background->y),
-                              static_cast<float>(r.background->z)};
+    const Background bg = r.background.value_or(default_background(r.format.name));
+    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
+    options.background_alpha = static_cast<float>(bg.alpha);
     const RenderResult result =
         render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop);
 

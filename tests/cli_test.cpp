@@ -4,12 +4,14 @@
 
 #include <sys/wait.h>
 #include <unistd.h>
+#include <OpenImageIO/imageio.h>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -212,6 +214,57 @@ TEST(CliRender, RejectsBadOptions) {
     EXPECT_EQ(run_nurbsrt("render " + kScrew + " -o /tmp/x.png --width 0").status, 2);
 }
 
+// Background and size follow the API's rules (one shared parser): PNG
+// transparent by default, a colour alone opaque, JPEG opaque white by default;
+// one side given alone keeps the default 4:3 aspect.
+TEST(CliRender, BackgroundAlphaAndDefaultSize) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-bg-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    struct Pixel {
+        int width = 0, height = 0, channels = 0;
+        std::vector<float> rgba;
+    };
+    const auto corner = [](const std::string& path) {
+        Pixel p;
+        // The file's own (unassociated) values: OIIO would premultiply by alpha on reading.
+        OIIO::ImageSpec config;
+        config.attribute("oiio:UnassociatedAlpha", 1);
+        auto in = OIIO::ImageInput::open(path, &config);
+        if (!in) return p;
+        const OIIO::ImageSpec& spec = in->spec();
+        p.width = spec.width;
+        p.height = spec.height;
+        p.channels = spec.nchannels;
+        std::vector<float> row(size_t(spec.width) * spec.nchannels);  // read_scanline reads the whole row
+        if (!in->read_scanline(0, 0, OIIO::TypeDesc::FLOAT, row.data())) return p;
+        p.rgba.assign(row.begin(), row.begin() + spec.nchannels);
+        return p;
+    };
+    const struct {
+        std::string file, args;
+        int width, height;
+        std::vector<float> expected;
+    } cases[] = {
+        {"a.png", "--width 64 --height 48", 64, 48, {0, 0, 0, 0}},
+        {"b.png", "--width 64 --background 1,1,1", 64, 48, {1, 1, 1, 1}},
+        {"c.png", "--height 30 --background 0,0,1,0.5", 40, 30, {0, 0, 1, 128.0f / 255}},
+        {"d.jpg", "--width 40 --height 30", 40, 30, {1, 1, 1}},
+        {"e.jpg", "--width 40 --height 30 --background 0,0,0", 40, 30, {0, 0, 0}},
+    };
+    for (const auto& c : cases) {
+        const std::string out = (dir / c.file).string();
+        const CliRun r = run_nurbsrt("render " + kScrew + " -q -o " + out + " " + c.args);
+        ASSERT_EQ(r.status, 0) << c.args << "\n" << r.err;
+        const Pixel p = corner(out);
+        EXPECT_EQ(p.width, c.width) << c.args;
+        EXPECT_EQ(p.height, c.height) << c.args;
+        ASSERT_EQ(p.rgba.size(), c.expected.size()) << c.args;
+        for (size_t k = 0; k < c.expected.size(); ++k)
+            EXPECT_NEAR(p.rgba[k], c.expected[k], 0.02) << c.args << " channel " << k;  // JPEG is lossy
+    }
+    fs::remove_all(dir);
+}
+
 // Every option is checked before any import: a usage error exits 2 with
 // CLI11's message naming the flag, and the import never starts (the progress
 // line "importing" is the first thing a render prints once the options are good).
@@ -227,7 +280,7 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o " + out + " --aov " + out, "--aov: '" + out + "' must end in one of .exr"},
         {"-o " + out + " --eye 1,2", "--eye: must be three numbers x,y,z (got '1,2')"},
         {"-o " + out + " --up 0,0,z", "--up: must be three numbers"},
-        {"-o " + out + " --background 2,0,0", "--background: each component must be in [0, 1]"},
+        {"-o " + out + " --background 2,0,0", "--background: the value has a component outside [0, 1] (got '2,0,0')"},
         {"-o " + out + " --stats " + (dir / "s.txt").string(), "--stats"},
         {"-o " + out + " --widht 100", "not expected: --widht"},
         {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},

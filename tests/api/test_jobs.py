@@ -91,6 +91,42 @@ def download(base, output):
     return r.content
 
 
+def png_pixels(data):
+    """(width, height, channels, rows) of a non-interlaced 8-bit PNG, rows unfiltered
+    (PNG specification, section 9: filter types 0-4), each a bytes of width * channels."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, ihdr = 8, b"", None
+    while pos < len(data):
+        length, ctype = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        if ctype == b"IHDR":
+            ihdr = struct.unpack(">IIBBBBB", body)
+        elif ctype == b"IDAT":
+            idat += body
+        pos += 12 + length
+    width, height, depth, color, _, _, interlace = ihdr
+    assert depth == 8 and interlace == 0
+    ch = {0: 1, 2: 3, 4: 2, 6: 4}[color]
+    raw, stride, rows, prev = zlib.decompress(idat), width * ch, [], bytearray(width * ch)
+    for y in range(height):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - ch] if i >= ch else 0
+            b, c = prev[i], prev[i - ch] if i >= ch else 0
+            if f == 1:
+                line[i] = (line[i] + a) & 255
+            elif f == 2:
+                line[i] = (line[i] + b) & 255
+            elif f == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append(bytes(line))
+        prev = line
+    return width, height, ch, rows
+
+
 def png_size(data):
     """Decodes a non-interlaced 8-bit PNG far enough to prove it whole: chunk CRCs, IHDR, and the
     inflated IDAT stream of exactly height rows of (filter byte + width * channels) bytes."""

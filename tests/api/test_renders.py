@@ -9,7 +9,7 @@ import time
 import pytest
 import requests
 
-from conftest import BEARING, MODELS, OCCT_DATA, SCREW, TIMEOUT, post_raw, validate
+from conftest import BEARING, MODELS, OCCT_DATA, SCREW, TIMEOUT, check_problem, post_raw, validate
 
 STAGES = ["read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"]
 MAGIC = {"png": b"\x89PNG\r\n\x1a\n", "jpeg": b"\xff\xd8\xff", "exr": b"\x76\x2f\x31\x01"}
@@ -154,3 +154,40 @@ def test_simultaneous_first_renders_import_once(url):
     assert caches == ["hit", "miss"], caches
     reads = sorted(r.json()["statistics"]["timings_ms"]["read"] for r in results)
     assert reads[0] == 0 and reads[1] > 0
+
+
+# ---- background, alpha and default size (the same rules as the CLI) --------------------------------------
+
+def corner_pixel(png):
+    from test_jobs import png_pixels
+    width, height, ch, rows = png_pixels(png)
+    return (width, height), tuple(rows[0][:ch])
+
+
+def test_background_alpha_and_defaults(url):
+    step = SCREW.read_bytes()
+
+    def corner(**params):
+        r = post_raw(url, "/v1/renders", step, params={"width": 64, "height": 48, **params})
+        assert r.status_code == 200, r.text[:300]
+        return corner_pixel(r.content)[1]
+
+    assert corner() == (0, 0, 0, 0)                            # PNG default: transparent
+    assert corner(background="transparent") == (0, 0, 0, 0)
+    assert corner(background="1,1,1") == (255, 255, 255, 255)  # a colour alone is opaque
+    assert corner(background="0,0,1,0.5") == (0, 0, 255, 128)
+    for bad in ("2,0,0", "1,1", "white", "0,0,0,1.5"):
+        check_problem(post_raw(url, "/v1/renders", step, params={"background": bad}), 400, "invalid_argument")
+    files = {"file": ("s.step", step), "options": (None, json.dumps({"width": 40, "height": 30,
+                                                                     "background": [0, 1, 0]}))}
+    r = requests.post(url + "/v1/renders", files=files, timeout=TIMEOUT)
+    assert r.status_code == 200 and corner_pixel(r.content)[1] == (0, 255, 0, 255)
+
+
+def test_one_side_keeps_the_default_aspect(url):
+    step = SCREW.read_bytes()
+    for params, size in (({"width": 640}, (640, 480)), ({"height": 300}, (400, 300)), ({}, (800, 600)),
+                         ({"width": 50, "height": 70}, (50, 70))):
+        r = post_raw(url, "/v1/renders", step, params=params)
+        assert r.status_code == 200, r.text[:300]
+        assert corner_pixel(r.content)[0] == size, params
