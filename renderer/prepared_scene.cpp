@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
+#include <unordered_map>
 
 #include "renderer/error.h"
 
@@ -27,6 +28,14 @@ constexpr double kTrimBandPerTolerance = 2.0;
 // Faces built without a tolerance get a rounding-level band, relative to the
 // diagonal of their parameter box.
 constexpr double kMinTrimBandRelative = 1e-9;
+
+// Adjacency grid cell, relative to the scene's diagonal. BRepMesh puts a node on
+// every topological vertex, so faces that share an edge or a vertex have map-mesh
+// nodes at the same point (bitwise, when the file shares the vertex; within the
+// edge tolerance, up to ~1e-4 of the model, when it does not, as IGES trimmed
+// surfaces). A cell 10x that tolerance catches both; a false neighbour (two
+// faces' nodes merely close) only costs a few extra solves where one is tried.
+constexpr double kAdjacencyCellRelative = 1e-3;
 
 std::atomic<uint64_t> next_prepared_id{1};
 
@@ -68,6 +77,41 @@ MapMesh merge_map_meshes(const Scene& scene) {
     return m;
 }
 
+// PreparedFace::adjacent: faces with map-mesh nodes in one cell of a grid of
+// kAdjacencyCellRelative x diag. One cell per node (no neighbouring cells):
+// coincident nodes always share it, and an edge has a node at each end, so a
+// pair split by a cell border at one end is still found at the other.
+void link_adjacent_faces(const Scene& scene, std::vector<PreparedFace>& faces) {
+    struct Key {
+        int64_t x, y, z;
+        bool operator==(const Key&) const = default;
+    };
+    struct KeyHash {
+        size_t operator()(const Key& k) const {
+            return static_cast<size_t>(static_cast<uint64_t>(k.x) * 73856093u ^ static_cast<uint64_t>(k.y) * 19349663u ^
+                                       static_cast<uint64_t>(k.z) * 83492791u);
+        }
+    };
+    const double inv = 1.0 / (kAdjacencyCellRelative * std::max(scene.bbox.diagonal(), 1e-300));
+    std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells;
+    for (const Face& f : scene.faces)
+        for (const Vec3& p : f.mesh.xyz) {
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+            const Key k{static_cast<int64_t>(std::floor(p.x * inv)), static_cast<int64_t>(std::floor(p.y * inv)),
+                        static_cast<int64_t>(std::floor(p.z * inv))};
+            std::vector<uint32_t>& ids = cells[k];
+            if (std::find(ids.begin(), ids.end(), f.index) == ids.end()) ids.push_back(f.index);
+        }
+    for (const auto& [key, ids] : cells)
+        for (const uint32_t a : ids)
+            for (const uint32_t b : ids)
+                if (a != b) faces[a - 1].adjacent.push_back(b);
+    for (PreparedFace& pf : faces) {
+        std::sort(pf.adjacent.begin(), pf.adjacent.end());
+        pf.adjacent.erase(std::unique(pf.adjacent.begin(), pf.adjacent.end()), pf.adjacent.end());
+    }
+}
+
 }  // namespace
 
 struct PreparedSceneBuilder {
@@ -88,6 +132,7 @@ struct PreparedSceneBuilder {
             tbb::parallel_for(size_t(0), scene.faces.size(),
                               [&](size_t k) { ps.faces_[k] = prepare_face(scene.faces[k], seam_tol); });
         });
+        link_adjacent_faces(scene, ps.faces_);
         ps.map_ = merge_map_meshes(scene);
         ps.prepare_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         return ps;
@@ -96,7 +141,7 @@ struct PreparedSceneBuilder {
 
 size_t PreparedScene::memory_bytes() const {
     size_t n = sizeof(PreparedScene) + faces_.capacity() * sizeof(PreparedFace);
-    for (const PreparedFace& f : faces_) n += f.trim.memory_bytes();
+    for (const PreparedFace& f : faces_) n += f.trim.memory_bytes() + f.adjacent.capacity() * sizeof(uint32_t);
     n += map_.xyz.capacity() * sizeof(Vec3) + map_.uv.capacity() * sizeof(float) +
          map_.face.capacity() * sizeof(uint32_t) + map_.indices.capacity() * sizeof(uint32_t);
     return n;
