@@ -5,8 +5,11 @@
 // more than the spike threshold. Such pixels are solved again from those
 // neighbours' faces and (u, v); a hit on the pixel's own ray that is nearer by more
 // than the nearer threshold replaces it: the nearest intersection is the visible
-// one. Reads only the hits so far, so the result stays independent of the thread
-// count.
+// one. A hit just outside the neighbour face's trim, within its tolerance band,
+// counts (a crack between two front faces otherwise shows the face behind), and
+// where both neighbours are nearer and neither's face covers the pixel, the faces
+// adjacent to theirs are tried too (a face too thin for the map). Reads only the
+// hits so far, so the result stays independent of the thread count.
 #include <algorithm>
 
 #include "renderer/passes.h"
@@ -24,13 +27,21 @@ constexpr double kSpikeRelative = 1e-5;
 // same root reached from another start never counts as nearer.
 constexpr double kNearerRelative = 1e-6;
 // A neighbour's (u, v) "jumps" when it is 3x farther from the pixel's than the
-// opposite neighbour's (compared squared: 9): on one smooth sheet the two
-// distances are about equal.
+// opposite neighbour's, or than half the distance between the two neighbours'
+// (compared squared: 9): on one smooth sheet all three are about equal.
 constexpr double kUvJump2 = 9.0;
 // Passes after the first: a run of far-sheet pixels is peeled one pixel per pass
 // from each end, so runs of up to about 64 pixels are cleared; longer runs are not spikes
 // but a whole region the map got wrong, which this pass does not claim to fix.
 constexpr int kMaxPeelPasses = 32;
+// A spike deeper than this many pixel footprints below its pair's mean is off
+// their sheet: on one smooth sheet the second difference of depth is about a
+// footprint squared over the curvature radius, far below one footprint except
+// where the sheet is seen almost edge-on (a wasted re-solve there, never a wrong hit).
+constexpr double kSheetFootprints = 1.0;
+// Adjacent faces tried per neighbour face of a pit (as the rescue's C): bounds the
+// cost where a face touches many others.
+constexpr size_t kMaxAdjacentFaces = 12;
 
 struct Update {
     size_t k;
@@ -40,7 +51,7 @@ struct Update {
 class NearerSheet {
 public:
     NearerSheet(const FrameContext& c, const Solver& solver, const std::vector<PixelHit>& hits)
-        : c_(c), solver_(solver), hits_(hits) {
+        : c_(c), solver_(solver), hits_(hits), screen_points_(c) {
         const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
         spike_ = kSpikeRelative * diag;
         nearer_ = kNearerRelative * diag;
@@ -58,20 +69,45 @@ public:
             if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + spike_)) continue;
             // Only from a neighbour on another face, or on another sheet of the same
             // face: its (u, v) jumps. A smoothly curved concave sheet, where depth
-            // also rises above the pair's mean, changes (u, v) evenly and is not
-            // solved again.
-            auto uv_dist2 = [&](const PixelHit& x) {
-                const double du = double(x.u) - p.u, dv = double(x.v) - p.v;
+            // also rises above the pair's mean, changes (u, v) evenly (the pixel's
+            // (u, v) lies about midway between its neighbours') and is not solved
+            // again. Two ways to be on another sheet: one neighbour is far in (u, v)
+            // while the other is near (the pixel sits at the edge of a run of
+            // far-sheet pixels), or both are far compared with their own distance
+            // (an isolated far-sheet pixel between two near-sheet ones).
+            auto uv_dist2 = [](const PixelHit& x, const PixelHit& y) {
+                const double du = double(x.u) - y.u, dv = double(x.v) - y.v;
                 return du * du + dv * dv;
             };
+            const double half_pair2 = 0.25 * uv_dist2(a, b);
+            // (u, v) distances mislead where a face's parametrization is very
+            // anisotropic (two sheets a tenth of a pixel's v-step apart in u); in
+            // model units, a pixel deeper than its pair's mean by more than its own
+            // footprint is not on their smooth sheet either.
+            const bool deep = p.t - 0.5 * (a.t + b.t) > kSheetFootprints * footprint(p.t);
+            int jumps = 0;
             for (const PixelHit* n : {&a, &b}) {
                 const PixelHit& other = n == &a ? b : a;
-                const bool jump = n->face != p.face || other.face != p.face || uv_dist2(*n) > kUvJump2 * uv_dist2(other);
-                PixelHit h;
-                if (jump && n->t < p.t - nearer_ &&
-                    solver_.solve(n->face, i, j, n->u, n->v, solver_.params, false, h) == kConverged &&
-                    h.t < best.t - nearer_)
-                    best = h;
+                const bool jump = deep || n->face != p.face || other.face != p.face ||
+                                  uv_dist2(*n, p) > kUvJump2 * std::min(uv_dist2(other, p), half_pair2);
+                if (!jump || !(n->t < p.t - nearer_)) continue;
+                ++jumps;
+                // Also just outside the neighbour's trim, within its tolerance band:
+                // a crack between two front faces must not show the face behind.
+                consider(n->face, i, j, n->u, n->v, solver_.params, best);
+            }
+            // A pit between two nearer neighbours on one face: the middle of their
+            // (u, v) starts next to the root between them, where Newton from either
+            // end can still run to another sheet (near a silhouette, a sheet's two
+            // roots lie close together).
+            if (jumps == 2 && a.face == b.face)
+                consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, best);
+            // A pit between two nearer neighbours that their own faces do not
+            // cover: a face the map could not show (too thin) may lie in between;
+            // it touches the neighbours' faces.
+            if (jumps == 2 && best.face == p.face && best.t == p.t) {
+                adjacent(a.face, i, j, best);
+                if (b.face != a.face) adjacent(b.face, i, j, best);
             }
         }
         if (best.face == p.face && best.t == p.t) return false;
@@ -80,9 +116,33 @@ public:
     }
 
 private:
+    // The size of one pixel in model units at hit distance t (depth along the
+    // view direction for orthographic views, where it does not matter).
+    double footprint(double t) const {
+        return 2.0 * c_.camera.image_to_model_scale(t) / c_.height;
+    }
+    // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
+    void consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, PixelHit& best) const {
+        PixelHit h;
+        const Outcome o = solver_.solve(id, i, j, u0, v0, params, true, h);
+        if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
+    }
+    // The faces adjacent to `of` (PreparedFace::adjacent), from their mesh vertex
+    // nearest to the pixel, with the rescue's robust solve (the start is a mesh
+    // vertex, not a converged neighbour).
+    void adjacent(uint32_t of, int i, int j, PixelHit& best) const {
+        const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+        const std::vector<uint32_t>& ids = c_.prepared.faces()[of - 1].adjacent;
+        for (size_t q = 0; q < ids.size() && q < kMaxAdjacentFaces; ++q) {
+            float u = 0, v = 0;
+            if (screen_points_.nearest_uv(ids[q], sp, u, v)) consider(ids[q], i, j, u, v, solver_.robust, best);
+        }
+    }
+
     const FrameContext& c_;
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;
+    const MeshScreenPoints screen_points_;
     double spike_ = 0, nearer_ = 0;
 };
 
