@@ -85,23 +85,30 @@ public:
             // model units, a pixel deeper than its pair's mean by more than its own
             // footprint is not on their smooth sheet either.
             const bool deep = p.t - 0.5 * (a.t + b.t) > kSheetFootprints * footprint(p.t);
-            int jumps = 0;
-            for (const PixelHit* n : {&a, &b}) {
-                const PixelHit& other = n == &a ? b : a;
-                const bool jump = deep || n->face != p.face || other.face != p.face ||
-                                  uv_dist2(*n, p) > kUvJump2 * std::min(uv_dist2(other, p), half_pair2);
-                if (!jump || !(n->t < p.t - nearer_)) continue;
-                ++jumps;
-                // Also just outside the neighbour's trim, within its tolerance band:
-                // a crack between two front faces must not show the face behind.
-                consider(n->face, i, j, n->u, n->v, solver_.params, best);
+            bool from[2] = {false, false};
+            for (int q = 0; q < 2; ++q) {
+                const PixelHit& n = q == 0 ? a : b;
+                const PixelHit& other = q == 0 ? b : a;
+                const bool jump = deep || n.face != p.face || other.face != p.face ||
+                                  uv_dist2(n, p) > kUvJump2 * std::min(uv_dist2(other, p), half_pair2);
+                from[q] = jump && n.t < p.t - nearer_;
+            }
+            const int jumps = from[0] + from[1];
+            // Where both neighbours are in front (a pit), the pixel is a crack in the
+            // front surface: a hit just outside a neighbour's trim, within its
+            // tolerance band, counts (as for the rescue's cracks), so that the crack
+            // does not show the face behind. Never at a mere step in depth: there the
+            // band would spread a face past its edge pixel by pixel.
+            for (int q = 0; q < 2; ++q) {
+                const PixelHit& n = q == 0 ? a : b;
+                if (from[q]) consider(n.face, i, j, n.u, n.v, solver_.params, jumps == 2, best);
             }
             // A pit between two nearer neighbours on one face: the middle of their
             // (u, v) starts next to the root between them, where Newton from either
             // end can still run to another sheet (near a silhouette, a sheet's two
             // roots lie close together).
             if (jumps == 2 && a.face == b.face)
-                consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, best);
+                consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, true, best);
             // A pit between two nearer neighbours that their own faces do not
             // cover: a face the map could not show (too thin) may lie in between;
             // it touches the neighbours' faces.
@@ -122,9 +129,10 @@ private:
         return 2.0 * c_.camera.image_to_model_scale(t) / c_.height;
     }
     // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
-    void consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, PixelHit& best) const {
+    void consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
+                  PixelHit& best) const {
         PixelHit h;
-        const Outcome o = solver_.solve(id, i, j, u0, v0, params, true, h);
+        const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h);
         if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
     }
     // The faces adjacent to `of` (PreparedFace::adjacent), from their mesh vertex
@@ -135,7 +143,7 @@ private:
         const std::vector<uint32_t>& ids = c_.prepared.faces()[of - 1].adjacent;
         for (size_t q = 0; q < ids.size() && q < kMaxAdjacentFaces; ++q) {
             float u = 0, v = 0;
-            if (screen_points_.nearest_uv(ids[q], sp, u, v)) consider(ids[q], i, j, u, v, solver_.robust, best);
+            if (screen_points_.nearest_uv(ids[q], sp, u, v)) consider(ids[q], i, j, u, v, solver_.robust, true, best);
         }
     }
 

@@ -176,7 +176,11 @@ private:
 // t by more than a pixel footprint at t.
 bool behind_pair(const FrameContext& c, const std::vector<PixelHit>& src, int i, int j, double t) {
     const double margin = 2.0 * c.camera.image_to_model_scale(t) / c.height;
-    auto nearer = [&](int a, int b) { return c.in_frame(a, b) && src[c.map.index(a, b)].face && src[c.map.index(a, b)].t < t - margin; };
+    auto nearer = [&](int a, int b) {
+        if (!c.in_frame(a, b)) return false;
+        const PixelHit& h = src[c.map.index(a, b)];
+        return h.face != 0 && h.t < t - margin;
+    };
     return (nearer(i - 1, j) && nearer(i + 1, j)) || (nearer(i, j - 1) && nearer(i, j + 1));
 }
 

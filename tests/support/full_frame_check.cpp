@@ -169,7 +169,20 @@ struct Diagnoser {
                 if (inside(F, r)) ++ok;
                 if (first.empty()) first = describe(F, r);
             }
-        o << " | face " << F << (in8 ? " in 3x3" : in25 ? " in 5x5 only" : " NOT within 5x5");
+        // Does F touch a face of the 5x5 (PreparedFace::adjacent: the rescue's C)?
+        std::string touching;
+        for (int dj = -2; dj <= 2 && touching.empty(); ++dj)
+            for (int di = -2; di <= 2 && touching.empty(); ++di) {
+                const int a = i + di, b = j + dj;
+                if (a < 0 || b < 0 || a >= c.im.width || b >= c.im.height) continue;
+                for (const uint32_t g : {c.im.face[c.idx(a, b)], map.face[map.index(a, b)]}) {
+                    if (!g || g > c.scene.faces.size()) continue;
+                    const std::vector<uint32_t>& adj = prepared.faces()[g - 1].adjacent;
+                    if (std::binary_search(adj.begin(), adj.end(), F)) touching = std::to_string(g);
+                }
+            }
+        o << " | face " << F << (in8 ? " in 3x3" : in25 ? " in 5x5 only" : " NOT within 5x5")
+          << (touching.empty() ? ", touches no face of the 5x5" : ", touches face " + touching);
         o << " | robust Newton from " << tried << " neighbour hits on it: " << ok << " inside";
         if (!first.empty()) o << " (first: " << first << ")";
         // The nearest root on F from a grid of starts.
