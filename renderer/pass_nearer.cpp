@@ -6,10 +6,9 @@
 // neighbours' faces and (u, v); a hit on the pixel's own ray that is nearer by more
 // than the nearer threshold replaces it: the nearest intersection is the visible
 // one. A hit just outside the neighbour face's trim, within its tolerance band,
-// counts (a crack between two front faces otherwise shows the face behind), and
-// where both neighbours are nearer and neither's face covers the pixel, the faces
-// adjacent to theirs are tried too (a face too thin for the map). Reads only the
-// hits so far, so the result stays independent of the thread count.
+// counts where both neighbours are in front (a crack between two front faces
+// otherwise shows the face behind). Reads only the hits so far, so the result
+// stays independent of the thread count.
 #include <algorithm>
 
 #include "renderer/passes.h"
@@ -34,14 +33,11 @@ constexpr double kUvJump2 = 9.0;
 // from each end, so runs of up to about 64 pixels are cleared; longer runs are not spikes
 // but a whole region the map got wrong, which this pass does not claim to fix.
 constexpr int kMaxPeelPasses = 32;
-// A spike deeper than this many pixel footprints below its pair's mean is off
+// A pixel deeper than this many pixel footprints behind both of its pair is off
 // their sheet: on one smooth sheet the second difference of depth is about a
 // footprint squared over the curvature radius, far below one footprint except
 // where the sheet is seen almost edge-on (a wasted re-solve there, never a wrong hit).
 constexpr double kSheetFootprints = 1.0;
-// Adjacent faces tried per neighbour face of a pit (as the rescue's C): bounds the
-// cost where a face touches many others.
-constexpr size_t kMaxAdjacentFaces = 12;
 
 struct Update {
     size_t k;
@@ -51,7 +47,7 @@ struct Update {
 class NearerSheet {
 public:
     NearerSheet(const FrameContext& c, const Solver& solver, const std::vector<PixelHit>& hits)
-        : c_(c), solver_(solver), hits_(hits), screen_points_(c) {
+        : c_(c), solver_(solver), hits_(hits) {
         const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
         spike_ = kSpikeRelative * diag;
         nearer_ = kNearerRelative * diag;
@@ -82,9 +78,10 @@ public:
             const double half_pair2 = 0.25 * uv_dist2(a, b);
             // (u, v) distances mislead where a face's parametrization is very
             // anisotropic (two sheets a tenth of a pixel's v-step apart in u); in
-            // model units, a pixel deeper than its pair's mean by more than its own
-            // footprint is not on their smooth sheet either.
-            const bool deep = p.t - 0.5 * (a.t + b.t) > kSheetFootprints * footprint(p.t);
+            // model units, a pixel deeper than both of its pair by more than its own
+            // footprint is not on their smooth sheet either (on a slope it lies
+            // between them, so grazing views cost no extra solves).
+            const bool deep = p.t - std::max(a.t, b.t) > kSheetFootprints * footprint(p.t);
             bool from[2] = {false, false};
             for (int q = 0; q < 2; ++q) {
                 const PixelHit& n = q == 0 ? a : b;
@@ -109,13 +106,6 @@ public:
             // roots lie close together).
             if (jumps == 2 && a.face == b.face)
                 consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, true, best);
-            // A pit between two nearer neighbours that their own faces do not
-            // cover: a face the map could not show (too thin) may lie in between;
-            // it touches the neighbours' faces.
-            if (jumps == 2 && best.face == p.face && best.t == p.t) {
-                adjacent(a.face, i, j, best);
-                if (b.face != a.face) adjacent(b.face, i, j, best);
-            }
         }
         if (best.face == p.face && best.t == p.t) return false;
         out = best;
@@ -135,22 +125,9 @@ private:
         const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h);
         if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
     }
-    // The faces adjacent to `of` (PreparedFace::adjacent), from their mesh vertex
-    // nearest to the pixel, with the rescue's robust solve (the start is a mesh
-    // vertex, not a converged neighbour).
-    void adjacent(uint32_t of, int i, int j, PixelHit& best) const {
-        const ScreenPoint sp = c_.camera.pixel_screen(i, j);
-        const std::vector<uint32_t>& ids = c_.prepared.faces()[of - 1].adjacent;
-        for (size_t q = 0; q < ids.size() && q < kMaxAdjacentFaces; ++q) {
-            float u = 0, v = 0;
-            if (screen_points_.nearest_uv(ids[q], sp, u, v)) consider(ids[q], i, j, u, v, solver_.robust, true, best);
-        }
-    }
-
     const FrameContext& c_;
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;
-    const MeshScreenPoints screen_points_;
     double spike_ = 0, nearer_ = 0;
 };
 
