@@ -2,6 +2,7 @@
 #include "renderer/prepared_scene.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -9,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
-#include <unordered_map>
 
 #include "renderer/error.h"
 
@@ -80,32 +80,41 @@ MapMesh merge_map_meshes(const Scene& scene) {
 // PreparedFace::adjacent: faces with map-mesh nodes in one cell of a grid of
 // kAdjacencyCellRelative x diag. One cell per node (no neighbouring cells):
 // coincident nodes always share it, and an edge has a node at each end, so a
-// pair split by a cell border at one end is still found at the other.
+// pair split by a cell border at one end is still found at the other. The
+// (cell, face) pairs are sorted rather than hashed into per-cell lists: no
+// allocation per cell, which made this most of prepare() on the 27 ducks.
 void link_adjacent_faces(const Scene& scene, std::vector<PreparedFace>& faces) {
-    struct Key {
+    struct Node {
         int64_t x, y, z;
-        bool operator==(const Key&) const = default;
-    };
-    struct KeyHash {
-        size_t operator()(const Key& k) const {
-            return static_cast<size_t>(static_cast<uint64_t>(k.x) * 73856093u ^ static_cast<uint64_t>(k.y) * 19349663u ^
-                                       static_cast<uint64_t>(k.z) * 83492791u);
+        uint32_t face;
+        bool operator<(const Node& o) const {
+            return x != o.x ? x < o.x : y != o.y ? y < o.y : z != o.z ? z < o.z : face < o.face;
         }
+        bool same_cell(const Node& o) const { return x == o.x && y == o.y && z == o.z; }
     };
     const double inv = 1.0 / (kAdjacencyCellRelative * std::max(scene.bbox.diagonal(), 1e-300));
-    std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells;
+    std::vector<Node> nodes;
+    size_t total = 0;
+    for (const Face& f : scene.faces) total += f.mesh.xyz.size();
+    nodes.reserve(total);
     for (const Face& f : scene.faces)
         for (const Vec3& p : f.mesh.xyz) {
             if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-            const Key k{static_cast<int64_t>(std::floor(p.x * inv)), static_cast<int64_t>(std::floor(p.y * inv)),
-                        static_cast<int64_t>(std::floor(p.z * inv))};
-            std::vector<uint32_t>& ids = cells[k];
-            if (std::find(ids.begin(), ids.end(), f.index) == ids.end()) ids.push_back(f.index);
+            nodes.push_back({static_cast<int64_t>(std::floor(p.x * inv)), static_cast<int64_t>(std::floor(p.y * inv)),
+                             static_cast<int64_t>(std::floor(p.z * inv)), f.index});
         }
-    for (const auto& [key, ids] : cells)
-        for (const uint32_t a : ids)
-            for (const uint32_t b : ids)
-                if (a != b) faces[a - 1].adjacent.push_back(b);
+    tbb::parallel_sort(nodes.begin(), nodes.end());
+    std::vector<uint32_t> ids;
+    for (size_t a = 0; a < nodes.size();) {
+        size_t b = a;
+        ids.clear();
+        for (; b < nodes.size() && nodes[b].same_cell(nodes[a]); ++b)
+            if (ids.empty() || ids.back() != nodes[b].face) ids.push_back(nodes[b].face);
+        for (const uint32_t f : ids)
+            for (const uint32_t g : ids)
+                if (f != g) faces[f - 1].adjacent.push_back(g);
+        a = b;
+    }
     for (PreparedFace& pf : faces) {
         std::sort(pf.adjacent.begin(), pf.adjacent.end());
         pf.adjacent.erase(std::unique(pf.adjacent.begin(), pf.adjacent.end()), pf.adjacent.end());
@@ -132,7 +141,7 @@ struct PreparedSceneBuilder {
             tbb::parallel_for(size_t(0), scene.faces.size(),
                               [&](size_t k) { ps.faces_[k] = prepare_face(scene.faces[k], seam_tol); });
         });
-        link_adjacent_faces(scene, ps.faces_);
+        arena.execute([&] { link_adjacent_faces(scene, ps.faces_); });
         ps.map_ = merge_map_meshes(scene);
         ps.prepare_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         return ps;
