@@ -12,7 +12,9 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <type_traits>
 #include <utility>
@@ -92,6 +94,57 @@ struct FrameContext {
 
     bool in_frame(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
     size_t pixels() const { return static_cast<size_t>(width) * height; }
+};
+
+// Screen positions (sx, sy) of each face's map-mesh vertices, for the rescue's and
+// the nearer-sheet pass's nearest-vertex start, projected once per face and frame
+// on first use instead of once per pixel: the scan is O(vertices) and a face of the
+// ducks has ~4000, which made this search most of the rescue's time (`nurbsrt
+// bench`). Same arithmetic as projecting in place (X/D, Y/D of Camera::project_h);
+// NaN marks a vertex behind the eye. Thread-safe.
+class MeshScreenPoints {
+public:
+    explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
+    const std::vector<Vec2>& operator()(uint32_t id) const {
+        Entry& e = faces_[id - 1];
+        std::call_once(e.once, [&] {
+            const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+            const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
+            e.pts.resize(n);
+            for (size_t m = 0; m < n; ++m) {
+                const Vec4 ph = c_.camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
+                e.pts[m] = c_.camera.depth(ph) > 0 ? Vec2{ph.x / ph.z, ph.y / ph.z} : Vec2{NAN, NAN};
+            }
+        });
+        return e.pts;
+    }
+    // The (u, v) of face id's mesh vertex nearest to screen point sp (in front of
+    // the eye); false when it has none.
+    bool nearest_uv(uint32_t id, ScreenPoint sp, float& u, float& v) const {
+        const std::vector<Vec2>& pts = (*this)(id);
+        const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+        double bd = HUGE_VAL;
+        size_t bv = pts.size();
+        for (size_t m = 0; m < pts.size(); ++m) {
+            const double dx = pts[m].x - sp.sx, dy = pts[m].y - sp.sy, dd = dx * dx + dy * dy;
+            if (dd < bd) {  // false for NaN: a vertex behind the eye
+                bd = dd;
+                bv = m;
+            }
+        }
+        if (bv == pts.size()) return false;
+        u = static_cast<float>(mesh.uv[bv].x);
+        v = static_cast<float>(mesh.uv[bv].y);
+        return true;
+    }
+
+private:
+    struct Entry {
+        std::once_flag once;
+        std::vector<Vec2> pts;
+    };
+    const FrameContext& c_;
+    const std::unique_ptr<Entry[]> faces_;
 };
 
 // Calls fn(ni, nj) for every pixel of the (2 radius + 1)^2 square around (i, j)

@@ -5,8 +5,10 @@
 // more than the spike threshold. Such pixels are solved again from those
 // neighbours' faces and (u, v); a hit on the pixel's own ray that is nearer by more
 // than the nearer threshold replaces it: the nearest intersection is the visible
-// one. Reads only the hits so far, so the result stays independent of the thread
-// count.
+// one. A hit just outside the neighbour face's trim, within its tolerance band,
+// counts where both neighbours are in front (a crack between two front faces
+// otherwise shows the face behind). Reads only the hits so far, so the result
+// stays independent of the thread count.
 #include <algorithm>
 
 #include "renderer/passes.h"
@@ -24,13 +26,18 @@ constexpr double kSpikeRelative = 1e-5;
 // same root reached from another start never counts as nearer.
 constexpr double kNearerRelative = 1e-6;
 // A neighbour's (u, v) "jumps" when it is 3x farther from the pixel's than the
-// opposite neighbour's (compared squared: 9): on one smooth sheet the two
-// distances are about equal.
+// opposite neighbour's, or than half the distance between the two neighbours'
+// (compared squared: 9): on one smooth sheet all three are about equal.
 constexpr double kUvJump2 = 9.0;
 // Passes after the first: a run of far-sheet pixels is peeled one pixel per pass
 // from each end, so runs of up to about 64 pixels are cleared; longer runs are not spikes
 // but a whole region the map got wrong, which this pass does not claim to fix.
 constexpr int kMaxPeelPasses = 32;
+// A pixel deeper than this many pixel footprints behind both of its pair is off
+// their sheet: on one smooth sheet the second difference of depth is about a
+// footprint squared over the curvature radius, far below one footprint except
+// where the sheet is seen almost edge-on (a wasted re-solve there, never a wrong hit).
+constexpr double kSheetFootprints = 1.0;
 
 struct Update {
     size_t k;
@@ -58,21 +65,47 @@ public:
             if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + spike_)) continue;
             // Only from a neighbour on another face, or on another sheet of the same
             // face: its (u, v) jumps. A smoothly curved concave sheet, where depth
-            // also rises above the pair's mean, changes (u, v) evenly and is not
-            // solved again.
-            auto uv_dist2 = [&](const PixelHit& x) {
-                const double du = double(x.u) - p.u, dv = double(x.v) - p.v;
+            // also rises above the pair's mean, changes (u, v) evenly (the pixel's
+            // (u, v) lies about midway between its neighbours') and is not solved
+            // again. Two ways to be on another sheet: one neighbour is far in (u, v)
+            // while the other is near (the pixel sits at the edge of a run of
+            // far-sheet pixels), or both are far compared with their own distance
+            // (an isolated far-sheet pixel between two near-sheet ones).
+            auto uv_dist2 = [](const PixelHit& x, const PixelHit& y) {
+                const double du = double(x.u) - y.u, dv = double(x.v) - y.v;
                 return du * du + dv * dv;
             };
-            for (const PixelHit* n : {&a, &b}) {
-                const PixelHit& other = n == &a ? b : a;
-                const bool jump = n->face != p.face || other.face != p.face || uv_dist2(*n) > kUvJump2 * uv_dist2(other);
-                PixelHit h;
-                if (jump && n->t < p.t - nearer_ &&
-                    solver_.solve(n->face, i, j, n->u, n->v, solver_.params, false, h) == kConverged &&
-                    h.t < best.t - nearer_)
-                    best = h;
+            const double half_pair2 = 0.25 * uv_dist2(a, b);
+            // (u, v) distances mislead where a face's parametrization is very
+            // anisotropic (two sheets a tenth of a pixel's v-step apart in u); in
+            // model units, a pixel deeper than both of its pair by more than its own
+            // footprint is not on their smooth sheet either (on a slope it lies
+            // between them, so grazing views cost no extra solves).
+            const bool deep = p.t - std::max(a.t, b.t) > kSheetFootprints * footprint(p.t);
+            bool from[2] = {false, false};
+            for (int q = 0; q < 2; ++q) {
+                const PixelHit& n = q == 0 ? a : b;
+                const PixelHit& other = q == 0 ? b : a;
+                const bool jump = deep || n.face != p.face || other.face != p.face ||
+                                  uv_dist2(n, p) > kUvJump2 * std::min(uv_dist2(other, p), half_pair2);
+                from[q] = jump && n.t < p.t - nearer_;
             }
+            const int jumps = from[0] + from[1];
+            // Where both neighbours are in front (a pit), the pixel is a crack in the
+            // front surface: a hit just outside a neighbour's trim, within its
+            // tolerance band, counts (as for the rescue's cracks), so that the crack
+            // does not show the face behind. Never at a mere step in depth: there the
+            // band would spread a face past its edge pixel by pixel.
+            for (int q = 0; q < 2; ++q) {
+                const PixelHit& n = q == 0 ? a : b;
+                if (from[q]) consider(n.face, i, j, n.u, n.v, solver_.params, jumps == 2, best);
+            }
+            // A pit between two nearer neighbours on one face: the middle of their
+            // (u, v) starts next to the root between them, where Newton from either
+            // end can still run to another sheet (near a silhouette, a sheet's two
+            // roots lie close together).
+            if (jumps == 2 && a.face == b.face)
+                consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, true, best);
         }
         if (best.face == p.face && best.t == p.t) return false;
         out = best;
@@ -80,6 +113,18 @@ public:
     }
 
 private:
+    // The size of one pixel in model units at hit distance t (depth along the
+    // view direction for orthographic views, where it does not matter).
+    double footprint(double t) const {
+        return 2.0 * c_.camera.image_to_model_scale(t) / c_.height;
+    }
+    // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
+    void consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
+                  PixelHit& best) const {
+        PixelHit h;
+        const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h);
+        if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
+    }
     const FrameContext& c_;
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;

@@ -10,6 +10,10 @@
 //    neighbourhood from several starts: the converged (u, v) of its pixels, its
 //    map (u, v), the face's mesh vertex projected nearest to the pixel, and the
 //    middle of the face's parameter box.
+//  C (adjacent): if B found nothing either and the pixel is enclosed (its map
+//    face failed, or a crack), the faces that touch B's faces (shared vertices of
+//    their meshes, PreparedFace::adjacent), from their nearest mesh vertex and box
+//    middle: a face too thin for the map to show lies between the faces it touches.
 //  Crack pixels (hit on opposite sides, or on 3 of 4 sides) also accept a hit
 //    just outside a trim loop, within the face's tolerance band (Solver::solve).
 // All rescue solves use the robust Newton (newton.h); the nearest hit wins.
@@ -27,9 +31,10 @@ namespace {
 
 // At most this many distinct starts (face, u, v) are solved per rescued pixel. A
 // needs at most 8 + 8 + 2 (each neighbour's hit and map start, the own map start
-// and one own converged start); the rest is B's budget. It bounds a pixel's cost
-// where many small faces meet, and sizes the stack array of tried starts.
-constexpr int kMaxStarts = 64;
+// and one own converged start), B the rest of the first 64, C at most
+// 2 x kMaxAdjacentFaces = 24 more. It bounds a pixel's cost where many small faces
+// meet, and sizes the stack array of tried starts.
+constexpr int kMaxStarts = 88;
 // A's neighbourhood: the 8 pixels around (a hit there is at most a pixel away).
 constexpr int kNeighbourRadius = 1;
 // B's neighbourhood: 5x5, one ring beyond A's, for the faces a pixel-wide sliver
@@ -39,42 +44,14 @@ constexpr int kGeneralRadius = 2;
 // itself; more distinct faces there are a pathological corner where the start
 // budget (kMaxStarts) would run out anyway.
 constexpr int kMaxGeneralFaces = 24;
+// C's faces: the adjacent faces of B's, two starts each; a thin face between
+// the neighbourhood's faces touches at least one of them. 12 x 2 starts stay
+// within the start budget after A's and B's usual few.
+constexpr int kMaxAdjacentFaces = 12;
 // Silhouette growth passes: each adds one pixel ring outside the map's
 // silhouette; the exact silhouette lies within a few pixels of the mesh's (its
 // deflection), so 64 is never reached in practice and only bounds the work.
 constexpr int kMaxGrowthPasses = 64;
-
-// Screen positions (sx, sy) of each face's map-mesh vertices for B's
-// nearest-vertex start, projected once per face and frame on first use instead of
-// once per rescued pixel: the scan is O(vertices) and a face of the ducks has
-// ~4000, which made this search most of the rescue's time (`nurbsrt bench`). Same
-// arithmetic as projecting in place (X/D, Y/D of Camera::project_h), so the chosen
-// vertex is unchanged; NaN marks a vertex behind the eye.
-class MeshScreenPoints {
-public:
-    explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
-    const std::vector<Vec2>& operator()(uint32_t id) const {
-        Entry& e = faces_[id - 1];
-        std::call_once(e.once, [&] {
-            const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-            const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
-            e.pts.resize(n);
-            for (size_t m = 0; m < n; ++m) {
-                const Vec4 ph = c_.camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
-                e.pts[m] = c_.camera.depth(ph) > 0 ? Vec2{ph.x / ph.z, ph.y / ph.z} : Vec2{NAN, NAN};
-            }
-        });
-        return e.pts;
-    }
-
-private:
-    struct Entry {
-        std::once_flag once;
-        std::vector<Vec2> pts;
-    };
-    const FrameContext& c_;
-    const std::unique_ptr<Entry[]> faces_;
-};
 
 // The rescue of one pixel (i, j) from the hits `src`: the starts tried so far
 // (each distinct start is solved once) and the nearest hits inside the trim and
@@ -88,7 +65,7 @@ public:
         if (id == 0 || id > c_.nfaces) return;
         for (int q = 0; q < ntried_; ++q)
             if (tried_[q].id == id && tried_[q].u == su && tried_[q].v == sv) return;
-        if (ntried_ == kMaxStarts) return;
+        if (ntried_ == limit_) return;
         tried_[ntried_++] = {id, su, sv};
         PixelHit h;
         const Outcome o = solver_.solve(id, i_, j_, su, sv, solver_.robust, crack_, h);
@@ -141,28 +118,46 @@ public:
                 if (src_[n].face == id) attempt(id, src_[n].u, src_[n].v);
                 if (map.face[n] == id) attempt(id, map.u[n], map.v[n]);
             });
-            // The face's mesh vertex nearest to the pixel on screen (in front of the eye).
-            const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-            const std::vector<Vec2>& pts = screen_points(id);
-            double bd = HUGE_VAL;
-            size_t bv = mesh.uv.size();
-            for (size_t m = 0; m < pts.size(); ++m) {
-                const double dx = pts[m].x - sp.sx, dy = pts[m].y - sp.sy, dd = dx * dx + dy * dy;
-                if (dd < bd) {  // false for NaN: a vertex behind the eye
-                    bd = dd;
-                    bv = m;
-                }
-            }
-            if (bv < mesh.uv.size())
-                attempt(id, static_cast<float>(mesh.uv[bv].x), static_cast<float>(mesh.uv[bv].y));
-            const UvBox& bx = c_.prepared.faces()[id - 1].box;  // and the middle of its box
-            attempt(id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
+            far_starts(screen_points, id, sp);
         }
+    }
+    // C: the faces adjacent to those of the 5x5 neighbourhood that are not in it
+    // (PreparedFace::adjacent). A face narrower than the map's pixel spacing (a
+    // fillet or a blend strip seen edge-on, a sliver between two larger faces) may
+    // cover no pixel centre of the map at all, and its mesh may lie a little inside
+    // its true extent; the exact ray still hits it, between the faces it touches.
+    void adjacent_starts(const MeshScreenPoints& screen_points) {
+        const PreliminaryMap& map = c_.map;
+        uint32_t near[kMaxGeneralFaces], faces[kMaxAdjacentFaces];
+        int nn = 0, nf = 0;
+        for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
+            const size_t n = map.index(ni, nj);
+            for (const uint32_t id : {src_[n].face, map.face[n]})
+                if (id && id <= c_.nfaces && nn < kMaxGeneralFaces && std::find(near, near + nn, id) == near + nn)
+                    near[nn++] = id;
+        });
+        for (int q = 0; q < nn; ++q)
+            for (const uint32_t id : c_.prepared.faces()[near[q] - 1].adjacent)
+                if (nf < kMaxAdjacentFaces && std::find(near, near + nn, id) == near + nn &&
+                    std::find(faces, faces + nf, id) == faces + nf)
+                    faces[nf++] = id;
+        const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
+        limit_ = kMaxStarts;
+        for (int q = 0; q < nf; ++q) far_starts(screen_points, faces[q], sp);
     }
 
     PixelHit best, best_near;
 
 private:
+    // Starts of a face that has no pixel near this one: its mesh vertex nearest to
+    // the pixel on screen (in front of the eye), and the middle of its box.
+    void far_starts(const MeshScreenPoints& screen_points, uint32_t id, ScreenPoint sp) {
+        float u = 0, v = 0;
+        if (screen_points.nearest_uv(id, sp, u, v)) attempt(id, u, v);
+        const UvBox& bx = c_.prepared.faces()[id - 1].box;
+        attempt(id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
+    }
+
     struct Start {
         uint32_t id;
         float u, v;
@@ -174,7 +169,20 @@ private:
     const bool crack_;
     Start tried_[kMaxStarts];
     int ntried_ = 0;
+    int limit_ = kMaxStarts - 2 * kMaxAdjacentFaces;  // A's and B's share; C may use the rest
 };
+
+// Whether both pixels of a row or column pair around (i, j) are hit nearer than
+// t by more than a pixel footprint at t.
+bool behind_pair(const FrameContext& c, const std::vector<PixelHit>& src, int i, int j, double t) {
+    const double margin = 2.0 * c.camera.image_to_model_scale(t) / c.height;
+    auto nearer = [&](int a, int b) {
+        if (!c.in_frame(a, b)) return false;
+        const PixelHit& h = src[c.map.index(a, b)];
+        return h.face != 0 && h.t < t - margin;
+    };
+    return (nearer(i - 1, j) && nearer(i + 1, j)) || (nearer(i, j - 1) && nearer(i, j + 1));
+}
 
 // One pixel's rescue from the hits `src` (and the map); returns its kind, or kNoRescue.
 uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, int i,
@@ -195,9 +203,17 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     PixelRescue pr(c, solver, src, i, j, crack);
     pr.neighbour_starts(own);
     uint8_t kind = own ? kRescueNeighbour : kRescueSilhouette;
-    if (!pr.best.face && !pr.best_near.face && (own || n4 >= 2)) {
+    // A hit found behind both neighbours of a row or column pair (deeper than
+    // their nearer one by a pixel footprint) is a face seen through a crack of the
+    // front surface: the face that closes the crack is not among A's; look further.
+    const bool pit = pr.best.face && behind_pair(c, src, i, j, pr.best.t);
+    if ((!pr.best.face && !pr.best_near.face && (own || n4 >= 2)) || pit) {
         pr.general_starts(screen_points);
         kind = kRescueGeneral;
+        // C only where the pixel is enclosed (its map face failed, or a crack):
+        // not along every silhouette, where B already fails for good reason.
+        if ((!pr.best.face && !pr.best_near.face && (own || crack)) || (pit && behind_pair(c, src, i, j, pr.best.t)))
+            pr.adjacent_starts(screen_points);
     }
     // A hit inside a trim beats a near-trim one unless the latter is in front
     // (a crack in a front face must not show the face behind it).

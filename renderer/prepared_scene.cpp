@@ -2,6 +2,7 @@
 #include "renderer/prepared_scene.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -27,6 +28,14 @@ constexpr double kTrimBandPerTolerance = 2.0;
 // Faces built without a tolerance get a rounding-level band, relative to the
 // diagonal of their parameter box.
 constexpr double kMinTrimBandRelative = 1e-9;
+
+// Adjacency grid cell, relative to the scene's diagonal. BRepMesh puts a node on
+// every topological vertex, so faces that share an edge or a vertex have map-mesh
+// nodes at the same point (bitwise, when the file shares the vertex; within the
+// edge tolerance, up to ~1e-4 of the model, when it does not, as IGES trimmed
+// surfaces). A cell 10x that tolerance catches both; a false neighbour (two
+// faces' nodes merely close) only costs a few extra solves where one is tried.
+constexpr double kAdjacencyCellRelative = 1e-3;
 
 std::atomic<uint64_t> next_prepared_id{1};
 
@@ -68,6 +77,50 @@ MapMesh merge_map_meshes(const Scene& scene) {
     return m;
 }
 
+// PreparedFace::adjacent: faces with map-mesh nodes in one cell of a grid of
+// kAdjacencyCellRelative x diag. One cell per node (no neighbouring cells):
+// coincident nodes always share it, and an edge has a node at each end, so a
+// pair split by a cell border at one end is still found at the other. The
+// (cell, face) pairs are sorted rather than hashed into per-cell lists: no
+// allocation per cell, which made this most of prepare() on the 27 ducks.
+void link_adjacent_faces(const Scene& scene, std::vector<PreparedFace>& faces) {
+    struct Node {
+        int64_t x, y, z;
+        uint32_t face;
+        bool operator<(const Node& o) const {
+            return x != o.x ? x < o.x : y != o.y ? y < o.y : z != o.z ? z < o.z : face < o.face;
+        }
+        bool same_cell(const Node& o) const { return x == o.x && y == o.y && z == o.z; }
+    };
+    const double inv = 1.0 / (kAdjacencyCellRelative * std::max(scene.bbox.diagonal(), 1e-300));
+    std::vector<Node> nodes;
+    size_t total = 0;
+    for (const Face& f : scene.faces) total += f.mesh.xyz.size();
+    nodes.reserve(total);
+    for (const Face& f : scene.faces)
+        for (const Vec3& p : f.mesh.xyz) {
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+            nodes.push_back({static_cast<int64_t>(std::floor(p.x * inv)), static_cast<int64_t>(std::floor(p.y * inv)),
+                             static_cast<int64_t>(std::floor(p.z * inv)), f.index});
+        }
+    tbb::parallel_sort(nodes.begin(), nodes.end());
+    std::vector<uint32_t> ids;
+    for (size_t a = 0; a < nodes.size();) {
+        size_t b = a;
+        ids.clear();
+        for (; b < nodes.size() && nodes[b].same_cell(nodes[a]); ++b)
+            if (ids.empty() || ids.back() != nodes[b].face) ids.push_back(nodes[b].face);
+        for (const uint32_t f : ids)
+            for (const uint32_t g : ids)
+                if (f != g) faces[f - 1].adjacent.push_back(g);
+        a = b;
+    }
+    for (PreparedFace& pf : faces) {
+        std::sort(pf.adjacent.begin(), pf.adjacent.end());
+        pf.adjacent.erase(std::unique(pf.adjacent.begin(), pf.adjacent.end()), pf.adjacent.end());
+    }
+}
+
 }  // namespace
 
 struct PreparedSceneBuilder {
@@ -88,6 +141,7 @@ struct PreparedSceneBuilder {
             tbb::parallel_for(size_t(0), scene.faces.size(),
                               [&](size_t k) { ps.faces_[k] = prepare_face(scene.faces[k], seam_tol); });
         });
+        arena.execute([&] { link_adjacent_faces(scene, ps.faces_); });
         ps.map_ = merge_map_meshes(scene);
         ps.prepare_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         return ps;
@@ -96,7 +150,7 @@ struct PreparedSceneBuilder {
 
 size_t PreparedScene::memory_bytes() const {
     size_t n = sizeof(PreparedScene) + faces_.capacity() * sizeof(PreparedFace);
-    for (const PreparedFace& f : faces_) n += f.trim.memory_bytes();
+    for (const PreparedFace& f : faces_) n += f.trim.memory_bytes() + f.adjacent.capacity() * sizeof(uint32_t);
     n += map_.xyz.capacity() * sizeof(Vec3) + map_.uv.capacity() * sizeof(float) +
          map_.face.capacity() * sizeof(uint32_t) + map_.indices.capacity() * sizeof(uint32_t);
     return n;

@@ -27,6 +27,10 @@ struct PreparedFace {
     TrimTester trim;
     UvBox box;             // parameter box with seams (face_uv_box)
     double near_uv = 0;    // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
+    // Faces that touch this one (their map meshes share a vertex, see prepare()),
+    // ascending ids. The rescue and the nearer-sheet pass try them where a face
+    // too thin for the map to rasterize lies between the pixel's neighbours' faces.
+    std::vector<uint32_t> adjacent;
 };
 
 // The preliminary map's mesh: all faces' FaceMesh vertices that have a (u, v),

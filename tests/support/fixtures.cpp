@@ -1,6 +1,10 @@
 #include "tests/support/fixtures.h"
 
 #include <BRepAlgoAPI_Cut.hxx>
+#include <BRepAlgoAPI_Fuse.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepBuilderAPI_Transform.hxx>
+#include <BRepOffsetAPI_ThruSections.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
@@ -8,6 +12,9 @@
 #include <BRepClass_FaceClassifier.hxx>
 #include <BRepFilletAPI_MakeFillet.hxx>
 #include <BRepLib.hxx>
+#include <BRep_Tool.hxx>
+#include <Geom_Curve.hxx>
+#include <gp_Ax1.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
@@ -35,6 +42,7 @@
 #include <TDataStd_Name.hxx>
 #include <TDocStd_Document.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_ColorTool.hxx>
@@ -136,6 +144,77 @@ TopoDS_Shape make_filleted_box() {
     return f.Shape();
 }
 
+// Fillet radius per edge direction of filleted_box_blend (x, y, z): three
+// different radii meet at every corner, so OCCT builds a free-form vertex blend
+// there instead of a sphere.
+constexpr double kBlendRadii[3] = {2.0, 3.5, 5.0};
+
+TopoDS_Shape make_filleted_box_blend() {
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(40.0, 30.0, 20.0).Shape();
+    BRepFilletAPI_MakeFillet f(box);
+    for (TopExp_Explorer ex(box, TopAbs_EDGE); ex.More(); ex.Next()) {
+        const TopoDS_Edge& e = TopoDS::Edge(ex.Current());
+        double first = 0, last = 0;
+        const Handle(Geom_Curve) c = BRep_Tool::Curve(e, first, last);
+        const gp_Vec d(c->Value(first), c->Value(last));
+        const int axis = std::fabs(d.X()) > 0.5 ? 0 : std::fabs(d.Y()) > 0.5 ? 1 : 2;
+        f.Add(kBlendRadii[axis], e);
+    }
+    f.Build();
+    if (!f.IsDone()) throw std::runtime_error("filleted_box_blend: fillet failed");
+    return f.Shape();
+}
+
+// blade_fan: a hub with kBlades thin twisted blades. Each blade is lofted
+// (BRepOffsetAPI_ThruSections, smooth: B-spline side faces) through rectangular
+// sections kBladeChord x kBladeThickness whose chord turns by kBladeTwistDeg from
+// root to tip, then all are fused with the hub, so every blade root is a trimmed
+// edge on the hub. At 512 pixels the blades are 2-3 pixels thick edge-on.
+constexpr int kBlades = 7;
+constexpr double kHubRadius = 8.0, kHubHeight = 8.0;
+constexpr double kBladeRoot = 6.0, kBladeTip = 38.0;  // radial extent (the root inside the hub)
+constexpr double kBladeChord = 9.0, kBladeThickness = 0.6, kBladeTwistDeg = 50.0;
+
+TopoDS_Shape make_blade() {
+    BRepOffsetAPI_ThruSections loft(Standard_True, Standard_False);
+    constexpr int kSections = 4;
+    for (int s = 0; s < kSections; ++s) {
+        const double f = static_cast<double>(s) / (kSections - 1);
+        const double r = kBladeRoot + f * (kBladeTip - kBladeRoot);
+        const double a = (15.0 + f * kBladeTwistDeg) * M_PI / 180.0;
+        // Chord in the (y, z) plane at angle a; thickness across it. The chord
+        // shrinks a little towards the tip, as a fan blade's does.
+        const double hc = 0.5 * kBladeChord * (1.0 - 0.3 * f), ht = 0.5 * kBladeThickness;
+        const gp_Vec ch(0, hc * std::cos(a), hc * std::sin(a)), th(0, -ht * std::sin(a), ht * std::cos(a));
+        const gp_Pnt o(r, 0, 0);
+        BRepBuilderAPI_MakePolygon p(o.Translated(ch + th), o.Translated(-ch + th), o.Translated(-ch - th),
+                                     o.Translated(ch - th), Standard_True);
+        loft.AddWire(p.Wire());
+    }
+    loft.Build();
+    if (!loft.IsDone()) throw std::runtime_error("blade_fan: loft failed");
+    return loft.Shape();
+}
+
+TopoDS_Shape make_blade_fan() {
+    const TopoDS_Shape hub =
+        BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -0.5 * kHubHeight), gp::DZ()), kHubRadius, kHubHeight).Shape();
+    const TopoDS_Shape blade = make_blade();
+    TopTools_ListOfShape args, tools;
+    args.Append(hub);
+    for (int k = 0; k < kBlades; ++k) {
+        gp_Trsf rot;
+        rot.SetRotation(gp_Ax1(gp::Origin(), gp::DZ()), 2.0 * M_PI * k / kBlades);
+        tools.Append(BRepBuilderAPI_Transform(blade, rot, Standard_True).Shape());
+    }
+    BRepAlgoAPI_Fuse fuse;
+    fuse.SetArguments(args);
+    fuse.SetTools(tools);
+    fuse.Build();
+    if (!fuse.IsDone()) throw std::runtime_error("blade_fan: fuse failed");
+    return fuse.Shape();
+}
+
 // The free-form net: 6 x 5 poles over x in [0, 20], y in [0, 12], with a smooth
 // non-planar height field (values are fixed; no randomness).
 Handle(Geom_BSplineSurface) make_freeform_surface(bool rational) {
@@ -232,6 +311,7 @@ const Named kFixtures[] = {
     {"sphere", sphere},                 {"cone", cone},                 {"torus", torus},
     {"freeform_bspline", freeform_bspline}, {"freeform_rational", freeform_rational},
     {"assembly", assembly},
+    {"filleted_box_blend", filleted_box_blend}, {"blade_fan", blade_fan},
 };
 // Fixtures that also get an IGES copy ("<name>_iges").
 const char* const kIgesFixtures[] = {"box_with_holes", "filleted_box", "cylinder", "sphere",
@@ -243,6 +323,8 @@ std::string fixture_dir() { return dir().path; }
 
 std::string box_with_holes() { return step_fixture("box_with_holes", make_box_with_holes); }
 std::string filleted_box() { return step_fixture("filleted_box", make_filleted_box); }
+std::string filleted_box_blend() { return step_fixture("filleted_box_blend", make_filleted_box_blend); }
+std::string blade_fan() { return step_fixture("blade_fan", make_blade_fan); }
 std::string cylinder() {
     return step_fixture("cylinder", [] { return BRepPrimAPI_MakeCylinder(10.0, 30.0).Shape(); });
 }

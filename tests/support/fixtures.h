@@ -29,6 +29,13 @@ std::string box_with_holes();
 // Box 40 x 30 x 20 with every edge filleted (radius 4, BRepFilletAPI_MakeFillet):
 // 6 planes + 12 cylinders + 8 spherical corners = 26 faces.
 std::string filleted_box();
+// The same box with a different radius per edge direction (x 2, y 3.5, z 5):
+// where three fillets of different radii meet, OCCT builds a free-form vertex
+// blend (no sphere), the corner where fillet cracks were seen on real files.
+std::string filleted_box_blend();
+// A fan: a hub cylinder (r 8, h 8, axis Z) fused with 7 thin twisted blades
+// (lofted B-spline faces, 0.6 thick, 9 chord, radius 6 to 38, 50 deg twist).
+std::string blade_fan();
 // BRepPrimAPI primitives (analytic surfaces; NURBS conversion makes them rational).
 std::string cylinder();  // r 10, h 30, 3 faces
 std::string sphere();    // r 15, 1 face (two degenerate pole edges)

@@ -1,0 +1,184 @@
+// Zero holes and zero wrong-sheet speckles over the WHOLE frame.
+//
+// Sampling one pixel in 64 against the exact reference (render_accuracy_test)
+// cannot see single-pixel defects: cracks along shared edges, pinholes in thin
+// faces, a pixel showing a farther sheet. This test renders each model at 512 x 512
+// in two named views, as a user does (import_file -> fit_view -> render), and runs
+// the full-frame check (tests/support/full_frame_check.h) over every pixel: every
+// background pixel enclosed by hits and every depth spike is re-cast against
+// OCCT's IntCurvesFace_ShapeIntersector on the original shape, disputes settled
+// with BRepExtrema. None may be a hole (the exact ray hits a face, we show
+// background) or a speckle (the exact ray has a nearer hit than ours), except the
+// few still open that kKnownRemaining lists with their cause: their counts may
+// not rise.
+//
+// Runs on generated fixtures always (filleted boxes whose vertex blends meet edge
+// fillets, a fan of thin twisted blades) and on every good model of
+// ../shared/models (step/, iges/, duck/; not broken/) when that directory exists.
+// One test case per model, so ctest runs them in parallel.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "importer/importer.h"
+#include "importer/occt_shape.h"
+#include "importer/reference_intersector.h"
+#include "renderer/camera.h"
+#include "renderer/render.h"
+#include "tests/support/fixtures.h"
+#include "tests/support/full_frame_check.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace T = nurbsrt::test;
+using namespace nurbsrt;
+
+// The resolution at which the defects were reported, and the two views: the CLI's
+// default (iso, perspective) and an axis view in orthographic projection (rays
+// parallel: grazing rays along whole faces, the other classic failure).
+constexpr int kSize = 512;
+struct View {
+    const char* name;
+    Projection projection;
+};
+constexpr View kViews[2] = {{"iso", Projection::perspective}, {"front", Projection::orthographic}};
+// The good models' folders under ../shared/models (broken/ holds invalid files).
+const char* const kModelDirs[] = {"step", "iges", "duck"};
+
+// Defects the renderer still has (work to do, not a tolerance): per model and
+// view, the holes and speckles the check finds today, each with its diagnosed
+// cause. The test fails if a count rises above these, and everywhere
+// else (every fixture, every other model and view) it demands 0. When a fix
+// lands, the entry's counts go down to 0 and the entry is removed.
+struct Known {
+    const char* model;  // relative to ../shared/models
+    const char* view;
+    long holes, speckles;
+    const char* cause;
+};
+// Thin faces: a face too thin for the map (no pixel of it within 5x5 in the map
+// or the hits) in front of the hit or over background. The rescue reaches it
+// through PreparedFace::adjacent, but only for pixels it rescues, from mesh-vertex
+// starts; the nearer-sheet pass tries only the neighbours' own faces.
+#define NURBSRT_THIN "thin face (see above)"
+const Known kKnownRemaining[] = {
+    {"step/ec_turbine-A.stp", "iso", 1, 1, NURBSRT_THIN},
+    {"step/trj3_s1-al-214.stp", "iso", 1, 1, NURBSRT_THIN "; Newton from the rescue's starts misses a root"},
+    {"step/cylinder_block.stp", "iso", 0, 2, NURBSRT_THIN "; a farther root of a neighbour's face"},
+    {"step/r0901_ec.stp", "iso", 0, 4, NURBSRT_THIN},
+    {"step/bug31670_russian.stp", "iso", 0, 1, NURBSRT_THIN},
+    {"step/trj5_k1-ct-214.stp", "iso", 0, 1, NURBSRT_THIN},
+    {"step/trj8_b1-ec-214.stp", "iso", 0, 1, "Newton from the neighbours' starts misses the nearer root"},
+    {"step/trj2_io1-ca-214.stp", "iso", 0, 1, "Newton from the neighbours' starts misses the nearer root"},
+    {"step/bug27693_cornetta-step.stp", "iso", 0, 1,
+     "the rescue's single start per neighbour face runs to a farther root of that face"},
+    {"iges/as1_pe_203.igs", "iso", 0, 1, "same kind: a farther root of a neighbour's face"},
+    {"step/bug29715_slow.stp", "front", 0, 4,
+     "one dense folded face seen edge-on: Newton from the neighbours' starts diverges or reaches the sheet behind"},
+    {"duck/duck_from_glscene.igs", "front", 0, 1, "a neighbour's start runs to the far side of the same closed face"},
+    {"duck/duck_from_glscene.stp", "front", 0, 1, "a neighbour's start runs to the far side of the same closed face"},
+    {"iges/ship_kcs.igs", "iso", 0, 1,
+     "two faces 0.03 mm apart in depth (the hit one trimmed by 2e-4 in (u,v)): the nearer-sheet pass's "
+     "neighbour starts do not reach the nearer face's root"},
+};
+#undef NURBSRT_THIN
+
+// Models the reference cannot check in CI time: IntCurvesFace_ShapeIntersector
+// needs ~0.3 s per ray on this file's dense helical face, and one view has ~2500
+// candidates (over 10 minutes). Skipped with this reason, never silently.
+const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
+
+const Known* known_remaining(const std::string& rel, const std::string& view) {
+    for (const Known& k : kKnownRemaining)
+        if (rel == k.model && view == k.view) return &k;
+    return nullptr;
+}
+
+struct Case {
+    std::string name;     // gtest parameter name
+    std::string fixture;  // a generated fixture, or
+    std::string path;     // a file of ../shared/models
+    std::string rel;      // its path relative to ../shared/models
+};
+
+std::vector<Case> cases() {
+    std::vector<Case> v;
+    for (const char* f : {"filleted_box", "filleted_box_blend", "blade_fan", "box_with_holes"})
+        v.push_back({std::string("fixture_") + f, f, "", ""});
+    const std::string root = T::shared_models_dir();
+    if (root.empty()) {
+        v.push_back({"shared_models_absent", "", "", ""});
+        return v;
+    }
+    for (const char* dir : kModelDirs)
+        for (const std::string& p : T::shared_model_files(dir))
+            v.push_back({T::sanitize_test_name(fs::relative(p, root).string()), "", p, fs::relative(p, root).string()});
+    return v;
+}
+
+[[maybe_unused]] void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
+class RenderFullFrame : public testing::TestWithParam<Case> {};
+
+TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
+    const Case& c = GetParam();
+    if (c.fixture.empty() && c.path.empty()) NURBSRT_REQUIRE_SHARED_MODELS();
+    for (const char* slow : kTooSlowForTheReference)
+        if (c.rel == slow)
+            GTEST_SKIP() << c.rel << ": the reference intersector needs ~0.3 s per ray on this model; checking "
+                                     "a 512x512 view takes over 10 minutes";
+    const std::string path = c.fixture.empty() ? c.path : T::fixture_by_name(c.fixture);
+    ASSERT_TRUE(fs::exists(path)) << path;
+
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    const Scene scene = import_file(path);
+    const occt::OcctModel model = occt::read_model(path, false);
+    ASSERT_EQ(static_cast<int>(scene.faces.size()), model.faces.Extent()) << "face-index contract broken";
+    ReferenceIntersector inter(model);
+    const PreparedScene prepared = prepare(scene);
+    std::cout << "[ full-frame ] " << c.name << ": " << scene.faces.size() << " faces, import+read+prepare "
+              << std::fixed << std::setprecision(2) << std::chrono::duration<double>(Clock::now() - t0).count()
+              << " s" << std::defaultfloat << "\n";
+
+    for (const View& view : kViews) {
+        CameraSpec base;
+        base.width = base.height = kSize;
+        base.projection = view.projection;
+        const Camera camera(fit_view(view.name, scene, base));
+        const RenderResult r = render(prepared, camera, RenderOptions{});
+        const std::string label = c.name + "/" + view.name;
+        const T::FullFrameReport rep = T::full_frame_check(label, scene, model, inter, camera, r.image);
+        std::cout << rep.text() << "   render " << std::fixed << std::setprecision(0) << r.stats.total_ms << " ms"
+                  << std::defaultfloat << "\n"
+                  << std::flush;
+        RecordProperty(std::string(view.name) + "_holes", static_cast<int>(rep.holes));
+        RecordProperty(std::string(view.name) + "_speckles", static_cast<int>(rep.speckles));
+        RecordProperty(std::string(view.name) + "_candidates", static_cast<int>(rep.enclosed + rep.spikes));
+        RecordProperty(std::string(view.name) + "_unchecked", static_cast<int>(rep.unchecked));
+        const Known* known = known_remaining(c.rel, view.name);
+        if (known)
+            std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles
+                      << " speckles (" << known->cause << ")\n";
+        if (rep.unchecked)
+            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes not checked within "
+                      << T::kCheckBudgetSeconds << " s\n";
+        EXPECT_LE(rep.holes, known ? known->holes : 0)
+            << label << ": background pixels where the exact ray hits a face";
+        EXPECT_LE(rep.speckles, known ? known->speckles : 0)
+            << label << ": pixels showing a farther sheet than the exact nearest hit";
+        // A blank frame must not pass trivially.
+        EXPECT_GT(rep.pixels_hit, 100) << label << ": too few hits to judge";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, RenderFullFrame, testing::ValuesIn(cases()),
+                         [](const testing::TestParamInfo<Case>& i) { return i.param.name; });
+
+}  // namespace
