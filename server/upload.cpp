@@ -15,6 +15,16 @@ std::string lower(std::string s) {
     return s;
 }
 
+// As nlohmann::json checks it when writing a string (the parser checks the same).
+bool is_utf8(const std::string& s) {
+    try {
+        (void)nlohmann::json(s).dump();
+        return true;
+    } catch (const nlohmann::json::type_error&) {
+        return false;
+    }
+}
+
 }  // namespace
 
 Upload read_upload(const httplib::Request& req) {
@@ -24,6 +34,10 @@ Upload read_upload(const httplib::Request& req) {
         // A repeated parameter or part is refused, never resolved silently one way.
         if (options.contains(k))
             throw Error(ErrorCode::invalid_argument, "query parameter '" + k.substr(0, 64) + "' is given more than once");
+        // Query strings are bytes, options are JSON text: a name or value that is
+        // not UTF-8 names no option and could not be written as JSON.
+        if (!is_utf8(k) || !is_utf8(v))
+            throw Error(ErrorCode::invalid_argument, "query parameter names and values must be UTF-8 text");
         options[k] = v;
     }
 
