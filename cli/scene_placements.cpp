@@ -38,7 +38,11 @@ std::vector<Placement> parse_scene_file(std::istream& in, const std::string& pat
             throw Error(ErrorCode::invalid_argument, "scene file " + path + ": every model needs a \"file\"");
         fs::path file = m["file"].get<std::string>();
         if (file.is_relative()) file = base / file;
-        const double scale = m.value("scale", 1.0);
+        // Checked before it is read: nlohmann's value() throws its own type_error
+        // for "scale": "2", which is not the invalid_argument callers handle.
+        const json scale_json = m.contains("scale") ? m.at("scale") : json(1.0);
+        if (!scale_json.is_number()) throw Error(ErrorCode::invalid_argument, "scene file: 'scale' must be a number");
+        const double scale = scale_json.get<double>();
         if (!(scale > 0)) throw Error(ErrorCode::invalid_argument, "scene file: 'scale' must be positive");
         // p' = T R S p: scale about the model origin, rotate, then place.
         const Affine xf = Affine::translation(vec3_of(m, "translate", {})) *

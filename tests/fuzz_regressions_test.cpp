@@ -6,8 +6,10 @@
 #include <httplib.h>
 
 #include <functional>
+#include <sstream>
 #include <string>
 
+#include "cli/scene_placements.h"
 #include "renderer/error.h"
 #include "server/upload.h"
 
@@ -43,6 +45,24 @@ TEST(FuzzRegressions, QueryParameterThatIsNotUtf8IsInvalidArgument) {
         EXPECT_EQ(code_of([&] { (void)nurbsrt::server::read_upload(req); }), ErrorCode::invalid_argument)
             << (in_name ? "in a name" : "in a value");
     }
+}
+
+// The render scene file read "scale" with nlohmann's value(key, 1.0), which
+// throws json::type_error for a string: `nurbsrt render` ended on an uncaught
+// exception instead of naming the mistake.
+TEST(FuzzRegressions, SceneFileScaleThatIsNotANumberIsInvalidArgument) {
+    for (const char* scale : {"\"b./a.stp\"", "\"2\"", "null", "[1]", "{}"}) {
+        std::istringstream in(std::string(R"({"models": [{"file": "b.igs", "scale": )") + scale + "}]}");
+        EXPECT_EQ(code_of([&] { (void)nurbsrt::cli::parse_scene_file(in, "scenes/s.json"); }),
+                  ErrorCode::invalid_argument)
+            << "scale " << scale;
+    }
+    std::istringstream ok(R"({"models": [{"file": "b.igs", "scale": 2}, {"file": "c.igs"}]})");
+    const auto placements = nurbsrt::cli::parse_scene_file(ok, "scenes/s.json");
+    ASSERT_EQ(placements.size(), 2u);
+    EXPECT_DOUBLE_EQ(placements[0].xf.m[0], 2.0);
+    EXPECT_DOUBLE_EQ(placements[1].xf.m[0], 1.0);
+    EXPECT_EQ(placements[0].file, "scenes/b.igs");
 }
 
 }  // namespace
