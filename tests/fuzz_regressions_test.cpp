@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <climits>
 #include <functional>
 #include <sstream>
 #include <string>
 
 #include "cli/scene_placements.h"
 #include "renderer/error.h"
+#include "renderer/scene_io.h"
 #include "server/upload.h"
 
 using nurbsrt::Error;
@@ -63,6 +65,26 @@ TEST(FuzzRegressions, SceneFileScaleThatIsNotANumberIsInvalidArgument) {
     EXPECT_DOUBLE_EQ(placements[0].xf.m[0], 2.0);
     EXPECT_DOUBLE_EQ(placements[1].xf.m[0], 1.0);
     EXPECT_EQ(placements[0].file, "scenes/b.igs");
+}
+
+// A binary scene whose surface has degree INT_MAX: the check "fewer control
+// points than degree + 1" computed INT_MAX + 1 (signed overflow, undefined
+// behaviour that UBSan reports). It must be refused as corrupt.
+TEST(FuzzRegressions, SceneSurfaceDegreeIntMaxIsCorruptScene) {
+    for (const bool in_u : {true, false}) {
+        nurbsrt::Scene scene;
+        nurbsrt::Face f;
+        f.index = 1;
+        f.surface.degree_u = in_u ? INT_MAX : 1;
+        f.surface.degree_v = in_u ? 1 : INT_MAX;
+        f.surface.num_u = f.surface.num_v = 2;
+        f.surface.knots_u = f.surface.knots_v = {0, 0, 1, 1};
+        f.surface.cp.resize(4);
+        scene.faces.push_back(f);
+        const std::string bytes = nurbsrt::serialize_scene(scene);
+        EXPECT_EQ(code_of([&] { (void)nurbsrt::deserialize_scene(bytes); }), ErrorCode::corrupt_scene)
+            << (in_u ? "degree_u" : "degree_v");
+    }
 }
 
 }  // namespace
