@@ -56,6 +56,7 @@ dict_of() {
     render_options|job_spec|scene_file) echo fuzz/json.dict ;;
     multipart) echo fuzz/http.dict ;;
     prescan) echo fuzz/step.dict ;;
+    scene_binary) echo fuzz/scene.dict ;;
   esac
 }
 
