@@ -60,8 +60,17 @@ dict_of() {
   esac
 }
 
+# CPU seconds (user + system) used so far by the finished children of this
+# shell: `times` must run in this shell itself, not in a command substitution.
+child_cpu() {
+  times > "$BUILD/logs/.times"
+  tail -n 1 "$BUILD/logs/.times" |
+    awk '{ s = 0; for (i = 1; i <= 2; i++) { split($i, p, /[ms]/); s += p[1] * 60 + p[2] } printf "%.0f", s }'
+}
+
 status=0
 total_runs=0
+total_cpu=0
 total_seconds=0
 summary=()
 for t in "${TARGETS[@]}"; do
@@ -79,9 +88,13 @@ for t in "${TARGETS[@]}"; do
   [ -n "$dict" ] && args+=(-dict="$dict")
   echo "== fuzz_$t: ${SECONDS_PER_TARGET} s, corpus $corpus"
   start=$(date +%s)
+  child_cpu > "$BUILD/logs/.cpu"
+  cpu_start=$(cat "$BUILD/logs/.cpu")
   rc=0
   "$bin" "${args[@]}" "${dirs[@]}" > "$log" 2>&1 || rc=$?
   seconds=$(( $(date +%s) - start ))
+  child_cpu > "$BUILD/logs/.cpu"
+  cpu=$(( $(cat "$BUILD/logs/.cpu") - cpu_start ))
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
   runs=${runs:-0}
   units=$(find "$corpus" -type f | wc -l)
@@ -97,11 +110,12 @@ for t in "${TARGETS[@]}"; do
   fi
   total_runs=$((total_runs + runs))
   total_seconds=$((total_seconds + seconds))
-  summary+=("$(printf '%-16s %12s %8s %10s %8s  %s' "$t" "$runs" "$seconds" "$((runs / (seconds > 0 ? seconds : 1)))" "$units" "$result")")
+  total_cpu=$((total_cpu + cpu))
+  summary+=("$(printf '%-16s %12s %8s %8s %10s %8s  %s' "$t" "$runs" "$seconds" "$cpu" "$((runs / (seconds > 0 ? seconds : 1)))" "$units" "$result")")
 done
 
 echo
-printf '%-16s %12s %8s %10s %8s  %s\n' target executions seconds "exec/s" corpus result
+printf '%-16s %12s %8s %8s %10s %8s  %s\n' target executions seconds "cpu s" "exec/s" corpus result
 for line in "${summary[@]}"; do echo "$line"; done
-printf '%-16s %12s %8s\n' total "$total_runs" "$total_seconds"
+printf '%-16s %12s %8s %8s\n' total "$total_runs" "$total_seconds" "$total_cpu"
 exit $status
