@@ -1,11 +1,10 @@
 #include "cli/scene_file.h"
 
-#include <nlohmann/json.hpp>
-
 #include <filesystem>
 #include <fstream>
 #include <map>
 
+#include "cli/scene_placements.h"
 #include "importer/isolated.h"
 #include "renderer/error.h"
 #include "renderer/scene_ops.h"
@@ -14,7 +13,6 @@ namespace nurbsrt::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 bool is_scene_file(const std::string& path) {
     if (fs::path(path).extension() == ".json") return true;
@@ -24,53 +22,14 @@ bool is_scene_file(const std::string& path) {
     return c == '{';
 }
 
-Vec3 vec3_of(const json& j, const char* key, Vec3 fallback) {
-    if (!j.contains(key)) return fallback;
-    const json& a = j.at(key);
-    if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() || !a[2].is_number())
-        throw Error(ErrorCode::invalid_argument, std::string("scene file: '") + key + "' must be [x, y, z]");
-    return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
-}
-
-struct Placement {
-    std::string file;
-    Affine xf;
-};
-
-std::vector<Placement> read_scene_file_entries(const std::string& path) {
-    std::ifstream in(path);
-    json doc;
-    try {
-        doc = json::parse(in);
-    } catch (const json::exception& e) {
-        throw Error(ErrorCode::invalid_argument, "scene file " + path + ": " + e.what());
-    }
-    if (!doc.is_object() || !doc.contains("models") || !doc["models"].is_array() || doc["models"].empty())
-        throw Error(ErrorCode::invalid_argument, "scene file " + path + ": needs a non-empty \"models\" array");
-    const fs::path base = fs::path(path).parent_path();
-    std::vector<Placement> out;
-    for (const json& m : doc["models"]) {
-        if (!m.is_object() || !m.contains("file") || !m["file"].is_string())
-            throw Error(ErrorCode::invalid_argument, "scene file " + path + ": every model needs a \"file\"");
-        fs::path file = m["file"].get<std::string>();
-        if (file.is_relative()) file = base / file;
-        const double scale = m.value("scale", 1.0);
-        if (!(scale > 0)) throw Error(ErrorCode::invalid_argument, "scene file: 'scale' must be positive");
-        // p' = T R S p: scale about the model origin, rotate, then place.
-        const Affine xf = Affine::translation(vec3_of(m, "translate", {})) *
-                          Affine::rotation_xyz_deg(vec3_of(m, "rotate_deg", {})) * Affine::scaling(scale);
-        out.push_back({file.string(), xf});
-    }
-    return out;
-}
-
 }  // namespace
 
 Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options) {
     std::vector<Placement> placements;
     for (const std::string& in : inputs) {
         if (is_scene_file(in)) {
-            for (Placement& p : read_scene_file_entries(in)) placements.push_back(std::move(p));
+            std::ifstream file(in);
+            for (Placement& p : parse_scene_file(file, in)) placements.push_back(std::move(p));
         } else {
             placements.push_back({in, Affine{}});
         }

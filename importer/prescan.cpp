@@ -3,6 +3,7 @@
 
 #include <cctype>
 #include <fstream>
+#include <istream>
 #include <vector>
 
 #include "renderer/error.h"
@@ -183,7 +184,7 @@ private:
 };
 
 template <class Scanner>
-void feed_file(std::ifstream& in, Scanner& scanner) {
+void feed_file(std::istream& in, Scanner& scanner) {
     std::vector<char> chunk(kChunkBytes);
     while (in) {
         in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
@@ -197,6 +198,10 @@ void feed_file(std::ifstream& in, Scanner& scanner) {
 PrescanReport prescan_cad_file(const std::string& path, CadFormat format, const PrescanLimits& limits) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(ErrorCode::io, "cannot open '" + path + "'");
+    return prescan_cad_stream(in, format, limits);
+}
+
+PrescanReport prescan_cad_stream(std::istream& in, CadFormat format, const PrescanLimits& limits) {
     if (format == CadFormat::iges) {
         IgesScanner scanner(limits);
         feed_file(in, scanner);

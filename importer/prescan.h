@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <iosfwd>
 #include <string>
 
 #include "importer/importer.h"
@@ -39,5 +40,7 @@ struct PrescanReport {
 // Error(unreadable_file) naming the first limit exceeded, Error(io) when the
 // file cannot be read.
 PrescanReport prescan_cad_file(const std::string& path, CadFormat format, const PrescanLimits& limits);
+// The same over a stream (read to its end), e.g. bytes already in memory.
+PrescanReport prescan_cad_stream(std::istream& in, CadFormat format, const PrescanLimits& limits);
 
 }  // namespace nurbsrt

@@ -216,7 +216,8 @@ void read_surface(Reader& r, NurbsSurface& s, size_t fi) {
         corrupt(face_ctx(fi, "surface degrees ") + std::to_string(s.degree_u) + "," +
                 std::to_string(s.degree_v) + " (must be >= 1)");
     }
-    if (s.num_u < s.degree_u + 1 || s.num_v < s.degree_v + 1) {
+    // num <= degree, not num < degree + 1: a degree of INT_MAX overflowed there.
+    if (s.num_u <= s.degree_u || s.num_v <= s.degree_v) {
         corrupt(face_ctx(fi, "surface has ") + std::to_string(s.num_u) + "x" + std::to_string(s.num_v) +
                 " control points, fewer than degree + 1");
     }

@@ -9,6 +9,11 @@ cd "$(dirname "$0")/.."
 # links "-lfontconfig" by name, but no OCCT package depends on the -dev package, so a
 # fresh Debian 12 (the Docker build stage) fails to link without it.
 # iproute2: the API tests read the service's listen backlog with `ss`.
+# clang, libclang-rt-14-dev: the libFuzzer harnesses (scripts/fuzz.sh, the fuzz suite
+# of scripts/test.sh) build with clang; libclang_rt.fuzzer and the sanitizer runtimes
+# are in libclang-rt-14-dev, which clang's packages only recommend (not installed
+# with --no-install-recommends). libfuzzer-14-dev is not needed: it holds a libFuzzer
+# for linking by hand, not the runtime that clang's -fsanitize=fuzzer links.
 PACKAGES=(
   cmake ninja-build pkg-config g++ git ca-certificates
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
@@ -18,6 +23,7 @@ PACKAGES=(
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
   libsqlite3-dev sqlite3
   iproute2
+  clang libclang-rt-14-dev
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
 )
 

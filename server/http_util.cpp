@@ -63,54 +63,6 @@ bool wants_json(const httplib::Request& req) {
     return lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
 }
 
-Upload read_upload(const httplib::Request& req) {
-    using nlohmann::json;
-    json options = json::object();
-    for (const auto& [k, v] : req.params) {
-        // A repeated parameter or part is refused, never resolved silently one way.
-        if (options.contains(k))
-            throw Error(ErrorCode::invalid_argument, "query parameter '" + k.substr(0, 64) + "' is given more than once");
-        options[k] = v;
-    }
-
-    Upload up;
-    if (req.is_multipart_form_data()) {
-        const auto file = req.files.find("file");
-        if (file == req.files.end())
-            throw Error(ErrorCode::invalid_argument, "multipart upload without a 'file' part");
-        for (const char* name : {"file", "options"})
-            if (req.files.count(name) > 1)
-                throw Error(ErrorCode::invalid_argument,
-                            std::string("more than one '") + name + "' part: send one file and one options part "
-                                                                  "(several files: POST /v1/jobs)");
-        up.bytes = &file->second.content;
-        if (const auto part = req.files.find("options"); part != req.files.end()) {
-            const json o = json::parse(part->second.content, nullptr, false);
-            if (o.is_discarded() || !o.is_object())
-                throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
-            options.merge_patch(o);
-        }
-        for (const auto& [name, part] : req.files)
-            if (name != "file" && name != "options")
-                throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
-    } else {
-        const std::string type = lower(req.get_header_value("Content-Type"));
-        const std::string base = type.substr(0, type.find(';'));
-        static const char* accepted[] = {"",           "application/octet-stream", "model/step", "model/iges",
-                                         "application/step", "application/iges", "application/p21"};
-        bool ok = false;
-        for (const char* a : accepted) ok = ok || base == a;
-        if (!ok)
-            throw Error(ErrorCode::unsupported_format,
-                        "request body of type '" + base.substr(0, 64) +
-                            "': send the STEP/IGES file raw (application/octet-stream, model/step, model/iges) "
-                            "or as the 'file' part of multipart/form-data");
-        up.bytes = &req.body;
-    }
-    up.options_json = options.dump();
-    return up;
-}
-
 std::string without_service_paths(const std::string& message, const ServerContext& ctx) {
     std::string data = ctx.config.data_dir;
     while (data.size() > 1 && data.back() == '/') data.pop_back();

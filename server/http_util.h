@@ -1,6 +1,6 @@
 // Helpers shared by the route handlers (server/*.cpp only: this header pulls
 // in httplib.h): request ids, problem responses, content negotiation, and
-// reading an upload (multipart `file` + `options` part, or a raw body).
+// reading an upload (server/upload.h).
 #pragma once
 
 #include <httplib.h>
@@ -9,6 +9,7 @@
 #include <string>
 
 #include "renderer/error.h"
+#include "server/upload.h"
 
 namespace nurbsrt::server {
 
@@ -43,13 +44,5 @@ std::string without_service_paths(const std::string& message, const ServerContex
 // True when the client asked for JSON (Accept contains application/json).
 bool wants_json(const httplib::Request& req);
 
-struct Upload {
-    const std::string* bytes = nullptr;  // the file's content (points into the request)
-    std::string options_json;            // JSON object text: query parameters overlaid by the options part
-};
-// Throws Error(invalid_argument) for a multipart body without `file`, or a bad
-// options part; Error(unsupported_format) for a raw body whose Content-Type is
-// not a CAD or octet-stream type. Query parameter values are passed as strings.
-Upload read_upload(const httplib::Request& req);
 
 }  // namespace nurbsrt::server

@@ -7,7 +7,6 @@
 #include "importer/importer.h"
 #include "renderer/error.h"
 #include "server/render_options.h"
-#include "server/render_service.h"
 
 namespace nurbsrt::server {
 namespace {

@@ -208,6 +208,17 @@ void complete_size(std::optional<int> width, std::optional<int> height, int& out
     out_height = height ? *height : width ? keep_aspect(*width, kDefaultWidth, kDefaultHeight) : kDefaultHeight;
 }
 
+void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
+    if (r.width > c.max_dimension || r.height > c.max_dimension)
+        throw Error(ErrorCode::limit_exceeded, "image " + std::to_string(r.width) + "x" + std::to_string(r.height) +
+                                                   " exceeds the limit of " + std::to_string(c.max_dimension) +
+                                                   " pixels per side");
+    if (static_cast<long long>(r.width) * r.height > c.max_pixels)
+        throw Error(ErrorCode::limit_exceeded, "image of " +
+                                                   std::to_string(static_cast<long long>(r.width) * r.height) +
+                                                   " pixels exceeds the limit of " + std::to_string(c.max_pixels));
+}
+
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
     return with_explicit_values(r, fit_view(r.view, scene, base_spec(r)));
 }

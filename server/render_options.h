@@ -9,6 +9,7 @@
 #include "importer/importer.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
+#include "server/config.h"
 
 namespace nurbsrt::server {
 
@@ -51,6 +52,9 @@ struct RenderRequest {
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).
 RenderRequest parse_render_options(const std::string& options_json);
+
+// Throws Error(limit_exceeded) when the image is over the configured size limits.
+void check_render_limits(const ServerConfig& config, const RenderRequest& r);
 
 // The camera for a scene: the named view fitted to it, then explicit values.
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene);

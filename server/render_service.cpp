@@ -139,17 +139,6 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const PreparedSc
 
 }  // namespace
 
-void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
-    if (r.width > c.max_dimension || r.height > c.max_dimension)
-        throw Error(ErrorCode::limit_exceeded, "image " + std::to_string(r.width) + "x" + std::to_string(r.height) +
-                                                   " exceeds the limit of " + std::to_string(c.max_dimension) +
-                                                   " pixels per side");
-    if (static_cast<long long>(r.width) * r.height > c.max_pixels)
-        throw Error(ErrorCode::limit_exceeded, "image of " +
-                                                   std::to_string(static_cast<long long>(r.width) * r.height) +
-                                                   " pixels exceeds the limit of " + std::to_string(c.max_pixels));
-}
-
 RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const RenderRequest& r,
                             const RenderControl& control) {
     const auto t0 = control.start.value_or(clock_type::now());

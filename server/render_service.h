@@ -15,9 +15,6 @@
 
 namespace nurbsrt::server {
 
-// Throws Error(limit_exceeded) when the image is over the configured size limits.
-void check_render_limits(const ServerConfig& config, const RenderRequest& r);
-
 struct RenderedImage {
     std::string bytes;       // the encoded image (r.format)
     std::string stats_json;  // the Statistics object's JSON text (with camera, cache, warnings)

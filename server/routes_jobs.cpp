@@ -103,40 +103,11 @@ JobService& jobs_of(ServerContext& ctx) {
 }
 
 void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
-    if (!req.is_multipart_form_data())
-        throw Error(ErrorCode::unsupported_format,
-                    "a job is multipart/form-data: one or more 'file' parts and one 'job' part (JSON)");
-    std::vector<JobInput> inputs;
-    std::vector<const std::string*> bytes;
-    const std::string* job_part = nullptr;
-    for (const auto& [name, part] : req.files) {
-        if (name == "file") {
-            if (static_cast<int>(inputs.size()) >= ctx.config.max_job_files)
-                throw Error(ErrorCode::limit_exceeded,
-                            "more than " + std::to_string(ctx.config.max_job_files) + " files in one job");
-            const std::string& b = part.content;
-            const int index = static_cast<int>(inputs.size());
-            if (b.empty()) throw Error(ErrorCode::invalid_argument, "file " + std::to_string(index) + " is empty");
-            const CadFormat f = detect_format_bytes(b.data(), b.size());
-            if (f == CadFormat::unknown)
-                throw Error(ErrorCode::unsupported_format,
-                            "file " + std::to_string(index) + " is neither STEP nor IGES (recognised by content)");
-            // The filename is only a label for the client (and to refer to the file): bounded, never a path.
-            inputs.push_back({index, part.filename.substr(0, 255), format_name(f), static_cast<int64_t>(b.size())});
-            bytes.push_back(&b);
-        } else if (name == "job") {
-            if (job_part) throw Error(ErrorCode::invalid_argument, "more than one 'job' part");
-            job_part = &part.content;
-        } else {
-            throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
-        }
-    }
-    if (inputs.empty()) throw Error(ErrorCode::invalid_argument, "a job needs at least one 'file' part");
-    if (!job_part) throw Error(ErrorCode::invalid_argument, "a job needs a 'job' part (JSON with 'outputs')");
+    JobUpload up = read_job_upload(req, ctx.config.max_job_files);
     JobRecord job;
-    job.inputs = std::move(inputs);
-    job.outputs = parse_job_spec(*job_part, job.inputs, ctx.config);
-    jobs_of(ctx).submit(job, bytes);
+    job.inputs = std::move(up.inputs);
+    job.outputs = parse_job_spec(*up.job_json, job.inputs, ctx.config);
+    jobs_of(ctx).submit(job, up.bytes);
     res.set_header("Location", job_url(job.id));
     send_json(res, job_json(job), 202);
 }

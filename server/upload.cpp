@@ -1,0 +1,113 @@
+#include "server/upload.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cctype>
+
+#include "importer/importer.h"
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+namespace {
+
+std::string lower(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+// As nlohmann::json checks it when writing a string (the parser checks the same).
+bool is_utf8(const std::string& s) {
+    try {
+        (void)nlohmann::json(s).dump();
+        return true;
+    } catch (const nlohmann::json::type_error&) {
+        return false;
+    }
+}
+
+}  // namespace
+
+Upload read_upload(const httplib::Request& req) {
+    using nlohmann::json;
+    json options = json::object();
+    for (const auto& [k, v] : req.params) {
+        // A repeated parameter or part is refused, never resolved silently one way.
+        if (options.contains(k))
+            throw Error(ErrorCode::invalid_argument, "query parameter '" + k.substr(0, 64) + "' is given more than once");
+        // Query strings are bytes, options are JSON text: a name or value that is
+        // not UTF-8 names no option and could not be written as JSON.
+        if (!is_utf8(k) || !is_utf8(v))
+            throw Error(ErrorCode::invalid_argument, "query parameter names and values must be UTF-8 text");
+        options[k] = v;
+    }
+
+    Upload up;
+    if (req.is_multipart_form_data()) {
+        const auto file = req.files.find("file");
+        if (file == req.files.end())
+            throw Error(ErrorCode::invalid_argument, "multipart upload without a 'file' part");
+        for (const char* name : {"file", "options"})
+            if (req.files.count(name) > 1)
+                throw Error(ErrorCode::invalid_argument,
+                            std::string("more than one '") + name + "' part: send one file and one options part "
+                                                                  "(several files: POST /v1/jobs)");
+        up.bytes = &file->second.content;
+        if (const auto part = req.files.find("options"); part != req.files.end()) {
+            const json o = json::parse(part->second.content, nullptr, false);
+            if (o.is_discarded() || !o.is_object())
+                throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
+            options.merge_patch(o);
+        }
+        for (const auto& [name, part] : req.files)
+            if (name != "file" && name != "options")
+                throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
+    } else {
+        const std::string type = lower(req.get_header_value("Content-Type"));
+        const std::string base = type.substr(0, type.find(';'));
+        static const char* accepted[] = {"",           "application/octet-stream", "model/step", "model/iges",
+                                         "application/step", "application/iges", "application/p21"};
+        bool ok = false;
+        for (const char* a : accepted) ok = ok || base == a;
+        if (!ok)
+            throw Error(ErrorCode::unsupported_format,
+                        "request body of type '" + base.substr(0, 64) +
+                            "': send the STEP/IGES file raw (application/octet-stream, model/step, model/iges) "
+                            "or as the 'file' part of multipart/form-data");
+        up.bytes = &req.body;
+    }
+    up.options_json = options.dump();
+    return up;
+}
+
+JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {
+    if (!req.is_multipart_form_data())
+        throw Error(ErrorCode::unsupported_format,
+                    "a job is multipart/form-data: one or more 'file' parts and one 'job' part (JSON)");
+    JobUpload up;
+    for (const auto& [name, part] : req.files) {
+        if (name == "file") {
+            if (static_cast<int>(up.inputs.size()) >= max_job_files)
+                throw Error(ErrorCode::limit_exceeded, "more than " + std::to_string(max_job_files) + " files in one job");
+            const std::string& b = part.content;
+            const int index = static_cast<int>(up.inputs.size());
+            if (b.empty()) throw Error(ErrorCode::invalid_argument, "file " + std::to_string(index) + " is empty");
+            const CadFormat f = detect_format_bytes(b.data(), b.size());
+            if (f == CadFormat::unknown)
+                throw Error(ErrorCode::unsupported_format,
+                            "file " + std::to_string(index) + " is neither STEP nor IGES (recognised by content)");
+            // The filename is only a label for the client (and to refer to the file): bounded, never a path.
+            up.inputs.push_back({index, part.filename.substr(0, 255), format_name(f), static_cast<int64_t>(b.size())});
+            up.bytes.push_back(&b);
+        } else if (name == "job") {
+            if (up.job_json) throw Error(ErrorCode::invalid_argument, "more than one 'job' part");
+            up.job_json = &part.content;
+        } else {
+            throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
+        }
+    }
+    if (up.inputs.empty()) throw Error(ErrorCode::invalid_argument, "a job needs at least one 'file' part");
+    if (!up.job_json) throw Error(ErrorCode::invalid_argument, "a job needs a 'job' part (JSON with 'outputs')");
+    return up;
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,37 @@
+// Reading what a client uploads, from the request cpp-httplib has parsed: the
+// `file` and `options` parts of POST /v1/renders and /v1/conversions (or a raw
+// body with query parameters), and the `file` and `job` parts of POST /v1/jobs.
+// Every duplicate, missing or unknown part is refused here, before any work
+// (server/*.cpp and the fuzz harnesses only: this header pulls in httplib.h).
+#pragma once
+
+#include <httplib.h>
+
+#include <string>
+#include <vector>
+
+#include "server/job_store.h"
+
+namespace nurbsrt::server {
+
+struct Upload {
+    const std::string* bytes = nullptr;  // the file's content (points into the request)
+    std::string options_json;            // JSON object text: query parameters overlaid by the options part
+};
+// Throws Error(invalid_argument) for a multipart body without `file`, or a bad
+// options part; Error(unsupported_format) for a raw body whose Content-Type is
+// not a CAD or octet-stream type. Query parameter values are passed as strings.
+Upload read_upload(const httplib::Request& req);
+
+struct JobUpload {
+    std::vector<JobInput> inputs;              // the `file` parts in order: index, filename, format, size
+    std::vector<const std::string*> bytes;     // their contents (point into the request)
+    const std::string* job_json = nullptr;     // the `job` part
+};
+// Throws Error(unsupported_format) for a body that is not multipart or a file
+// that is neither STEP nor IGES, Error(limit_exceeded) beyond `max_job_files`
+// files, Error(invalid_argument) for an empty file, a missing or repeated `job`
+// part, no file, or an unknown part.
+JobUpload read_job_upload(const httplib::Request& req, int max_job_files);
+
+}  // namespace nurbsrt::server
