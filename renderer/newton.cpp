@@ -8,15 +8,6 @@
 
 namespace nurbsrt {
 
-const char* newton_method_name(NewtonMethod m) {
-    return m == NewtonMethod::proposed ? "proposed" : "martin";
-}
-
-std::optional<NewtonMethod> parse_newton_method(std::string_view name) {
-    for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin})
-        if (name == newton_method_name(m)) return m;
-    return std::nullopt;
-}
 
 const char* newton_status_name(NewtonStatus s) {
     switch (s) {

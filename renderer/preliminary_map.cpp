@@ -15,13 +15,6 @@
 
 namespace nurbsrt {
 
-const char* map_precision_name(MapPrecision p) { return p == MapPrecision::rgb8 ? "rgb8" : "float32"; }
-const char* map_precision_option(MapPrecision p) { return p == MapPrecision::rgb8 ? "rgb8" : "float"; }
-std::optional<MapPrecision> parse_map_precision(std::string_view option) {
-    for (MapPrecision p : {MapPrecision::float32, MapPrecision::rgb8})
-        if (option == map_precision_option(p)) return p;
-    return std::nullopt;
-}
 
 float quantize_rgb8(float u, double lo, double hi) {
     const double range = hi - lo;
