@@ -30,6 +30,11 @@ namespace nurbsrt::server {
 namespace fs = std::filesystem;
 namespace {
 
+// Messages of exceptions caught in the runner's own loops may carry bytes that
+// are not UTF-8 (a path, a library's text): dumping them must not throw there,
+// where an escaping exception would end the process.
+constexpr auto kReplaceBadUtf8 = nlohmann::json::error_handler_t::replace;
+
 int64_t now_ms() {
     return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
         .count();
@@ -196,7 +201,7 @@ void JobService::sweep_loop() {
         try {
             sweep();
         } catch (const std::exception& e) {
-            log_event("jobs_sweep_failed", nlohmann::json{{"error", e.what()}}.dump());
+            log_event("jobs_sweep_failed", nlohmann::json{{"error", e.what()}}.dump(-1, ' ', false, kReplaceBadUtf8));
         }
         lock.lock();
     }
@@ -218,8 +223,8 @@ void JobService::run_loop() {
             if (job) run_job(*job);
         } catch (const std::exception& e) {
             failed = true;
-            log_event("job_runner_error",
-                      nlohmann::json{{"job_id", job ? job->id : std::string()}, {"error", e.what()}}.dump());
+            log_event("job_runner_error", nlohmann::json{{"job_id", job ? job->id : std::string()}, {"error", e.what()}}
+                                              .dump(-1, ' ', false, kReplaceBadUtf8));
         }
         if (!job || failed) {
             std::unique_lock<std::mutex> lock(m_);
