@@ -22,7 +22,7 @@ namespace {
 
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const auto t0 = std::chrono::steady_clock::now();
-    const Upload upload = read_upload(req);
+    const Upload upload = read_upload(req, {"format"});
     const ConversionFormat format = parse_conversion_format(upload.options_json);
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, "empty upload: send a STEP or IGES file");
@@ -66,8 +66,9 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                                      {"total", total_ms}}}};
         res.set_content(body.dump(), "application/json");
     } else {
-        res.set_header("Content-Disposition",
-                       std::string("attachment; filename=\"converted") + conversion_format_extension(format) + "\"");
+        res.set_header("Content-Disposition", "attachment; filename=\"" +
+                                                  download_name(upload.filename, conversion_format_extension(format)) +
+                                                  "\"");
         res.set_content(data, content_type.c_str());
     }
 }

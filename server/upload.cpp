@@ -27,7 +27,7 @@ bool is_utf8(const std::string& s) {
 
 }  // namespace
 
-Upload read_upload(const httplib::Request& req) {
+Upload read_upload(const httplib::Request& req, std::initializer_list<const char*> form_options) {
     using nlohmann::json;
     json options = json::object();
     for (const auto& [k, v] : req.params) {
@@ -52,15 +52,25 @@ Upload read_upload(const httplib::Request& req) {
                             std::string("more than one '") + name + "' part: send one file and one options part "
                                                                   "(several files: POST /v1/jobs)");
         up.bytes = &file->second.content;
+        up.filename = file->second.filename;
         if (const auto part = req.files.find("options"); part != req.files.end()) {
             const json o = json::parse(part->second.content, nullptr, false);
             if (o.is_discarded() || !o.is_object())
                 throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
             options.merge_patch(o);
         }
-        for (const auto& [name, part] : req.files)
-            if (name != "file" && name != "options")
+        for (const auto& [name, part] : req.files) {
+            if (name == "file" || name == "options") continue;
+            bool field = false;
+            for (const char* f : form_options) field = field || name == f;
+            if (!field)
                 throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
+            if (req.files.count(name) > 1 || options.contains(name))
+                throw Error(ErrorCode::invalid_argument, "option '" + name + "' is given more than once");
+            if (!is_utf8(part.content))
+                throw Error(ErrorCode::invalid_argument, "form field '" + name + "' must be UTF-8 text");
+            options[name] = part.content;
+        }
     } else {
         const std::string type = lower(req.get_header_value("Content-Type"));
         const std::string base = type.substr(0, type.find(';'));
@@ -77,6 +87,19 @@ Upload read_upload(const httplib::Request& req) {
     }
     up.options_json = options.dump();
     return up;
+}
+
+std::string download_name(const std::string& upload_filename, const std::string& extension) {
+    // Browsers send a bare name, some clients a path (either separator).
+    std::string name = upload_filename.substr(upload_filename.find_last_of("/\\") + 1);
+    if (const size_t dot = name.rfind('.'); dot != std::string::npos && dot > 0) name.resize(dot);
+    std::string stem;
+    for (char c : name)
+        if (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_') stem += c;
+    constexpr size_t kMaxStem = 100;  // file systems take 255 bytes; leave room for the extension
+    if (stem.size() > kMaxStem) stem.resize(kMaxStem);
+    while (!stem.empty() && stem.front() == '.') stem.erase(stem.begin());  // no hidden files
+    return (stem.empty() ? std::string("converted") : stem) + extension;
 }
 
 JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {

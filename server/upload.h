@@ -7,6 +7,7 @@
 
 #include <httplib.h>
 
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,20 @@ namespace nurbsrt::server {
 struct Upload {
     const std::string* bytes = nullptr;  // the file's content (points into the request)
     std::string options_json;            // JSON object text: query parameters overlaid by the options part
+    std::string filename;                // the `file` part's file name as sent ("" for a raw body)
 };
 // Throws Error(invalid_argument) for a multipart body without `file`, or a bad
 // options part; Error(unsupported_format) for a raw body whose Content-Type is
-// not a CAD or octet-stream type. Query parameter values are passed as strings.
-Upload read_upload(const httplib::Request& req);
+// not a CAD or octet-stream type. Query parameter values are passed as strings,
+// and so are the plain form fields named in `form_options` (`-F format=iges`);
+// such a field given more than once, or also as a query parameter or in the
+// options part, is refused.
+Upload read_upload(const httplib::Request& req, std::initializer_list<const char*> form_options = {});
+
+// A download name for a result made from `upload_filename`: its stem (path,
+// quotes and anything but letters, digits, '.', '-', '_' removed; "converted"
+// when nothing is left) with `extension` (".igs", ...).
+std::string download_name(const std::string& upload_filename, const std::string& extension);
 
 struct JobUpload {
     std::vector<JobInput> inputs;              // the `file` parts in order: index, filename, format, size

@@ -200,3 +200,21 @@ def test_conversion_errors(url):
     check_problem(post_raw(url, "/v1/conversions", b"hello", params={"format": "step"}), 415)
     check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes()[:1500], params={"format": "iges"}), 422)
     check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes()[:1500], params={"format": "glb"}), 422)
+
+
+def test_format_as_form_field_and_download_named_after_the_upload(url):
+    files = {"file": ("parts/My Bearing (v2).iges", BEARING.read_bytes()), "format": (None, "step")}
+    r = requests.post(url + "/v1/conversions", files=files, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == "model/step"
+    assert r.headers["Content-Disposition"] == 'attachment; filename="MyBearingv2.step"'
+    assert r.content.startswith(b"ISO-10303-21;")
+    # The format in two places is refused, not resolved one way.
+    check_problem(requests.post(url + "/v1/conversions", files=files, params={"format": "iges"}, timeout=TIMEOUT),
+                  400, "invalid_argument")
+    two = {**files, "options": (None, '{"format": "stl"}')}
+    check_problem(requests.post(url + "/v1/conversions", files=two, timeout=TIMEOUT), 400, "invalid_argument")
+    # A name with nothing usable left falls back to "converted".
+    r = requests.post(url + "/v1/conversions", files={"file": ("(((.step", SCREW.read_bytes()),
+                                                      "format": (None, "iges")}, timeout=TIMEOUT)
+    assert r.headers["Content-Disposition"] == 'attachment; filename="converted.igs"'
