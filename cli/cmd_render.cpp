@@ -208,12 +208,7 @@ void add_render_command(CLI::App& app) {
 
         if (!a->stats.empty()) {
             nlohmann::json j = render_stats_json(result.stats, scene.timings, encode_ms, ms_since(t0));
-            j["camera"] = {{"eye", {camera.spec().eye.x, camera.spec().eye.y, camera.spec().eye.z}},
-                           {"target", {camera.spec().target.x, camera.spec().target.y, camera.spec().target.z}},
-                           {"up", {camera.spec().up.x, camera.spec().up.y, camera.spec().up.z}},
-                           {"projection", camera.perspective() ? "perspective" : "orthographic"},
-                           {"fov_deg", camera.spec().fov_deg},
-                           {"ortho_height", camera.spec().ortho_height}};
+            j["camera"] = camera_json(camera);
             j["map_precision"] = a->map_precision;
             j["warnings"] = scene.warnings;
             if (a->stats == "-") {

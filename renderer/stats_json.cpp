@@ -52,4 +52,17 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
     };
 }
 
+nlohmann::json camera_json(const Camera& camera) {
+    const CameraSpec& cs = camera.spec();
+    nlohmann::json j = {{"eye", {cs.eye.x, cs.eye.y, cs.eye.z}},
+                        {"target", {cs.target.x, cs.target.y, cs.target.z}},
+                        {"up", {cs.up.x, cs.up.y, cs.up.z}},
+                        {"projection", camera.perspective() ? "perspective" : "orthographic"}};
+    if (camera.perspective())
+        j["fov_deg"] = cs.fov_deg;
+    else
+        j["ortho_height"] = cs.ortho_height;
+    return j;
+}
+
 }  // namespace nurbsrt

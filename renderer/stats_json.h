@@ -4,6 +4,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "renderer/camera.h"
 #include "renderer/render.h"
 #include "renderer/scene.h"
 
@@ -14,5 +15,9 @@ namespace nurbsrt {
 // wall-clock time of the whole request as the caller measured it.
 nlohmann::json render_stats_json(const RenderStats& stats, const ImportTimings& import, double encode_ms,
                                  double total_ms);
+
+// The camera a frame was rendered with: eye, target, up, projection, and the
+// one size that applies to it (fov_deg for perspective, ortho_height for orthographic).
+nlohmann::json camera_json(const Camera& camera);
 
 }  // namespace nurbsrt

@@ -187,13 +187,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     stats["estimate"] = {{"memory_mb", double(cost.memory_bytes) / (1 << 20)},
                          {"core_seconds", cost.core_seconds},
                          {"priority", priority_name(options.priority)}};
-    const CameraSpec& cs = camera.spec();
-    stats["camera"] = {{"eye", {cs.eye.x, cs.eye.y, cs.eye.z}},
-                       {"target", {cs.target.x, cs.target.y, cs.target.z}},
-                       {"up", {cs.up.x, cs.up.y, cs.up.z}},
-                       {"projection", camera.perspective() ? "perspective" : "orthographic"},
-                       {"fov_deg", cs.fov_deg},
-                       {"ortho_height", cs.ortho_height}};
+    stats["camera"] = camera_json(camera);
     stats["map_precision"] = map_precision_option(r.map_precision);
     stats["warnings"] = scene.warnings;
     stats["cache"] = out.cache_hit ? "hit" : "miss";

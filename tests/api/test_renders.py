@@ -118,6 +118,12 @@ def test_explicit_camera_in_json_options(url):
     assert r.status_code == 200, r.text[:300]
     cam = r.json()["statistics"]["camera"]
     assert cam["eye"] == [200, -300, 150] and cam["fov_deg"] == 30
+    assert "ortho_height" not in cam  # a size that does not apply to the camera is not reported
+    r = post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 64, "height": 64, "view": "top",
+                                                                 "projection": "orthographic"},
+                 headers={"Accept": "application/json"})
+    cam = r.json()["statistics"]["camera"]
+    assert cam["projection"] == "orthographic" and cam["ortho_height"] > 0 and "fov_deg" not in cam
 
 
 def test_second_render_of_same_bytes_uses_the_cache(url):
