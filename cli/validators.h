@@ -13,19 +13,17 @@
 
 namespace nurbsrt::cli {
 
-// "x,y,z": three numbers; with `unit` each in [0, 1] (colours).
-inline CLI::Validator vec3_validator(bool unit = false) {
+// "x,y,z": three numbers.
+inline CLI::Validator vec3_validator() {
     return CLI::Validator(
-        [unit](std::string& s) -> std::string {
+        [](std::string& s) -> std::string {
             double x, y, z;
             char tail = 0;
             if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3)
                 return "must be three numbers x,y,z (got '" + s + "')";
-            if (unit && (x < 0 || x > 1 || y < 0 || y > 1 || z < 0 || z > 1))
-                return "each component must be in [0, 1] (got '" + s + "')";
             return {};
         },
-        unit ? "R,G,B" : "X,Y,Z");
+        "X,Y,Z");
 }
 
 // A file we are going to write: one of `extensions` (lower case, with the dot),

@@ -14,21 +14,14 @@
 #include "renderer/error.h"
 #include "renderer/scene_io.h"
 #include "server/upload.h"
+#include "tests/support/error_code_of.h"
 
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
 
 namespace {
 
-ErrorCode code_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.code();
-    }
-    ADD_FAILURE() << "no nurbsrt::Error thrown";
-    return ErrorCode::internal;
-}
+using nurbsrt::test::code_of;
 
 // A query string is bytes: "?heig\xFB\xFB...ht=10" reached the options as a
 // JSON key, and writing that JSON threw nlohmann's invalid UTF-8 type_error,

@@ -11,6 +11,7 @@
 #include "importer/isolated.h"
 #include "renderer/error.h"
 #include "renderer/scene_io.h"
+#include "tests/support/error_code_of.h"
 
 namespace {
 
@@ -23,15 +24,7 @@ nurbsrt::IsolationLimits limits(double seconds) {
     return l;
 }
 
-nurbsrt::ErrorCode code_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const nurbsrt::Error& e) {
-        return e.code();
-    }
-    ADD_FAILURE() << "no nurbsrt::Error thrown";
-    return nurbsrt::ErrorCode::internal;
-}
+using nurbsrt::test::code_of;
 
 // setenv affects the child started by fork/exec; each test restores it.
 struct FaultHook {

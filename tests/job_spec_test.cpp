@@ -8,6 +8,7 @@
 
 #include "renderer/error.h"
 #include "server/job_spec.h"
+#include "tests/support/error_code_of.h"
 
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
@@ -17,15 +18,7 @@ namespace {
 
 std::vector<JobInput> two_inputs() { return {{0, "bearing.iges", "IGES", 10}, {1, "screw.step", "STEP", 20}}; }
 
-ErrorCode code_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.code();
-    }
-    ADD_FAILURE() << "no nurbsrt::Error thrown";
-    return ErrorCode::internal;
-}
+using nurbsrt::test::code_of;
 
 TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
     ServerConfig config;

@@ -73,11 +73,14 @@
 #include "renderer/scene.h"
 #include "renderer/trim.h"
 #include "tests/support/fixtures.h"
+#include "tests/support/occt_distance.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 namespace T = nurbsrt::test;
+using T::at;
+using T::dist_to_face;
 using namespace nurbsrt;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -237,22 +240,6 @@ bool near_edge(const RenderImage& im, int i, int j) {
 
 // The intersector's answer for one ray (importer/reference_intersector.h).
 using OcctHit = ReferenceHit;
-
-// Distance from p to the trimmed face (DistShapeShape vertex-face); +inf on failure.
-double dist_to_face(const TopoDS_Face& f, const gp_Pnt& p) {
-    try {
-        const TopoDS_Vertex v = BRepBuilderAPI_MakeVertex(p).Vertex();
-        BRepExtrema_DistShapeShape d(v, f);
-        if (!d.IsDone() || d.NbSolution() == 0) return kInf;
-        return d.Value();
-    } catch (const Standard_Failure&) {
-        return kInf;
-    }
-}
-
-gp_Pnt at(const Ray& r, double t) {
-    return gp_Pnt(r.origin.x + t * r.dir.x, r.origin.y + t * r.dir.y, r.origin.z + t * r.dir.z);
-}
 
 enum class Verdict {
     both_miss,

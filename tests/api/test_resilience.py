@@ -16,20 +16,23 @@ from conftest import BEARING, SCREW, TIMEOUT, check_problem, healthy
 from test_jobs import accepted, get_job, submit, wait_finished, wait_for, wait_gone
 
 
-def children_of(pid):
-    """Live (not zombie) processes whose parent is `pid`."""
-    kids = []
+def processes():
+    """(pid, state, parent pid, command line) of every process in /proc."""
     for entry in pathlib.Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
         try:
             stat = (entry / "stat").read_text()
+            cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
         except OSError:
             continue
         fields = stat[stat.rindex(")") + 2:].split()
-        if int(fields[1]) == pid and fields[0] != "Z":
-            kids.append(int(entry.name))
-    return kids
+        yield int(entry.name), fields[0], int(fields[1]), cmd
+
+
+def children_of(pid):
+    """Live (not zombie) processes whose parent is `pid`."""
+    return [p for p, state, parent, _ in processes() if parent == pid and state != "Z"]
 
 
 def alive(pid):
@@ -198,17 +201,7 @@ def test_absurd_step_refused_before_parsing(url):
 
 def processes_mentioning(text):
     """Live processes whose command line contains `text` (our children carry the data dir's paths)."""
-    found = []
-    for entry in pathlib.Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-        except OSError:
-            continue
-        if text in cmd and alive(int(entry.name)):
-            found.append((int(entry.name), cmd[:200]))
-    return found
+    return [(p, cmd[:200]) for p, state, _, cmd in processes() if text in cmd and state != "Z"]
 
 
 def test_repeated_sigkill_with_jobs_in_flight_loses_nothing(own_server, tmp_path):

@@ -21,6 +21,7 @@
 #include "renderer/newton.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/prepared_scene.h"
+#include "tests/support/occt_distance.h"
 
 namespace nurbsrt::test {
 namespace {
@@ -32,21 +33,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kRootGrid = 16;
 // The rescue's robust solves may take this many steps (render.cpp's kRescueMinIterations).
 constexpr int kDiagnoseIterations = 16;
-
-double dist_to_face(const TopoDS_Face& f, const gp_Pnt& p) {
-    try {
-        const TopoDS_Vertex v = BRepBuilderAPI_MakeVertex(p).Vertex();
-        BRepExtrema_DistShapeShape d(v, f);
-        if (!d.IsDone() || d.NbSolution() == 0) return kInf;
-        return d.Value();
-    } catch (const Standard_Failure&) {
-        return kInf;
-    }
-}
-
-gp_Pnt at(const Ray& r, double t) {
-    return gp_Pnt(r.origin.x + t * r.dir.x, r.origin.y + t * r.dir.y, r.origin.z + t * r.dir.z);
-}
 
 struct Checker {
     const Scene& scene;
