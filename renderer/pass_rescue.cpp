@@ -9,7 +9,8 @@
 //    failed, or at least two 4-neighbours are hit), every face of the 5x5
 //    neighbourhood from several starts: the converged (u, v) of its pixels, its
 //    map (u, v), the face's mesh vertex projected nearest to the pixel, and the
-//    middle of the face's parameter box.
+//    middle of the face's parameter box (on an open silhouette, not enclosed,
+//    only the nearest of the first two kinds, and the others where those miss).
 //  C (adjacent): if B found nothing either and the pixel is enclosed (its map
 //    face failed, or a crack), the faces that touch B's faces (shared vertices of
 //    their meshes, PreparedFace::adjacent), from their nearest mesh vertex and box
@@ -48,6 +49,8 @@ constexpr int kMaxGeneralFaces = 24;
 // the neighbourhood's faces touches at least one of them. 12 x 2 starts stay
 // within the start budget after A's and B's usual few.
 constexpr int kMaxAdjacentFaces = 12;
+// "No start of this face seen yet": above every squared pixel distance in B's 5x5.
+constexpr int kNoStart = 1 << 20;
 // Silhouette growth passes: each adds one pixel ring outside the map's
 // silhouette; the exact silhouette lies within a few pixels of the mesh's (its
 // deflection), so 64 is never reached in practice and only bounds the work.
@@ -61,16 +64,19 @@ public:
     PixelRescue(const FrameContext& c, const Solver& solver, const std::vector<PixelHit>& src, int i, int j, bool crack)
         : c_(c), solver_(solver), src_(src), i_(i), j_(j), crack_(crack) {}
 
-    void attempt(uint32_t id, float su, float sv) {
-        if (id == 0 || id > c_.nfaces) return;
+    // Solves face id from (su, sv) unless tried before; true when it hit (inside
+    // the trim or within its tolerance band).
+    bool attempt(uint32_t id, float su, float sv) {
+        if (id == 0 || id > c_.nfaces) return false;
         for (int q = 0; q < ntried_; ++q)
-            if (tried_[q].id == id && tried_[q].u == su && tried_[q].v == sv) return;
-        if (ntried_ == limit_) return;
+            if (tried_[q].id == id && tried_[q].u == su && tried_[q].v == sv) return false;
+        if (ntried_ == limit_) return false;
         tried_[ntried_++] = {id, su, sv};
         PixelHit h;
         const Outcome o = solver_.solve(id, i_, j_, su, sv, solver_.robust, crack_, h);
         if (o == kConverged && h.t < best.t) best = h;
         if (o == kNearTrim && h.t < best_near.t) best_near = h;
+        return o == kConverged || o == kNearTrim;
     }
     // A: converged neighbours first (their uv is on the exact surface, next to this
     // pixel), one start per face; then the map faces' starts; then the own map face.
@@ -99,8 +105,13 @@ public:
             return false;  // one converged start of the own face is enough
         });
     }
-    // B: every face of the 5x5 neighbourhood, from each start it offers.
-    void general_starts(const MeshScreenPoints& screen_points) {
+    // B: every face of the 5x5 neighbourhood. `thorough` (an enclosed pixel):
+    // from each start it offers. Otherwise (a pixel on the silhouette, where B runs
+    // most and every start of one face fails alike): from the face's converged and
+    // map starts nearest to the pixel; Newton from the others, on the same sheet a
+    // pixel or two farther, ends where these do. The far starts (mesh vertex, box
+    // middle) where the near ones found no hit.
+    void general_starts(const MeshScreenPoints& screen_points, bool thorough) {
         const PreliminaryMap& map = c_.map;
         uint32_t faces[kMaxGeneralFaces];
         int nf = 0;
@@ -113,12 +124,26 @@ public:
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
         for (int q = 0; q < nf; ++q) {
             const uint32_t id = faces[q];
-            for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
-                const size_t n = map.index(ni, nj);
-                if (src_[n].face == id) attempt(id, src_[n].u, src_[n].v);
-                if (map.face[n] == id) attempt(id, map.u[n], map.v[n]);
-            });
-            far_starts(screen_points, id, sp);
+            bool hit = false;
+            if (thorough) {
+                for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
+                    const size_t n = map.index(ni, nj);
+                    if (src_[n].face == id) hit = attempt(id, src_[n].u, src_[n].v) || hit;
+                    if (map.face[n] == id) hit = attempt(id, map.u[n], map.v[n]) || hit;
+                });
+            } else {
+                size_t hit_n = 0, map_n = 0;
+                int hit_d = kNoStart, map_d = kNoStart;
+                for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
+                    const size_t n = map.index(ni, nj);
+                    const int d = (ni - i_) * (ni - i_) + (nj - j_) * (nj - j_);
+                    if (src_[n].face == id && d < hit_d) hit_d = d, hit_n = n;
+                    if (map.face[n] == id && d < map_d) map_d = d, map_n = n;
+                });
+                hit = hit_d != kNoStart && attempt(id, src_[hit_n].u, src_[hit_n].v);
+                hit = (map_d != kNoStart && attempt(id, map.u[map_n], map.v[map_n])) || hit;
+            }
+            if (!hit || thorough) far_starts(screen_points, id, sp);
         }
     }
     // C: the faces adjacent to those of the 5x5 neighbourhood that are not in it
@@ -208,7 +233,7 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     // front surface: the face that closes the crack is not among A's; look further.
     const bool pit = pr.best.face && behind_pair(c, src, i, j, pr.best.t);
     if ((!pr.best.face && !pr.best_near.face && (own || n4 >= 2)) || pit) {
-        pr.general_starts(screen_points);
+        pr.general_starts(screen_points, own || crack || pit);
         kind = kRescueGeneral;
         // C only where the pixel is enclosed (its map face failed, or a crack):
         // not along every silhouette, where B already fails for good reason.
