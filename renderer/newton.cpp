@@ -192,12 +192,13 @@ struct ProposedSystem {
     const NurbsSurface& projected;
     const Camera& camera;
     ScreenPoint s;
+    const SurfaceSpans* spans;
     struct State {
         SurfaceDerivs d;
         double r;
     };
     State eval(double u, double v) const {
-        const SurfaceDerivs d = evaluate_d1(projected, u, v);
+        const SurfaceDerivs d = spans ? evaluate_d1(projected, *spans, u, v) : evaluate_d1(projected, u, v);
         return {d, proposed_residual(d.S, camera, s)};
     }
     bool step(const State& st, double eps_det, Step& out) const { return proposed_step(st.d, s, eps_det, out); }
@@ -213,12 +214,13 @@ struct MartinSystem {
     const NurbsSurface& surface;
     const Ray& ray;
     RayPlanes pl;
+    const SurfaceSpans* spans;
     struct State {
         CartesianDerivs c;
         double f1, f2, r;
     };
     State eval(double u, double v) const {
-        const CartesianDerivs c = cartesian_d1(surface, u, v);
+        const CartesianDerivs c = spans ? cartesian_d1(surface, *spans, u, v) : cartesian_d1(surface, u, v);
         const double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
         return {c, f1, f2, std::hypot(f1, f2)};
     }
@@ -242,13 +244,14 @@ struct MartinSystem {
 }  // namespace
 
 NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
-                             double u0, double v0, const UvBox& box, const NewtonParams& params) {
-    return newton_iterate(ProposedSystem{projected, camera, s}, u0, v0, box, params);
+                             double u0, double v0, const UvBox& box, const NewtonParams& params,
+                             const SurfaceSpans* spans) {
+    return newton_iterate(ProposedSystem{projected, camera, s, spans}, u0, v0, box, params);
 }
 
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params) {
-    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray)}, u0, v0, box, params);
+                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans) {
+    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray), spans}, u0, v0, box, params);
 }
 
 }  // namespace nurbsrt

@@ -55,6 +55,7 @@
 #include "renderer/camera.h"
 #include "renderer/nurbs.h"
 #include "renderer/scene.h"
+#include "renderer/span_basis.h"
 
 namespace nurbsrt {
 
@@ -115,13 +116,17 @@ struct NewtonResult {
 };
 
 // proposed: `projected` is project_surface(camera, face.surface); s is the pixel's
-// screen point (xR, yR); (u0, v0) the start (clamped into `box`).
+// screen point (xR, yR); (u0, v0) the start (clamped into `box`). `spans`: the
+// surface's per-span basis tables (span_basis.h; the same for the projected and
+// the model surface), or null for the knot search and A2.2 in every step. Both
+// give the same iterates to rounding.
 NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
-                             double u0, double v0, const UvBox& box, const NewtonParams& params);
+                             double u0, double v0, const UvBox& box, const NewtonParams& params,
+                             const SurfaceSpans* spans = nullptr);
 
 // martin: on the model-space surface and the pixel ray.
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params);
+                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans = nullptr);
 
 // The two planes of Martin et al.: N1 perpendicular to dir (built from dir's two
 // largest components), N2 = N1 x dir, d_i = -N_i . origin.

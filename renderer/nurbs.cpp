@@ -71,14 +71,9 @@ struct Scratch {
     double *Nu, *dNu, *Nv, *dNv, *left, *right;
 };
 
-// Evaluation levels: 0 point only, 1 point + first partials, 2 additionally S_uv.
-struct Homog2 {
-    Vec4 S, Su, Sv, Suv;
-};
+using Homog2 = HomogDerivs;
 
-// Tensor-product evaluation (A3.5 / A3.6 restricted to first partials): for each of the
-// p+1 rows i of the u-span, contract the q+1 contiguous control points of that row with
-// the v basis (T = sum_j N_j P_ij, Tv = sum_j N'_j P_ij), then accumulate with the u basis.
+// Point and partials up to kLevel (see tensor_product in nurbs.h) at (u, v).
 template <int kLevel>
 Homog2 eval_core(const NurbsSurface& s, double u, double v, const Scratch& w) {
     const int p = s.degree_u, q = s.degree_v;
@@ -91,24 +86,7 @@ Homog2 eval_core(const NurbsSurface& s, double u, double v, const Scratch& w) {
     constexpr bool kD = kLevel >= 1;
     basis_core<kD>(su, p, u, U, w.Nu, w.dNu, w.left, w.right);
     basis_core<kD>(sv, q, v, V, w.Nv, w.dNv, w.left, w.right);
-
-    Homog2 r{};
-    const Vec4* row = s.cp.data() + static_cast<size_t>(su - p) * s.num_v + (sv - q);
-    for (int i = 0; i <= p; ++i, row += s.num_v) {
-        Vec4 T{}, Tv{};
-        for (int j = 0; j <= q; ++j) {
-            const Vec4 P = row[j];
-            T += w.Nv[j] * P;
-            if constexpr (kD) Tv += w.dNv[j] * P;
-        }
-        r.S += w.Nu[i] * T;
-        if constexpr (kD) {
-            r.Su += w.dNu[i] * T;
-            r.Sv += w.Nu[i] * Tv;
-        }
-        if constexpr (kLevel >= 2) r.Suv += w.dNu[i] * Tv;
-    }
-    return r;
+    return tensor_product<kLevel>(s, su, sv, w.Nu, w.dNu, w.Nv, w.dNv);
 }
 
 // Runs eval_core with stack scratch for low degrees, heap scratch above kMaxFastDegree.
@@ -194,6 +172,11 @@ Vec4 evaluate(const NurbsSurface& s, double u, double v) {
 
 CartesianDerivs cartesian_d1(const NurbsSurface& s, double u, double v) {
     const Cart2 c = to_cartesian(eval_dispatch<1>(s, u, v), false);
+    return {c.P, c.Pu, c.Pv};
+}
+
+CartesianDerivs cartesian_from(const SurfaceDerivs& h) {
+    const Cart2 c = to_cartesian(HomogDerivs{h.S, h.Su, h.Sv, {}}, false);
     return {c.P, c.Pu, c.Pv};
 }
 

@@ -30,6 +30,38 @@ struct SurfaceDerivs {
 };
 SurfaceDerivs evaluate_d1(const NurbsSurface& s, double u, double v);
 
+// The tensor product of A3.5 / A3.6 from the basis values N and first derivatives
+// dN of knot spans su and sv: for each of the p+1 rows i of the u-span, contract
+// the q+1 contiguous control points of that row with the v basis (T = sum_j N_j P_ij,
+// Tv = sum_j N'_j P_ij), then accumulate with the u basis. kLevel 0: S only; 1: and
+// S_u, S_v; 2: and S_uv. Shared by the knot-search path (nurbs.cpp) and the
+// per-span tables (span_basis.h), which differ only in how they get the basis.
+struct HomogDerivs {
+    Vec4 S, Su, Sv, Suv;
+};
+template <int kLevel>
+inline HomogDerivs tensor_product(const NurbsSurface& s, int su, int sv, const double* Nu, const double* dNu,
+                                  const double* Nv, const double* dNv) {
+    constexpr bool kD = kLevel >= 1;
+    HomogDerivs r{};
+    const Vec4* row = s.cp.data() + static_cast<size_t>(su - s.degree_u) * s.num_v + (sv - s.degree_v);
+    for (int i = 0; i <= s.degree_u; ++i, row += s.num_v) {
+        Vec4 T{}, Tv{};
+        for (int j = 0; j <= s.degree_v; ++j) {
+            const Vec4 P = row[j];
+            T += Nv[j] * P;
+            if constexpr (kD) Tv += dNv[j] * P;
+        }
+        r.S += Nu[i] * T;
+        if constexpr (kD) {
+            r.Su += dNu[i] * T;
+            r.Sv += Nu[i] * Tv;
+        }
+        if constexpr (kLevel >= 2) r.Suv += dNu[i] * Tv;
+    }
+    return r;
+}
+
 // Homogeneous point only (cheaper: no derivative basis).
 Vec4 evaluate(const NurbsSurface& s, double u, double v);
 
@@ -39,6 +71,8 @@ struct CartesianDerivs {
     Vec3 P, Pu, Pv;
 };
 CartesianDerivs cartesian_d1(const NurbsSurface& s, double u, double v);
+// The same from homogeneous partials already evaluated.
+CartesianDerivs cartesian_from(const SurfaceDerivs& h);
 
 // Unit normal of the Cartesian surface, oriented by `reversed` (face orientation).
 // Where Pu x Pv vanishes (a degenerate pole edge) the normal is taken from the

@@ -31,8 +31,8 @@ Outcome Solver::solve(uint32_t id, int i, int j, double u0, double v0, const New
     const Camera& camera = ctx.camera;
     const NewtonResult r =
         ctx.options.method == NewtonMethod::proposed
-            ? newton_proposed(projected[id - 1], camera, camera.pixel_screen(i, j), u0, v0, ff.box, p)
-            : newton_martin(ctx.scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, p);
+            ? newton_proposed(projected[id - 1], camera, camera.pixel_screen(i, j), u0, v0, ff.box, p, &ff.spans)
+            : newton_martin(ctx.scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, p, &ff.spans);
     hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
     if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
         border_gap_hit(id, i, j, r, hit))

@@ -25,6 +25,7 @@ namespace nurbsrt {
 // Camera-independent per-face data of the pixel solves.
 struct PreparedFace {
     TrimTester trim;
+    SurfaceSpans spans;    // per-span basis tables of the face's surface (span_basis.h)
     UvBox box;             // parameter box with seams (face_uv_box)
     double near_uv = 0;    // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
     // Faces that touch this one (their map meshes share a vertex, see prepare()),

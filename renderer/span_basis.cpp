@@ -1,0 +1,132 @@
+// Per-span evaluation tables of the B-spline basis (see span_basis.h).
+#include "renderer/span_basis.h"
+
+#include <algorithm>
+#include <array>
+
+namespace nurbsrt {
+namespace {
+
+constexpr int kM = kMaxTableDegree + 1;
+
+// A2.3 (Piegl & Tiller, DersBasisFuns): ders[k][r] = k-th derivative of
+// N_{s-p+r,p} at t, k = 0..p, for t in span s.
+void ders_basis_funs(int s, double t, int p, const double* U, std::array<std::array<double, kM>, kM>& ders) {
+    double ndu[kM][kM], a[2][kM], left[kM], right[kM];
+    ndu[0][0] = 1.0;
+    for (int j = 1; j <= p; ++j) {
+        left[j] = t - U[s + 1 - j];
+        right[j] = U[s + j] - t;
+        double saved = 0.0;
+        for (int r = 0; r < j; ++r) {
+            ndu[j][r] = right[r + 1] + left[j - r];  // lower triangle: knot differences
+            const double temp = ndu[r][j - 1] / ndu[j][r];
+            ndu[r][j] = saved + right[r + 1] * temp;  // upper triangle: basis functions
+            saved = left[j - r] * temp;
+        }
+        ndu[j][j] = saved;
+    }
+    for (int j = 0; j <= p; ++j) ders[0][j] = ndu[j][p];
+    for (int r = 0; r <= p; ++r) {
+        int s1 = 0, s2 = 1;
+        a[0][0] = 1.0;
+        for (int k = 1; k <= p; ++k) {
+            double d = 0.0;
+            const int rk = r - k, pk = p - k;
+            if (r >= k) {
+                a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+                d = a[s2][0] * ndu[rk][pk];
+            }
+            const int j1 = rk >= -1 ? 1 : -rk;
+            const int j2 = r - 1 <= pk ? k - 1 : p - r;
+            for (int j = j1; j <= j2; ++j) {
+                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
+                d += a[s2][j] * ndu[rk + j][pk];
+            }
+            if (r <= pk) {
+                a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+                d += a[s2][k] * ndu[r][pk];
+            }
+            ders[k][r] = d;
+            std::swap(s1, s2);
+        }
+    }
+    double f = p;  // multiply by p! / (p-k)!
+    for (int k = 1; k <= p; ++k) {
+        for (int j = 0; j <= p; ++j) ders[k][j] *= f;
+        f *= p - k;
+    }
+}
+
+}  // namespace
+
+KnotSpans::KnotSpans(int n, int p, const std::vector<double>& knots) : p_(p) {
+    if (p < 0 || p > kMaxTableDegree || n <= p || knots.size() != static_cast<size_t>(n + p + 1)) return;
+    const double* U = knots.data();
+    std::array<std::array<double, kM>, kM> ders{};
+    for (int s = p; s < n; ++s) {
+        if (!(U[s] < U[s + 1])) continue;
+        const double h = U[s + 1] - U[s];
+        ders_basis_funs(s, U[s], p, U, ders);
+        span_.push_back(s);
+        start_.push_back(U[s]);
+        inv_h_.push_back(1.0 / h);
+        // Taylor coefficients in t = (u - u_s) / h: N^(k)(u_s) h^k / k!.
+        double hk = 1.0;  // h^k / k!
+        const size_t base = coef_.size();
+        coef_.resize(base + static_cast<size_t>((p + 1) * (p + 1)));
+        for (int k = 0; k <= p; ++k) {
+            for (int r = 0; r <= p; ++r) coef_[base + static_cast<size_t>(r * (p + 1) + k)] = ders[k][r] * hk;
+            hk *= h / (k + 1);
+        }
+    }
+    if (span_.empty()) return;
+    start_.push_back(U[span_.back() + 1]);
+}
+
+void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
+    const size_t nspans = span_.size();
+    // The span whose [start, next start) holds t; clamped at both ends like find_span.
+    size_t k = 0;
+    if (t > start_[0]) {  // false for NaN: the first span
+        k = static_cast<size_t>(std::upper_bound(start_.begin(), start_.end() - 1, t) - start_.begin()) - 1;
+        if (k >= nspans) k = nspans - 1;
+        t = std::min(t, start_[nspans]);
+    } else {
+        t = start_[0];
+    }
+    s = span_[k];
+    const double x = (t - start_[k]) * inv_h_[k];
+    const int p = p_;
+    const double* c = coef_.data() + k * static_cast<size_t>((p + 1) * (p + 1));
+    for (int r = 0; r <= p; ++r, c += p + 1) {
+        // Horner for the value and its derivative in t together.
+        double val = c[p], der = 0.0;
+        for (int q = p - 1; q >= 0; --q) {
+            der = der * x + val;
+            val = val * x + c[q];
+        }
+        N[r] = val;
+        dN[r] = der * inv_h_[k];
+    }
+}
+
+SurfaceSpans make_surface_spans(const NurbsSurface& s) {
+    return {KnotSpans(s.num_u, s.degree_u, s.knots_u), KnotSpans(s.num_v, s.degree_v, s.knots_v)};
+}
+
+SurfaceDerivs evaluate_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
+    if (!spans.usable()) return evaluate_d1(s, u, v);
+    double Nu[kM], dNu[kM], Nv[kM], dNv[kM];
+    int su = 0, sv = 0;
+    spans.u.basis(u, su, Nu, dNu);
+    spans.v.basis(v, sv, Nv, dNv);
+    const HomogDerivs h = tensor_product<1>(s, su, sv, Nu, dNu, Nv, dNv);
+    return {h.S, h.Su, h.Sv};
+}
+
+CartesianDerivs cartesian_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
+    return spans.usable() ? cartesian_from(evaluate_d1(s, spans, u, v)) : cartesian_d1(s, u, v);
+}
+
+}  // namespace nurbsrt

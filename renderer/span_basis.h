@@ -1,0 +1,70 @@
+// Per-span evaluation tables of a surface's B-spline basis, built once per face
+// by prepare(), so that a Newton step evaluates the basis functions and their
+// first derivatives by Horner's rule on polynomial coefficients: no division and
+// no Cox-de Boor recursion per step (Piegl & Tiller A2.2 costs p(p+1)/2 divisions
+// per direction and evaluation, on one dependency chain).
+//
+// On a non-empty knot span [u_s, u_{s+1}) the p+1 nonzero basis functions are
+// polynomials of degree p. In the local parameter t = (u - u_s) / h, h = u_{s+1} - u_s,
+//   N_{s-p+r,p}(u) = sum_k c[r][k] t^k,   c[r][k] = N^(k)_{s-p+r,p}(u_s) h^k / k!
+// (Taylor at the span's left end), the derivatives N^(k) from A2.3 (DersBasisFuns).
+// With t in [0, 1] the coefficients stay of the size of the binomial ones, so for
+// the degrees tabulated (kMaxTableDegree) the Horner sum is as accurate as A2.2 to
+// a few units in the last place (tests/renderer_span_basis_test.cpp compares them).
+// The table depends on the knot vector only: the projected surface of a frame
+// (project_surface) shares the model surface's table.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "renderer/nurbs.h"
+
+namespace nurbsrt {
+
+// Degrees tabulated. CAD surfaces are almost all of degree <= 5 (STEP/IGES from
+// the CAD systems of ../shared/models: 1-3, some 5); a higher degree takes the
+// A2.2 path, where the power basis's conditioning (growing like 2^p) would start
+// to cost digits.
+constexpr int kMaxTableDegree = 7;
+
+// The table of one knot vector.
+class KnotSpans {
+public:
+    KnotSpans() = default;
+    // n control points, degree p, knots of size n + p + 1 (clamped). Empty (not
+    // usable) when p > kMaxTableDegree or the knot vector has no non-empty span.
+    KnotSpans(int n, int p, const std::vector<double>& knots);
+    bool usable() const { return !span_.empty(); }
+
+    // Basis values N[0..p] and first derivatives dN[0..p] at t (clamped into the
+    // knot range, NaN to its start) and the knot span index s, exactly as
+    // find_span + basis_and_derivs give them.
+    void basis(double t, int& s, double* N, double* dN) const;
+    size_t memory_bytes() const {
+        return (start_.capacity() + inv_h_.capacity() + coef_.capacity()) * sizeof(double) +
+               span_.capacity() * sizeof(int);
+    }
+
+private:
+    int p_ = 0;
+    std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
+    std::vector<int> span_;      // knot index s of each non-empty span
+    std::vector<double> inv_h_;  // 1 / span length
+    std::vector<double> coef_;   // per span (p+1) x (p+1): c[r][k]
+};
+
+// Both directions of a surface's tables.
+struct SurfaceSpans {
+    KnotSpans u, v;
+    bool usable() const { return u.usable() && v.usable(); }
+};
+SurfaceSpans make_surface_spans(const NurbsSurface& s);
+
+// evaluate_d1 (nurbs.h) with the basis from the tables; spans must come from
+// make_surface_spans of s or of a surface with the same degrees and knots.
+SurfaceDerivs evaluate_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v);
+// cartesian_d1 (nurbs.h) likewise.
+CartesianDerivs cartesian_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v);
+
+}  // namespace nurbsrt

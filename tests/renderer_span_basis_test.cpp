@@ -1,0 +1,128 @@
+// Per-span basis tables (renderer/span_basis.h) against the knot search and
+// Cox-de Boor evaluation of nurbs.h (Piegl & Tiller A2.1-A2.3), which the
+// renderer used in every Newton step before: same span, same values to rounding.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "renderer/nurbs.h"
+#include "renderer/span_basis.h"
+
+namespace {
+
+using namespace nurbsrt;
+
+// A clamped knot vector of degree p for n control points with uneven interior
+// spacing, an interior knot of multiplicity p (a C0 joint, like a converted
+// face's patch boundary) when there is room, and all knots offset by `origin`
+// (parameters far from 0, as some CAD exporters write them).
+std::vector<double> knots_for(int n, int p, double origin, double scale) {
+    std::vector<double> k(p + 1, origin);
+    const int interior = n - p - 1;
+    double x = 0;
+    for (int i = 0; i < interior; ++i) {
+        x += 1.0 + 0.7 * std::sin(3.0 * i + p);  // uneven steps in (0.3, 1.7)
+        k.push_back(origin + scale * x);
+    }
+    x += 1.0;
+    for (int r = 0; r <= p; ++r) k.push_back(origin + scale * x);
+    // Make one interior knot p-fold where it fits (the vector stays non-decreasing).
+    if (interior >= p && p >= 2)
+        for (int r = 1; r < p; ++r) k[p + 1 + r] = k[p + 1];
+    return k;
+}
+
+struct Case {
+    int n, p;
+    double origin, scale;
+};
+
+TEST(SpanBasis, SameSpanAndBasisAsA22) {
+    const Case cases[] = {{2, 1, 0, 1}, {4, 2, 0, 1}, {9, 3, 0, 1}, {12, 3, 1000, 0.01}, {7, 4, -5, 2},
+                          {11, 5, 0, 1}, {10, 7, 0, 1}, {30, 3, 0, 1e-3}};
+    std::mt19937 rng(7);
+    for (const Case& c : cases) {
+        SCOPED_TRACE("n=" + std::to_string(c.n) + " p=" + std::to_string(c.p));
+        const std::vector<double> U = knots_for(c.n, c.p, c.origin, c.scale);
+        const KnotSpans spans(c.n, c.p, U);
+        ASSERT_TRUE(spans.usable());
+        const double lo = U[c.p], hi = U[c.n];
+        std::vector<double> ts = {lo, hi, lo - 1, hi + 1, std::numeric_limits<double>::quiet_NaN()};
+        for (size_t k = c.p; k <= static_cast<size_t>(c.n); ++k) ts.push_back(U[k]);  // every breakpoint
+        std::uniform_real_distribution<double> d(lo, hi);
+        for (int k = 0; k < 400; ++k) ts.push_back(d(rng));
+        for (const double t : ts) {
+            double N[8], dN[8], Nr[8], dNr[8];
+            int s = -1;
+            spans.basis(t, s, N, dN);
+            const double tc = std::isnan(t) ? lo : std::clamp(t, lo, hi);
+            const int sr = find_span(c.n, c.p, tc, U.data());
+            basis_and_derivs(sr, c.p, tc, U.data(), Nr, dNr);
+            ASSERT_EQ(s, sr) << "t=" << t;
+            double dmax = 0;
+            for (int r = 0; r <= c.p; ++r) dmax = std::max(dmax, std::abs(dNr[r]));
+            for (int r = 0; r <= c.p; ++r) {
+                // Basis values are in [0, 1] and sum to 1: absolute error. Derivatives
+                // scale with p / h: relative to the largest of them.
+                EXPECT_NEAR(N[r], Nr[r], 1e-13) << "t=" << t << " r=" << r;
+                EXPECT_NEAR(dN[r], dNr[r], 1e-12 * dmax) << "t=" << t << " r=" << r;
+            }
+        }
+    }
+}
+
+TEST(SpanBasis, SurfaceEvaluationMatches) {
+    NurbsSurface s;
+    s.degree_u = 3;
+    s.degree_v = 2;
+    s.num_u = 9;
+    s.num_v = 6;
+    s.knots_u = knots_for(s.num_u, s.degree_u, 0, 1);
+    s.knots_v = knots_for(s.num_v, s.degree_v, 10, 0.5);
+    s.rational = true;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> c(-50, 50), w(0.5, 2);
+    for (int k = 0; k < s.num_u * s.num_v; ++k) {
+        const double wk = w(rng);
+        s.cp.push_back({wk * c(rng), wk * c(rng), wk * c(rng), wk});
+    }
+    const SurfaceSpans spans = make_surface_spans(s);
+    ASSERT_TRUE(spans.usable());
+    std::uniform_real_distribution<double> uu(s.u_begin(), s.u_end()), vv(s.v_begin(), s.v_end());
+    for (int k = 0; k < 2000; ++k) {
+        const double u = uu(rng), v = vv(rng);
+        const SurfaceDerivs a = evaluate_d1(s, spans, u, v), b = evaluate_d1(s, u, v);
+        const double scale = 100 * 2 * s.num_u;  // control-point size times a derivative's p / h
+        for (const auto& [x, y] : {std::pair{a.S, b.S}, std::pair{a.Su, b.Su}, std::pair{a.Sv, b.Sv}}) {
+            EXPECT_NEAR(x.x, y.x, 1e-12 * scale);
+            EXPECT_NEAR(x.y, y.y, 1e-12 * scale);
+            EXPECT_NEAR(x.z, y.z, 1e-12 * scale);
+            EXPECT_NEAR(x.w, y.w, 1e-12 * scale);
+        }
+        const CartesianDerivs ca = cartesian_d1(s, spans, u, v), cb = cartesian_d1(s, u, v);
+        EXPECT_NEAR(length(ca.P - cb.P), 0, 1e-11 * scale);
+        EXPECT_NEAR(length(ca.Pu - cb.Pu), 0, 1e-10 * scale);
+    }
+}
+
+TEST(SpanBasis, HighDegreesAndBadKnotsFallBack) {
+    // Above kMaxTableDegree no table is made; evaluate_d1 then takes A2.2 itself.
+    NurbsSurface s;
+    s.degree_u = s.degree_v = kMaxTableDegree + 2;
+    s.num_u = s.num_v = s.degree_u + 1;
+    s.knots_u = s.knots_v = knots_for(s.num_u, s.degree_u, 0, 1);
+    for (int k = 0; k < s.num_u * s.num_v; ++k) s.cp.push_back({double(k % 7), double(k % 5), double(k % 3), 1.0});
+    const SurfaceSpans spans = make_surface_spans(s);
+    EXPECT_FALSE(spans.usable());
+    const SurfaceDerivs a = evaluate_d1(s, spans, 0.3, 0.6), b = evaluate_d1(s, 0.3, 0.6);
+    EXPECT_EQ(a.S.x, b.S.x);
+    EXPECT_EQ(a.Su.y, b.Su.y);
+    // A knot vector of the wrong length, or with no non-empty span, gives no table.
+    EXPECT_FALSE(KnotSpans(4, 2, {0, 0, 0, 1, 1, 1}).usable());
+    EXPECT_FALSE(KnotSpans(3, 2, {0, 0, 0, 0, 0, 0}).usable());
+}
+
+}  // namespace
