@@ -1,8 +1,10 @@
 // Import in a child process, so that a file that crashes, hangs or exhausts
 // memory in OCCT fails only its own request (DESIGN.md, robustness rules).
 //
-// The child is this same program run as `nurbsrt import-worker IN OUT ...`
-// (cli/cmd_import_worker.cpp), under an address-space limit; the parent waits
+// The child is nurbsrt-worker (cli/worker_main.cpp, a small OCCT-only program
+// beside this one) run as `nurbsrt-worker import-worker IN OUT ...`, or this same
+// program with those arguments where the worker is not installed
+// (cli/cmd_import_worker.cpp); under an address-space limit. The parent waits
 // with a wall-clock limit, kills the child when it runs over, and reads the
 // serialized scene (renderer/scene_io.h) or the typed error the child wrote.
 // The child dies with its parent (PR_SET_PDEATHSIG: a killed service leaves no
@@ -23,7 +25,7 @@ namespace nurbsrt {
 struct IsolationLimits {
     double time_limit_s = 300.0;                      // wall clock, whole import
     size_t memory_limit_bytes = size_t(8) << 30;      // RLIMIT_AS of the child; 0 = none
-    std::string worker_executable;                    // empty: this process's own binary
+    std::string worker_executable;                    // empty: nurbsrt-worker beside this binary, else this binary
     std::string scratch_dir;                          // empty: $TMPDIR or /tmp
     // Polled about every kStopPollMs while the child runs; when it returns true
     // the child is killed and the call throws Error(canceled) (a deleted job,

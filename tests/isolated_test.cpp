@@ -17,12 +17,18 @@ namespace {
 
 const std::string kScrew = "/usr/share/opencascade/data/step/screw.step";
 
-nurbsrt::IsolationLimits limits(double seconds) {
-    nurbsrt::IsolationLimits l;
-    l.time_limit_s = seconds;
-    l.worker_executable = NURBSRT_BINARY;
-    return l;
-}
+// Every test runs with both worker programs: nurbsrt-worker (what the service
+// starts; cli/worker_main.cpp) and nurbsrt's own hidden subcommands (the fallback
+// where the worker is not installed). They must behave identically.
+class IsolatedImport : public ::testing::TestWithParam<const char*> {
+protected:
+    nurbsrt::IsolationLimits limits(double seconds) const {
+        nurbsrt::IsolationLimits l;
+        l.time_limit_s = seconds;
+        l.worker_executable = GetParam();
+        return l;
+    }
+};
 
 using nurbsrt::test::code_of;
 
@@ -32,7 +38,7 @@ struct FaultHook {
     ~FaultHook() { unsetenv("NURBSRT_IMPORT_WORKER_FAULT"); }
 };
 
-TEST(IsolatedImport, SameSceneAsInProcess) {
+TEST_P(IsolatedImport, SameSceneAsInProcess) {
     const nurbsrt::Scene a = nurbsrt::import_isolated(kScrew, {}, limits(120));
     const nurbsrt::Scene b = nurbsrt::import_file(kScrew, {});
     ASSERT_EQ(a.faces.size(), b.faces.size());
@@ -43,35 +49,35 @@ TEST(IsolatedImport, SameSceneAsInProcess) {
     EXPECT_EQ(nurbsrt::serialize_scene(a2), nurbsrt::serialize_scene(b2));
 }
 
-TEST(IsolatedImport, ChildErrorsKeepTheirCode) {
-    EXPECT_EQ(code_of([] { nurbsrt::import_isolated("/nonexistent.step", {}, limits(60)); }),
+TEST_P(IsolatedImport, ChildErrorsKeepTheirCode) {
+    EXPECT_EQ(code_of([this] { nurbsrt::import_isolated("/nonexistent.step", {}, limits(60)); }),
               nurbsrt::ErrorCode::io);
     const std::string junk = (std::filesystem::temp_directory_path() / "nurbsrt-isolated-junk.igs").string();
     std::ofstream(junk) << "this is not a CAD file\n";
-    EXPECT_EQ(code_of([&] { nurbsrt::import_isolated(junk, {}, limits(60)); }),
+    EXPECT_EQ(code_of([&, this] { nurbsrt::import_isolated(junk, {}, limits(60)); }),
               nurbsrt::ErrorCode::unsupported_format);
     std::filesystem::remove(junk);
 }
 
-TEST(IsolatedImport, CrashFailsOnlyThisImport) {
+TEST_P(IsolatedImport, CrashFailsOnlyThisImport) {
     {
         FaultHook hook("crash");
-        EXPECT_EQ(code_of([] { nurbsrt::import_isolated(kScrew, {}, limits(60)); }),
+        EXPECT_EQ(code_of([this] { nurbsrt::import_isolated(kScrew, {}, limits(60)); }),
                   nurbsrt::ErrorCode::import_crashed);
     }
     EXPECT_EQ(nurbsrt::import_isolated(kScrew, {}, limits(120)).faces.size(), 10u);
 }
 
-TEST(IsolatedImport, HangIsKilledAtTheTimeLimit) {
+TEST_P(IsolatedImport, HangIsKilledAtTheTimeLimit) {
     FaultHook hook("hang");
     const auto t0 = std::chrono::steady_clock::now();
-    EXPECT_EQ(code_of([] { nurbsrt::import_isolated(kScrew, {}, limits(1.0)); }),
+    EXPECT_EQ(code_of([this] { nurbsrt::import_isolated(kScrew, {}, limits(1.0)); }),
               nurbsrt::ErrorCode::import_timeout);
     // Not a performance assertion: proves the child was killed rather than waited for.
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 30.0);
 }
 
-TEST(IsolatedImport, WorkerOptionsRoundTrip) {
+TEST(IsolatedImportOptions, WorkerOptionsRoundTrip) {
     nurbsrt::ImportOptions o;
     o.mesh_relative_deflection = 0.0123;
     o.mesh_angular_deflection = 0.5;
@@ -86,6 +92,23 @@ TEST(IsolatedImport, WorkerOptionsRoundTrip) {
     EXPECT_EQ(p.read_attributes, o.read_attributes);
     EXPECT_THROW(nurbsrt::import_options_from_args({"--bogus=1"}), nurbsrt::Error);
     EXPECT_THROW(nurbsrt::import_options_from_args({"--mesh-angle=abc"}), nurbsrt::Error);
+}
+
+INSTANTIATE_TEST_SUITE_P(Workers, IsolatedImport, ::testing::Values(NURBSRT_WORKER_BINARY, NURBSRT_BINARY),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                             return std::string(info.index == 0 ? "nurbsrt_worker" : "nurbsrt_subcommand");
+                         });
+
+// With no worker named, the import runs nurbsrt-worker from beside the running
+// program: this test binary is built beside it and has no worker subcommand of
+// its own, so a successful import proves the sibling was found and used.
+TEST(IsolatedImportDefault, FindsTheWorkerBesideTheProgram) {
+    ASSERT_TRUE(std::filesystem::exists(NURBSRT_WORKER_BINARY));
+    ASSERT_EQ(std::filesystem::path(NURBSRT_WORKER_BINARY).parent_path(),
+              std::filesystem::canonical("/proc/self/exe").parent_path());
+    nurbsrt::IsolationLimits l;
+    l.time_limit_s = 120;
+    EXPECT_EQ(nurbsrt::import_isolated(kScrew, {}, l).faces.size(), 10u);
 }
 
 }  // namespace

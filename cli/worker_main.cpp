@@ -1,0 +1,46 @@
+// nurbsrt-worker: the child process of an isolated import or conversion
+// (importer/isolated.h), run by the service as
+//   nurbsrt-worker import-worker IN OUT [name=value ...]
+//   nurbsrt-worker convert-worker IN OUT REPORT
+// the same arguments as the hidden subcommands of `nurbsrt` itself.
+//
+// Why a program of its own: a child pays the dynamic linking of everything its
+// executable links before it reads a byte. `nurbsrt` links OpenImageIO (which on
+// Debian 12 pulls in OpenCV, FFmpeg, GDAL, DCMTK: about 300 libraries in all) and
+// OSMesa (LLVM); the child needs only OCCT. Linked with --as-needed, this program
+// starts in a fraction of the time (figures in importer/isolated.cpp), and every
+// upload the service imports waits for that start.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "importer/isolated.h"
+#include "renderer/error.h"
+
+int main(int argc, char** argv) {
+    // Exit status 2 for a malformed command line, as `nurbsrt` uses; the parent
+    // reads the error file the worker entry points write, or the status alone.
+    if (argc < 4) {
+        std::fprintf(stderr, "usage: nurbsrt-worker import-worker IN OUT [name=value ...]\n"
+                             "       nurbsrt-worker convert-worker IN OUT REPORT\n");
+        return 2;
+    }
+    const std::string command = argv[1];
+    try {
+        if (command == "import-worker") {
+            const std::vector<std::string> rest(argv + 4, argv + argc);
+            return nurbsrt::run_import_worker(argv[2], argv[3], nurbsrt::import_options_from_args(rest));
+        }
+        if (command == "convert-worker" && argc == 5) return nurbsrt::run_convert_worker(argv[2], argv[3], argv[4]);
+    } catch (const nurbsrt::Error& e) {
+        std::fprintf(stderr, "nurbsrt-worker: error [%s]: %s\n", nurbsrt::error_code_name(e.code()), e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "nurbsrt-worker: error [internal]: %s\n", e.what());
+        return 1;
+    }
+    std::fprintf(stderr, "nurbsrt-worker: unknown command or arguments: %s\n", command.c_str());
+    return 2;
+}
