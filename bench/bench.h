@@ -11,7 +11,8 @@
 namespace nurbsrt::bench {
 
 // Sections, in the order they run and are reported.
-inline const std::vector<std::string> kSections = {"table1", "precision", "occt", "tessellation", "scaling"};
+inline const std::vector<std::string> kSections = {"table1", "precision", "occt", "tessellation", "meshtracer",
+                                                   "scaling"};
 
 struct BenchOptions {
     bool quick = false;          // small images, few runs, small budgets (a smoke run)

@@ -214,6 +214,32 @@ void tessellation(std::string& o, const json& doc, const json& t) {
     }
 }
 
+void mesh_tracer(std::string& o, const json& t) {
+    o += "## Frame vs mesh tracer (Embree)\n\n";
+    if (!t.value("embree", false)) {
+        o += "Embree was not built in (no libembree-dev at configure time): no figures.\n\n";
+        return;
+    }
+    o += "Our exact frame (map + Newton + shading of the prepared model) against Embree tracing the same camera's "
+         "rays through a BRepMesh mesh at " + sci(d(t, "fine_relative_deflection")) + " of the diagonal (trace only, "
+         "BVH built beforehand), " + std::to_string(n(t, "threads")) + " thread(s) each; goal: at most 2x. First "
+         "frame after reading the file: ours (NURBS conversion + map mesh + prepare + frame) against BRepMesh at " +
+         sci(d(t, "coarse_relative_deflection")) + " + mesh copy + BVH + trace; goal: at most 1x.\n\n";
+    o += "| scene | faces | ours frame ms | Embree trace ms | triangles | frame / trace | ours first frame ms | "
+         "mesh first frame ms | first / mesh first |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& x : t["rows"])
+        o += "| " + s(x, "title") + " | " + std::to_string(n(x, "faces")) + " | " + ms(d(x, "ours_frame_ms")) + " | " +
+             ms(d(x, "embree_trace_ms")) + " | " + std::to_string(n(x, "fine_triangles")) + " | **" +
+             num(d(x, "frame_over_trace"), 2) + "** | " + ms(d(x, "ours_first_frame_ms")) + " | " +
+             ms(d(x, "mesh_first_frame_ms")) + " | **" + num(d(x, "first_over_mesh_first"), 2) + "** |\n";
+    if (t.contains("missing_models") && !t["missing_models"].empty()) {
+        o += "\nNot found under the models directory (skipped):";
+        for (const json& m : t["missing_models"]) o += " `" + m.get<std::string>() + "`";
+        o += "\n";
+    }
+    o += "\n";
+}
+
 void scaling(std::string& o, const json& t) {
     o += "## Scaling (`proposed`)\n\n";
     const json& r = t["resolution"];
@@ -256,6 +282,7 @@ std::string bench_markdown(const json& doc) {
     if (doc.contains("precision")) precision(o, doc["precision"]);
     if (doc.contains("occt")) occt(o, doc["occt"]);
     if (doc.contains("tessellation")) tessellation(o, doc, doc["tessellation"]);
+    if (doc.contains("meshtracer")) mesh_tracer(o, doc["meshtracer"]);
     if (doc.contains("scaling")) scaling(o, doc["scaling"]);
     return o;
 }

@@ -56,7 +56,7 @@ void add_bench_command(CLI::App& app) {
         ->check(CLI::Range(1, 1024))->capture_default_str();
     cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")
         ->check(CLI::Range(16, 8192));
-    cmd->add_option("--only", *only, "comma-separated sections: table1,precision,occt,tessellation,scaling");
+    cmd->add_option("--only", *only, "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling");
     cmd->add_flag("-q,--quiet", *quiet, "no progress on stderr");
 
     cmd->callback([o, json_path, md_path, only, quiet] {

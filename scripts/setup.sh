@@ -9,6 +9,9 @@ cd "$(dirname "$0")/.."
 # links "-lfontconfig" by name, but no OCCT package depends on the -dev package, so a
 # fresh Debian 12 (the Docker build stage) fails to link without it.
 # iproute2: the API tests read the service's listen backlog with `ss`.
+# libembree-dev: `nurbsrt bench` traces the same camera's rays through a BRepMesh
+# mesh with Embree, the mesh ray tracer our frame is measured against (CMake
+# builds the bench without that peer where it is missing).
 # clang, libclang-rt-14-dev: the libFuzzer harnesses (scripts/fuzz.sh, the fuzz suite
 # of scripts/test.sh) build with clang; libclang_rt.fuzzer and the sanitizer runtimes
 # are in libclang-rt-14-dev, which clang's packages only recommend (not installed
@@ -21,7 +24,7 @@ PACKAGES=(
   libocct-data-exchange-dev libocct-ocaf-dev occt-misc libtbb-dev
   libfontconfig-dev
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
-  libsqlite3-dev sqlite3
+  libsqlite3-dev sqlite3 libembree-dev
   iproute2
   clang libclang-rt-14-dev
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy

@@ -10,7 +10,7 @@ import subprocess
 import sys
 import tempfile
 
-SECTIONS = ["table1", "precision", "occt", "tessellation", "scaling"]
+SECTIONS = ["table1", "precision", "occt", "tessellation", "meshtracer", "scaling"]
 errors = []
 
 
@@ -157,6 +157,22 @@ def main():
                 for f in ("embree.build_ms", "embree.render_ms", "embree.total_ms"):
                     positive(lv, f, lw)
 
+    mt = doc["meshtracer"]
+    if mt["embree"]:
+        # --quick runs the three scenes only (the four extra models are a full run's).
+        check([r["scene"] for r in mt["rows"]] == keys, "meshtracer: one row per scene")
+        for r in mt["rows"]:
+            w = f"meshtracer {r['scene']}"
+            for f in ("faces", "ours_frame_ms", "ours_first_frame_ms", "fine_triangles", "embree_trace_ms",
+                      "frame_over_trace", "coarse_triangles", "mesh_first_frame_ms", "first_over_mesh_first"):
+                positive(r, f, w)
+            check(r["ours_first_frame_ms"] > r["ours_frame_ms"], f"{w}: a first frame includes a frame")
+            check(abs(r["frame_over_trace"] - r["ours_frame_ms"] / r["embree_trace_ms"]) < 1e-6 * r["frame_over_trace"],
+                  f"{w}: frame_over_trace is the ratio of its two times")
+            check(r["fine_triangles"] > r["coarse_triangles"], f"{w}: the fine mesh has more triangles")
+    else:
+        print("bench_smoke: Embree not built in: meshtracer figures not checked")
+
     sc = doc["scaling"]
     res = sc["resolution"]["rows"]
     check(len(res) >= 2 and all(a["size"] < b["size"] for a, b in zip(res, res[1:])), "scaling: sizes increase")
@@ -172,7 +188,8 @@ def main():
         for f in ("threads_1.frame_ms", "threads_2.frame_ms", "frame_speedup", "newton_speedup"):
             positive(r, f, f"scaling threads {r['scene']}")
 
-    for heading in ("## Table 1", "## Map precision", "## Exact peer", "## Tessellating peer", "## Scaling"):
+    for heading in ("## Table 1", "## Map precision", "## Exact peer", "## Tessellating peer",
+                    "## Frame vs mesh tracer", "## Scaling"):
         check(heading in report, f"Markdown report lacks '{heading}'")
     for k in keys:
         check(k in report, f"Markdown report lacks scene {k}")
