@@ -36,11 +36,23 @@ async function problemOf(res) {
 }
 
 // fetch() of an API path with the key; throws ApiError for any non-2xx answer.
-export async function call(path, { method = 'GET', body, signal, accept = 'application/json' } = {}) {
+// A request without side effects (`retry`: GETs, renders, conversions) is sent
+// once more when the connection fails: a server may close an idle persistent
+// connection just as the browser reuses it, and Chromium does not resend a
+// POST whose body is a file (RFC 9112, 9.3.1: a client may retry requests it
+// knows to be idempotent). A job is never sent twice.
+export async function call(path, { method = 'GET', body, signal, accept = 'application/json', retry = method === 'GET' } = {}) {
   const headers = { Accept: accept };
   const key = apiKey();
   if (key) headers.Authorization = `Bearer ${key}`;
-  const res = await fetch(path, { method, body, headers, signal, cache: 'no-store' });
+  const send = () => fetch(path, { method, body, headers, signal, cache: 'no-store' });
+  let res;
+  try {
+    res = await send();
+  } catch (error) {
+    if (!retry || error.name === 'AbortError') throw error;
+    res = await send();
+  }
   if (!res.ok) throw new ApiError(res.status, await problemOf(res));
   return res;
 }
@@ -55,7 +67,7 @@ export function uploadForm(file, options) {
 
 // POST /v1/renders answered as JSON (RenderResponse).
 export async function render(file, options, signal) {
-  const res = await call('/v1/renders', { method: 'POST', body: uploadForm(file, options), signal });
+  const res = await call('/v1/renders', { method: 'POST', body: uploadForm(file, options), signal, retry: true });
   return res.json();
 }
 

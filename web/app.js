@@ -49,7 +49,7 @@ function requestOptions(job) {
   const o = { ...imageOptions(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
   else o.view = job.view;
-  if (job.final && !job.noAovs) o.aovs = aovsFor($('look').value);
+  if (job.aovs) o.aovs = aovsFor($('look').value);
   return o;
 }
 
@@ -111,6 +111,7 @@ function show(frame, job) {
       text += `; full-size frame ${latency.toFixed(0)} ms after the pointer stopped`;
     }
     setStatus(text);
+    if (state.pointer && frame.aov) hover(state.pointer);
   } else {
     canvas.width = frame.width * PREVIEW_DIVISOR;
     canvas.height = frame.height * PREVIEW_DIVISOR;
@@ -143,9 +144,12 @@ const scheduler = new RenderScheduler({
   fail: (error) => { report(error); setStatus('The render failed.'); },
 });
 
+// A full-size frame. The AOVs (about 17 bytes a pixel, 8 MB at 800x600) come
+// with it only when the view shows them; the shaded view fetches them on the
+// first hover, so that a release shows the image without waiting for them.
 function renderFinal(extra = {}) {
   if (!state.file) return;
-  const job = { file: state.file, final: true, ...extra };
+  const job = { file: state.file, final: true, aovs: $('look').value !== 'shaded', ...extra };
   if (state.camera && !job.view) job.camera = state.camera.toOption();
   else job.view = job.view || state.view || 'iso';
   scheduler.submit(job);
@@ -192,7 +196,8 @@ for (const b of document.querySelectorAll('button.view')) {
 }
 for (const id of ['resolution', 'method', 'map-precision', 'background']) $(id).addEventListener('change', () => renderFinal());
 $('look').addEventListener('change', () => {
-  if ($('look').value === 'normal' && state.frame?.aov && !state.frame.aov.normal) renderFinal();
+  const look = $('look').value, aov = state.frame?.aov;
+  if (state.frame && look !== 'shaded' && (!aov || (look === 'normal' && !aov.normal))) renderFinal();
   else draw();
 });
 
@@ -210,14 +215,28 @@ bindInteraction(canvas, {
     state.dirty = false;
     renderFinal({ releasedAt: performance.now() });
   },
-  hover(e) {
-    const f = state.frame;
-    if (!f?.aov || canvas.dataset.final !== '1') return;
-    const r = canvas.getBoundingClientRect();
-    const x = Math.floor(((e.clientX - r.left) * f.width) / r.width), y = Math.floor(((e.clientY - r.top) * f.height) / r.height);
-    if (x >= 0 && y >= 0 && x < f.width && y < f.height) $('hover').textContent = describePixel(f.aov, f.width, x, y);
-  },
+  hover,
 });
+canvas.addEventListener('pointerleave', () => { state.pointer = null; });
+
+// The readout of the pixel under the pointer; fetches the AOVs of the shown
+// frame when it has none yet (and reads again when they arrive).
+function hover(e) {
+  state.pointer = { clientX: e.clientX, clientY: e.clientY };
+  const f = state.frame;
+  if (!f || canvas.dataset.final !== '1') return;
+  if (!f.aov) {
+    if (!f.aovAsked && canvas.dataset.busy !== '1') {
+      f.aovAsked = true;
+      renderFinal({ aovs: true });
+    }
+    $('hover').textContent = 'Reading the AOVs of this view…';
+    return;
+  }
+  const r = canvas.getBoundingClientRect();
+  const x = Math.floor(((e.clientX - r.left) * f.width) / r.width), y = Math.floor(((e.clientY - r.top) * f.height) / r.height);
+  if (x >= 0 && y >= 0 && x < f.width && y < f.height) $('hover').textContent = describePixel(f.aov, f.width, x, y);
+}
 
 // ---- compare methods -------------------------------------------------------------
 $('compare').addEventListener('click', async () => {
@@ -228,7 +247,7 @@ $('compare').addEventListener('click', async () => {
   const results = {};
   try {
     for (const method of ['proposed', 'martin']) {
-      const job = { final: true, noAovs: true, camera: state.camera.toOption(), override: { method } };
+      const job = { final: true, camera: state.camera.toOption(), override: { method } };
       results[method] = (await render(state.file, requestOptions(job))).statistics;
     }
     const { maxCount, maxK } = histogramBounds(results.proposed.newton.iteration_histogram, results.martin.newton.iteration_histogram);

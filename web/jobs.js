@@ -101,7 +101,7 @@ export function bindConversions({ form, file, format, result, currentFile, repor
     }
     result.textContent = `Converting ${input.name}…`;
     try {
-      const res = await call('/v1/conversions', { method: 'POST', body: uploadForm(input, { format: format.value }) });
+      const res = await call('/v1/conversions', { method: 'POST', body: uploadForm(input, { format: format.value }), retry: true });
       const doc = await res.json();
       const name = dispositionName(res, input.name.replace(/\.[^.]*$/, '') + '.' + format.value);
       const blob = new Blob([base64Bytes(doc.data_base64)], { type: doc.content_type });
