@@ -320,6 +320,20 @@ def step_problem_shown(page, tmp):
     assert "unsupported_format" in text and "HTTP 415" in text, text
 
 
+def step_csp_enforced(page):
+    """The browser enforces the page's policy: an injected inline script does not run."""
+    directive = page.ev("""new Promise((resolve) => {
+      document.addEventListener('securitypolicyviolation', (e) => resolve(e.effectiveDirective), {once: true});
+      const s = document.createElement('script');
+      s.textContent = 'window.inlineRan = true';
+      document.body.append(s);
+      setTimeout(() => resolve('no violation'), 2000);
+    })""")
+    ran = page.ev("window.inlineRan === true")
+    log(f"CSP: an inline script was refused ({directive})")
+    assert directive.startswith("script-src") and not ran, (directive, ran)
+
+
 def main():
     step_file, other_file = map(pathlib.Path, sys.argv[1:3])
     big_part = pathlib.Path(sys.argv[3]) if len(sys.argv) > 3 and pathlib.Path(sys.argv[3]).is_file() else None
@@ -362,6 +376,7 @@ def main():
         else:
             log("SKIPPED the latency on a ~300-face part: ../shared/models/step/box_sides.STEP is absent")
         current = "problem+json"; step_problem_shown(page, tmp)
+        current = "CSP"; step_csp_enforced(page)  # last: the refusal is logged as an error
         log("all steps passed")
         return 0
     except Exception:
