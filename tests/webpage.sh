@@ -3,7 +3,8 @@
 # a free loopback port and drives Debian's headless Chromium over the DevTools
 # protocol (tests/web/webpage_e2e.py, with Debian's python3-websocket). Skips,
 # saying so, where Chromium or python3-websocket is missing (scripts/setup.sh
-# installs both). On failure, screenshots and the console go to
+# installs both). The service requires an API key, which the test types into
+# the page. On failure, screenshots and the console go to
 # <build dir>/webpage-artifacts. Usage: tests/webpage.sh path/to/nurbsrt
 set -euo pipefail
 BIN=$(realpath "${1:?usage: tests/webpage.sh path/to/nurbsrt}")
@@ -39,7 +40,10 @@ cleanup() {
 }
 trap cleanup EXIT
 
-"$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
+# With an API key required, as a service open to a network would run: the page
+# must send it with every API request (the test types it into the page).
+KEY="web-test-$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')"
+NURBSRT_API_KEYS="$KEY" "$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
   --max-upload-mb 16 --import-timeout 120 --render-timeout 120 2> "$TMP/server.log" &
 SERVER_PID=$!
 for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done
@@ -50,7 +54,7 @@ fi
 ARTIFACTS="$(dirname "$BIN")/webpage-artifacts"
 rm -rf "$ARTIFACTS"
 status=0
-NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_WEB_ARTIFACTS="$ARTIFACTS" \
+NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_WEB_ARTIFACTS="$ARTIFACTS" NURBSRT_WEB_KEY="$KEY" \
   timeout 600 "$PY" "$HERE/web/webpage_e2e.py" "$STEP" "$OTHER" "$BIG" || status=$?
 if [ $status -ne 0 ]; then
   echo "webpage.sh: FAILED; artifacts in $ARTIFACTS; server log (last 30 lines):"; tail -n 30 "$TMP/server.log"

@@ -121,10 +121,12 @@ class Browser:
     def mouse(self, kind, x, y, button="left", buttons=1):
         self.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, button=button, buttons=buttons, clickCount=1)
 
-    def key(self, key, code, vk, shift=False):
+    def key(self, key, code, vk, shift=False, text=None):
+        """A key press; keys that type (Enter: text '\r') need their text to act."""
         mods = 8 if shift else 0
-        for kind in ("rawKeyDown", "keyUp"):
-            self.call("Input.dispatchKeyEvent", type=kind, key=key, code=code, windowsVirtualKeyCode=vk, modifiers=mods)
+        down = {"type": "keyDown", "text": text} if text else {"type": "rawKeyDown"}
+        for event in (down, {"type": "keyUp"}):
+            self.call("Input.dispatchKeyEvent", key=key, code=code, windowsVirtualKeyCode=vk, modifiers=mods, **event)
 
     def screenshot(self, path):
         import base64

@@ -18,6 +18,7 @@ from cdp import Browser, find_chromium
 URL = os.environ["NURBSRT_URL"]
 ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS", tempfile.mkdtemp(prefix="nurbsrt-web-")))
 SCREENSHOT = os.environ.get("NURBSRT_WEB_SCREENSHOT")  # where to save the README picture, if set
+KEY = os.environ.get("NURBSRT_WEB_KEY", "")  # the service's API key, typed into the page
 RENDERS = "/v1/renders"
 
 # Pixels of the canvas: how many differ from the background, a checksum, and
@@ -129,6 +130,25 @@ def step_load(page):
     assert not errors, f"console errors on load: {errors}"
     csp = page.ev("fetch('/').then(r => r.headers.get('Content-Security-Policy'))")
     assert csp and "default-src 'self'" in csp and "unsafe-inline" not in csp, f"CSP: {csp}"
+    if KEY:  # typed into the key field and submitted with Enter, as a user would
+        page.ev("document.getElementById('api-key').focus()")
+        page.b.call("Input.insertText", text=KEY)
+        page.b.key("Enter", "Enter", 13, text="\r")
+        stored = page.ev("sessionStorage.getItem('nurbsrt.apiKey')")
+        assert stored == KEY, "the key was not kept in session storage"
+        assert page.ev("document.getElementById('api-key').value") == "", "the key stays visible in the field"
+
+
+def check_key_use(events):
+    """Every API request carried the key in its Authorization header and none in its URL."""
+    api = [e["params"]["request"] for e in events
+           if e["method"] == "Network.requestWillBeSent" and "/v1/" in e["params"]["request"]["url"]]
+    assert api, "no API requests seen"
+    for r in api:
+        assert KEY not in r["url"], f"the key is in a URL: {r['url']}"
+        if KEY:
+            assert r["headers"].get("Authorization") == f"Bearer {KEY}", f"{r['method']} {r['url']} without the key"
+    log(f"API key: sent as a header with all {len(api)} API requests, in no URL")
 
 
 def step_upload(page, step_file):
@@ -371,6 +391,7 @@ def main():
         current = "accessibility"; step_accessibility(page)
         errors = console_errors(browser.events)
         assert not errors, f"console errors: {errors}"
+        check_key_use(browser.events)
         if big_part:
             current = "300-face part"; step_big_part_latency(page, big_part)
         else:
