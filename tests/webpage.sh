@@ -9,7 +9,7 @@
 set -euo pipefail
 BIN=$(realpath "${1:?usage: tests/webpage.sh path/to/nurbsrt}")
 HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3   # python3 on PATH is another build without Debian's modules (STACK.md)
+PY=/usr/bin/python3   # python3 on PATH may be another build, without Debian's modules
 
 if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then
   echo "webpage.sh: SKIPPED: no chromium on PATH (apt-get install chromium, or run scripts/setup.sh)"
