@@ -19,7 +19,9 @@ const state = { file: null, camera: null, view: 'iso', frame: null, dirty: false
 // ---- messages ---------------------------------------------------------------
 function report(error) {
   const box = $('messages');
-  const text = error.status ? `${error.message} (HTTP ${error.status}${error.code ? `, ${error.code}` : ''})` : error.message;
+  const text = error.status ? `${error.message} (HTTP ${error.status}${error.code ? `, ${error.code}` : ''})`
+    : error instanceof TypeError ? `No answer from the service (${error.message}): is it running and reachable?`
+    : error.message;
   const dismiss = document.createElement('button');
   dismiss.type = 'button';
   dismiss.textContent = 'Dismiss';

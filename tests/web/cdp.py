@@ -13,9 +13,10 @@ import urllib.request
 import websocket
 
 # Flags for a headless Chromium run as root in CI: no sandbox (root cannot use
-# it), no GPU, and nothing that reaches the network on its own.
+# it), no GPU, shared memory in /tmp (containers give /dev/shm 64 MB), and
+# nothing that reaches the network on its own.
 CHROMIUM_FLAGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-quic", "--no-first-run",
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
     "--disable-default-apps", "--disable-extensions", "--mute-audio", "--hide-scrollbars",
     "--remote-debugging-port=0", "--window-size=1400,1100",
