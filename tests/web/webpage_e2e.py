@@ -7,6 +7,7 @@ Usage: webpage_e2e.py STEP_FILE OTHER_CAD_FILE [PART_OF_ABOUT_300_FACES]"""
 import json
 import os
 import pathlib
+import shutil
 import statistics
 import sys
 import tempfile
@@ -16,7 +17,7 @@ import traceback
 from cdp import Browser, find_chromium
 
 URL = os.environ["NURBSRT_URL"]
-ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS", tempfile.mkdtemp(prefix="nurbsrt-web-")))
+ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS") or tempfile.mkdtemp(prefix="nurbsrt-web-"))
 SCREENSHOT = os.environ.get("NURBSRT_WEB_SCREENSHOT")  # where to save the README picture, if set
 KEY = os.environ.get("NURBSRT_WEB_KEY", "")  # the service's API key, typed into the page
 RENDERS = "/v1/renders"
@@ -414,6 +415,7 @@ def main():
         return 1
     finally:
         browser.close()
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 if __name__ == "__main__":
