@@ -17,6 +17,9 @@ cd "$(dirname "$0")/.."
 # are in libclang-rt-14-dev, which clang's packages only recommend (not installed
 # with --no-install-recommends). libfuzzer-14-dev is not needed: it holds a libFuzzer
 # for linking by hand, not the runtime that clang's -fsanitize=fuzzer links.
+# chromium, python3-websocket: the web page's end-to-end test (tests/webpage.sh) drives
+# Debian's headless Chromium over the DevTools protocol from Python; nothing downloads
+# a browser of its own.
 PACKAGES=(
   cmake ninja-build pkg-config g++ git ca-certificates
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
@@ -28,6 +31,7 @@ PACKAGES=(
   iproute2
   clang libclang-rt-14-dev
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
+  chromium python3-websocket
 )
 
 missing=()

@@ -86,7 +86,10 @@ bool ApiKeys::accepts(std::string_view authorization) const {
 }
 
 bool ApiKeys::is_public_path(std::string_view path) {
-    return path == "/healthz" || path == "/readyz" || path == "/v1/openapi.json";
+    // The web page too: a browser loads it before the user can type a key, and
+    // it holds no data (it sends the key itself, with every API request).
+    return path == "/healthz" || path == "/readyz" || path == "/v1/openapi.json" || path == "/" ||
+           (path.rfind("/web/", 0) == 0 && path.find('/', 5) == std::string_view::npos);
 }
 
 }  // namespace nurbsrt::server

@@ -1,5 +1,5 @@
 // Optional API keys: when any key is configured, every request except the
-// unauthenticated probes (/healthz, /readyz) and the API document needs
+// unauthenticated probes (/healthz, /readyz), the API document and the web page needs
 // `Authorization: Bearer <key>`; otherwise it gets 401 (problem+json) before
 // any work starts. Keys come from a file (one per line, '#' comments) and/or the
 // NURBSRT_API_KEYS environment variable (comma-separated), never from the
@@ -28,7 +28,8 @@ public:
     // of where the strings differ, so a key cannot be guessed byte by byte.
     bool accepts(std::string_view authorization) const;
 
-    // Paths open without a key: liveness/readiness probes and the API document.
+    // Paths open without a key: liveness/readiness probes, the API document and
+    // the web page (GET / and /web/{name}).
     static bool is_public_path(std::string_view path);
 
 private:

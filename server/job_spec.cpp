@@ -78,6 +78,9 @@ std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::ve
             try {
                 r = parse_render_options(out.options_json);
                 check_render_limits(config, r);
+                if (r.aovs)
+                    bad("option 'aovs' is for POST /v1/renders with Accept: application/json; "
+                        "a job's render gets the AOVs with format exr");
             } catch (const Error& e) {
                 throw Error(e.code(), where + ": " + e.what());
             }

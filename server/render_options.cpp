@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <vector>
 
 #include "renderer/error.h"
 
@@ -83,6 +84,32 @@ std::string one_of(const json& v, const std::string& key, const std::set<std::st
         bad("option '" + key + "' must be one of: " + list);
     }
     return s;
+}
+
+// "aovs": ["z", "face", ...] or, as a query parameter, "z,face,...".
+unsigned aov_bits(const json& v, const std::string& key) {
+    std::vector<std::string> names;
+    if (v.is_string()) {
+        std::string s = v.get<std::string>();
+        for (size_t start = 0; start <= s.size();) {
+            const size_t comma = std::min(s.find(',', start), s.size());
+            names.push_back(s.substr(start, comma - start));
+            start = comma + 1;
+        }
+    } else if (v.is_array()) {
+        for (const json& x : v) names.push_back(text(x, key));
+    } else {
+        bad("option '" + key + "' must be an array of AOV names");
+    }
+    unsigned bits = 0;
+    for (const std::string& name : names) {
+        bool known = false;
+        for (Aov a : kAllAovs)
+            if (name == aov_name(a)) bits |= aov_bit(a), known = true;
+        if (!known) bad("option '" + key + "' names an unknown AOV '" + name.substr(0, 64) +
+                        "' (z, face, normal, uv, iterations)");
+    }
+    return bits;
 }
 
 void camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -167,6 +194,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
             else r.format = {"exr", ".exr", "image/x-exr"};
         } else if (key == "background") {
             r.background = background(v, key);
+        } else if (key == "aovs") {
+            r.aovs = aov_bits(v, key);
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items()) camera_field(r, ck, cv);
@@ -178,6 +207,17 @@ RenderRequest parse_render_options(const std::string& options_json) {
     complete_size(width, height, r.width, r.height);
     check_camera_without_scene(r);
     return r;
+}
+
+const char* aov_name(Aov a) {
+    switch (a) {
+        case Aov::z: return "z";
+        case Aov::face: return "face";
+        case Aov::normal: return "normal";
+        case Aov::uv: return "uv";
+        case Aov::iterations: break;
+    }
+    return "iterations";
 }
 
 Background parse_background(const std::string& s, const std::string& what) {

@@ -38,6 +38,14 @@ Background default_background(const std::string& format_name);
 constexpr int kDefaultWidth = 800, kDefaultHeight = 600;
 void complete_size(std::optional<int> width, std::optional<int> height, int& out_width, int& out_height);
 
+// Per-pixel AOVs a render may return beside its image, in the JSON answer of
+// POST /v1/renders, as raw little-endian arrays a browser reads directly
+// (typed arrays) where it could not decode OpenEXR.
+enum class Aov : uint8_t { z, face, normal, uv, iterations };
+inline constexpr Aov kAllAovs[] = {Aov::z, Aov::face, Aov::normal, Aov::uv, Aov::iterations};
+constexpr unsigned aov_bit(Aov a) { return 1u << static_cast<unsigned>(a); }
+const char* aov_name(Aov a);  // z, face, normal, uv, iterations
+
 struct RenderRequest {
     int width = kDefaultWidth, height = kDefaultHeight;
     std::string view = "iso";
@@ -48,6 +56,7 @@ struct RenderRequest {
     MapPrecision map_precision = MapPrecision::float32;
     OutputFormat format{"png", ".png", "image/png"};
     std::optional<Background> background;  // unset: default_background(format)
+    unsigned aovs = 0;                      // aov_bit() of each AOV asked for
 };
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).

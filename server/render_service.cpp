@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cstdio>
 #include <future>
 #include <thread>
@@ -137,6 +138,35 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const PreparedSc
     return result.get();
 }
 
+template <class T>
+std::string raw_bytes(const std::vector<T>& values) {
+    return {reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T)};
+}
+
+// The AOVs asked for, as the raw arrays the JSON answer carries.
+std::vector<AovBuffer> aov_buffers(const RenderImage& image, unsigned bits) {
+    // The arrays are sent as they are in memory, and browsers' typed arrays read
+    // the platform's order, which is little-endian on every platform they run on.
+    static_assert(std::endian::native == std::endian::little, "AOV arrays are sent little-endian");
+    std::vector<AovBuffer> out;
+    for (Aov a : kAllAovs) {
+        if (!(bits & aov_bit(a))) continue;
+        switch (a) {
+            case Aov::z: out.push_back({a, "float32", 1, raw_bytes(image.z)}); break;
+            case Aov::face: out.push_back({a, "uint32", 1, raw_bytes(image.face)}); break;
+            case Aov::normal: out.push_back({a, "float32", 3, raw_bytes(image.normal)}); break;
+            case Aov::uv: {
+                std::vector<float> uv(image.u.size() * 2);
+                for (size_t i = 0; i < image.u.size(); ++i) uv[2 * i] = image.u[i], uv[2 * i + 1] = image.v[i];
+                out.push_back({a, "float32", 2, raw_bytes(uv)});
+                break;
+            }
+            case Aov::iterations: out.push_back({a, "uint8", 1, raw_bytes(image.iterations)}); break;
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
 RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const RenderRequest& r,
@@ -177,6 +207,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         write_image(result.image, file.path());
         out.bytes = read_file_bytes(file.path());
     }
+    out.aovs = aov_buffers(result.image, r.aovs);
     const double encode_ms = ms_since(te);
     ticket.reset();
 

@@ -9,14 +9,25 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "server/context.h"
 #include "server/render_options.h"
 
 namespace nurbsrt::server {
 
+// One AOV of a frame as raw bytes: width x height x components values of
+// `type` (float32, uint32 or uint8), little-endian, row 0 = top.
+struct AovBuffer {
+    Aov aov;
+    const char* type;
+    int components;
+    std::string bytes;
+};
+
 struct RenderedImage {
     std::string bytes;       // the encoded image (r.format)
+    std::vector<AovBuffer> aovs;  // those of r.aovs, in kAllAovs order
     std::string stats_json;  // the Statistics object's JSON text (with camera, cache, warnings)
     bool cache_hit = false;
 };

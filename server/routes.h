@@ -13,5 +13,6 @@ void add_render_routes(httplib::Server& svr, ServerContext& ctx);      // POST /
 void add_conversion_routes(httplib::Server& svr, ServerContext& ctx);  // POST /v1/conversions
 void add_job_routes(httplib::Server& svr, ServerContext& ctx);         // /v1/jobs...
 void add_service_routes(httplib::Server& svr, ServerContext& ctx);     // /healthz /readyz /metrics /v1/openapi.json
+void add_page_routes(httplib::Server& svr, ServerContext& ctx);        // GET / and /web/{name}: the web page
 
 }  // namespace nurbsrt::server

@@ -64,7 +64,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                                      {"mesh", report.mesh_ms},
                                                      {"write", report.write_ms},
                                                      {"total", total_ms}}}};
-        res.set_content(body.dump(), "application/json");
+        res.set_content(body.dump(), kBulkJsonContentType);
     } else {
         res.set_header("Content-Disposition", "attachment; filename=\"" +
                                                   download_name(upload.filename, conversion_format_extension(format)) +

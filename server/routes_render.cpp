@@ -21,11 +21,22 @@
 namespace nurbsrt::server {
 namespace {
 
+// {"z": {"type": "float32", "components": 1, "data": base64}, ...}
+nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
+    nlohmann::json out = nlohmann::json::object();
+    for (const AovBuffer& a : aovs)
+        out[aov_name(a.aov)] = {{"type", a.type}, {"components", a.components}, {"data", base64_encode(a.bytes)}};
+    return out;
+}
+
 void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const auto t0 = std::chrono::steady_clock::now();
     const Upload upload = read_upload(req);
     const RenderRequest r = parse_render_options(upload.options_json);
     check_render_limits(ctx.config, r);
+    if (r.aovs && !wants_json(req))
+        throw Error(ErrorCode::invalid_argument,
+                    "option 'aovs' needs a JSON answer: send 'Accept: application/json' (or use format exr)");
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, "empty upload: send a STEP or IGES file");
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
@@ -51,14 +62,15 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     res.set_header("Server-Timing", timing);
 
     if (wants_json(req)) {
-        const nlohmann::json body = {{"request_id", request_id(res)},
-                                     {"format", r.format.name},
-                                     {"content_type", r.format.content_type},
-                                     {"width", r.width},
-                                     {"height", r.height},
-                                     {"image_base64", base64_encode(image)},
-                                     {"statistics", stats}};
-        res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
+        nlohmann::json body = {{"request_id", request_id(res)},
+                               {"format", r.format.name},
+                               {"content_type", r.format.content_type},
+                               {"width", r.width},
+                               {"height", r.height},
+                               {"image_base64", base64_encode(image)},
+                               {"statistics", stats}};
+        if (!rendered.aovs.empty()) body["aovs"] = aovs_json(rendered.aovs);
+        res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), kBulkJsonContentType);
     } else {
         res.set_content(image, r.format.content_type.c_str());
     }

@@ -34,13 +34,15 @@ namespace {
 // path, which is the client's and unbounded).
 std::string route_of(const httplib::Request& req) {
     static const char* known[] = {"/v1/renders", "/v1/conversions", "/v1/jobs", "/healthz", "/readyz", "/metrics",
-                                  "/v1/openapi.json"};
+                                  "/v1/openapi.json", "/"};
     for (const char* k : known)
         if (req.path == k) return k;
     // Job resources by template (the id and name are the client's, unbounded).
     static const std::regex job("^/v1/jobs/[^/]+$"), artifact("^/v1/jobs/[^/]+/artifacts/[^/]+$");
     if (std::regex_match(req.path, job)) return "/v1/jobs/{id}";
     if (std::regex_match(req.path, artifact)) return "/v1/jobs/{id}/artifacts/{name}";
+    static const std::regex web_file("^/web/[A-Za-z0-9_.-]+$");
+    if (std::regex_match(req.path, web_file)) return "/web/{name}";
     return "other";
 }
 
@@ -51,7 +53,7 @@ const char* allowed_methods(const std::string& route) {
     if (route == "/v1/jobs") return "GET, POST";
     if (route == "/v1/jobs/{id}") return "GET, DELETE";
     if (route == "other") return "";
-    return "GET";  // probes, metrics, the API document, artifacts
+    return "GET";  // probes, metrics, the API document, artifacts, the web page
 }
 
 ErrorCode code_for_status(int status) {
@@ -283,6 +285,7 @@ int run_server(const ServerConfig& config) {
     add_conversion_routes(svr, ctx);
     add_job_routes(svr, ctx);
     add_service_routes(svr, ctx);
+    add_page_routes(svr, ctx);
 
     int port = config.port;
     if (port == 0) {

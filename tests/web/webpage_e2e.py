@@ -1,0 +1,422 @@
+"""End-to-end test of the web page in a real headless Chromium, driven over the
+DevTools protocol, against a running `nurbsrt serve` (NURBSRT_URL). Started by
+tests/webpage.sh. Each step checks what a user would see; the first failure
+saves a screenshot and the page's console to NURBSRT_WEB_ARTIFACTS and fails.
+
+Usage: webpage_e2e.py STEP_FILE OTHER_CAD_FILE [PART_OF_ABOUT_300_FACES]"""
+import json
+import os
+import pathlib
+import shutil
+import statistics
+import sys
+import tempfile
+import time
+import traceback
+
+from cdp import Browser, find_chromium
+
+URL = os.environ["NURBSRT_URL"]
+ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS") or tempfile.mkdtemp(prefix="nurbsrt-web-"))
+SCREENSHOT = os.environ.get("NURBSRT_WEB_SCREENSHOT")  # where to save the README picture, if set
+KEY = os.environ.get("NURBSRT_WEB_KEY", "")  # the service's API key, typed into the page
+RENDERS = "/v1/renders"
+
+# Pixels of the canvas: how many differ from the background, a checksum, and
+# the number of distinct colours among them (a face-id view has many).
+PIXELS_JS = """(() => {
+  const c = document.getElementById('view');
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  const bg = document.getElementById('background').value.split(',').map(x => Math.round(Number(x) * 255));
+  let differ = 0, sum = 0; const colours = new Set();
+  for (let i = 0; i < d.length; i += 4) {
+    sum = (sum * 31 + d[i] + 7 * d[i + 1] + 13 * d[i + 2]) % 1000000007;
+    if (Math.abs(d[i] - bg[0]) > 8 || Math.abs(d[i + 1] - bg[1]) > 8 || Math.abs(d[i + 2] - bg[2]) > 8) {
+      differ++;
+      if (colours.size < 5000) colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+    }
+  }
+  return {width: c.width, height: c.height, differ, sum, colours: colours.size};
+})()"""
+
+
+def log(msg):
+    print(f"webpage: {msg}", flush=True)
+
+
+class Page:
+    def __init__(self, browser):
+        self.b = browser
+
+    def ev(self, js):
+        return self.b.evaluate(js)
+
+    def frames(self):
+        return int(self.ev("Number(document.getElementById('view').dataset.frames || 0)"))
+
+    def wait_final_after(self, frames_before, timeout=120):
+        """Waits for a full-size frame after `frames_before`; fails at once on an error message."""
+        state = self.b.wait_for(
+            f"(() => {{ const c = document.getElementById('view');"
+            f" const m = document.getElementById('messages').textContent;"
+            f" if (m) return 'error: ' + m;"
+            f" return Number(c.dataset.frames || 0) > {frames_before} && c.dataset.final === '1'"
+            f" && c.dataset.busy === '0' ? 'ok' : ''; }})()", timeout, "a full-size frame")
+        assert state == "ok", f"the page shows {state}"
+
+    def canvas_centre(self):
+        r = self.ev("(() => { const r = document.getElementById('view').getBoundingClientRect();"
+                    " return [r.left, r.top, r.width, r.height]; })()")
+        return r[0] + r[2] / 2, r[1] + r[3] / 2, r
+
+    def scroll_to(self, element_id):
+        self.ev(f"document.getElementById('{element_id}').scrollIntoView({{block: 'center'}})")
+
+    def set_select(self, element_id, value):
+        self.ev(f"(() => {{ const s = document.getElementById('{element_id}'); s.value = '{value}';"
+                f" s.dispatchEvent(new Event('change', {{bubbles: true}})); }})()")
+
+    def set_files(self, element_id, paths):
+        # Absolute paths without '..': Chromium refuses to upload a file named
+        # through a parent reference (net::ERR_ACCESS_DENIED).
+        oid = self.b.object_id(f"document.getElementById('{element_id}')")
+        self.b.call("DOM.setFileInputFiles", files=[str(pathlib.Path(p).resolve()) for p in paths], objectId=oid)
+
+
+def console_errors(events):
+    out = []
+    for e in events:
+        m, p = e["method"], e.get("params", {})
+        if m == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
+            out.append("console: " + " ".join(str(a.get("value", a.get("description", ""))) for a in p.get("args", [])))
+        elif m == "Runtime.exceptionThrown":
+            out.append("exception: " + json.dumps(p.get("exceptionDetails", {}))[:400])
+        elif m == "Log.entryAdded" and p.get("entry", {}).get("level") == "error":
+            out.append(f"log: {p['entry'].get('text')} {p['entry'].get('url', '')}")
+    return out
+
+
+def render_requests(events, since):
+    """(requests sent, most in flight at once) of POST /v1/renders since `since`."""
+    live, most, sent = set(), 0, 0
+    for e in events:
+        if e["time"] < since:
+            continue
+        m, p = e["method"], e.get("params", {})
+        if m == "Network.requestWillBeSent" and p["request"]["url"].endswith(RENDERS):
+            sent += 1
+            live.add(p["requestId"])
+            most = max(most, len(live))
+        elif m in ("Network.loadingFinished", "Network.loadingFailed"):
+            live.discard(p["requestId"])
+    return sent, most
+
+
+def drag(page, dx_total, steps, pause):
+    """Drags across the image; returns (release time, mouse moves sent)."""
+    x, y, _ = page.canvas_centre()
+    page.b.mouse("mousePressed", x, y)
+    for i in range(1, steps + 1):
+        page.b.mouse("mouseMoved", x + dx_total * i / steps, y + 0.2 * dx_total * i / steps)
+        page.b.pump(pause)
+    page.b.mouse("mouseReleased", x + dx_total, y + 0.2 * dx_total, buttons=0)
+    return time.monotonic(), steps
+
+
+def step_load(page):
+    page.b.call("Page.navigate", url=URL + "/")
+    page.b.wait_for("document.body && document.body.dataset.ready === '1'", 30, "the page's modules")
+    page.b.pump(0.5)
+    errors = console_errors(page.b.events)
+    assert not errors, f"console errors on load: {errors}"
+    csp = page.ev("fetch('/').then(r => r.headers.get('Content-Security-Policy'))")
+    assert csp and "default-src 'self'" in csp and "unsafe-inline" not in csp, f"CSP: {csp}"
+    if KEY:  # typed into the key field and submitted with Enter, as a user would
+        page.ev("document.getElementById('api-key').focus()")
+        page.b.call("Input.insertText", text=KEY)
+        page.b.key("Enter", "Enter", 13, text="\r")
+        stored = page.ev("sessionStorage.getItem('nurbsrt.apiKey')")
+        assert stored == KEY, "the key was not kept in session storage"
+        assert page.ev("document.getElementById('api-key').value") == "", "the key stays visible in the field"
+
+
+def check_key_use(events):
+    """Every API request carried the key in its Authorization header and none in its URL."""
+    api = [e["params"]["request"] for e in events
+           if e["method"] == "Network.requestWillBeSent" and "/v1/" in e["params"]["request"]["url"]]
+    assert api, "no API requests seen"
+    for r in api:
+        assert KEY not in r["url"], f"the key is in a URL: {r['url']}"
+        if KEY:
+            assert r["headers"].get("Authorization") == f"Bearer {KEY}", f"{r['method']} {r['url']} without the key"
+    log(f"API key: sent as a header with all {len(api)} API requests, in no URL")
+
+
+def step_upload(page, step_file):
+    before = page.frames()
+    t0 = time.monotonic()
+    page.set_files("file", [step_file])
+    page.b.wait_for("!document.getElementById('busy').hidden || Number(document.getElementById('view').dataset.frames"
+                    f" || 0) > {before}", 10, "the progress indication")
+    page.wait_final_after(before)
+    px = page.ev(PIXELS_JS)
+    log(f"first render {px['width']}x{px['height']} in {time.monotonic() - t0:.2f} s; {px['differ']} pixels not background")
+    assert (px["width"], px["height"]) == (800, 600), px
+    assert px["differ"] > 0.02 * px["width"] * px["height"], f"the image is (nearly) all background: {px}"
+    stages = page.ev("[...document.querySelectorAll('#stages > div')].map(d => d.dataset.stage)")
+    assert "newton" in stages and "read" in stages, f"stage bar: {stages}"
+    return px
+
+
+def step_orbit(page, px_before):
+    since = time.monotonic()
+    before = page.frames()
+    # Moves come faster than previews render: a page that sent one request per
+    # move would send 41; this one coalesces them (one in flight, one pending).
+    _, moves = drag(page, 160, 40, 0)
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    sent, most = render_requests(page.b.events, since)
+    px = page.ev(PIXELS_JS)
+    log(f"orbit: {moves} mouse moves -> {sent} render requests, at most {most} in flight")
+    assert px["sum"] != px_before["sum"], "the image did not change after orbiting"
+    assert px["differ"] > 0.02 * px["width"] * px["height"], "the orbited image is all background"
+    assert 2 <= sent <= 0.6 * moves + 1, f"{sent} render requests for one drag of {moves} moves (want coalesced previews + a final)"
+    # One in flight; an aborted one may still be reported for a moment beside its successor.
+    assert most <= 2, f"{most} render requests in flight at once"
+    return px
+
+
+def step_latency(page, what, repeats=3):
+    """Pointer release -> full-size (800x600) frame of the cached part, as the page measures it."""
+    samples = []
+    for i in range(repeats):
+        before = page.frames()
+        drag(page, -40 if i % 2 else 40, 4, 0.02)
+        page.wait_final_after(before)
+        samples.append(float(page.ev("document.getElementById('view').dataset.latencyMs")))
+    log(f"interaction latency, {what} (pointer release -> full-size 800x600 frame, cached scene): "
+        f"median {statistics.median(samples):.0f} ms, samples {[round(s) for s in samples]} ms")
+    return samples
+
+
+def hover_readout(page):
+    """Hovers the centre of the image (on the part): the AOV readout names a face."""
+    page.ev("document.getElementById('hover').textContent = ''")
+    x, y, _ = page.canvas_centre()
+    page.b.mouse("mouseMoved", x + 1, y, buttons=0)
+    page.b.mouse("mouseMoved", x, y, buttons=0)
+    return page.b.wait_for("(() => { const t = document.getElementById('hover').textContent;"
+                           " return t.startsWith('pixel') ? t : ''; })()", 30, "the hover readout")
+
+
+def step_look_inside(page, px_shaded):
+    # The shaded view fetches the AOVs on the first hover.
+    hover = hover_readout(page)
+    log("hover (shaded view): " + hover.replace("\n", "; "))
+    assert "face" in hover and "iterations" in hover, hover
+    page.set_select("look", "face")
+    page.b.wait_for("document.getElementById('view').dataset.look === 'face'", 10, "the face-id view")
+    px = page.ev(PIXELS_JS)
+    log(f"face-id view: {px['colours']} distinct colours over {px['differ']} hit pixels")
+    assert px["sum"] != px_shaded["sum"], "the face-id view looks like the shaded one"
+    assert px["colours"] >= 3, f"the face-id view has {px['colours']} colours"
+    page.set_select("look", "iterations")
+    page.b.wait_for("document.getElementById('view').dataset.look === 'iterations'"
+                    " && !document.getElementById('legend').hidden", 10, "the iterations heat map and legend")
+    step_latency(page, "iterations view, with AOVs")
+    hover = hover_readout(page)
+    log("hover (iterations view): " + hover.replace("\n", "; "))
+    page.set_select("look", "shaded")
+
+
+def step_compare(page):
+    before = page.frames()
+    page.ev("document.querySelector('button.view[data-view=\"iso\"]').click()")
+    page.wait_final_after(before)
+    page.scroll_to("compare")
+    page.ev("document.getElementById('compare').click()")
+    page.b.wait_for("document.getElementById('martin-newton-ms').textContent !== '–'"
+                    " && !document.getElementById('compare').disabled", 120, "both methods' times")
+    times = {m: page.ev(f"document.getElementById('{m}-newton-ms').textContent") for m in ("proposed", "martin")}
+    bars = page.ev("document.querySelectorAll('#martin-histogram > div').length")
+    log(f"compare methods: Newton stage proposed {times['proposed']} ms, martin {times['martin']} ms")
+    for m, t in times.items():
+        assert float(t) > 0, f"{m}: Newton time '{t}'"
+    assert bars > 0, "no iteration histogram"
+
+
+def step_job(page, files, downloads):
+    try:
+        page.b.call("Browser.setDownloadBehavior", behavior="allow", downloadPath=str(downloads))
+    except RuntimeError:  # older Chromium: the page-level (deprecated) form
+        page.b.call("Page.setDownloadBehavior", behavior="allow", downloadPath=str(downloads))
+    page.scroll_to("job-form")
+    page.set_files("job-files", files)
+    page.ev("document.querySelector('input[value=\"conversion:stl\"]').checked = true")
+    page.ev("document.getElementById('job-submit').click()")
+    state = page.b.wait_for("(() => { const j = document.querySelector('#job-list .job');"
+                            " return j && ['succeeded','failed','canceled'].includes(j.dataset.state) ? j.dataset.state : ''; })()",
+                            180, "the job to finish")
+    rows = page.ev("document.querySelectorAll('#job-list .job tbody tr').length")
+    log(f"job: {state}, {rows} outputs")
+    assert state == "succeeded", f"job ended {state}"
+    assert rows == 2 * len(files), f"{rows} outputs listed"
+    page.ev("document.querySelector('#job-list button.download').click()")
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        done = [p for p in downloads.iterdir() if not p.name.endswith(".crdownload")]
+        if done:
+            break
+        page.b.pump(0.2)
+    assert done, "no artifact was downloaded"
+    data = done[0].read_bytes()
+    log(f"downloaded artifact {done[0].name} ({len(data)} bytes)")
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", f"the artifact is not a PNG: {data[:16]!r}"
+
+
+def step_conversion(page):
+    page.set_select("convert-format", "stl")
+    page.ev("document.getElementById('convert-submit').click()")
+    text = page.b.wait_for("(() => { const t = document.getElementById('convert-result').textContent;"
+                           " return t.includes('saved as') ? t : ''; })()", 120, "the conversion")
+    log("conversion: " + text)
+
+
+def step_accessibility(page):
+    nodes = page.b.call("Accessibility.getFullAXTree")["nodes"]
+    controls = {"button", "checkbox", "combobox", "textbox", "spinbutton", "slider", "radio", "link", "searchbox",
+                "listbox", "switch", "menuitem"}
+    nameless, seen = [], 0
+    for n in nodes:
+        role = n.get("role", {}).get("value")
+        if n.get("ignored") or role not in controls:
+            continue
+        seen += 1
+        if not str(n.get("name", {}).get("value", "")).strip():
+            nameless.append(f"{role} (backend node {n.get('backendDOMNodeId')})")
+    log(f"accessibility: {seen} controls, {len(nameless)} without a name")
+    assert seen >= 20, f"only {seen} controls in the accessibility tree"
+    assert not nameless, f"controls without an accessible name: {nameless}"
+    # Tab order follows the page: key, file, views, options, image, ..., compare.
+    page.ev("document.getElementById('api-key').focus()")
+    order = []
+    for _ in range(40):
+        page.b.key("Tab", "Tab", 9)
+        order.append(page.ev("document.activeElement.id || document.activeElement.dataset.view || document.activeElement.tagName"))
+    wanted = ["key-save", "file", "iso", "resolution", "look", "view", "compare", "job-files", "convert-submit"]
+    positions = [order.index(w) if w in order else -1 for w in wanted]
+    log(f"tab order: {order[:24]}")
+    assert -1 not in positions and positions == sorted(positions), f"tab order {order}"
+    # The image is keyboard-operable: an arrow key re-renders the view.
+    before = page.frames()
+    page.ev("document.getElementById('view').focus()")
+    page.b.key("ArrowLeft", "ArrowLeft", 37)
+    page.wait_final_after(before)
+
+
+def step_big_part_latency(page, part):
+    """The latency the issue asks about: a cached part of about 300 faces at 800x600."""
+    page.scroll_to("file")
+    page.set_select("look", "shaded")
+    before = page.frames()
+    t0 = time.monotonic()
+    page.set_files("file", [part])
+    page.wait_final_after(before, timeout=180)
+    faces = page.ev("document.getElementById('status').textContent")
+    log(f"{part.name}: first render in {time.monotonic() - t0:.1f} s ({faces})")
+    step_latency(page, f"{part.name}, shaded view")
+    page.set_select("look", "iterations")
+    step_latency(page, f"{part.name}, iterations view, with AOVs")
+    page.set_select("look", "shaded")
+
+
+def step_problem_shown(page, tmp):
+    bad = pathlib.Path(tmp, "not-a-cad-file.step")
+    bad.write_text("hello, this is not STEP\n")
+    page.scroll_to("file")
+    page.set_files("file", [bad])
+    text = page.b.wait_for("document.getElementById('messages').textContent", 30, "an error message")
+    log(f"problem shown: {text}")
+    assert "unsupported_format" in text and "HTTP 415" in text, text
+
+
+def step_csp_enforced(page):
+    """The browser enforces the page's policy: an injected inline script does not run."""
+    directive = page.ev("""new Promise((resolve) => {
+      document.addEventListener('securitypolicyviolation', (e) => resolve(e.effectiveDirective), {once: true});
+      const s = document.createElement('script');
+      s.textContent = 'window.inlineRan = true';
+      document.body.append(s);
+      setTimeout(() => resolve('no violation'), 2000);
+    })""")
+    ran = page.ev("window.inlineRan === true")
+    log(f"CSP: an inline script was refused ({directive})")
+    assert directive.startswith("script-src") and not ran, (directive, ran)
+
+
+def main():
+    step_file, other_file = map(pathlib.Path, sys.argv[1:3])
+    big_part = pathlib.Path(sys.argv[3]) if len(sys.argv) > 3 and pathlib.Path(sys.argv[3]).is_file() else None
+    chromium = find_chromium()
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    tmp = tempfile.mkdtemp(prefix="nurbsrt-web-test-")
+    downloads = pathlib.Path(tmp, "downloads")
+    downloads.mkdir()
+    browser = Browser(chromium)
+    page = Page(browser)
+    current = "start"
+    try:
+        for domain in ("Runtime", "Log", "Network", "Page", "DOM", "Accessibility"):
+            browser.call(f"{domain}.enable")
+        browser.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
+        current = "load"; step_load(page)
+        current = "upload"; px = step_upload(page, step_file)
+        current = "orbit"; px = step_orbit(page, px)
+        current = "latency"; step_latency(page, "shaded view")
+        px = page.ev(PIXELS_JS)
+        current = "look inside"; step_look_inside(page, px)
+        current = "compare"; step_compare(page)
+        if SCREENSHOT:
+            before = page.frames()
+            page.set_select("look", "face")  # the Iso frame has no AOVs yet: fetched now
+            page.wait_final_after(before)
+            page.b.wait_for("document.getElementById('view').dataset.look === 'face'", 10, "the face-id view")
+            page.ev("window.scrollTo(0, 0)")
+            browser.pump(0.3)
+            browser.screenshot(SCREENSHOT)
+            log(f"screenshot saved to {SCREENSHOT}")
+            page.set_select("look", "shaded")
+        current = "job"; step_job(page, [step_file, other_file], downloads)
+        current = "conversion"; step_conversion(page)
+        current = "accessibility"; step_accessibility(page)
+        errors = console_errors(browser.events)
+        assert not errors, f"console errors: {errors}"
+        check_key_use(browser.events)
+        if big_part:
+            current = "300-face part"; step_big_part_latency(page, big_part)
+        else:
+            log("SKIPPED the latency on a ~300-face part: ../shared/models/step/box_sides.STEP is absent")
+        current = "problem+json"; step_problem_shown(page, tmp)
+        current = "CSP"; step_csp_enforced(page)  # last: the refusal is logged as an error
+        log("all steps passed")
+        return 0
+    except Exception:
+        traceback.print_exc()
+        shot = ARTIFACTS / f"failure-{current.replace(' ', '-')}.png"
+        try:
+            browser.screenshot(shot)
+            log(f"step '{current}' failed; screenshot {shot}")
+        except Exception as e:
+            log(f"step '{current}' failed; no screenshot ({e})")
+        failed = [json.dumps(e["params"]) for e in browser.events
+                  if e["method"] == "Network.loadingFailed" and not e["params"].get("canceled")]
+        (ARTIFACTS / "console.txt").write_text("\n".join(console_errors(browser.events) + failed) + "\n")
+        return 1
+    finally:
+        browser.close()
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

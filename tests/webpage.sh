@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# End-to-end test of the web page in a real browser: starts `nurbsrt serve` on
+# a free loopback port and drives Debian's headless Chromium over the DevTools
+# protocol (tests/web/webpage_e2e.py, with Debian's python3-websocket). Skips,
+# saying so, where Chromium or python3-websocket is missing (scripts/setup.sh
+# installs both). The service requires an API key, which the test types into
+# the page. On failure, screenshots and the console go to
+# <build dir>/webpage-artifacts. Usage: tests/webpage.sh path/to/nurbsrt
+set -euo pipefail
+BIN=$(realpath "${1:?usage: tests/webpage.sh path/to/nurbsrt}")
+HERE=$(cd "$(dirname "$0")" && pwd)
+PY=/usr/bin/python3   # python3 on PATH may be another build, without Debian's modules
+
+if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then
+  echo "webpage.sh: SKIPPED: no chromium on PATH (apt-get install chromium, or run scripts/setup.sh)"
+  exit 0
+fi
+if ! "$PY" -c 'import websocket' 2>/dev/null; then
+  echo "webpage.sh: SKIPPED: Debian's python3-websocket is not installed (run scripts/setup.sh)"
+  exit 0
+fi
+STEP=/usr/share/opencascade/data/step/screw.step
+OTHER=/usr/share/opencascade/data/step/linkrods.step
+for f in "$STEP" "$OTHER"; do
+  [ -f "$f" ] || { echo "webpage.sh: $f is missing (Debian's occt-misc installs it)"; exit 1; }
+done
+
+# A part of about 300 faces (310) for the interaction latency, when ../shared/models is there.
+BIG="$HERE/../../shared/models/step/box_sides.STEP"
+
+TMP=$(mktemp -d)
+SERVER_PID=""
+cleanup() {
+  if [ -n "$SERVER_PID" ] && kill -0 "$SERVER_PID" 2>/dev/null; then
+    kill -TERM "$SERVER_PID" 2>/dev/null || true
+    for _ in $(seq 1 50); do kill -0 "$SERVER_PID" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$SERVER_PID" 2>/dev/null || true
+  fi
+  rm -rf "$TMP"
+}
+trap cleanup EXIT
+
+# With an API key required, as a service open to a network would run: the page
+# must send it with every API request (the test types it into the page).
+KEY="web-test-$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')"
+NURBSRT_API_KEYS="$KEY" "$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
+  --max-upload-mb 16 --import-timeout 120 --render-timeout 120 2> "$TMP/server.log" &
+SERVER_PID=$!
+for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done
+if [ ! -s "$TMP/port" ]; then
+  echo "webpage.sh: the server did not start; its log:"; cat "$TMP/server.log"; exit 1
+fi
+
+ARTIFACTS="$(dirname "$BIN")/webpage-artifacts"
+rm -rf "$ARTIFACTS"
+status=0
+NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_WEB_ARTIFACTS="$ARTIFACTS" NURBSRT_WEB_KEY="$KEY" \
+  timeout 600 "$PY" "$HERE/web/webpage_e2e.py" "$STEP" "$OTHER" "$BIG" || status=$?
+if [ $status -ne 0 ]; then
+  echo "webpage.sh: FAILED; artifacts in $ARTIFACTS; server log (last 30 lines):"; tail -n 30 "$TMP/server.log"
+fi
+exit $status

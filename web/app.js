@@ -1,0 +1,296 @@
+// The page: a file in, the exact render out, then orbit/pan/zoom (previews at
+// a quarter of the size while the pointer moves, the full size when it stops),
+// AOV views, stage times, the method comparison, jobs and conversions. Only
+// the public REST API is used (api.js).
+
+import { apiKey, setApiKey, render, base64Bytes } from './api.js';
+import { Camera } from './camera.js';
+import { RenderScheduler } from './scheduler.js';
+import { bindInteraction } from './interaction.js';
+import { decodeAovs, aovsFor, paint, drawLegend, describePixel } from './aov.js';
+import { showStages, showHistogram, histogramBounds, fmt } from './stats.js';
+import { bindJobs, bindConversions } from './jobs.js';
+
+const $ = (id) => document.getElementById(id);
+const PREVIEW_DIVISOR = 4;
+const canvas = $('view');
+const state = { file: null, camera: null, view: 'iso', frame: null, dirty: false };
+
+// ---- messages ---------------------------------------------------------------
+function report(error) {
+  const box = $('messages');
+  const text = error.status ? `${error.message} (HTTP ${error.status}${error.code ? `, ${error.code}` : ''})`
+    : error instanceof TypeError ? `No answer from the service (${error.message}): is it running and reachable?`
+    : error.message;
+  const dismiss = document.createElement('button');
+  dismiss.type = 'button';
+  dismiss.textContent = 'Dismiss';
+  const message = document.createElement('div');
+  message.className = 'message';
+  message.append(document.createTextNode(text), dismiss);
+  dismiss.addEventListener('click', () => message.remove());
+  box.append(message);
+  while (box.children.length > 3) box.firstChild.remove();
+}
+
+const setStatus = (text) => { $('status').textContent = text; };
+
+// ---- options ------------------------------------------------------------------
+function fullSize() {
+  const [width, height] = $('resolution').value.split('x').map(Number);
+  return { width, height };
+}
+
+function imageOptions() {
+  return { method: $('method').value, map_precision: $('map-precision').value, background: $('background').value };
+}
+
+function requestOptions(job) {
+  const { width, height } = fullSize();
+  const d = job.final ? 1 : PREVIEW_DIVISOR;
+  const o = { ...imageOptions(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
+  if (job.camera) o.camera = job.camera;
+  else o.view = job.view;
+  if (job.aovs) o.aovs = aovsFor($('look').value);
+  return o;
+}
+
+function backgroundRgba() {
+  const v = $('background').value;
+  if (v === 'transparent') return [0, 0, 0, 0];
+  return [...v.split(',').map((x) => Number(x) * 255), 255];
+}
+
+// ---- frames -------------------------------------------------------------------
+async function send(job, signal) {
+  const doc = await render(job.file, requestOptions(job), signal);
+  const bitmap = await createImageBitmap(new Blob([base64Bytes(doc.image_base64)], { type: doc.content_type }));
+  return { width: doc.width, height: doc.height, bitmap, aov: doc.aovs ? decodeAovs(doc.aovs) : null, stats: doc.statistics };
+}
+
+function draw() {
+  const frame = state.frame;
+  if (!frame) return;
+  const look = $('look').value;
+  canvas.width = frame.width;
+  canvas.height = frame.height;
+  const ctx = canvas.getContext('2d');
+  ctx.clearRect(0, 0, frame.width, frame.height);
+  const legendBox = $('legend');
+  if (look === 'shaded' || !frame.aov || (look === 'normal' && !frame.aov.normal)) {
+    ctx.drawImage(frame.bitmap, 0, 0);
+    legendBox.hidden = true;
+    canvas.dataset.look = 'shaded';
+    return;
+  }
+  const image = ctx.createImageData(frame.width, frame.height);
+  const legend = paint(look, frame.aov, image, backgroundRgba());
+  ctx.putImageData(image, 0, 0);
+  canvas.dataset.look = look;
+  legendBox.hidden = !legend;
+  if (legend) {
+    drawLegend($('legend-bar'), legend);
+    $('legend-min').textContent = fmt(legend.min);
+    $('legend-max').textContent = fmt(legend.max);
+    $('legend-title').textContent = legend.title;
+  }
+}
+
+function show(frame, job) {
+  if (job.view) state.camera = Camera.fromStatistics(frame.stats.camera);
+  canvas.dataset.frames = String(Number(canvas.dataset.frames || 0) + 1);
+  if (job.final) {
+    state.frame = frame;
+    draw();
+    showStages($('stages'), $('stage-list'), frame.stats);
+    canvas.dataset.final = '1';
+    const s = frame.stats;
+    let text = `${frame.width}×${frame.height}, ${s.method}, ${s.faces} faces, ${s.pixels_hit} pixels hit, ` +
+      `${fmt(s.timings_ms.total)} ms (${s.cache === 'hit' ? 'cached scene' : 'imported'})`;
+    if (job.releasedAt) {
+      const latency = performance.now() - job.releasedAt;
+      canvas.dataset.latencyMs = latency.toFixed(1);
+      text += `; full-size frame ${latency.toFixed(0)} ms after the pointer stopped`;
+    }
+    setStatus(text);
+    if (state.pointer && frame.aov) hover(state.pointer);
+  } else {
+    canvas.width = frame.width * PREVIEW_DIVISOR;
+    canvas.height = frame.height * PREVIEW_DIVISOR;
+    const ctx = canvas.getContext('2d');
+    ctx.clearRect(0, 0, canvas.width, canvas.height);
+    ctx.drawImage(frame.bitmap, 0, 0, canvas.width, canvas.height);
+    canvas.dataset.final = '0';
+  }
+}
+
+let busyTimer = 0;
+function busy(on, job) {
+  clearInterval(busyTimer);
+  canvas.dataset.busy = on ? '1' : '0';
+  const box = $('busy');
+  if (!on || !job.final) {
+    box.hidden = true;
+    return;
+  }
+  const t0 = performance.now();
+  const what = job.first ? 'Uploading, importing and rendering' : 'Rendering';
+  const tick = () => { $('busy-text').textContent = `${what}… ${((performance.now() - t0) / 1000).toFixed(1)} s`; };
+  tick();
+  box.hidden = false;
+  busyTimer = setInterval(tick, 100);
+}
+
+const scheduler = new RenderScheduler({
+  send, show, busy,
+  fail: (error) => { report(error); setStatus('The render failed.'); },
+});
+
+// A full-size frame. The AOVs (about 17 bytes a pixel, 8 MB at 800x600) come
+// with it only when the view shows them; the shaded view fetches them on the
+// first hover, so that a release shows the image without waiting for them.
+function renderFinal(extra = {}) {
+  if (!state.file) return;
+  const job = { file: state.file, final: true, aovs: $('look').value !== 'shaded', ...extra };
+  if (state.camera && !job.view) job.camera = state.camera.toOption();
+  else job.view = job.view || state.view || 'iso';
+  scheduler.submit(job);
+}
+
+// ---- inputs -------------------------------------------------------------------
+function loadFile(file) {
+  if (!file) return;
+  state.file = file;
+  state.camera = null;
+  state.frame = null;
+  state.view = 'iso';
+  $('file-name').textContent = `${file.name} (${(file.size / 1024).toFixed(0)} KiB)`;
+  $('compare').disabled = false;
+  scheduler.cancelAll();
+  pressView('iso');
+  renderFinal({ view: 'iso', first: true });
+}
+
+function pressView(name) {
+  for (const b of document.querySelectorAll('button.view')) b.setAttribute('aria-pressed', String(b.dataset.view === name));
+}
+
+$('file').addEventListener('change', (e) => loadFile(e.target.files[0]));
+const drop = $('drop');
+for (const target of [drop, canvas]) {
+  target.addEventListener('dragover', (e) => { e.preventDefault(); drop.classList.add('over'); });
+  target.addEventListener('dragleave', () => drop.classList.remove('over'));
+  target.addEventListener('drop', (e) => {
+    e.preventDefault();
+    drop.classList.remove('over');
+    loadFile(e.dataTransfer.files[0]);
+  });
+}
+
+for (const b of document.querySelectorAll('button.view')) {
+  b.setAttribute('aria-pressed', 'false');
+  b.addEventListener('click', () => {
+    state.view = b.dataset.view;
+    state.camera = null;
+    pressView(state.view);
+    renderFinal({ view: state.view });
+  });
+}
+for (const id of ['resolution', 'method', 'map-precision', 'background']) $(id).addEventListener('change', () => renderFinal());
+$('look').addEventListener('change', () => {
+  const look = $('look').value, aov = state.frame?.aov;
+  if (state.frame && look !== 'shaded' && (!aov || (look === 'normal' && !aov.normal))) renderFinal();
+  else draw();
+});
+
+bindInteraction(canvas, {
+  move(change) {
+    if (!state.camera || !state.file) return;
+    change(state.camera);
+    state.view = null;
+    state.dirty = true;
+    pressView(null);
+    scheduler.submit({ file: state.file, final: false, camera: state.camera.toOption() });
+  },
+  settle() {
+    if (!state.dirty) return;
+    state.dirty = false;
+    renderFinal({ releasedAt: performance.now() });
+  },
+  hover,
+});
+canvas.addEventListener('pointerleave', () => { state.pointer = null; });
+
+// The readout of the pixel under the pointer; fetches the AOVs of the shown
+// frame when it has none yet (and reads again when they arrive).
+function hover(e) {
+  state.pointer = { clientX: e.clientX, clientY: e.clientY };
+  const f = state.frame;
+  if (!f || canvas.dataset.final !== '1') return;
+  if (!f.aov) {
+    if (!f.aovAsked && canvas.dataset.busy !== '1') {
+      f.aovAsked = true;
+      renderFinal({ aovs: true });
+    }
+    $('hover').textContent = 'Reading the AOVs of this view…';
+    return;
+  }
+  const r = canvas.getBoundingClientRect();
+  const x = Math.floor(((e.clientX - r.left) * f.width) / r.width), y = Math.floor(((e.clientY - r.top) * f.height) / r.height);
+  if (x >= 0 && y >= 0 && x < f.width && y < f.height) $('hover').textContent = describePixel(f.aov, f.width, x, y);
+}
+
+// ---- compare methods -------------------------------------------------------------
+$('compare').addEventListener('click', async () => {
+  if (!state.file || !state.camera) return;
+  const button = $('compare');
+  button.disabled = true;
+  button.textContent = 'Comparing…';
+  const results = {};
+  try {
+    for (const method of ['proposed', 'martin']) {
+      const job = { final: true, camera: state.camera.toOption(), override: { method } };
+      results[method] = (await render(state.file, requestOptions(job))).statistics;
+    }
+    const { maxCount, maxK } = histogramBounds(results.proposed.newton.iteration_histogram, results.martin.newton.iteration_histogram);
+    for (const [method, s] of Object.entries(results)) {
+      $(`${method}-newton-ms`).textContent = fmt(s.timings_ms.newton);
+      $(`${method}-primary-ms`).textContent = fmt(s.newton.primary_pass_ms);
+      $(`${method}-mean`).textContent = s.newton.mean_iterations.toFixed(2);
+      showHistogram($(`${method}-histogram`), s.newton.iteration_histogram, maxCount, maxK);
+    }
+    const ratio = results.martin.timings_ms.newton / (results.proposed.timings_ms.newton || 1);
+    setStatus(`Newton stage: proposed ${fmt(results.proposed.timings_ms.newton)} ms, martin ${fmt(results.martin.timings_ms.newton)} ms (martin/proposed ${ratio.toFixed(2)}×)`);
+  } catch (err) {
+    report(err);
+  } finally {
+    button.disabled = false;
+    button.textContent = 'Compare methods';
+  }
+});
+
+// ---- API key ------------------------------------------------------------------------
+function showKeyState() {
+  $('api-key').value = '';
+  $('api-key').placeholder = apiKey() ? 'a key is set for this tab' : 'only if the service needs one';
+}
+$('key-form').addEventListener('submit', (e) => {
+  e.preventDefault();
+  setApiKey($('api-key').value.trim());
+  showKeyState();
+});
+$('key-forget').addEventListener('click', () => { setApiKey(''); showKeyState(); });
+showKeyState();
+
+// ---- jobs and conversions -----------------------------------------------------------
+bindJobs({
+  form: $('job-form'), files: $('job-files'), list: $('job-list'), report,
+  // A named view, not the current camera: the job's files are other parts.
+  renderOptions: () => ({ ...imageOptions(), ...fullSize(), view: state.view || 'iso' }),
+});
+bindConversions({
+  form: $('convert-form'), file: $('convert-file'), format: $('convert-format'), result: $('convert-result'),
+  currentFile: () => state.file, report,
+});
+
+document.body.dataset.ready = '1';

@@ -1,0 +1,72 @@
+// The camera the page moves: eye, target and up in model units (as the API's
+// `camera` option and the statistics' `camera` carry them), and the orbit, pan
+// and zoom of a turntable viewer.
+
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const length = (a) => Math.hypot(a[0], a[1], a[2]);
+const normalize = (a) => scale(a, 1 / (length(a) || 1));
+
+// Rotation of v about the unit axis k by angle a (Rodrigues' formula).
+function rotate(v, k, a) {
+  const c = Math.cos(a), s = Math.sin(a);
+  return add(add(scale(v, c), scale(cross(k, v), s)), scale(k, dot(k, v) * (1 - c)));
+}
+
+export class Camera {
+  constructor(eye, target, up, fovDeg) {
+    this.eye = eye;
+    this.target = target;
+    this.up = up;
+    this.fovDeg = fovDeg || 30;
+  }
+
+  static fromStatistics(c) {
+    return new Camera(c.eye, c.target, c.up, c.fov_deg);
+  }
+
+  // The `camera` render option.
+  toOption() {
+    const round = (v) => v.map((x) => Number(x.toPrecision(12)));
+    return { eye: round(this.eye), target: round(this.target), up: round(this.up), fov_deg: this.fovDeg };
+  }
+
+  basis() {
+    const f = normalize(sub(this.target, this.eye));
+    const r = normalize(cross(f, this.up));
+    return { f, r, u: cross(r, f) };
+  }
+
+  // Turntable orbit about the target: yaw about the up vector, pitch about the
+  // camera's right axis (kept away from the poles so that up stays defined).
+  orbit(yaw, pitch) {
+    const { r } = this.basis();
+    const k = normalize(this.up);
+    let offset = sub(this.eye, this.target);
+    offset = rotate(offset, k, -yaw);
+    const right = rotate(r, k, -yaw);
+    const pitched = rotate(offset, right, -pitch);
+    const cosToUp = dot(normalize(pitched), k);
+    if (Math.abs(cosToUp) < 0.995) offset = pitched;
+    this.eye = add(this.target, offset);
+    this.up = k;
+  }
+
+  // Moves eye and target together by a fraction of the view's height.
+  pan(dxFraction, dyFraction) {
+    const { r, u } = this.basis();
+    const viewHeight = 2 * length(sub(this.target, this.eye)) * Math.tan((this.fovDeg * Math.PI) / 360);
+    const move = add(scale(r, -dxFraction * viewHeight), scale(u, dyFraction * viewHeight));
+    this.eye = add(this.eye, move);
+    this.target = add(this.target, move);
+  }
+
+  // factor < 1 moves closer.
+  zoom(factor) {
+    const offset = sub(this.eye, this.target);
+    this.eye = add(this.target, scale(offset, Math.min(Math.max(factor, 0.2), 5)));
+  }
+}

@@ -1,0 +1,118 @@
+// Batch jobs (POST /v1/jobs, polled with GET /v1/jobs/{id}, artifacts
+// downloaded with the key) and single conversions (POST /v1/conversions).
+
+import { call, saveBlob, dispositionName, uploadForm, base64Bytes } from './api.js';
+
+const POLL_MS = 500;
+const DONE = new Set(['succeeded', 'failed', 'canceled']);
+
+function el(tag, props = {}, ...children) {
+  const e = document.createElement(tag);
+  Object.assign(e, props);
+  e.append(...children);
+  return e;
+}
+
+// The job description for these files and outputs ("render:png", "conversion:stl").
+export function jobSpec(fileCount, outputs, renderOptions) {
+  const list = [];
+  for (let file = 0; file < fileCount; file++)
+    for (const out of outputs) {
+      const [type, format] = out.split(':');
+      if (type === 'render') list.push({ file, type, options: { ...renderOptions, format } });
+      else list.push({ file, type, format });
+    }
+  return { outputs: list };
+}
+
+async function download(artifact, status) {
+  const res = await call(artifact.url, { accept: '*/*' });
+  const blob = await res.blob();
+  saveBlob(blob, artifact.name);
+  status.textContent = `downloaded ${artifact.name} (${blob.size} bytes)`;
+}
+
+function outputRow(job, o, report) {
+  const what = o.type === 'render' ? `render ${o.format}` : `→ ${o.format}`;
+  const progress = el('progress', { max: 1, value: o.progress || 0 });
+  progress.setAttribute('aria-label', `progress of ${job.files[o.file].filename} ${what}`);
+  const cell = el('td');
+  if (o.artifact) {
+    const button = el('button', { type: 'button', textContent: `Download ${o.artifact.name}` });
+    button.classList.add('download');
+    button.addEventListener('click', () => download(o.artifact, cell.lastChild).catch(report));
+    cell.append(button, el('span', { className: 'download-status' }));
+  } else if (o.error) {
+    cell.append(`${o.error.code}: ${o.error.message}`);
+  }
+  return el('tr', {}, el('td', { textContent: job.files[o.file].filename }), el('td', { textContent: what }),
+    el('td', { textContent: o.state }, ' ', progress), cell);
+}
+
+function renderJob(box, job, report) {
+  const table = el('table', {},
+    el('caption', { textContent: `Job ${job.id.slice(0, 8)}: ${job.state}` }),
+    el('thead', {}, el('tr', {}, ...['File', 'Output', 'State', 'Artifact'].map((h) => el('th', { scope: 'col', textContent: h })))),
+    el('tbody', {}, ...job.outputs.map((o) => outputRow(job, o, report))));
+  box.replaceChildren(table);
+  box.dataset.state = job.state;
+}
+
+export function bindJobs({ form, files, list, renderOptions, report }) {
+  form.addEventListener('submit', async (e) => {
+    e.preventDefault();
+    const chosen = [...files.files];
+    const outputs = [...form.querySelectorAll('input[name=out]:checked')].map((c) => c.value);
+    if (!chosen.length || !outputs.length) {
+      report(new Error('Choose at least one file and one output for the job.'));
+      return;
+    }
+    const body = new FormData();
+    for (const f of chosen) body.append('file', f, f.name);
+    body.append('job', new Blob([JSON.stringify(jobSpec(chosen.length, outputs, renderOptions()))], { type: 'application/json' }));
+    const submit = form.querySelector('button[type=submit]');
+    submit.disabled = true;
+    try {
+      let job = await (await call('/v1/jobs', { method: 'POST', body })).json();
+      const box = el('div', { className: 'job' });
+      box.dataset.id = job.id;
+      list.prepend(box);
+      renderJob(box, job, report);
+      while (!DONE.has(job.state)) {
+        await new Promise((r) => setTimeout(r, POLL_MS));
+        job = await (await call(job.url)).json();
+        renderJob(box, job, report);
+      }
+    } catch (err) {
+      report(err);
+    } finally {
+      submit.disabled = false;
+    }
+  });
+}
+
+export function bindConversions({ form, file, format, result, currentFile, report }) {
+  form.addEventListener('submit', async (e) => {
+    e.preventDefault();
+    const input = file.files[0] || currentFile();
+    if (!input) {
+      report(new Error('Choose a file to convert (or load one to render first).'));
+      return;
+    }
+    result.textContent = `Converting ${input.name}…`;
+    try {
+      const res = await call('/v1/conversions', { method: 'POST', body: uploadForm(input, { format: format.value }), retry: true });
+      const doc = await res.json();
+      const name = dispositionName(res, input.name.replace(/\.[^.]*$/, '') + '.' + format.value);
+      const blob = new Blob([base64Bytes(doc.data_base64)], { type: doc.content_type });
+      saveBlob(blob, name);
+      const t = doc.timings_ms;
+      result.textContent = `${doc.input_format} → ${doc.output_format}: ${doc.faces} faces` +
+        (doc.triangles ? `, ${doc.triangles} triangles` : '') +
+        `, ${blob.size} bytes in ${t.total.toFixed(0)} ms (read ${t.read.toFixed(0)}, write ${t.write.toFixed(0)}); saved as ${name}`;
+    } catch (err) {
+      result.textContent = '';
+      report(err);
+    }
+  });
+}

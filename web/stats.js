@@ -1,0 +1,74 @@
+// "Where the time goes": the stage-time bar of a render's statistics and the
+// iteration histograms of the method comparison.
+
+const STAGES = [
+  ['queue', 'queue', '#b0b7c3'],
+  ['read', 'read', '#6c8ebf'],
+  ['nurbs_convert', 'NURBS conversion', '#4a6fa5'],
+  ['mesh', 'meshing', '#82b366'],
+  ['prepare', 'prepare', '#5a8f47'],
+  ['preliminary_map', 'preliminary map', '#d6b656'],
+  ['newton', 'Newton', '#d0542e'],
+  ['shade', 'shading', '#9673a6'],
+  ['encode', 'encoding', '#7aa6a6'],
+];
+
+const fmt = (ms) => (ms >= 100 ? ms.toFixed(0) : ms >= 10 ? ms.toFixed(1) : ms.toFixed(2));
+
+function el(tag, props = {}, ...children) {
+  const e = document.createElement(tag);
+  Object.assign(e, props);
+  e.append(...children);
+  return e;
+}
+
+// The bar (`bar`, flex children sized by time) and its legend list (`list`).
+export function showStages(bar, list, statistics) {
+  const t = statistics.timings_ms || {};
+  const total = t.total || 0;
+  const parts = STAGES.map(([key, label, colour]) => ({ key, label, colour, ms: t[key] || 0 }));
+  const other = Math.max(0, total - parts.reduce((s, p) => s + p.ms, 0));
+  parts.push({ key: 'other', label: 'other (HTTP, set-up)', colour: '#e3e6ea', ms: other });
+  bar.replaceChildren();
+  list.replaceChildren();
+  for (const p of parts) {
+    if (p.ms <= 0) continue;
+    const seg = el('div', { title: `${p.label}: ${fmt(p.ms)} ms` });
+    seg.style.flexGrow = String(p.ms);
+    seg.style.background = p.colour;
+    seg.dataset.stage = p.key;
+    bar.append(seg);
+    const swatch = el('span', { className: 'swatch' });
+    swatch.style.background = p.colour;
+    list.append(el('li', {}, swatch, `${p.label} ${fmt(p.ms)} ms`));
+  }
+  list.append(el('li', {}, `total ${fmt(total)} ms (${statistics.cache === 'hit' ? 'cached scene' : 'imported'})`));
+  bar.setAttribute('aria-label', `Stage times of the last render, total ${fmt(total)} ms`);
+}
+
+// Histogram bars of {iterations: count}, scaled to `maxCount` so that two
+// histograms side by side compare.
+export function showHistogram(box, histogram, maxCount, maxK) {
+  box.replaceChildren();
+  const parts = [];
+  for (let k = 0; k <= maxK; k++) {
+    const n = histogram[String(k)] || 0;
+    const bar = el('div', { title: `${k} iterations: ${n} pixels` }, el('span', {}, String(k)));
+    bar.style.height = `${(100 * n) / (maxCount || 1)}%`;
+    box.append(bar);
+    if (n) parts.push(`${k}: ${n}`);
+  }
+  box.setAttribute('aria-label', `${box.getAttribute('aria-label').split(':')[0]}: ${parts.join(', ')}`);
+}
+
+export function histogramBounds(...histograms) {
+  let maxCount = 0, maxK = 0;
+  for (const h of histograms)
+    for (const [k, n] of Object.entries(h)) {
+      maxCount = Math.max(maxCount, n);
+      maxK = Math.max(maxK, Number(k));
+    }
+  return { maxCount, maxK };
+}
+
+export { fmt };
