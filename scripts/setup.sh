@@ -14,6 +14,9 @@ cd "$(dirname "$0")/.."
 # are in libclang-rt-14-dev, which clang's packages only recommend (not installed
 # with --no-install-recommends). libfuzzer-14-dev is not needed: it holds a libFuzzer
 # for linking by hand, not the runtime that clang's -fsanitize=fuzzer links.
+# libpq-dev: the PostgreSQL job store (nurbsrt serve --job-store postgresql://...);
+# postgresql: the server the multi-instance tests start themselves (tests/scale_out.sh,
+# tests/api_postgres.sh: initdb and pg_ctl from /usr/lib/postgresql/15/bin).
 PACKAGES=(
   cmake ninja-build pkg-config g++ git ca-certificates
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
@@ -22,6 +25,7 @@ PACKAGES=(
   libfontconfig-dev
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
   libsqlite3-dev sqlite3
+  libpq-dev postgresql
   iproute2
   clang libclang-rt-14-dev
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
