@@ -134,6 +134,9 @@ def test_three_instances_survive_losing_one():
                    "AND state IN ('queued', 'running')")
         victim.proc.kill()
         t_kill = time.monotonic()
+        # When its leases run out, in the database's clock, seen from now.
+        (expiry_s,), = sql("SELECT (MAX(lease_expires_ms) - (extract(epoch FROM clock_timestamp()) * 1000)::bigint) "
+                           "/ 1000.0 FROM job_outputs WHERE lease_owner = 'inst-c' AND lease_token <> ''")
         victim.proc.wait(timeout=10)
         assert held, "inst-c held nothing when killed"
         survivors = insts[:2]
@@ -176,7 +179,8 @@ def test_three_instances_survive_losing_one():
         assert sum(1 for j in on_victim if finished[j]["state"] == "succeeded") == len(on_victim)
         print(f"scale_out: {JOBS} jobs ({2 * JOBS} outputs) on 3 instances, inst-c SIGKILLed holding "
               f"{len(held)} output(s); {rerun} output(s) re-run after the kill; every output completed exactly once; "
-              f"lease {LEASE_S} s: the dead instance's work resumed {resume_s:.1f} s after the kill; "
+              f"lease {LEASE_S} s: its lease expired {max(float(expiry_s or 0), 0):.1f} s after the kill and its work "
+              f"was taken over {resume_s:.1f} s after the kill (by the first runner to come free); "
               f"{len(on_victim)} jobs submitted to inst-c all succeeded; outputs completed by instance: {by_owner}; "
               f"all jobs done in {total_s:.1f} s")
     finally:
