@@ -183,7 +183,11 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
         if (const auto* err = dynamic_cast<const Error*>(&e)) throw *err;
         throw Error(ErrorCode::io, std::string("cannot store the job: ") + e.what());
     }
-    cv_.notify_one();
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        ++submissions_;
+    }
+    cv_.notify_all();  // the sweeper and the heartbeat wait on cv_ too: notify_one could wake only them
 }
 
 JobStore::DeleteOutcome JobService::remove(const std::string& id) {
@@ -272,6 +276,11 @@ void JobService::run_loop() {
         // at the next start (SQLite) or when its lease expires (PostgreSQL).
         std::optional<JobClaim> claim;
         bool failed = false;
+        uint64_t seen = 0;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            seen = submissions_;
+        }
         try {
             claim = store_->claim_next(now_ms(), kMaxJobAttempts);
             if (claim) run_claim(*claim);
@@ -282,8 +291,11 @@ void JobService::run_loop() {
                           -1, ' ', false, kReplaceBadUtf8));
         }
         if (!claim || failed) {
+            // Idle: a submission to this instance wakes the runner at once; work
+            // submitted to other instances (a shared store) is found by the poll.
             std::unique_lock<std::mutex> lock(m_);
-            cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_; });
+            cv_.wait_for(lock, std::chrono::seconds(1),
+                         [this, seen, failed] { return stopping_ || (!failed && submissions_ != seen); });
         }
     }
 }

@@ -76,6 +76,7 @@ private:
     std::mutex m_;
     std::condition_variable cv_;
     bool stopping_ = false;
+    uint64_t submissions_ = 0;  // jobs submitted here: an idle runner wakes when it changes
     struct Active {
         JobClaim claim;
         std::shared_ptr<std::atomic<bool>> cancel;
