@@ -106,6 +106,19 @@ void add_serve_command(CLI::App& app) {
     cmd->add_option("--job-retention", c->job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
         ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--job-store", c->job_store,
+                    "where batch jobs are queued: empty = SQLite in DATA_DIR/jobs.db (one instance);\n"
+                    "postgresql://user[:password]@host[:port]/db = one queue for every instance started\n"
+                    "with it and the same --data-dir (a shared volume: inputs and artifacts live there);\n"
+                    "give a password in PGPASSWORD or ~/.pgpass rather than here (ps shows arguments)")
+        ->envname("NURBSRT_JOB_STORE");
+    cmd->add_option("--lease-seconds", c->lease_s,
+                    "PostgreSQL job store: an output a dead instance was running is taken over by another\n"
+                    "this long after its last heartbeat (renewed every third of it)")
+        ->envname("NURBSRT_LEASE_SECONDS")->check(CLI::Range(1.0, 86400.0))->capture_default_str();
+    cmd->add_option("--instance-id", c->instance_id,
+                    "this instance's name in leases, logs and metrics (default: host name + random suffix)")
+        ->envname("NURBSRT_INSTANCE_ID");
     cmd->callback([c, upload_mb, import_memory_mb, cache_mb, body_rate_kib, budget_mb, render_mb] {
         c->memory_budget_bytes = static_cast<size_t>(*budget_mb * (1 << 20));
         c->max_render_bytes = static_cast<size_t>(*render_mb * (1 << 20));

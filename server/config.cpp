@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <string>
 
@@ -81,6 +82,12 @@ void ServerConfig::validate() const {
     if (max_job_files < 1 || max_job_files > 10000) fail("max job files must be in 1..10000");
     if (max_job_outputs < 1 || max_job_outputs > 10000) fail("max job outputs must be in 1..10000");
     if (!(job_retention_s > 0)) fail("job retention must be positive");
+    if (!(lease_s >= 1 && lease_s <= 86400)) fail("lease seconds must be in 1..86400");
+    if (!job_store.empty() && job_store.rfind("postgresql://", 0) != 0 && job_store.rfind("postgres://", 0) != 0)
+        fail("job store must be a postgresql:// URL (or empty for SQLite in the data dir)");
+    for (const char ch : instance_id)
+        if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_' && ch != '.')
+            fail("instance id may hold only letters, digits, '-', '_' and '.'");
 }
 
 }  // namespace nurbsrt::server

@@ -61,6 +61,18 @@ struct ServerConfig {
     int max_job_files = 16;          // files per job
     int max_job_outputs = 64;        // outputs per job
     double job_retention_s = 7 * 86400.0;  // finished jobs are deleted this long after they finished
+    // Where jobs are kept: empty = SQLite in DATA_DIR/jobs.db (one instance);
+    // postgresql://user@host:port/db = a queue shared by every instance started
+    // with it and the same DATA_DIR (a shared volume holding inputs and artifacts).
+    std::string job_store;
+    // PostgreSQL: how long a claimed output stays this instance's without a
+    // heartbeat (renewed every third of it). It bounds how late a dead
+    // instance's work resumes elsewhere; too short, and a stalled but live
+    // instance (a database hiccup, a long GC-like pause of the machine) loses
+    // work it then repeats. 30 s: an order of magnitude above a database
+    // round trip under load, small next to the minutes a render may take.
+    double lease_s = 30;
+    std::string instance_id;  // names this process in leases, logs, metrics (default: host name + random)
 
     // Throws nurbsrt::Error(invalid_argument) with a message naming the setting.
     void validate() const;

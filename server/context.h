@@ -20,7 +20,8 @@ struct ServerContext {
           gate(c.workers, c.max_queue),
           render_gate(c.max_renders, c.max_queue, c.render_memory_capacity()),
           cache(c.cache_bytes),
-          scratch(c.data_dir) {}
+          // A shared job store: scratch files apart per instance in the shared data dir.
+          scratch(c.data_dir, c.job_store.empty() ? std::string() : c.instance_id) {}
     const ServerConfig config;
     AdmissionGate gate;         // imports and conversions: child processes, by count
     AdmissionGate render_gate;  // renders: by estimated memory within the budget

@@ -77,13 +77,32 @@ std::string without_paths(const std::string& message, const std::string& dir, co
 
 }  // namespace
 
-JobService::JobService(ServerContext& ctx) : ctx_(ctx), jobs_dir_(ctx.config.data_dir + "/jobs") {
+JobService::JobService(ServerContext& ctx)
+    : ctx_(ctx), jobs_dir_(ctx.config.data_dir + "/jobs"), instance_(ctx.config.instance_id) {
     std::error_code ec;
     fs::create_directories(jobs_dir_, ec);
     if (ec || ::chmod(jobs_dir_.c_str(), 0700) != 0)
         throw Error(ErrorCode::io, "cannot create the job directory " + jobs_dir_);
-    store_ = std::make_shared<JobStore>(ctx.config.data_dir + "/jobs.db");
-
+    // Inputs and artifacts go there: find out now, not at the first job.
+    try {
+        const std::string probe = jobs_dir_ + "/.write-test-" + new_request_id();
+        write_file(probe, "x");
+        fs::remove(probe, ec);
+    } catch (const Error&) {
+        throw Error(ErrorCode::io, "the job directory " + jobs_dir_ + " is not writable");
+    }
+    if (is_postgres_url(ctx.config.job_store))
+        store_ = open_postgres_job_store(ctx.config.job_store, instance_, ctx.config.lease_s);
+    else
+        store_ = open_sqlite_job_store(ctx.config.job_store.empty() ? ctx.config.data_dir + "/jobs.db"
+                                                                    : ctx.config.job_store);
+    log_event("job_store", nlohmann::json{{"store", store_->describe()}, {"instance", instance_},
+                                          {"shared", store_->shared()}, {"lease_ms", store_->lease_ms()}}
+                               .dump());
+    if (store_->shared()) {
+        sweep();
+        return;  // every other instance's files are in flight in the shared directory
+    }
     const RecoveryReport r = store_->recover(kMaxJobAttempts, now_ms());
     for (const std::string& id : r.removed) remove_files(id);
     if (!r.requeued.empty() || !r.failed.empty() || !r.removed.empty())
@@ -126,6 +145,7 @@ void JobService::start() {
     stopping_ = false;
     for (int i = 0; i < ctx_.config.job_runners; ++i) runners_.emplace_back([this] { run_loop(); });
     sweeper_ = std::thread([this] { sweep_loop(); });
+    if (store_->lease_ms() > 0) heartbeat_ = std::thread([this] { heartbeat_loop(); });
 }
 
 void JobService::stop() {
@@ -133,12 +153,13 @@ void JobService::stop() {
         std::lock_guard<std::mutex> lock(m_);
         if (stopping_ && runners_.empty()) return;
         stopping_ = true;
-        for (auto& [id, flag] : cancel_flags_) flag->store(true);
+        for (auto& [key, a] : active_) a.cancel->store(true);
     }
     cv_.notify_all();
     for (std::thread& t : runners_) t.join();
     runners_.clear();
     if (sweeper_.joinable()) sweeper_.join();
+    if (heartbeat_.joinable()) heartbeat_.join();
 }
 
 void JobService::submit(JobRecord& job, const std::vector<const std::string*>& input_bytes) {
@@ -162,7 +183,11 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
         if (const auto* err = dynamic_cast<const Error*>(&e)) throw *err;
         throw Error(ErrorCode::io, std::string("cannot store the job: ") + e.what());
     }
-    cv_.notify_one();
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        ++submissions_;
+    }
+    cv_.notify_all();  // the sweeper and the heartbeat wait on cv_ too: notify_one could wake only them
 }
 
 JobStore::DeleteOutcome JobService::remove(const std::string& id) {
@@ -172,8 +197,10 @@ JobStore::DeleteOutcome JobService::remove(const std::string& id) {
     } else if (outcome == JobStore::DeleteOutcome::canceling) {
         // The runner registered its flag before it checks the job's state for
         // the next output, so either it sees `canceled` there or the flag here.
+        // Runners on other instances see it at their next heartbeat.
         std::lock_guard<std::mutex> lock(m_);
-        if (auto it = cancel_flags_.find(id); it != cancel_flags_.end()) it->second->store(true);
+        for (auto& [key, a] : active_)
+            if (a.claim.id == id) a.cancel->store(true);
     }
     return outcome;
 }
@@ -187,7 +214,37 @@ int JobService::sweep() {
             ++removed;
         }
     if (removed) log_event("jobs_expired", nlohmann::json{{"removed", removed}}.dump());
+    if (store_->shared()) sweep_shared_leftovers();
     return removed;
+}
+
+void JobService::sweep_shared_leftovers() {
+    // No start-up sweep runs on a shared data dir (other instances' files are in
+    // flight there), so what a killed instance left is removed by age instead:
+    // a partial artifact once no run could still be writing it (a conversion
+    // writes for at most the import time limit, a render writes at its end), a
+    // directory without a job once its submission must have ended or failed.
+    using clock = fs::file_time_type::clock;
+    const auto partial_age = std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(
+        ctx_.config.import_timeout_s + ctx_.config.render_timeout_s + ctx_.config.lease_s + 60));
+    const auto orphan_age = std::chrono::duration_cast<clock::duration>(std::chrono::hours(1));
+    const auto now = clock::now();
+    std::error_code ec;
+    std::vector<std::string> dirs;
+    for (const auto& entry : fs::directory_iterator(jobs_dir_, ec))
+        if (valid_job_id(entry.path().filename().string())) dirs.push_back(entry.path().filename().string());
+    for (const std::string& id : dirs) {
+        const auto dir_time = fs::last_write_time(job_dir(id), ec);
+        if (!ec && now - dir_time > orphan_age && !store_->exists(id)) {
+            remove_files(id);
+            continue;
+        }
+        for (const auto& entry : fs::directory_iterator(job_dir(id), ec)) {
+            if (entry.path().filename().string().rfind("partial-", 0) != 0) continue;
+            const auto t = fs::last_write_time(entry.path(), ec);
+            if (!ec && now - t > partial_age) fs::remove(entry.path(), ec);
+        }
+    }
 }
 
 void JobService::sweep_loop() {
@@ -213,86 +270,133 @@ void JobService::run_loop() {
             std::lock_guard<std::mutex> lock(m_);
             if (stopping_) return;
         }
-        // A store that fails (disk full, database locked for long) must not end
-        // the runner thread, which would end the process: log, pause, go on.
-        // The job stays `running` and is recovered at the next start.
-        std::optional<JobRecord> job;
+        // A store that fails (disk full, database locked for long, database
+        // unreachable) must not end the runner thread, which would end the
+        // process: log, pause, go on. The job stays `running` and is recovered
+        // at the next start (SQLite) or when its lease expires (PostgreSQL).
+        std::optional<JobClaim> claim;
         bool failed = false;
+        uint64_t seen = 0;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            seen = submissions_;
+        }
         try {
-            job = store_->claim_next(now_ms());
-            if (job) run_job(*job);
+            claim = store_->claim_next(now_ms(), kMaxJobAttempts);
+            if (claim) run_claim(*claim);
         } catch (const std::exception& e) {
             failed = true;
-            log_event("job_runner_error", nlohmann::json{{"job_id", job ? job->id : std::string()}, {"error", e.what()}}
-                                              .dump(-1, ' ', false, kReplaceBadUtf8));
+            log_event("job_runner_error",
+                      nlohmann::json{{"job_id", claim ? claim->id : std::string()}, {"error", e.what()}}.dump(
+                          -1, ' ', false, kReplaceBadUtf8));
         }
-        if (!job || failed) {
+        if (!claim || failed) {
+            // Idle: a submission to this instance wakes the runner at once; work
+            // submitted to other instances (a shared store) is found by the poll.
             std::unique_lock<std::mutex> lock(m_);
-            cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_; });
+            cv_.wait_for(lock, std::chrono::seconds(1),
+                         [this, seen, failed] { return stopping_ || (!failed && submissions_ != seen); });
         }
     }
 }
 
-void JobService::run_job(JobRecord& job) {
+void JobService::heartbeat_loop() {
+    // A third of the lease: two renewals may fail (a slow database, a long
+    // pause) before another instance may take the work over.
+    const auto interval = std::chrono::milliseconds(std::max<int64_t>(store_->lease_ms() / 3, 100));
+    std::unique_lock<std::mutex> lock(m_);
+    while (!stopping_) {
+        cv_.wait_for(lock, interval, [this] { return stopping_; });
+        if (stopping_) break;
+        std::vector<Active> now;
+        for (const auto& [key, a] : active_) now.push_back(a);
+        lock.unlock();
+        for (const Active& a : now) {
+            try {
+                if (!store_->renew(a.claim)) {
+                    a.cancel->store(true);  // canceled (from any instance) or the lease is lost
+                    log_event("job_claim_stopped", nlohmann::json{{"job_id", a.claim.id}}.dump());
+                }
+            } catch (const std::exception& e) {
+                // The database is unreachable: keep working; the fenced final update decides.
+                log_event("job_heartbeat_failed",
+                          nlohmann::json{{"error", e.what()}}.dump(-1, ' ', false, kReplaceBadUtf8));
+            }
+        }
+        lock.lock();
+    }
+}
+
+void JobService::run_claim(JobClaim& claim) {
     auto cancel = std::make_shared<std::atomic<bool>>(false);
+    uint64_t key = 0;
     {
         std::lock_guard<std::mutex> lock(m_);
-        cancel_flags_[job.id] = cancel;
+        key = next_active_++;
+        active_[key] = Active{claim, cancel};
         if (stopping_) cancel->store(true);
     }
     // The flag is unregistered however this ends.
     struct Unregister {
         JobService& s;
-        const std::string& id;
+        uint64_t key;
         ~Unregister() {
             std::lock_guard<std::mutex> lock(s.m_);
-            s.cancel_flags_.erase(id);
+            s.active_.erase(key);
         }
-    } unregister{*this, job.id};
-    log_event("job_started", nlohmann::json{{"job_id", job.id}, {"attempt", job.attempts}}.dump());
-    bool interrupted_by_stop = false;
-    for (const JobOutput& out : job.outputs) {
-        if (out.state != "queued") continue;  // finished before a restart: its artifact is kept
-        if (cancel->load() || !store_->running(job.id)) break;
+    } unregister{*this, key};
+    log_event("job_started",
+              nlohmann::json{{"job_id", claim.id}, {"attempt", claim.attempts}, {"outputs", claim.run}}.dump());
+    for (const int index : claim.run) {
+        const JobOutput& out = claim.outputs.at(static_cast<size_t>(index));
+        if (cancel->load() || !store_->running(claim.id)) break;
         try {
-            run_output(job, out, cancel);
+            run_output(claim, out, cancel);
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) break;
-            store_->output_failed(job.id, out.index, error_code_name(e.code()),
-                                  without_paths(e.what(), job_dir(job.id), ctx_.scratch.path()), now_ms());
+            store_->output_failed(claim.id, out.index, error_code_name(e.code()),
+                                  without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), now_ms(),
+                                  claim.lease);
         } catch (const std::exception& e) {
-            store_->output_failed(job.id, out.index, "internal", e.what(), now_ms());
+            store_->output_failed(claim.id, out.index, "internal", e.what(), now_ms(), claim.lease);
         }
     }
+    end_claim(claim);
+}
+
+void JobService::end_claim(const JobClaim& claim) {
+    bool interrupted_by_stop = false;
     {
         std::lock_guard<std::mutex> lock(m_);
         interrupted_by_stop = stopping_;
     }
-    if (store_->running(job.id) && interrupted_by_stop) {
-        // Stopped with work left: back to the queue for the next start, not counted as an interrupted run.
-        const auto now = store_->get(job.id);
+    if (store_->running(claim.id) && interrupted_by_stop) {
+        // Stopped with work left: back to the queue, not counted as an interrupted run.
+        const auto now = store_->get(claim.id);
         bool left = false;
         for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{})
-            left = left || o.state == "queued" || o.state == "running";
+            for (const int index : claim.run)
+                left = left || (o.index == index && (o.state == "queued" || o.state == "running"));
         if (left) {
-            store_->requeue(job.id);
-            log_event("job_requeued", nlohmann::json{{"job_id", job.id}}.dump());
+            store_->requeue(claim);
+            log_event("job_requeued", nlohmann::json{{"job_id", claim.id}}.dump());
             return;
         }
     }
-    const std::optional<std::string> state = store_->finish(job.id, now_ms());
+    const std::optional<std::string> state = store_->finish(claim.id, now_ms());
     if (!state) {  // deleted while running
-        store_->remove(job.id);
-        remove_files(job.id);
+        store_->remove(claim.id);
+        remove_files(claim.id);
         ctx_.metrics.count_job_finished("canceled");
-        log_event("job_canceled", nlohmann::json{{"job_id", job.id}}.dump());
+        log_event("job_canceled", nlohmann::json{{"job_id", claim.id}}.dump());
         return;
     }
+    if (*state == "running") return;  // other outputs are still at work (shared store)
     ctx_.metrics.count_job_finished(*state);
-    log_event("job_finished", nlohmann::json{{"job_id", job.id}, {"state", *state}}.dump());
+    log_event("job_finished", nlohmann::json{{"job_id", claim.id}, {"state", *state}}.dump());
 }
 
-void JobService::run_output(const JobRecord& job, const JobOutput& out,
+void JobService::run_output(const JobClaim& job, const JobOutput& out,
                             const std::shared_ptr<std::atomic<bool>>& cancel) {
     // Admission waits as long as it takes (the job is accepted work already),
     // in its place in the gates' order; a cancel or a stop leaves the queue.
@@ -301,14 +405,18 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
     const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
     std::shared_ptr<AdmissionGate::Ticket> ticket;
     if (out.kind != "render") ticket = admit(ctx_, ctx_.gate, 0, patient);
-    if (!store_->output_running(job.id, out.index, now_ms())) throw Error(ErrorCode::canceled, "the job was deleted");
+    if (!store_->output_running(job.id, out.index, now_ms(), job.lease))
+        throw Error(ErrorCode::canceled, "the job was deleted");
     const auto t0 = std::chrono::steady_clock::now();
     const std::string dir = job_dir(job.id);
     const std::string input = dir + "/" + input_name(out.file);
     const std::string final_path = artifact_path(job.id, out.artifact);
     // Written under a temporary name with the same extension (the converter
     // picks the format from it), then renamed: an artifact exists only complete.
-    const std::string partial = dir + "/partial-" + out.artifact;
+    // With leases the name holds the claim's token: a run that lost its lease
+    // and the one that took over never write the same temporary file.
+    const std::string partial =
+        dir + "/partial-" + (job.lease.empty() ? std::string() : job.lease.substr(0, 12) + "-") + out.artifact;
     nlohmann::json result;
     if (out.kind == "render") {
         const RenderRequest r = parse_render_options(out.options_json);
@@ -319,12 +427,12 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
         // The callback may run after this job is gone (a canceled render stops
         // at its next block of rows): it holds the store, not `this`.
         auto last = std::make_shared<std::atomic<int>>(0);
-        control.progress = [store = store_, id = job.id, index = out.index, last](double f) {
+        control.progress = [store = store_, id = job.id, index = out.index, lease = job.lease, last](double f) {
             const int pct = static_cast<int>(f * 100);
             if (pct >= last->load() + 5 && pct < 100) {
                 last->store(pct);
                 try {
-                    store->output_progress(id, index, f);
+                    store->output_progress(id, index, f, lease);
                 } catch (const Error&) {
                     // Progress is advisory; the output's end state is what counts.
                 }
@@ -355,12 +463,21 @@ void JobService::run_output(const JobRecord& job, const JobOutput& out,
                   {"timings_ms", {{"read", report.read_ms}, {"write", report.write_ms}, {"total", total}}}};
     }
     std::error_code ec;
+    // A run whose lease was lost meanwhile leaves the artifact to the run that took over.
+    if (!job.lease.empty() && !store_->renew(job)) {
+        fs::remove(partial, ec);
+        cancel->store(true);
+        throw Error(ErrorCode::canceled, "the lease of this output was lost or its job canceled");
+    }
     fs::rename(partial, final_path, ec);
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
     sync_dir(dir);
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
-    store_->output_succeeded(job.id, out.index, size,
-                             result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), now_ms());
+    if (!store_->output_succeeded(job.id, out.index, size,
+                                  result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), now_ms(),
+                                  job.lease) &&
+        !job.lease.empty())
+        log_event("job_output_fenced", nlohmann::json{{"job_id", job.id}, {"output", out.index}}.dump());
 }
 
 }  // namespace nurbsrt::server

@@ -3,7 +3,10 @@
 // that take queued jobs from the store in submission order and run their
 // outputs one by one through the same admission gate as synchronous renders
 // and conversions, restart recovery at start, cancellation, and the retention
-// sweep. Free of HTTP and JSON headers.
+// sweep. With a shared store (PostgreSQL) several instances run the same
+// queue: a heartbeat renews the leases of the outputs this one runs and stops
+// a run whose job was canceled elsewhere or whose lease was lost. Free of HTTP
+// and JSON headers.
 #pragma once
 
 #include <atomic>
@@ -26,9 +29,12 @@ inline constexpr int kMaxJobAttempts = 2;
 
 class JobService {
 public:
-    // Opens DATA_DIR/jobs.db (throws Error(io) when it cannot), creates
-    // DATA_DIR/jobs, recovers jobs a dead service left running, removes expired
-    // jobs and directories without a job. Runs nothing until start().
+    // Opens the job store (--job-store, or DATA_DIR/jobs.db; throws Error(io)
+    // when it cannot), creates DATA_DIR/jobs and checks it is writable. With
+    // SQLite (one process) it also recovers jobs a dead service left running and
+    // removes directories without a job and partial artifacts; a shared store
+    // skips those sweeps (other instances' files are in flight there) and gets
+    // a lost instance's work back by lease expiry. Runs nothing until start().
     explicit JobService(ServerContext& ctx);
     ~JobService();  // stop()
     JobService(const JobService&) = delete;
@@ -53,22 +59,32 @@ public:
 private:
     void run_loop();
     void sweep_loop();
-    void run_job(JobRecord& job);
-    void run_output(const JobRecord& job, const JobOutput& out, const std::shared_ptr<std::atomic<bool>>& cancel);
+    void heartbeat_loop();
+    void sweep_shared_leftovers();
+    void run_claim(JobClaim& claim);
+    void run_output(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<std::atomic<bool>>& cancel);
+    void end_claim(const JobClaim& claim);
     void remove_files(const std::string& id) const;
     std::string job_dir(const std::string& id) const;
 
     ServerContext& ctx_;
     std::string jobs_dir_;
     std::shared_ptr<JobStore> store_;  // shared: a canceled render's thread may report progress late
+    std::string instance_;
     std::mutex submit_m_;
 
     std::mutex m_;
     std::condition_variable cv_;
     bool stopping_ = false;
-    std::map<std::string, std::shared_ptr<std::atomic<bool>>> cancel_flags_;  // running jobs
+    uint64_t submissions_ = 0;  // jobs submitted here: an idle runner wakes when it changes
+    struct Active {
+        JobClaim claim;
+        std::shared_ptr<std::atomic<bool>> cancel;
+    };
+    std::map<uint64_t, Active> active_;  // claims at work, by a number of their own
+    uint64_t next_active_ = 0;
     std::vector<std::thread> runners_;
-    std::thread sweeper_;
+    std::thread sweeper_, heartbeat_;
 };
 
 }  // namespace nurbsrt::server

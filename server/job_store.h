@@ -1,14 +1,15 @@
-// Persistent store of batch jobs: SQLite in DATA_DIR/jobs.db (WAL, busy
-// timeout, schema version table, prepared statements, every state change in
-// one transaction). Rows only: the inputs and artifacts themselves live on
-// disk under DATA_DIR/jobs/<id>/ (server/job_runner.h). sqlite3.h stays in
-// job_store.cpp. Thread-safe (one connection behind a mutex).
+// Persistent store of batch jobs behind one interface, with two backends:
+// SQLite in DATA_DIR/jobs.db (server/job_store_sqlite.h, one process, the
+// default) and PostgreSQL (server/job_store_pg.h, many instances sharing one
+// queue). Rows only: the inputs and artifacts themselves live on disk under
+// DATA_DIR/jobs/<id>/ (server/job_runner.h). Both keep a schema version table,
+// make every state change in one transaction and are thread-safe. No database
+// header is included here.
 #pragma once
 
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,10 +48,19 @@ struct JobRecord {
     int64_t seq = 0;  // submission order
     std::string state = "queued";
     int64_t created_ms = 0, started_ms = 0, finished_ms = 0;
-    int attempts = 0;  // runs started (a restart interrupting one re-queues it)
+    int attempts = 0;  // runs started (a restart or a lost instance interrupting one re-queues it)
     std::string error_code, error_message;
     std::vector<JobInput> inputs;
     std::vector<JobOutput> outputs;
+};
+
+// Work handed to one runner: the job as it was claimed, the outputs this
+// runner is to run (in order), and the lease that fences its updates. SQLite:
+// every queued output of the job, no lease (one process owns the file).
+// PostgreSQL: one output under a lease token that expires unless renewed.
+struct JobClaim : JobRecord {
+    std::vector<int> run;
+    std::string lease;
 };
 
 struct JobPage {
@@ -65,63 +75,88 @@ struct RecoveryReport {
 
 class JobStore {
 public:
-    // Opens (creating when needed) the database. Throws Error(io) with a clear
-    // message when the file cannot be opened or written, is not a SQLite
-    // database, or has a schema of a newer version.
-    explicit JobStore(const std::string& db_path);
-    ~JobStore();
-    JobStore(const JobStore&) = delete;
-    JobStore& operator=(const JobStore&) = delete;
+    virtual ~JobStore() = default;
 
     // Inserts a queued job with its inputs and outputs (id, created_ms set by the caller).
-    void create(JobRecord& job);
-    std::optional<JobRecord> get(const std::string& id);
-    bool exists(const std::string& id);
+    virtual void create(JobRecord& job) = 0;
+    virtual std::optional<JobRecord> get(const std::string& id) = 0;
+    virtual bool exists(const std::string& id) = 0;
     // Jobs in submission order (newest first or oldest first), optionally of one
     // state, after the cursor `after_seq` (exclusive), at most `limit`.
-    JobPage list(const std::optional<std::string>& state, bool newest_first, int limit,
-                 std::optional<int64_t> after_seq);
-    std::map<std::string, int64_t> count_by_state();
+    virtual JobPage list(const std::optional<std::string>& state, bool newest_first, int limit,
+                         std::optional<int64_t> after_seq) = 0;
+    virtual std::map<std::string, int64_t> count_by_state() = 0;
 
-    // The oldest queued job, now running (attempts + 1, started_ms set on the first run).
-    std::optional<JobRecord> claim_next(int64_t now_ms);
-    // Output transitions; each returns false when the job is gone (deleted).
-    bool output_running(const std::string& id, int output, int64_t now_ms);
-    bool output_progress(const std::string& id, int output, double progress);
-    bool output_succeeded(const std::string& id, int output, int64_t artifact_bytes, const std::string& result_json,
-                          int64_t now_ms);
-    bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
-                       int64_t now_ms);
-    // Ends a running job: succeeded when every output succeeded, failed when
-    // any failed (job error = summary with the first failed output's code).
-    // Returns the final state, or nullopt when the job is gone.
-    std::optional<std::string> finish(const std::string& id, int64_t now_ms);
-    // A running job put back in the queue without counting the run (graceful stop).
-    void requeue(const std::string& id);
+    // The next work, its job now running (started_ms set on the first run).
+    // An output claimed `max_attempts` times whose lease expired each time
+    // fails with code `interrupted` instead (PostgreSQL; SQLite does that in
+    // recover()).
+    virtual std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 2) = 0;
+    // Output transitions; each returns false when the job is gone (deleted) or,
+    // with a lease, when the lease is no longer this claim's (fencing).
+    virtual bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) = 0;
+    virtual bool output_progress(const std::string& id, int output, double progress,
+                                 const std::string& lease = {}) = 0;
+    virtual bool output_succeeded(const std::string& id, int output, int64_t artifact_bytes,
+                                  const std::string& result_json, int64_t now_ms, const std::string& lease = {}) = 0;
+    virtual bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
+                               int64_t now_ms, const std::string& lease = {}) = 0;
+    // Ends a running job once every output is finished: succeeded when every
+    // output succeeded, failed when any failed (job error = summary with the
+    // first failed output's code). Returns the final state; "running" when
+    // outputs remain (other instances run them) or another instance finished
+    // it; nullopt when the job is gone or canceled.
+    virtual std::optional<std::string> finish(const std::string& id, int64_t now_ms) = 0;
+    // Graceful stop: the claim's unfinished outputs go back to the queue
+    // without counting the run (the job too, when nothing else of it runs).
+    virtual void requeue(const JobClaim& claim) = 0;
     // DELETE: a queued or finished job's rows are deleted (removed); a running
-    // one becomes `canceled` (canceling) and its runner removes it once its
+    // one becomes `canceled` (canceling) and its runners remove it once their
     // current step stops; a job already canceling stays so.
     enum class DeleteOutcome { not_found, removed, canceling };
-    DeleteOutcome delete_job(const std::string& id, int64_t now_ms);
+    virtual DeleteOutcome delete_job(const std::string& id, int64_t now_ms) = 0;
     // Deletes the job's rows unconditionally; false when there were none.
-    bool remove(const std::string& id);
+    virtual bool remove(const std::string& id) = 0;
     // True while the job is running (not canceled, not deleted).
-    bool running(const std::string& id);
+    virtual bool running(const std::string& id) = 0;
+    // Heartbeat of a claim at work: extends its lease. False when the claim
+    // should stop: the job is no longer running (canceled from any instance,
+    // deleted) or the lease was lost (expired and taken by another instance).
+    virtual bool renew(const JobClaim& claim) = 0;
 
-    // At start: jobs found running were interrupted. Those with fewer than
-    // `max_attempts` runs go back to the queue (their unfinished outputs too);
-    // the others fail with code `interrupted`. Finished outputs are kept.
-    // Jobs found `canceled` (deleted while running) are removed.
-    RecoveryReport recover(int max_attempts, int64_t now_ms);
-    // Succeeded and failed jobs that finished before `before_ms` (ids), for the
-    // retention sweep (canceled ones are being removed by their runner).
-    std::vector<std::string> finished_before(int64_t before_ms);
-    std::vector<std::string> all_ids();
+    // At start (SQLite, one process): jobs found running were interrupted.
+    // Those with fewer than `max_attempts` runs go back to the queue (their
+    // unfinished outputs too); the others fail with code `interrupted`.
+    // Finished outputs are kept. Jobs found `canceled` are removed. With a
+    // shared store this does nothing: work of a lost instance comes back when
+    // its lease expires (claim_next).
+    virtual RecoveryReport recover(int max_attempts, int64_t now_ms) = 0;
+    // Jobs the retention sweep removes: succeeded and failed ones that
+    // finished before `before_ms`; with a shared store also canceled ones
+    // that no live lease holds any more (their runner died before removing).
+    virtual std::vector<std::string> finished_before(int64_t before_ms) = 0;
+    virtual std::vector<std::string> all_ids() = 0;
 
-private:
-    struct Impl;
-    std::unique_ptr<Impl> impl_;
-    std::mutex m_;
+    // Several instances share this store (and the data directory): nothing
+    // there belongs to this process alone, so no start-up sweep may run.
+    virtual bool shared() const = 0;
+    // Lease duration in ms (0: no leases, nothing to renew).
+    virtual int64_t lease_ms() const = 0;
+    // Shown in logs and errors: the backend and where (never a password).
+    virtual std::string describe() const = 0;
 };
+
+// SQLite in one file (created when needed). Throws Error(io) with a clear
+// message when the file cannot be opened or written, is not a SQLite
+// database, or has a schema of a newer version.
+std::unique_ptr<JobStore> open_sqlite_job_store(const std::string& db_path);
+// PostgreSQL at `url` (postgresql://user[:password]@host[:port]/db or a libpq
+// key=value string). `instance` names this process in the lease rows.
+// Throws Error(io) when the server cannot be reached, refuses the login, or
+// holds a schema of a newer version.
+std::unique_ptr<JobStore> open_postgres_job_store(const std::string& url, const std::string& instance,
+                                                  double lease_s);
+// True when `spec` selects PostgreSQL (postgresql:// or postgres:// URL).
+bool is_postgres_url(const std::string& spec);
 
 }  // namespace nurbsrt::server

@@ -104,6 +104,12 @@ std::string Metrics::exposition(const Gauges& g) const {
     out += "# TYPE nurbsrt_jobs gauge\n";
     for (const auto& [state, n] : g.jobs_by_state)
         out += "nurbsrt_jobs{state=\"" + state + "\"} " + std::to_string(n) + "\n";
+    // An info metric (Prometheus naming practice): scrapes of several instances
+    // behind one balancer tell which instance answered; the job gauges above
+    // come from the store, so with a shared store they are the whole queue.
+    out += "# HELP nurbsrt_instance_info This instance and its job store backend.\n";
+    out += "# TYPE nurbsrt_instance_info gauge\n";
+    out += "nurbsrt_instance_info{instance=\"" + g.instance + "\",job_store=\"" + g.job_store + "\"} 1\n";
     auto gauge = [&](const char* name, const char* help, double v) {
         out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " gauge\n" + name + " " + num(v) + "\n";
     };

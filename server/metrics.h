@@ -27,7 +27,8 @@ public:
         int renders_active = 0, renders_queued = 0;
         size_t render_memory_used = 0, render_memory_capacity = 0;
         size_t cache_bytes = 0, cache_entries = 0, cache_capacity = 0;
-        std::map<std::string, int64_t> jobs_by_state;  // from the job store
+        std::map<std::string, int64_t> jobs_by_state;  // from the job store (shared: every instance's jobs)
+        std::string instance, job_store;               // this process's id; the store's backend
     };
     std::string exposition(const Gauges& g) const;
 

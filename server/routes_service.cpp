@@ -45,6 +45,8 @@ void add_service_routes(httplib::Server& svr, ServerContext& ctx) {
         g.cache_entries = ctx.cache.entries();
         g.cache_capacity = ctx.cache.capacity();
         if (ctx.jobs) g.jobs_by_state = ctx.jobs->store().count_by_state();
+        g.instance = ctx.config.instance_id;
+        g.job_store = ctx.config.job_store.empty() ? "sqlite" : "postgresql";
         res.set_content(ctx.metrics.exposition(g), "text/plain; version=0.0.4; charset=utf-8");
     });
     svr.Get("/v1/openapi.json", [](const httplib::Request&, httplib::Response& res) {

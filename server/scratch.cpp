@@ -1,6 +1,7 @@
 #include "server/scratch.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -21,7 +22,35 @@ TempFile::~TempFile() {
     if (!path_.empty()) unlink(path_.c_str());
 }
 
-ScratchDir::ScratchDir(const std::string& data_dir) {
+ScratchDir::~ScratchDir() {
+    if (lock_fd_ >= 0) close(lock_fd_);
+}
+
+void ScratchDir::own_instance_dir(const std::string& instance) {
+    std::error_code ec;
+    // Directories of instances that are gone: their lock is free.
+    for (const auto& entry : fs::directory_iterator(dir_, ec)) {
+        if (entry.path().extension() != ".lock") continue;
+        const int fd = ::open(entry.path().c_str(), O_RDWR | O_CLOEXEC);
+        if (fd < 0) continue;
+        if (flock(fd, LOCK_EX | LOCK_NB) == 0) {
+            fs::path dead = entry.path();
+            fs::remove_all(dead.replace_extension(), ec);
+            fs::remove(entry.path(), ec);
+        }
+        close(fd);
+    }
+    const std::string lock = dir_ + "/" + instance + ".lock";
+    lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+    if (lock_fd_ < 0 || flock(lock_fd_, LOCK_EX | LOCK_NB) != 0)
+        throw Error(ErrorCode::io, "cannot lock '" + lock + "': is another instance running with the id " + instance +
+                                       "?");
+    dir_ += "/" + instance;
+    fs::create_directories(dir_, ec);
+    if (ec || chmod(dir_.c_str(), 0700) != 0) throw Error(ErrorCode::io, "cannot create '" + dir_ + "'");
+}
+
+ScratchDir::ScratchDir(const std::string& data_dir, const std::string& instance) {
     std::error_code ec;
     fs::create_directories(data_dir, ec);
     if (ec) throw Error(ErrorCode::io, "cannot create data dir '" + data_dir + "': " + ec.message());
@@ -30,6 +59,7 @@ ScratchDir::ScratchDir(const std::string& data_dir) {
     if (ec) throw Error(ErrorCode::io, "cannot create '" + dir_ + "': " + ec.message());
     if (chmod(dir_.c_str(), 0700) != 0)
         throw Error(ErrorCode::io, "cannot make '" + dir_ + "' private: " + std::strerror(errno));
+    if (!instance.empty()) own_instance_dir(instance);
     // Remove leftovers of an earlier run: only files with the names we generate,
     // so a data dir pointed at a shared place never loses anything else.
     static const char* ours[] = {"upload-", "render-", "converted-", "nurbsrt-import-", "nurbsrt-convert-"};

@@ -4,8 +4,10 @@
 #include <nlohmann/json.hpp>
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cerrno>
 #include <cstdio>
@@ -254,10 +256,22 @@ void install_request_log(GuardedServer& svr, ServerContext& ctx) {
     });
 }
 
+// host name + 8 random hex digits: unique per process, readable in logs and leases.
+std::string default_instance_id() {
+    char host[256] = {0};
+    if (gethostname(host, sizeof host - 1) != 0 || !*host) std::snprintf(host, sizeof host, "nurbsrt");
+    std::string id;
+    for (const char* p = host; *p && id.size() < 40; ++p)
+        id += std::isalnum(static_cast<unsigned char>(*p)) || *p == '-' ? *p : '-';
+    return id + "-" + new_request_id().substr(0, 8);
+}
+
 }  // namespace
 
-int run_server(const ServerConfig& config) {
-    config.validate();
+int run_server(const ServerConfig& given) {
+    given.validate();
+    ServerConfig config = given;
+    if (config.instance_id.empty()) config.instance_id = default_instance_id();
     // SIGINT/SIGTERM are taken by a waiting thread (blocked everywhere else,
     // before any thread starts); a peer closing its socket must not kill us.
     sigset_t stop_signals;
@@ -315,7 +329,9 @@ int run_server(const ServerConfig& config) {
                                    {"max_connections_per_client", config.max_connections_per_client},
                                    {"job_runners", config.job_runners},
                                    {"max_queued_jobs", config.max_queued_jobs},
-                                   {"job_retention_s", config.job_retention_s}};
+                                   {"job_retention_s", config.job_retention_s},
+                                   {"instance", config.instance_id},
+                                   {"job_store", ctx.jobs->store().describe()}};
     log_event("listening", fields.dump());
     jobs.start();
 

@@ -2,6 +2,8 @@
 # API integration tests: starts the real `nurbsrt serve` on a free loopback port
 # with a temporary data dir, runs tests/api/ with Debian's python3 (pytest,
 # requests, jsonschema), then stops the server. Usage: tests/api.sh path/to/nurbsrt
+# With NURBSRT_API_JOB_STORE set (tests/api_postgres.sh) the server keeps its
+# jobs there instead of SQLite in the data dir.
 set -euo pipefail
 BIN=$(realpath "${1:?usage: tests/api.sh path/to/nurbsrt}")
 HERE=$(cd "$(dirname "$0")" && pwd)
@@ -24,6 +26,7 @@ trap cleanup EXIT
 "$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
   --workers 2 --max-queue 2 --queue-timeout 60 --max-upload-mb 4 --max-dimension 4096 \
   --max-pixels 4000000 --import-timeout 60 --render-timeout 60 --render-threads 2 \
+  ${NURBSRT_API_JOB_STORE:+--job-store "$NURBSRT_API_JOB_STORE"} \
   2> "$TMP/server.log" &
 SERVER_PID=$!
 for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done

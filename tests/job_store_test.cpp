@@ -12,7 +12,7 @@
 #include <fstream>
 
 #include "renderer/error.h"
-#include "server/job_store.h"
+#include "server/job_store_sqlite.h"
 
 namespace fs = std::filesystem;
 using nurbsrt::Error;
@@ -20,6 +20,7 @@ using nurbsrt::ErrorCode;
 using nurbsrt::server::JobOutput;
 using nurbsrt::server::JobRecord;
 using nurbsrt::server::JobStore;
+using nurbsrt::server::SqliteJobStore;
 
 namespace {
 
@@ -61,7 +62,7 @@ protected:
 };
 
 TEST_F(JobStoreTest, CreateGetAndListWithPaging) {
-    JobStore store(db_);
+    SqliteJobStore store(db_);
     for (int n = 1; n <= 5; ++n) {
         JobRecord j = make_job(n);
         store.create(j);
@@ -110,7 +111,7 @@ TEST_F(JobStoreTest, CreateGetAndListWithPaging) {
 }
 
 TEST_F(JobStoreTest, StateTransitions) {
-    JobStore store(db_);
+    SqliteJobStore store(db_);
     JobRecord a = make_job(1), b = make_job(2);
     store.create(a);
     store.create(b);
@@ -173,7 +174,7 @@ TEST_F(JobStoreTest, StateTransitions) {
 TEST_F(JobStoreTest, RecoveryAfterRestart) {
     const JobRecord j1 = make_job(1), j2 = make_job(2), j3 = make_job(3);
     {
-        JobStore store(db_);
+        SqliteJobStore store(db_);
         for (JobRecord j : {j1, j2, j3}) store.create(j);
         // j1 ran once and was cut short after its first output.
         store.claim_next(1000);
@@ -184,7 +185,7 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         store.claim_next(1300);
     }
     {
-        JobStore store(db_);  // the service restarted
+        SqliteJobStore store(db_);  // the service restarted
         const auto r = store.recover(2, 2000);
         EXPECT_EQ(r.requeued, (std::vector<std::string>{j1.id, j2.id}));
         EXPECT_TRUE(r.failed.empty());
@@ -201,7 +202,7 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         EXPECT_EQ(store.get(j1.id)->started_ms, 1000);  // the first start is kept
     }
     {
-        JobStore store(db_);
+        SqliteJobStore store(db_);
         const auto r = store.recover(2, 3000);
         EXPECT_EQ(r.failed, (std::vector<std::string>{j1.id, j2.id}));
         const auto a = store.get(j1.id);
@@ -222,14 +223,14 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         store.claim_next(3200);
         store.delete_job(j3.id, 3300);
     }
-    JobStore store(db_);
+    SqliteJobStore store(db_);
     const auto r = store.recover(2, 4000);
     EXPECT_EQ(r.removed, (std::vector<std::string>{j3.id}));
     EXPECT_FALSE(store.get(j3.id));
 }
 
 TEST_F(JobStoreTest, RetentionQuery) {
-    JobStore store(db_);
+    SqliteJobStore store(db_);
     for (int n = 1; n <= 3; ++n) {
         JobRecord j = make_job(n, 1);
         store.create(j);
@@ -252,7 +253,7 @@ TEST_F(JobStoreTest, CorruptDatabaseIsAClearError) {
         out << std::string(8192, 'x');
     }
     try {
-        JobStore store(db_);
+        SqliteJobStore store(db_);
         FAIL() << "a corrupt database opened";
     } catch (const Error& e) {
         EXPECT_EQ(e.code(), ErrorCode::io);
@@ -264,7 +265,7 @@ TEST_F(JobStoreTest, CorruptDatabaseIsAClearError) {
 
 void expect_io_error_naming(const std::string& path) {
     try {
-        JobStore store(path);
+        SqliteJobStore store(path);
         ADD_FAILURE() << "the database " << path << " opened";
     } catch (const Error& e) {
         EXPECT_EQ(e.code(), ErrorCode::io);
@@ -288,14 +289,14 @@ TEST_F(JobStoreTest, UnwritableDatabaseIsAClearError) {
 }
 
 TEST_F(JobStoreTest, NewerSchemaIsRefused) {
-    { JobStore store(db_); }
+    { SqliteJobStore store(db_); }
     {
         // Bump the version as a newer nurbsrt would (the store has no SQL entry point: use the shell).
         std::string cmd = "sqlite3 '" + db_ + "' 'UPDATE schema_version SET version = 99'";
         if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "sqlite3 shell not available";
     }
     try {
-        JobStore store(db_);
+        SqliteJobStore store(db_);
         FAIL() << "a newer schema was accepted";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("schema version 99"), std::string::npos) << e.what();

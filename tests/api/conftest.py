@@ -1,5 +1,6 @@
 """Shared fixtures of the API tests: the running server (started by tests/api.sh),
 extra servers with special settings, and validation against api_schema/openapi.json."""
+import hashlib
 import json
 import os
 import pathlib
@@ -19,6 +20,21 @@ OCCT_DATA = pathlib.Path("/usr/share/opencascade/data")
 SCREW = OCCT_DATA / "step" / "screw.step"
 BEARING = OCCT_DATA / "iges" / "bearing.iges"
 TIMEOUT = 180  # seconds, for every HTTP call: no test can hang
+# Set by tests/api_postgres.sh: the suite runs against the PostgreSQL job store.
+PG_ADMIN = os.environ.get("NURBSRT_TEST_PG_ADMIN")
+sqlite_only = pytest.mark.skipif(
+    bool(PG_ADMIN), reason="SQLite job store only: the start-up sweeps of a one-process data dir (with PostgreSQL "
+                           "the data dir is shared, nothing is swept at start; tests/scale_out.sh covers a lost instance)")
+
+
+def pg_store_for(data_dir):
+    """The PostgreSQL job store of a server on `data_dir`: a database of its own, the same for a restart on it."""
+    name = "t_" + hashlib.sha1(str(data_dir).encode()).hexdigest()[:16]
+    exists = subprocess.run(["psql", "-qtA", PG_ADMIN, "-c", f"SELECT 1 FROM pg_database WHERE datname = '{name}'"],
+                            capture_output=True, text=True, check=True).stdout.strip()
+    if not exists:
+        subprocess.run(["psql", "-q", PG_ADMIN, "-c", f"CREATE DATABASE {name}"], check=True, capture_output=True)
+    return PG_ADMIN.rsplit("/", 1)[0] + "/" + name
 
 
 def validate(instance, name):
@@ -49,9 +65,10 @@ class Server:
         self.data_dir = pathlib.Path(data_dir) if data_dir else pathlib.Path(self.tmp.name) / "data"
         port_file = pathlib.Path(self.tmp.name) / "port"
         self.log = open(pathlib.Path(self.tmp.name) / "server.log", "wb")
+        store = ["--job-store", pg_store_for(self.data_dir)] if PG_ADMIN else []
         self.proc = subprocess.Popen(
             [os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--port-file", str(port_file),
-             "--data-dir", str(self.data_dir), *args],
+             "--data-dir", str(self.data_dir), *store, *args],
             env={**os.environ, **(env or {})}, stderr=self.log)
         for _ in range(100):
             if port_file.exists() and port_file.read_text().strip():

@@ -110,5 +110,12 @@ def test_scratch_dir_is_left_empty(url):
     if not data_dir:
         pytest.skip("NURBSRT_DATA_DIR not set")
     post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 32, "height": 32})
-    assert os.listdir(os.path.join(data_dir, "tmp")) == []
-    assert oct(os.stat(os.path.join(data_dir, "tmp")).st_mode & 0o777) == "0o700"
+    scratch = os.path.join(data_dir, "tmp")
+    if os.environ.get("NURBSRT_API_JOB_STORE"):
+        # A shared job store: DATA_DIR/tmp/<instance>/ beside its lock file, one instance here.
+        names = sorted(os.listdir(scratch))
+        assert len(names) == 2 and names[1] == names[0] + ".lock", names
+        assert oct(os.stat(scratch).st_mode & 0o777) == "0o700"
+        scratch = os.path.join(scratch, names[0])
+    assert os.listdir(scratch) == []
+    assert oct(os.stat(scratch).st_mode & 0o777) == "0o700"

@@ -12,7 +12,7 @@ from urllib.parse import urlparse
 
 import requests
 
-from conftest import BEARING, SCREW, TIMEOUT, check_problem, healthy
+from conftest import BEARING, SCREW, TIMEOUT, check_problem, healthy, sqlite_only
 from test_jobs import accepted, get_job, submit, wait_finished, wait_for, wait_gone
 
 
@@ -104,6 +104,7 @@ def test_deleted_jobs_conversion_child_is_killed(own_server):
     check_problem(r, 415)
 
 
+@sqlite_only
 def test_killed_service_takes_its_children_and_restart_leaves_no_stray_files(own_server, tmp_path):
     data = tmp_path / "data"
     s1 = own_server(args=["--workers", "1", "--job-runners", "1"], env={"NURBSRT_IMPORT_WORKER_FAULT": "hang"},
@@ -204,6 +205,7 @@ def processes_mentioning(text):
     return [(p, cmd[:200]) for p, state, _, cmd in processes() if text in cmd and state != "Z"]
 
 
+@sqlite_only
 def test_repeated_sigkill_with_jobs_in_flight_loses_nothing(own_server, tmp_path):
     """Ten SIGKILL/restart cycles on one data directory, each at a different moment
     of the work (imports, conversions, renders in flight): afterwards every job

@@ -1,5 +1,7 @@
 """Service endpoints: health, readiness, metrics, the OpenAPI document, 404s, request ids."""
 import json
+import os
+import re
 
 import requests
 
@@ -49,6 +51,9 @@ def test_metrics_exposition(url):
     assert 'nurbsrt_http_request_duration_seconds_bucket{route="/healthz",le="+Inf"}' in text
     assert "nurbsrt_work_max_active 2" in text
     assert "# TYPE nurbsrt_import_failures_total counter" in text
+    # Which instance answered, and its job store (several instances may sit behind one balancer).
+    store = "postgresql" if os.environ.get("NURBSRT_API_JOB_STORE") else "sqlite"
+    assert re.search(r'^nurbsrt_instance_info\{instance="[A-Za-z0-9._-]+",job_store="' + store + r'"\} 1$', text, re.M)
     for line in text.splitlines():  # every sample line is "name{labels} value" or "name value"
         if line and not line.startswith("#"):
             float(line.rsplit(" ", 1)[1])

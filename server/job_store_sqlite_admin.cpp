@@ -1,0 +1,120 @@
+// The SQLite job store's deletions, restart recovery and retention queries.
+#include "server/job_store_sqlite_impl.h"
+
+namespace nurbsrt::server {
+
+void SqliteJobStore::Impl::remove_rows(const std::string& id) {
+    Stmt(*this, "DELETE FROM job_outputs WHERE job_id = ?").bind(1, id).run();
+    Stmt(*this, "DELETE FROM job_inputs WHERE job_id = ?").bind(1, id).run();
+    Stmt(*this, "DELETE FROM jobs WHERE id = ?").bind(1, id).run();
+}
+
+JobStore::DeleteOutcome SqliteJobStore::delete_job(const std::string& id, int64_t now_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    Impl::Transaction t(*impl_);
+    std::string state;
+    {
+        Impl::Stmt s(*impl_, "SELECT state FROM jobs WHERE id = ?");
+        s.bind(1, id);
+        if (!s.step()) return DeleteOutcome::not_found;
+        state = s.text(0);
+    }
+    if (state == "canceled") return DeleteOutcome::canceling;
+    if (state == "running") {
+        Impl::Stmt(*impl_,
+                   "UPDATE jobs SET state = 'canceled', finished_ms = ?, error_code = 'canceled', "
+                   "error_message = 'deleted while running; removed once its current step stops' "
+                   "WHERE id = ?")
+            .bind(1, now_ms)
+            .bind(2, id)
+            .run();
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'canceled', finished_ms = ? WHERE job_id = ? AND "
+                   "state IN ('queued', 'running')")
+            .bind(1, now_ms)
+            .bind(2, id)
+            .run();
+        t.commit();
+        return DeleteOutcome::canceling;
+    }
+    impl_->remove_rows(id);
+    t.commit();
+    return DeleteOutcome::removed;
+}
+
+bool SqliteJobStore::remove(const std::string& id) {
+    std::lock_guard<std::mutex> lock(m_);
+    Impl::Transaction t(*impl_);
+    impl_->remove_rows(id);
+    const int n = sqlite3_changes(impl_->db);
+    t.commit();
+    return n > 0;
+}
+
+bool SqliteJobStore::running(const std::string& id) {
+    std::lock_guard<std::mutex> lock(m_);
+    return impl_->job_running(id);
+}
+
+RecoveryReport SqliteJobStore::recover(int max_attempts, int64_t now_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    Impl::Transaction t(*impl_);
+    RecoveryReport r;
+    {
+        Impl::Stmt s(*impl_, "SELECT id, attempts FROM jobs WHERE state = 'running' ORDER BY seq");
+        while (s.step()) (s.i64(1) >= max_attempts ? r.failed : r.requeued).push_back(s.text(0));
+    }
+    {
+        Impl::Stmt s(*impl_, "SELECT id FROM jobs WHERE state = 'canceled' ORDER BY seq");
+        while (s.step()) r.removed.push_back(s.text(0));
+    }
+    for (const std::string& id : r.removed) impl_->remove_rows(id);
+    const std::string reason = "interrupted by a service restart (" + std::to_string(max_attempts) + " attempts)";
+    for (const std::string& id : r.requeued) {
+        Impl::Stmt(*impl_, "UPDATE jobs SET state = 'queued' WHERE id = ?").bind(1, id).run();
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 "
+                   "WHERE job_id = ? AND state = 'running'")
+            .bind(1, id)
+            .run();
+    }
+    for (const std::string& id : r.failed) {
+        Impl::Stmt(*impl_,
+                   "UPDATE jobs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
+                   "error_message = ? WHERE id = ?")
+            .bind(1, now_ms)
+            .bind(2, reason)
+            .bind(3, id)
+            .run();
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
+                   "error_message = ? WHERE job_id = ? AND state IN ('queued', 'running')")
+            .bind(1, now_ms)
+            .bind(2, reason)
+            .bind(3, id)
+            .run();
+    }
+    t.commit();
+    return r;
+}
+
+std::vector<std::string> SqliteJobStore::finished_before(int64_t before_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    std::vector<std::string> ids;
+    Impl::Stmt s(*impl_,
+                 "SELECT id FROM jobs WHERE state IN ('succeeded', 'failed') AND finished_ms < ? "
+                 "ORDER BY seq");
+    s.bind(1, before_ms);
+    while (s.step()) ids.push_back(s.text(0));
+    return ids;
+}
+
+std::vector<std::string> SqliteJobStore::all_ids() {
+    std::lock_guard<std::mutex> lock(m_);
+    std::vector<std::string> ids;
+    Impl::Stmt s(*impl_, "SELECT id FROM jobs ORDER BY seq");
+    while (s.step()) ids.push_back(s.text(0));
+    return ids;
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,136 @@
+// The PostgreSQL job store (server/job_store_pg.h) against a real server:
+// claims skip each other's outputs, an expired lease is taken over, the stale
+// holder's updates are fenced off (never completed twice), cancel is seen by
+// the heartbeat, the job finishes on whichever claim ends last, and an output
+// whose lease expired max_attempts times fails as interrupted. Needs
+// NURBSRT_TEST_PG_URL (tests/scale_out.sh sets it and runs these); skipped
+// otherwise, saying so.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <thread>
+
+#include "server/job_store_pg.h"
+
+using nurbsrt::server::JobClaim;
+using nurbsrt::server::JobOutput;
+using nurbsrt::server::JobRecord;
+using nurbsrt::server::JobStore;
+using nurbsrt::server::PgJobStore;
+
+namespace {
+
+std::string url() {
+    const char* u = std::getenv("NURBSRT_TEST_PG_URL");
+    return u ? u : "";
+}
+
+JobRecord make_job(const std::string& id, int outputs) {
+    JobRecord j;
+    j.id = id;
+    j.created_ms = 1000;
+    j.inputs.push_back({0, "part.step", "STEP", 10});
+    for (int i = 0; i < outputs; ++i) {
+        JobOutput o;
+        o.index = i;
+        o.kind = "conversion";
+        o.options_json = R"({"format":"iges"})";
+        o.artifact = "0-conversion-" + std::to_string(i) + ".igs";
+        o.content_type = "model/iges";
+        j.outputs.push_back(o);
+    }
+    return j;
+}
+
+class PgJobStoreTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (url().empty()) GTEST_SKIP() << "NURBSRT_TEST_PG_URL not set: run tests/scale_out.sh";
+        a_ = std::make_unique<PgJobStore>(url(), "test-a", 1.0);  // 1 s leases
+        b_ = std::make_unique<PgJobStore>(url(), "test-b", 1.0);
+        for (const std::string& id : a_->all_ids()) a_->remove(id);
+    }
+    std::unique_ptr<PgJobStore> a_, b_;
+};
+
+TEST_F(PgJobStoreTest, ClaimsSkipEachOtherAndTheLastFinishes) {
+    JobRecord j = make_job(std::string(32, 'a'), 2);
+    a_->create(j);
+    auto ca = a_->claim_next(2000), cb = b_->claim_next(2000);
+    ASSERT_TRUE(ca && cb);
+    EXPECT_EQ(ca->run, std::vector<int>{0});
+    EXPECT_EQ(cb->run, std::vector<int>{1});
+    EXPECT_NE(ca->lease, cb->lease);
+    EXPECT_FALSE(a_->claim_next(2000));  // nothing left
+    EXPECT_EQ(a_->get(j.id)->state, "running");
+    ASSERT_TRUE(a_->output_running(j.id, 0, 2100, ca->lease));
+    EXPECT_FALSE(a_->output_succeeded(j.id, 0, 5, "", 2200, cb->lease));  // not its lease
+    ASSERT_TRUE(a_->output_succeeded(j.id, 0, 5, "", 2200, ca->lease));
+    EXPECT_EQ(a_->finish(j.id, 2300), std::optional<std::string>("running"));  // output 1 still runs on b
+    ASSERT_TRUE(b_->output_running(j.id, 1, 2400, cb->lease));
+    ASSERT_TRUE(b_->output_failed(j.id, 1, "unreadable_file", "bad", 2500, cb->lease));
+    EXPECT_EQ(b_->finish(j.id, 2600), std::optional<std::string>("failed"));
+    const auto done = a_->get(j.id);
+    EXPECT_EQ(done->error_code, "unreadable_file");
+    EXPECT_EQ(done->outputs[0].state, "succeeded");
+}
+
+TEST_F(PgJobStoreTest, ExpiredLeaseIsTakenOverAndTheStaleRunIsFenced) {
+    JobRecord j = make_job(std::string(32, 'b'), 1);
+    a_->create(j);
+    auto ca = a_->claim_next(1000);
+    ASSERT_TRUE(ca);
+    ASSERT_TRUE(a_->output_running(j.id, 0, 1000, ca->lease));
+    EXPECT_TRUE(a_->renew(*ca));
+    EXPECT_FALSE(b_->claim_next(1000));  // leased
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    auto cb = b_->claim_next(3000);  // a "died": its lease expired
+    ASSERT_TRUE(cb);
+    EXPECT_EQ(cb->attempts, 2);
+    EXPECT_FALSE(a_->renew(*ca));  // the heartbeat tells a it lost the output
+    ASSERT_TRUE(b_->output_running(j.id, 0, 3000, cb->lease));
+    EXPECT_FALSE(a_->output_succeeded(j.id, 0, 1, "", 3100, ca->lease));  // fenced
+    EXPECT_TRUE(b_->output_succeeded(j.id, 0, 1, "", 3200, cb->lease));
+    EXPECT_FALSE(b_->output_succeeded(j.id, 0, 1, "", 3300, cb->lease));  // once only
+    EXPECT_EQ(b_->finish(j.id, 3400), std::optional<std::string>("succeeded"));
+    EXPECT_EQ(a_->get(j.id)->attempts, 2);
+}
+
+TEST_F(PgJobStoreTest, CancelStopsTheHeartbeatAndTwiceExpiredFails) {
+    JobRecord j = make_job(std::string(32, 'c'), 1);
+    a_->create(j);
+    auto ca = a_->claim_next(1000);
+    ASSERT_TRUE(ca);
+    EXPECT_EQ(b_->delete_job(j.id, 1100), JobStore::DeleteOutcome::canceling);
+    EXPECT_FALSE(a_->renew(*ca));                     // seen by the runner's next heartbeat
+    EXPECT_EQ(a_->finish(j.id, 1200), std::nullopt);  // so it removes the job
+    EXPECT_TRUE(a_->remove(j.id));
+
+    JobRecord k = make_job(std::string(32, 'd'), 1);
+    a_->create(k);
+    ASSERT_TRUE(a_->claim_next(1000));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    ASSERT_TRUE(b_->claim_next(2000));  // second attempt
+    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    EXPECT_FALSE(a_->claim_next(3000, 2));  // expired twice: failed, not claimed
+    const auto done = a_->get(k.id);
+    EXPECT_EQ(done->state, "failed");
+    EXPECT_EQ(done->error_code, "interrupted");
+    EXPECT_EQ(done->outputs[0].error_code, "interrupted");
+}
+
+TEST_F(PgJobStoreTest, GracefulStopRequeuesWithoutCountingTheRun) {
+    JobRecord j = make_job(std::string(32, 'e'), 1);
+    a_->create(j);
+    auto ca = a_->claim_next(1000);
+    ASSERT_TRUE(ca);
+    a_->requeue(*ca);
+    EXPECT_EQ(a_->get(j.id)->state, "queued");
+    EXPECT_EQ(a_->get(j.id)->attempts, 0);
+    auto cb = b_->claim_next(2000);  // at once: no lease to wait for
+    ASSERT_TRUE(cb);
+    EXPECT_EQ(cb->attempts, 1);
+}
+
+}  // namespace

@@ -1,0 +1,192 @@
+"""Three instances on one PostgreSQL job queue and one shared data directory.
+
+A job is canceled through another instance than the one running it; then 30 jobs
+(renders and conversions of four files) are spread over the instances, one instance
+is SIGKILLed while it runs outputs, and: every job ends succeeded with its artifacts
+present and decodable from any instance, no output was completed twice (counted in
+the database), the jobs submitted to the dead instance were served by the others,
+and GET answers the same on every instance. Prints the counts and times."""
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import requests
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "api"))
+from test_jobs import accepted, download, get_job, png_size, submit  # noqa: E402
+
+PG_URL = os.environ["NURBSRT_TEST_PG_URL"]
+OCCT = pathlib.Path("/usr/share/opencascade/data")
+FILES = [OCCT / "step" / "screw.step", OCCT / "step" / "linkrods.step", OCCT / "iges" / "bearing.iges",
+         OCCT / "iges" / "hammer.iges"]
+LEASE_S = 3
+JOBS = 30
+
+
+def sql(query):
+    out = subprocess.run(["psql", "-qtA", "-F", "|", PG_URL, "-c", query], capture_output=True, text=True,
+                         check=True).stdout
+    return [line.split("|") for line in out.splitlines() if line]
+
+
+class Instance:
+    def __init__(self, name, data_dir, tmp):
+        self.name = name
+        port_file = tmp / f"{name}.port"
+        self.log_path = tmp / f"{name}.log"
+        self.log = open(self.log_path, "wb")
+        self.proc = subprocess.Popen(
+            [os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--port-file", str(port_file),
+             "--data-dir", str(data_dir), "--job-store", PG_URL, "--lease-seconds", str(LEASE_S),
+             "--instance-id", name, "--workers", "1", "--job-runners", "1", "--render-threads", "1"],
+            stderr=self.log)
+        for _ in range(200):
+            if port_file.exists() and port_file.read_text().strip():
+                break
+            assert self.proc.poll() is None, self.log_path.read_text()[-2000:]
+            time.sleep(0.1)
+        self.url = f"http://127.0.0.1:{port_file.read_text().strip()}"
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.log.close()
+
+
+def spec_for(n):
+    """A render and a conversion of one file; sizes vary so outputs end at different times."""
+    src = FILES[n % len(FILES)]
+    target = "iges" if src.suffix == ".step" else "step"
+    size = 160 + 40 * (n % 5)
+    return src, {"outputs": [{"file": 0, "type": "render", "options": {"width": size, "height": size}},
+                             {"file": 0, "type": "conversion", "format": target}]}
+
+
+def check_artifact(url, out):
+    data = download(url, out)
+    if out["type"] == "render":
+        w, h = png_size(data)  # inflates every row: a half-written file fails here
+        assert (w, h) == (out["options"]["width"], out["options"]["height"])
+    elif out["format"] in ("step", "stp"):
+        assert data.startswith(b"ISO-10303-21;") and b"END-ISO-10303-21;" in data[-200:]
+    else:
+        assert data[72:73] == b"S" and data.rstrip()[-8:-7] == b"T", data[-80:]  # IGES: Start ... Terminate
+
+
+def wait_until(pred, timeout, what):
+    deadline = time.monotonic() + timeout
+    while not pred():
+        assert time.monotonic() < deadline, what
+        time.sleep(0.05)
+
+
+def cancel_across_instances(insts, data_dir):
+    """DELETE through an instance that is not the one running the job stops it there."""
+    src = FILES[2]
+    job = accepted(submit(insts[0].url, [(src.name, src.read_bytes())],
+                          {"outputs": [{"file": 0, "type": "render", "options": {"width": 2000, "height": 2000}}]}))
+    wait_until(lambda: sql(f"SELECT lease_owner FROM job_outputs WHERE job_id = '{job['id']}' AND state = 'running'"),
+               60, "the long render never started")
+    owner = sql(f"SELECT lease_owner FROM job_outputs WHERE job_id = '{job['id']}'")[0][0]
+    other = next(i for i in insts if i.name != owner)
+    t0 = time.monotonic()
+    r = requests.delete(f"{other.url}/v1/jobs/{job['id']}", timeout=30)
+    assert r.status_code in (202, 204), r.text[:300]
+    for inst in insts:  # gone everywhere once the owner stopped the render and removed it
+        wait_until(lambda: requests.get(f"{inst.url}/v1/jobs/{job['id']}", timeout=30).status_code == 404, 30,
+                   f"the canceled job is still visible on {inst.name}")
+    wait_until(lambda: not (data_dir / "jobs" / job["id"]).exists(), 10, "the canceled job's files remain")
+    owner_inst = next(i for i in insts if i.name == owner)
+    metrics = requests.get(owner_inst.url + "/metrics", timeout=30).text
+    assert 'nurbsrt_jobs_finished_total{result="canceled"} 1' in metrics
+    return owner, other.name, time.monotonic() - t0
+
+
+def test_three_instances_survive_losing_one():
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix="nurbsrt-scale-"))
+    data_dir = tmp / "data"
+    insts = [Instance(name, data_dir, tmp) for name in ("inst-a", "inst-b", "inst-c")]
+    victim = insts[2]
+    try:
+        owner, via, cancel_s = cancel_across_instances(insts, data_dir)
+        print(f"\nscale_out: cancel: job running on {owner}, DELETE via {via}, gone everywhere after {cancel_s:.1f} s")
+
+        t_start = time.monotonic()
+        jobs = {}  # id -> (instance it was submitted to, spec)
+        for n in range(JOBS):
+            src, spec = spec_for(n)
+            inst = insts[n % 3]
+            jobs[accepted(submit(inst.url, [(src.name, src.read_bytes())], spec))["id"]] = (inst.name, spec)
+        # Kill the victim while it holds a running output.
+        wait_until(lambda: sql("SELECT 1 FROM job_outputs WHERE lease_owner = 'inst-c' AND state = 'running' "
+                               "AND lease_token <> ''"), 120, "inst-c never ran an output")
+        held = sql("SELECT job_id, idx FROM job_outputs WHERE lease_owner = 'inst-c' AND lease_token <> '' "
+                   "AND state IN ('queued', 'running')")
+        victim.proc.kill()
+        t_kill = time.monotonic()
+        # When its leases run out, in the database's clock, seen from now.
+        (expiry_s,), = sql("SELECT (MAX(lease_expires_ms) - (extract(epoch FROM clock_timestamp()) * 1000)::bigint) "
+                           "/ 1000.0 FROM job_outputs WHERE lease_owner = 'inst-c' AND lease_token <> ''")
+        victim.proc.wait(timeout=10)
+        assert held, "inst-c held nothing when killed"
+        survivors = insts[:2]
+
+        # Its outputs are claimed again by the others once the lease expired.
+        def resumed():
+            return all(sql(f"SELECT 1 FROM job_outputs WHERE job_id = '{j}' AND idx = {i} AND "
+                           f"(lease_owner <> 'inst-c' OR state IN ('succeeded', 'failed'))") for j, i in held)
+        wait_until(resumed, 60, "the dead instance's outputs were never taken over")
+        resume_s = time.monotonic() - t_kill
+
+        finished = {}
+        for n, job_id in enumerate(jobs):
+            via_inst = survivors[n % 2]
+            deadline = time.monotonic() + 400
+            while True:
+                job = get_job(via_inst.url, job_id)
+                if job["state"] in ("succeeded", "failed", "canceled"):
+                    break
+                assert time.monotonic() < deadline, json.dumps(job)[:600]
+                time.sleep(0.2)
+            finished[job_id] = job
+        total_s = time.monotonic() - t_start
+        for job_id, job in finished.items():
+            assert job["state"] == "succeeded", json.dumps(job)[:800]
+            for out in job["outputs"]:
+                check_artifact(survivors[1].url, out)
+            # The same answer from either survivor.
+            assert get_job(survivors[0].url, job_id) == get_job(survivors[1].url, job_id)
+
+        ids = ",".join(f"'{j}'" for j in jobs)
+        (outputs, completed_once, max_completions, rerun), = sql(
+            f"SELECT COUNT(*), SUM((completions = 1)::int), MAX(completions), SUM((attempts > 1)::int) "
+            f"FROM job_outputs WHERE job_id IN ({ids})")
+        assert int(outputs) == 2 * JOBS and int(completed_once) == 2 * JOBS and int(max_completions) == 1
+        on_victim = [j for j, (name, _) in jobs.items() if name == "inst-c"]
+        by_owner = dict(sql(f"SELECT lease_owner, COUNT(*) FROM job_outputs WHERE job_id IN ({ids}) "
+                            f"GROUP BY lease_owner"))
+        assert int(rerun) >= 1
+        assert sum(1 for j in on_victim if finished[j]["state"] == "succeeded") == len(on_victim)
+        print(f"scale_out: {JOBS} jobs ({2 * JOBS} outputs) on 3 instances, inst-c SIGKILLed holding "
+              f"{len(held)} output(s); {rerun} output(s) re-run after the kill; every output completed exactly once; "
+              f"lease {LEASE_S} s: its lease expired {max(float(expiry_s or 0), 0):.1f} s after the kill and its work "
+              f"was taken over {resume_s:.1f} s after the kill (by the first runner to come free); "
+              f"{len(on_victim)} jobs submitted to inst-c all succeeded; outputs completed by instance: {by_owner}; "
+              f"all jobs done in {total_s:.1f} s")
+    finally:
+        for inst in insts:
+            inst.stop()
+        for inst in insts:
+            if inst is not victim and inst.proc.returncode not in (0, None):
+                print(inst.log_path.read_text()[-3000:])
+        subprocess.run(["rm", "-rf", str(tmp)])
