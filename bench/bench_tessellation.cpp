@@ -1,6 +1,6 @@
 // The tessellating peer: the same model meshed with BRepMesh (importer/
 // tessellate.h) at linear deflections of 1e-2, 1e-3, 1e-4 of the bounding-box
-// diagonal, rasterized from the same camera (renderer/mesh_raster.h, OSMesa
+// diagonal, rasterized from the same camera (bench/mesh_raster.h, OSMesa
 // depth) and optionally ray cast with Embree (bench/embree_peer.h). Time = mesh +
 // extract + render; accuracy = per-pixel |t_mesh - t_exact| / diagonal where
 // both hit our exact frame, and the pixels where only one of the two hits.
@@ -9,7 +9,7 @@
 #include "bench/bench_context.h"
 #include "bench/embree_peer.h"
 #include "importer/tessellate.h"
-#include "renderer/mesh_raster.h"
+#include "bench/mesh_raster.h"
 
 namespace nurbsrt::bench {
 namespace {

@@ -1,9 +1,8 @@
 // An offscreen OpenGL 4.5 core context with OSMesa (Mesa llvmpipe), shared by
-// the renderer's two rasterizers: the preliminary map (preliminary_map.cpp) and
-// the depth-only triangle-mesh rasterizer of the tessellating benchmark peer
-// (mesh_raster.cpp). No libGL is linked: OSMesa exports the gl* entry points
-// (STACK.md). Internal to renderer/*.cpp; GL types are spelled as the plain
-// integers they are so that this header needs no GL headers.
+// the preliminary map (preliminary_map.cpp) and the depth-only triangle-mesh
+// rasterizer of the benchmark's tessellating peer (bench/mesh_raster.cpp). No
+// libGL is linked: OSMesa exports the gl* entry points (STACK.md). GL types are
+// spelled as the plain integers they are so that this header needs no GL headers.
 #pragma once
 
 #include <string>

@@ -1,6 +1,6 @@
 // A plain triangle mesh in model space: what a tessellating renderer draws
 // instead of the exact surfaces (the benchmark's tessellating peer: the importer
-// meshes a model with BRepMesh, renderer/mesh_raster.h rasterizes it).
+// meshes a model with BRepMesh, bench/mesh_raster.h rasterizes it).
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 // Depth-only triangle-mesh rasterizer (see mesh_raster.h).
-#include "renderer/mesh_raster.h"
+#include "bench/mesh_raster.h"
 
 #include <GL/gl.h>
 #include <GL/glext.h>

@@ -5,8 +5,8 @@
 
 #include <cmath>
 
+#include "bench/mesh_raster.h"
 #include "renderer/camera.h"
-#include "renderer/mesh_raster.h"
 
 namespace nurbsrt {
 namespace {
