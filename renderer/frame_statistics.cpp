@@ -8,6 +8,7 @@ namespace nurbsrt {
 
 void frame_statistics(const FrameContext& c, const FrameBuffers& b, const RenderImage& img, int max_iterations,
                       RenderStats& st) {
+    st.iteration_limit = max_iterations;
     st.iteration_histogram.assign(static_cast<size_t>(max_iterations) + 1, 0);
     uint64_t solves = 0, its = 0;
     for (size_t k = 0; k < c.pixels(); ++k) {

@@ -65,8 +65,10 @@ struct RenderStats {
     double tolerance = 0;                       // (12) stop tolerance used, model units
     double mean_iterations = 0;                 // over every primary (map-started) solve
     std::vector<uint64_t> iteration_histogram;  // [k] = primary solves that took k iterations
+    int iteration_limit = 0;                    // the primary solves' cap (NewtonParams::max_iterations)
     // Outcome of each pixel's primary solve (a map pixel): converged (hit inside
-    // the trim), trimmed (converged outside the trim), or the failing criterion.
+    // the trim), trimmed (converged outside the trim), or the failing criterion
+    // (max_iterations: how many reached iteration_limit unconverged, not the limit).
     uint64_t converged = 0, diverged = 0, singular = 0, max_iterations = 0, left_domain = 0, behind_eye = 0,
              trimmed = 0;
     uint64_t fallback = 0;        // pixels whose hit came from the rescue (any kind below)

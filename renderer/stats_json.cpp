@@ -27,6 +27,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
           {"diverged", s.diverged},
           {"singular", s.singular},
           {"max_iterations", s.max_iterations},
+          {"iteration_limit", s.iteration_limit},
           {"left_domain", s.left_domain},
           {"behind_eye", s.behind_eye},
           {"trimmed", s.trimmed},

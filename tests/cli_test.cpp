@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "renderer/newton.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -183,6 +185,11 @@ TEST(CliRender, WritesImageAovAndContractStats) {
     for (const char* k : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"})
         EXPECT_TRUE(j["timings_ms"].contains(k)) << k;
     // The first pass is part of the Newton stage.
+    // max_iterations counts solves that hit the cap; iteration_limit is the cap, and
+    // the histogram's iteration counts never exceed it.
+    const int limit = j["newton"]["iteration_limit"].get<int>();
+    EXPECT_EQ(limit, nurbsrt::NewtonParams{}.max_iterations);
+    for (const auto& [k, count] : j["newton"]["iteration_histogram"].items()) EXPECT_LE(std::stoi(k), limit) << k;
     EXPECT_GT(j["newton"]["primary_pass_ms"].get<double>(), 0.0);
     EXPECT_LE(j["newton"]["primary_pass_ms"].get<double>(), j["timings_ms"]["newton"].get<double>());
     EXPECT_EQ(j["width"], 96);
