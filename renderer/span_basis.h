@@ -10,7 +10,8 @@
 // (Taylor at the span's left end), the derivatives N^(k) from A2.3 (DersBasisFuns).
 // With t in [0, 1] the coefficients stay of the size of the binomial ones, so for
 // the degrees tabulated (kMaxTableDegree) the Horner sum is as accurate as A2.2 to
-// a few units in the last place (tests/renderer_span_basis_test.cpp compares them).
+// a few units in the last place (the unit tests compare them on uneven, repeated
+// and offset knot vectors).
 // The table depends on the knot vector only: the projected surface of a frame
 // (project_surface) shares the model surface's table.
 #pragma once
