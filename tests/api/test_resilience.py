@@ -74,14 +74,22 @@ def test_disconnect_cancels_the_render(own_server):
     time.sleep(0.5)
     assert cpu_seconds(s.proc.pid) - busy > 0.3, "the render was not running"
     sock.close()  # the client gives up (curl -m, a closed browser tab)
-    time.sleep(1.0)
+
+    def canceled_in_log():
+        s.log.flush()
+        log = [json.loads(line) for line in pathlib.Path(s.log.name).read_text().splitlines()
+               if line.startswith("{")]
+        return any(e.get("route") == "/v1/renders" and e.get("code") == "canceled" for e in log)
+    # The render notices the disconnect within a row block and logs the cancel;
+    # the remaining 9 s of Newton iteration must not run. On a machine loaded by
+    # other builds the cancel can take longer than the idle window below, so the
+    # window starts once it is logged (the limit, 5 s, is still half the render).
+    wait_until(canceled_in_log, 5.0, "the render was not canceled within 5 s of the disconnect")
+    time.sleep(0.3)
     idle = cpu_seconds(s.proc.pid)
     time.sleep(1.0)
     spent = cpu_seconds(s.proc.pid) - idle
-    assert spent < 0.2, f"the service still spent {spent:.2f} s of CPU in the second after the disconnect"
-    s.log.flush()
-    log = [json.loads(line) for line in pathlib.Path(s.log.name).read_text().splitlines() if line.startswith("{")]
-    assert any(e.get("route") == "/v1/renders" and e.get("code") == "canceled" for e in log), log[-3:]
+    assert spent < 0.2, f"the service still spent {spent:.2f} s of CPU in the second after the cancel"
     healthy(s.url)
 
 
