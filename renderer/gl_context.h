@@ -1,7 +1,8 @@
 // An offscreen OpenGL 4.5 core context with OSMesa (Mesa llvmpipe), shared by
 // the preliminary map (preliminary_map.cpp) and the depth-only triangle-mesh
 // rasterizer of the benchmark's tessellating peer (bench/mesh_raster.cpp). No
-// libGL is linked: OSMesa exports the gl* entry points (STACK.md). GL types are
+// libGL is linked: OSMesa exports the gl* entry points itself, and libGL's would
+// take their place and break the map's shaders. GL types are
 // spelled as the plain integers they are so that this header needs no GL headers.
 #pragma once
 
