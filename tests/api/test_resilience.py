@@ -69,10 +69,14 @@ def test_disconnect_cancels_the_render(own_server):
     # then ~9 s of Newton iteration on this machine, where the disconnect falls.
     sock.sendall(b"POST /v1/renders?width=5000&height=5000&view=front HTTP/1.1\r\nHost: x\r\n"
                  b"Content-Type: application/octet-stream\r\nContent-Length: %d\r\n\r\n" % len(data) + data)
-    time.sleep(3.5)
-    busy = cpu_seconds(s.proc.pid)
-    time.sleep(0.5)
-    assert cpu_seconds(s.proc.pid) - busy > 0.3, "the render was not running"
+    time.sleep(2.5)
+    # The render is running (the CPU of a half second, of which a machine busy
+    # with other work may leave it only part), then the client goes.
+    def busy_half_second():
+        before = cpu_seconds(s.proc.pid)
+        time.sleep(0.5)
+        return cpu_seconds(s.proc.pid) - before > 0.2
+    wait_until(busy_half_second, 4.0, "the render was not running")
     sock.close()  # the client gives up (curl -m, a closed browser tab)
 
     def canceled_in_log():
@@ -81,15 +85,24 @@ def test_disconnect_cancels_the_render(own_server):
                if line.startswith("{")]
         return any(e.get("route") == "/v1/renders" and e.get("code") == "canceled" for e in log)
     # The render notices the disconnect within a row block and logs the cancel;
-    # the remaining 9 s of Newton iteration must not run. On a machine loaded by
-    # other builds the cancel can take longer than the idle window below, so the
-    # window starts once it is logged (the limit, 5 s, is still half the render).
+    # the remaining ~9 s of Newton iteration (two threads busy) must not run.
     wait_until(canceled_in_log, 5.0, "the render was not canceled within 5 s of the disconnect")
-    time.sleep(0.3)
-    idle = cpu_seconds(s.proc.pid)
-    time.sleep(1.0)
-    spent = cpu_seconds(s.proc.pid) - idle
-    assert spent < 0.2, f"the service still spent {spent:.2f} s of CPU in the second after the cancel"
+    # The render thread stops at its next row block, frees its frame buffers
+    # (gigabytes: tenths of a second of system time) and, if the disconnect fell
+    # in the preliminary map, first finishes that one uninterruptible OpenGL draw
+    # (~1 s, two to three times that on a machine loaded by other work). So the
+    # service must go idle (a half second with under 0.1 s of CPU) within 5 s of
+    # the cancel: a render that went on would keep both threads busy for 10 s more.
+    deadline = time.monotonic() + 5.0
+    windows = []
+    while True:
+        before = cpu_seconds(s.proc.pid)
+        time.sleep(0.5)
+        windows.append(round(cpu_seconds(s.proc.pid) - before, 2))
+        if windows[-1] < 0.1:
+            break
+        assert time.monotonic() < deadline, \
+            f"the service kept working after the cancel: CPU seconds per half second {windows}"
     healthy(s.url)
 
 
