@@ -96,52 +96,50 @@ struct FrameContext {
     size_t pixels() const { return static_cast<size_t>(width) * height; }
 };
 
-// Screen positions (sx, sy) of each face's map-mesh vertices, for the rescue's and
-// the nearer-sheet pass's nearest-vertex start, projected once per face and frame
-// on first use instead of once per pixel: the scan is O(vertices) and a face of the
-// ducks has ~4000, which made this search most of the rescue's time (`nurbsrt
-// bench`). Same arithmetic as projecting in place (X/D, Y/D of Camera::project_h);
-// NaN marks a vertex behind the eye. Thread-safe.
+// Starts (u, v) for a face that no pixel near this one shows: the point of the
+// face's mesh nearest to the pixel on screen, its (u, v) interpolated in that
+// triangle (Newton then starts within the mesh's deflection of the root). A
+// face narrower than a pixel (a fillet or a blend seen edge-on) has mesh vertices
+// many pixels apart along its length; the nearest vertex would start Newton that
+// far away, across a thin trimmed strip, and miss. Each face's vertices are
+// projected once per face and frame on first use, not once per pixel: the scan is
+// O(triangles) and a face of the ducks has ~8000 (`nurbsrt bench`). Same
+// arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
+// vertex behind the eye. Thread-safe.
 class MeshScreenPoints {
 public:
     explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
-    const std::vector<Vec2>& operator()(uint32_t id) const {
-        Entry& e = faces_[id - 1];
-        std::call_once(e.once, [&] {
-            const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-            const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
-            e.pts.resize(n);
-            for (size_t m = 0; m < n; ++m) {
-                const Vec4 ph = c_.camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
-                e.pts[m] = c_.camera.depth(ph) > 0 ? Vec2{ph.x / ph.z, ph.y / ph.z} : Vec2{NAN, NAN};
-            }
-        });
-        return e.pts;
-    }
-    // The (u, v) of face id's mesh vertex nearest to screen point sp (in front of
-    // the eye); false when it has none.
-    bool nearest_uv(uint32_t id, ScreenPoint sp, float& u, float& v) const {
-        const std::vector<Vec2>& pts = (*this)(id);
-        const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-        double bd = HUGE_VAL;
-        size_t bv = pts.size();
-        for (size_t m = 0; m < pts.size(); ++m) {
-            const double dx = pts[m].x - sp.sx, dy = pts[m].y - sp.sy, dd = dx * dx + dy * dy;
-            if (dd < bd) {  // false for NaN: a vertex behind the eye
-                bd = dd;
-                bv = m;
-            }
-        }
-        if (bv == pts.size()) return false;
-        u = static_cast<float>(mesh.uv[bv].x);
-        v = static_cast<float>(mesh.uv[bv].y);
-        return true;
-    }
+    // Starts of face id for screen point sp, written to out: the (u, v) of the
+    // face's mesh point nearest to sp (among triangles that contain sp, the
+    // nearest to the eye), then of its nearest mesh vertex if that differs (near
+    // a trim loop, a start interpolated across a triangle can lie where Newton
+    // runs off the trimmed face, and the vertex, on the face, does not). Only
+    // points in front of the eye count; returns how many starts (0 to 2).
+    int nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2 = nullptr) const;
+
+    // A face that no pixel near sp shows, with its nearest_starts.
+    struct FarFace {
+        uint32_t id = 0;
+        int nstarts = 0;
+        Vec2 starts[2];
+        double d2 = 0;  // squared screen distance of its mesh from sp
+    };
+    // The faces adjacent (PreparedFace::adjacent) to near[0..nn) that are not
+    // among them, the max_out nearest to sp on screen first (a thin face between
+    // the near faces lies at the pixel; a face with many neighbours, a hub or a
+    // base plate, would otherwise fill the list with faces far away). Returns the
+    // number written to out.
+    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out) const;
 
 private:
+    struct Projected {
+        Vec2 s;        // screen position (NaN behind the eye)
+        double depth;  // along the view direction
+    };
+    const std::vector<Projected>& projected(uint32_t id) const;
     struct Entry {
         std::once_flag once;
-        std::vector<Vec2> pts;
+        std::vector<Projected> pts;
     };
     const FrameContext& c_;
     const std::unique_ptr<Entry[]> faces_;

@@ -8,13 +8,15 @@
 //  B (general): if A found nothing and the pixel should be covered (its map face
 //    failed, or at least two 4-neighbours are hit), every face of the 5x5
 //    neighbourhood from several starts: the converged (u, v) of its pixels, its
-//    map (u, v), the face's mesh vertex projected nearest to the pixel, and the
+//    map (u, v), the face's mesh point and vertex nearest to the pixel, and the
 //    middle of the face's parameter box (on an open silhouette, not enclosed,
 //    only the nearest of the first two kinds, and the others where those miss).
 //  C (adjacent): if B found nothing either and the pixel is enclosed (its map
-//    face failed, or a crack), the faces that touch B's faces (shared vertices of
-//    their meshes, PreparedFace::adjacent), from their nearest mesh vertex and box
-//    middle: a face too thin for the map to show lies between the faces it touches.
+//    face failed, or hits on opposite sides within two pixels), the faces that
+//    touch B's faces (shared vertices of their meshes, PreparedFace::adjacent),
+//    nearest on screen first, from their mesh point and vertex nearest to the
+//    pixel and their box middle: a face too thin for the map to show lies between
+//    the faces it touches.
 //  Crack pixels (hit on opposite sides, or on 3 of 4 sides) also accept a hit
 //    just outside a trim loop, within the face's tolerance band (Solver::solve).
 // All rescue solves use the robust Newton (newton.h); the nearest hit wins.
@@ -30,12 +32,19 @@ namespace nurbsrt {
 
 namespace {
 
+// Starts per face that no pixel near the rescued one shows (far_starts): the
+// nearest point of its mesh on screen, its nearest mesh vertex, its box middle.
+constexpr int kFarStartsPerFace = 3;
+// C's faces: the adjacent faces of B's; a thin face between the neighbourhood's
+// faces touches at least one of them. 12 faces' far starts stay within the start
+// budget after A's and B's usual few.
+constexpr int kMaxAdjacentFaces = 12;
 // At most this many distinct starts (face, u, v) are solved per rescued pixel. A
 // needs at most 8 + 8 + 2 (each neighbour's hit and map start, the own map start
 // and one own converged start), B the rest of the first 64, C at most
-// 2 x kMaxAdjacentFaces = 24 more. It bounds a pixel's cost where many small faces
-// meet, and sizes the stack array of tried starts.
-constexpr int kMaxStarts = 88;
+// kFarStartsPerFace x kMaxAdjacentFaces = 36 more. It bounds a pixel's cost where
+// many small faces meet, and sizes the stack array of tried starts.
+constexpr int kMaxStarts = 64 + kFarStartsPerFace * kMaxAdjacentFaces;
 // A's neighbourhood: the 8 pixels around (a hit there is at most a pixel away).
 constexpr int kNeighbourRadius = 1;
 // B's neighbourhood: 5x5, one ring beyond A's, for the faces a pixel-wide sliver
@@ -45,10 +54,6 @@ constexpr int kGeneralRadius = 2;
 // itself; more distinct faces there are a pathological corner where the start
 // budget (kMaxStarts) would run out anyway.
 constexpr int kMaxGeneralFaces = 24;
-// C's faces: the adjacent faces of B's, two starts each; a thin face between
-// the neighbourhood's faces touches at least one of them. 12 x 2 starts stay
-// within the start budget after A's and B's usual few.
-constexpr int kMaxAdjacentFaces = 12;
 // "No start of this face seen yet": above every squared pixel distance in B's 5x5.
 constexpr int kNoStart = 1 << 20;
 // Silhouette growth passes: each adds one pixel ring outside the map's
@@ -153,34 +158,38 @@ public:
     // its true extent; the exact ray still hits it, between the faces it touches.
     void adjacent_starts(const MeshScreenPoints& screen_points) {
         const PreliminaryMap& map = c_.map;
-        uint32_t near[kMaxGeneralFaces], faces[kMaxAdjacentFaces];
-        int nn = 0, nf = 0;
+        uint32_t near[kMaxGeneralFaces];
+        int nn = 0;
         for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
             const size_t n = map.index(ni, nj);
             for (const uint32_t id : {src_[n].face, map.face[n]})
                 if (id && id <= c_.nfaces && nn < kMaxGeneralFaces && std::find(near, near + nn, id) == near + nn)
                     near[nn++] = id;
         });
-        for (int q = 0; q < nn; ++q)
-            for (const uint32_t id : c_.prepared.faces()[near[q] - 1].adjacent)
-                if (nf < kMaxAdjacentFaces && std::find(near, near + nn, id) == near + nn &&
-                    std::find(faces, faces + nf, id) == faces + nf)
-                    faces[nf++] = id;
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
+        MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
+        const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces);
         limit_ = kMaxStarts;
-        for (int q = 0; q < nf; ++q) far_starts(screen_points, faces[q], sp);
+        for (int q = 0; q < nf; ++q) far_starts(faces[q]);
     }
 
     PixelHit best, best_near;
 
 private:
-    // Starts of a face that has no pixel near this one: its mesh vertex nearest to
-    // the pixel on screen (in front of the eye), and the middle of its box.
+    // Starts of a face that has no pixel near this one: its mesh's point and
+    // vertex nearest to the pixel on screen (in front of the eye), and the middle
+    // of its box.
     void far_starts(const MeshScreenPoints& screen_points, uint32_t id, ScreenPoint sp) {
-        float u = 0, v = 0;
-        if (screen_points.nearest_uv(id, sp, u, v)) attempt(id, u, v);
-        const UvBox& bx = c_.prepared.faces()[id - 1].box;
-        attempt(id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
+        MeshScreenPoints::FarFace f;
+        f.id = id;
+        f.nstarts = screen_points.nearest_starts(id, sp, f.starts);
+        far_starts(f);
+    }
+    void far_starts(const MeshScreenPoints::FarFace& f) {
+        for (int q = 0; q < f.nstarts; ++q)
+            attempt(f.id, static_cast<float>(f.starts[q].x), static_cast<float>(f.starts[q].y));
+        const UvBox& bx = c_.prepared.faces()[f.id - 1].box;
+        attempt(f.id, static_cast<float>(0.5 * (bx.u0 + bx.u1)), static_cast<float>(0.5 * (bx.v0 + bx.v1)));
     }
 
     struct Start {
@@ -194,7 +203,7 @@ private:
     const bool crack_;
     Start tried_[kMaxStarts];
     int ntried_ = 0;
-    int limit_ = kMaxStarts - 2 * kMaxAdjacentFaces;  // A's and B's share; C may use the rest
+    int limit_ = kMaxStarts - kFarStartsPerFace * kMaxAdjacentFaces;  // A's and B's share; C may use the rest
 };
 
 // Whether both pixels of a row or column pair around (i, j) are hit nearer than
@@ -224,6 +233,11 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     const bool l = hit_at(i - 1, j), r = hit_at(i + 1, j), u = hit_at(i, j - 1), d = hit_at(i, j + 1);
     const int n4 = l + r + u + d;
     const bool crack = (l && r) || (u && d) || n4 >= 3;
+    // Hits on opposite sides within two pixels: a crack two pixels wide, or a
+    // pixel beside a one-pixel hit sliver (a thin face's few map pixels, already
+    // solved) that the exact surface covers too.
+    auto hit_within2 = [&](int di, int dj) { return hit_at(i + di, j + dj) || hit_at(i + 2 * di, j + 2 * dj); };
+    const bool enclosed = (hit_within2(-1, 0) && hit_within2(1, 0)) || (hit_within2(0, -1) && hit_within2(0, 1));
 
     PixelRescue pr(c, solver, src, i, j, crack);
     pr.neighbour_starts(own);
@@ -232,12 +246,12 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     // their nearer one by a pixel footprint) is a face seen through a crack of the
     // front surface: the face that closes the crack is not among A's; look further.
     const bool pit = pr.best.face && behind_pair(c, src, i, j, pr.best.t);
-    if ((!pr.best.face && !pr.best_near.face && (own || n4 >= 2)) || pit) {
-        pr.general_starts(screen_points, own || crack || pit);
+    if ((!pr.best.face && !pr.best_near.face && (own || n4 >= 2 || enclosed)) || pit) {
+        pr.general_starts(screen_points, own || crack || enclosed || pit);
         kind = kRescueGeneral;
-        // C only where the pixel is enclosed (its map face failed, or a crack):
-        // not along every silhouette, where B already fails for good reason.
-        if ((!pr.best.face && !pr.best_near.face && (own || crack)) || (pit && behind_pair(c, src, i, j, pr.best.t)))
+        // C only where the pixel is enclosed (its map face failed, or hits on
+        // opposite sides): not along every silhouette, where B already fails for good reason.
+        if ((!pr.best.face && !pr.best_near.face && (own || enclosed)) || (pit && behind_pair(c, src, i, j, pr.best.t)))
             pr.adjacent_starts(screen_points);
     }
     // A hit inside a trim beats a near-trim one unless the latter is in front
