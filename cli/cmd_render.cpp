@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
+#include <string>
 
 #include <unistd.h>
 
@@ -50,6 +52,10 @@ struct Args {
     int threads = 0;
     double tolerance = kDefaultRelativeTolerance;
     std::string background;
+    std::optional<int> antialias;  // unset: server::default_antialias(output format)
+    bool edges = false;
+    std::string edge_color;
+    double edge_width = 1.0;
     LoadOptions load;
     bool quiet = false;
 };
@@ -141,6 +147,31 @@ void add_render_command(CLI::App& app) {
                 }
             },
             "R,G,B[,A]|transparent"));
+    // The API's parsers, so that both accept and refuse the same values.
+    auto shared_check = [](auto parse, const char* description) {
+        return CLI::Validator(
+            [parse](std::string& s) -> std::string {
+                try {
+                    parse(s);
+                    return {};
+                } catch (const Error& e) {
+                    return e.what();
+                } catch (const std::exception&) {
+                    return "not a number: " + s;
+                }
+            },
+            description);
+    };
+    cmd->add_option("--antialias", a->antialias,
+                    "extra exact sub-pixel rays per edge pixel (silhouettes, face borders, creases); 0: off "
+                    "(default: " + std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
+        ->check(shared_check([](const std::string& s) { server::parse_antialias(std::stod(s), "the value"); }, "N"));
+    cmd->add_flag("--edges", a->edges, "draw feature lines: silhouettes, face borders and creases");
+    cmd->add_option("--edge-color", a->edge_color, "feature line colour r,g,b in [0,1] (default 0.02,0.02,0.02)")
+        ->check(shared_check([](const std::string& s) { server::parse_rgb(s, "the value"); }, "R,G,B"));
+    cmd->add_option("--edge-width", a->edge_width, "feature line width in pixels, at any resolution")
+        ->check(shared_check([](const std::string& s) { server::parse_edge_width(std::stod(s), "the value"); }, "PX"))
+        ->capture_default_str();
     cmd->add_option("--mesh-deflection", a->load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
         ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
@@ -174,6 +205,12 @@ void add_render_command(CLI::App& app) {
                                           : server::parse_background(a->background, "--background");
         options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
         options.background_alpha = static_cast<float>(bg.alpha);
+        server::ImageLook look;
+        look.antialias = a->antialias;
+        look.edges = a->edges;
+        if (!a->edge_color.empty()) look.edge_color = server::parse_rgb(a->edge_color, "--edge-color");
+        look.edge_width = a->edge_width;
+        server::apply_look(look, output_format_name(a->output), options);
         say("rendering %dx%d with %s", camera.width(), camera.height(), a->method.c_str());
         // Progress on stderr: live on a terminal; otherwise a line per 10% once the
         // render has taken over a second (logs of long renders, quiet for short ones).

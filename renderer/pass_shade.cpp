@@ -17,9 +17,26 @@ constexpr double kAmbient = 0.15, kKey = 0.55, kHeadlight = 0.35;
 
 }  // namespace
 
+Shader::Shader(const FrameContext& c)
+    : scene_(c.scene),
+      key_(normalize(-1.0 * c.camera.forward() + 0.6 * c.camera.up() - 0.5 * c.camera.right())) {}
+
+Vec3 Shader::colour(const PixelHit& h, Vec3 dir, Vec3& n) const {
+    const Face& f = scene_.faces[h.face - 1];
+    // The solve's normal (exact at the double-precision hit); the limits of
+    // surface_normal only where its partials were degenerate.
+    n = {h.nx, h.ny, h.nz};
+    if (n.x == 0 && n.y == 0 && n.z == 0) n = surface_normal(f.surface, h.u, h.v, f.reversed);
+    if (dot(n, dir) > 0) n = -n;  // two-sided: light the side facing the viewer
+    Color col = f.color;
+    if (!f.has_color && f.body < scene_.bodies.size() && scene_.bodies[f.body].has_color)
+        col = scene_.bodies[f.body].color;
+    const double lambert = kAmbient + kKey * std::max(0.0, dot(n, key_)) + kHeadlight * std::max(0.0, -dot(n, dir));
+    return {col.r * lambert, col.g * lambert, col.b * lambert};
+}
+
 void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) {
     const size_t npx = c.pixels();
-    const Scene& scene = c.scene;
     const Camera& camera = c.camera;
     const RenderOptions& options = c.options;
     img.width = c.width;
@@ -31,7 +48,7 @@ void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) 
     img.u.assign(npx, 0.0f);
     img.v.assign(npx, 0.0f);
     img.iterations.assign(npx, 0);
-    const Vec3 key = normalize(-1.0 * camera.forward() + 0.6 * camera.up() - 0.5 * camera.right());
+    const Shader shader(c);
     parallel_rows(c, true, [&](int j) {
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);
@@ -45,20 +62,11 @@ void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) 
                 px[3] = options.background_alpha;
                 continue;
             }
-            const Face& f = scene.faces[h.face - 1];
-            const Vec3 dir = camera.pixel_ray(i, j).dir;
-            // The solve's normal (exact at the double-precision hit); the limits
-            // of surface_normal only where its partials were degenerate.
-            Vec3 n{h.nx, h.ny, h.nz};
-            if (n.x == 0 && n.y == 0 && n.z == 0) n = surface_normal(f.surface, h.u, h.v, f.reversed);
-            if (dot(n, dir) > 0) n = -n;  // two-sided: light the side facing the viewer
-            Color col = f.color;
-            if (!f.has_color && f.body < scene.bodies.size() && scene.bodies[f.body].has_color)
-                col = scene.bodies[f.body].color;
-            const double lambert = kAmbient + kKey * std::max(0.0, dot(n, key)) + kHeadlight * std::max(0.0, -dot(n, dir));
-            px[0] = static_cast<float>(col.r * lambert);
-            px[1] = static_cast<float>(col.g * lambert);
-            px[2] = static_cast<float>(col.b * lambert);
+            Vec3 n;
+            const Vec3 rgb = shader.colour(h, camera.pixel_ray(i, j).dir, n);
+            px[0] = static_cast<float>(rgb.x);
+            px[1] = static_cast<float>(rgb.y);
+            px[2] = static_cast<float>(rgb.z);
             px[3] = 1.0f;
             img.z[k] = static_cast<float>(h.t);
             img.normal[3 * k] = static_cast<float>(n.x);

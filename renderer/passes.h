@@ -5,6 +5,8 @@
 //                      and starts; then silhouette growth (pass_rescue.cpp)
 //   nearer_sheet_pass  depth spikes re-solved from their neighbours (pass_nearer.cpp)
 //   shade_pass         shading from the exact normal, AOVs
+//   antialias_pass     extra exact sub-pixel rays on edge pixels (pass_antialias.cpp)
+//   edges_pass         feature lines over the shading (pass_edges.cpp)
 //   frame_statistics   RenderStats from the buffers
 // Each reads only what earlier passes wrote, so a frame's output is independent of
 // the thread count.
@@ -27,8 +29,38 @@ void rescue_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
 // Replaces hits on a farther sheet by nearer ones in b.hits; returns how many.
 uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
 
+// The lights of a frame and the colour of one hit under them (pass_shade.cpp).
+class Shader {
+public:
+    explicit Shader(const FrameContext& c);
+    // Linear RGB of hit h seen along the ray direction dir; n receives the
+    // shading normal (facing the viewer).
+    Vec3 colour(const PixelHit& h, Vec3 dir, Vec3& n) const;
+
+private:
+    const Scene& scene_;
+    Vec3 key_;
+};
+
 // The image and AOVs from b.hits.
 void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img);
+
+// Whether adjacent pixels k and n show different things: background and a face,
+// two faces, a step in depth, or normals at a crease angle (pass_edges.cpp). The
+// edge pixels of anti-aliasing and the feature lines.
+bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
+                   size_t n);
+
+// Anti-aliasing: pixels on silhouettes, face borders, depth steps and creases get
+// c.options.antialias extra sub-pixel rays, each solved exactly, and their colour
+// becomes the mean of all their samples; img's AOVs stay the pixel-centre sample.
+// Adds the pixels and rays to st.
+void antialias_pass(const FrameContext& c, const Solver& solver, const FrameBuffers& b, RenderImage& img,
+                    RenderStats& st);
+
+// Feature lines (c.options.edges): silhouettes, face borders and creases drawn
+// over img's colour, c.options.edge_width pixels wide, anti-aliased.
+void edges_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img);
 
 // Hits, primary outcomes, iterations, rescue kinds and holes into st.
 void frame_statistics(const FrameContext& c, const FrameBuffers& b, const RenderImage& img, int max_iterations,

@@ -25,17 +25,17 @@ void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, 
 
 }  // namespace
 
-Outcome Solver::solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
+Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
                       PixelHit& hit) const {
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const Camera& camera = ctx.camera;
     const NewtonResult r =
         ctx.options.method == NewtonMethod::proposed
-            ? newton_proposed(projected[id - 1], camera, camera.pixel_screen(i, j), u0, v0, ff.box, p, &ff.spans)
-            : newton_martin(ctx.scene.faces[id - 1].surface, camera.pixel_ray(i, j), u0, v0, ff.box, p, &ff.spans);
+            ? newton_proposed(projected[id - 1], camera, sp, u0, v0, ff.box, p, &ff.spans)
+            : newton_martin(ctx.scene.faces[id - 1].surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans);
     hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
     if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
-        border_gap_hit(id, i, j, r, hit))
+        border_gap_hit(id, sp, r, hit))
         return kNearTrim;
     switch (r.status) {
         case NewtonStatus::converged: break;
@@ -59,14 +59,14 @@ Outcome Solver::solve(uint32_t id, int i, int j, double u0, double v0, const New
 // of the ray (the exact hit lies on the surface's extension). Such a stop counts
 // as a near hit when the border point is within the trim band in (u,v) and
 // within the same band in model units (band x surface speed) of the ray.
-bool Solver::border_gap_hit(uint32_t id, int i, int j, const NewtonResult& r, PixelHit& hit) const {
+bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const {
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const UvBox& b = ff.box;
     if (!(r.u == b.u0 || r.u == b.u1 || r.v == b.v0 || r.v == b.v1)) return false;
     if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
         return false;
     const CartesianDerivs c = cartesian_d1(ctx.scene.faces[id - 1].surface, r.u, r.v);
-    const Ray ray = ctx.camera.pixel_ray(i, j);
+    const Ray ray = ctx.camera.ray(sp);
     const Vec3 q = c.P - ray.origin;
     const double t = dot(q, ray.dir);
     const double gap = length(q - t * ray.dir);

@@ -16,19 +16,24 @@ struct Solver {
     NewtonParams params;                         // the primary solves (the paper's criteria)
     NewtonParams robust;                         // the rescue's solves (NewtonParams::robust)
 
-    // One Newton solve of face id at pixel (i, j) from (u0, v0); hit if converged and
+    // One Newton solve of face id at the centre of pixel (i, j) from (u0, v0); hit if converged and
     // inside the trim. With `near`, a hit converged outside the trim but within the
     // face's trim-tolerance band is also returned (as kNearTrim): the sampled loops of
     // two faces sharing an edge are each only within that tolerance of the true edge,
     // so a ray through the sliver between the two polylines is rejected by both (a crack).
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
-                  PixelHit& hit) const;
+                  PixelHit& hit) const {
+        return solve(id, ctx.camera.pixel_screen(i, j), u0, v0, p, near, hit);
+    }
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
         return solve(id, i, j, u0, v0, params, false, hit);
     }
+    // The same for the ray through any screen point (a sub-pixel sample).
+    Outcome solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
+                  PixelHit& hit) const;
 
 private:
-    bool border_gap_hit(uint32_t id, int i, int j, const NewtonResult& r, PixelHit& hit) const;
+    bool border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const;
 };
 
 }  // namespace nurbsrt

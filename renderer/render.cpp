@@ -76,8 +76,9 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     st.preliminary_map_ms = ms_since(t0);
 
     // 3-4. Newton per pixel from the map's start, trim test, then rescue.
-    // Progress units: rows of the three per-pixel passes (Newton, rescue, shading).
-    Progress progress(options.progress, 3 * static_cast<int64_t>(H));
+    // Progress units: rows of the per-pixel passes (Newton, rescue, shading, and
+    // anti-aliasing when asked for).
+    Progress progress(options.progress, (options.antialias > 0 ? 4 : 3) * static_cast<int64_t>(H));
     const FrameContext ctx{prepared, scene, camera, map, options, arena, progress, W, H,
                            static_cast<uint32_t>(scene.faces.size())};
     FrameBuffers buf(ctx.pixels());
@@ -113,6 +114,12 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     t0 = Clock::now();
     shade_pass(ctx, buf, res.image);
     st.shade_ms = ms_since(t0);
+    t0 = Clock::now();
+    antialias_pass(ctx, solver, buf, res.image, st);
+    st.antialias_ms = ms_since(t0);
+    t0 = Clock::now();
+    edges_pass(ctx, buf, res.image);
+    st.edges_ms = ms_since(t0);
 
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.map_triangles = prepared.map_mesh().triangles();

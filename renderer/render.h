@@ -34,6 +34,15 @@ struct RenderOptions {
     // process's one worker pool serves higher-priority arenas first (a service
     // puts cheap frames ahead of heavy ones).
     RenderPriority priority = RenderPriority::normal;
+    // Extra sub-pixel rays per edge pixel (silhouettes, face borders, depth steps,
+    // creases), each solved exactly (pass_antialias.cpp); 0: one ray per pixel.
+    // The AOVs are the pixel-centre sample either way.
+    int antialias = 0;
+    // Feature lines over the shading (pass_edges.cpp): silhouettes, face borders
+    // and creases, edge_width pixels wide (any resolution), anti-aliased.
+    bool edges = false;
+    Color edge_color{0.02f, 0.02f, 0.02f};
+    float edge_width = 1.0f;
     Color background{0, 0, 0}; // of pixels no face covers
     float background_alpha = 0; // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
@@ -84,7 +93,11 @@ struct RenderStats {
     // over itself within the map mesh's deflection). Not part of `fallback`.
     uint64_t rescue_nearer = 0;
     uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
-    double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, total_ms = 0;
+    // Anti-aliasing: extra rays per edge pixel (RenderOptions::antialias), the
+    // edge pixels that got them, and the rays traced for them.
+    int antialias = 0;
+    uint64_t antialias_pixels = 0, antialias_rays = 0;
+    double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, antialias_ms = 0, edges_ms = 0, total_ms = 0;
     // prepare() of the Scene when render() was given one (then included in
     // total_ms); 0 when it was given a PreparedScene.
     double prepare_ms = 0;

@@ -40,6 +40,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
           {"trim_tolerance", s.rescue_trim_tolerance},
           {"nearer_sheet", s.rescue_nearer},
           {"holes", s.holes}}},
+        {"antialias", {{"rays_per_edge_pixel", s.antialias}, {"pixels", s.antialias_pixels}, {"rays", s.antialias_rays}}},
         {"timings_ms",
          {{"read", import.read_ms},
           {"nurbs_convert", import.nurbs_convert_ms},
@@ -48,6 +49,8 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
           {"preliminary_map", s.preliminary_map_ms},
           {"newton", s.newton_ms},
           {"shade", s.shade_ms},
+          {"antialias", s.antialias_ms},
+          {"edges", s.edges_ms},
           {"encode", encode_ms},
           {"total", total_ms}}},
     };

@@ -40,20 +40,39 @@ std::string text(const json& v, const std::string& key) {
     return v.get<std::string>();
 }
 
+// true/false, or (query parameters) "true"/"false"/"1"/"0".
+bool boolean(const json& v, const std::string& key) {
+    if (v.is_boolean()) return v.get<bool>();
+    if (v.is_string()) {
+        const std::string s = v.get<std::string>();
+        if (s == "true" || s == "1") return true;
+        if (s == "false" || s == "0") return false;
+    }
+    bad("option '" + key + "' must be true or false");
+}
+
+// An array of numbers (3, or max_size) as the "r,g,b[,a]" text the shared
+// parsers read, so arrays and strings are checked alike.
+std::string background_text(const json& v, const std::string& key, size_t max_size) {
+    const std::string what = "option '" + key + "'";
+    const std::string sizes = max_size == 3 ? "3" : "3 or 4";
+    if (!v.is_array() || v.size() < 3 || v.size() > max_size) bad(what + " must be an array of " + sizes + " numbers, or a string");
+    std::string text;
+    for (const json& x : v) {
+        if (!x.is_number()) bad(what + " must be an array of " + sizes + " numbers, or a string");
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%s%.17g", text.empty() ? "" : ",", x.get<double>());
+        text += buf;
+    }
+    return text;
+}
+
 // A background as a string ("1,1,1", "transparent": query parameters) or an
 // array of 3 (opaque) or 4 numbers.
 Background background(const json& v, const std::string& key) {
     const std::string what = "option '" + key + "'";
     if (v.is_string()) return parse_background(v.get<std::string>(), what);
-    if (!v.is_array() || (v.size() != 3 && v.size() != 4)) bad(what + " must be an array of 3 or 4 numbers, or a string");
-    std::string text;
-    for (const json& x : v) {
-        if (!x.is_number()) bad(what + " must be an array of 3 or 4 numbers, or a string");
-        char buf[40];
-        std::snprintf(buf, sizeof buf, "%s%.17g", text.empty() ? "" : ",", x.get<double>());
-        text += buf;
-    }
-    return parse_background(text, what);
+    return parse_background(background_text(v, key, 4), what);
 }
 
 Vec3 vec3(const json& v, const std::string& key) {
@@ -196,6 +215,15 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.background = background(v, key);
         } else if (key == "aovs") {
             r.aovs = aov_bits(v, key);
+        } else if (key == "antialias") {
+            r.look.antialias = parse_antialias(number(v, key), "option '" + key + "'");
+        } else if (key == "edges") {
+            r.look.edges = boolean(v, key);
+        } else if (key == "edge_color") {
+            r.look.edge_color = v.is_string() ? parse_rgb(v.get<std::string>(), "option '" + key + "'")
+                                              : parse_rgb(background_text(v, key, 3), "option '" + key + "'");
+        } else if (key == "edge_width") {
+            r.look.edge_width = parse_edge_width(number(v, key), "option '" + key + "'");
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items()) camera_field(r, ck, cv);
@@ -233,6 +261,45 @@ Background parse_background(const std::string& s, const std::string& what) {
             throw Error(ErrorCode::invalid_argument,
                         what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
     return {{c[0], c[1], c[2]}, c[3]};
+}
+
+int default_antialias(const std::string& format_name) {
+    return format_name == "png" || format_name == "jpeg" ? kDefaultAntialias : 0;
+}
+
+int parse_antialias(double n, const std::string& what) {
+    if (!(n >= 0 && n <= kMaxAntialias) || n != std::floor(n))
+        throw Error(ErrorCode::invalid_argument, what + " must be an integer from 0 (off) to " +
+                                                     std::to_string(kMaxAntialias) + " extra rays per edge pixel");
+    return static_cast<int>(n);
+}
+
+double parse_edge_width(double w, const std::string& what) {
+    if (!(w >= kMinEdgeWidth && w <= kMaxEdgeWidth)) {
+        char msg[64];
+        std::snprintf(msg, sizeof msg, " must be from %g to %g pixels", kMinEdgeWidth, kMaxEdgeWidth);
+        throw Error(ErrorCode::invalid_argument, what + msg);
+    }
+    return w;
+}
+
+Color parse_rgb(const std::string& s, const std::string& what) {
+    double c[3] = {0, 0, 0};
+    char tail = 0;
+    if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &c[0], &c[1], &c[2], &tail) != 3)
+        throw Error(ErrorCode::invalid_argument, what + " must be r,g,b in [0,1] (got '" + s.substr(0, 64) + "')");
+    for (double x : c)
+        if (!(x >= 0 && x <= 1))
+            throw Error(ErrorCode::invalid_argument,
+                        what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
+    return {static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])};
+}
+
+void apply_look(const ImageLook& look, const std::string& format_name, RenderOptions& options) {
+    options.antialias = look.antialias.value_or(default_antialias(format_name));
+    options.edges = look.edges;
+    options.edge_color = look.edge_color;
+    options.edge_width = static_cast<float>(look.edge_width);
 }
 
 Background default_background(const std::string& format_name) {

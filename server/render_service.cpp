@@ -198,6 +198,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const Background bg = r.background.value_or(default_background(r.format.name));
     options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
     options.background_alpha = static_cast<float>(bg.alpha);
+    apply_look(r.look, r.format.name, options);
     const RenderResult result =
         render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop);
 

@@ -289,6 +289,9 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o " + out + " --up 0,0,z", "--up: must be three numbers"},
         {"-o " + out + " --background 2,0,0", "--background: the value has a component outside [0, 1] (got '2,0,0')"},
         {"-o " + out + " --stats " + (dir / "s.txt").string(), "--stats"},
+        {"-o " + out + " --antialias 65", "--antialias: the value must be an integer from 0 (off) to 64"},
+        {"-o " + out + " --edge-width 0", "--edge-width: the value must be from 0.25 to 16 pixels"},
+        {"-o " + out + " --edge-color 2,0,0", "--edge-color: the value has a component outside [0, 1]"},
         {"-o " + out + " --widht 100", "not expected: --widht"},
         {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},
     };
@@ -303,3 +306,27 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
 }
 
 }  // namespace
+
+// Anti-aliasing is on by default for PNG and JPEG and off for EXR (the API's
+// defaults); --edges adds the feature-line pass; both show in the statistics.
+TEST(CliRender, AntialiasDefaultsAndEdgesInStats) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-aa-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const struct {
+        std::string file, args;
+        int rays;
+    } cases[] = {
+        {"a.png", "", 4}, {"b.jpg", "", 4}, {"c.exr", "", 0}, {"d.png", "--antialias 0", 0}, {"e.exr", "--antialias 8", 8},
+    };
+    for (const auto& c : cases) {
+        const CliRun r = run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --edges --stats - -o " +
+                                     (dir / c.file).string() + " " + c.args);
+        ASSERT_EQ(r.status, 0) << c.args << "\n" << r.err;
+        const nlohmann::json st = nlohmann::json::parse(r.out);
+        EXPECT_EQ(st["antialias"]["rays_per_edge_pixel"], c.rays) << c.file << " " << c.args;
+        EXPECT_EQ(st["antialias"]["rays"].get<uint64_t>(), c.rays * st["antialias"]["pixels"].get<uint64_t>());
+        EXPECT_EQ(st["antialias"]["pixels"].get<uint64_t>() > 0, c.rays > 0) << c.file << " " << c.args;
+        EXPECT_TRUE(st["timings_ms"].contains("edges"));
+    }
+    fs::remove_all(dir);
+}

@@ -16,38 +16,6 @@ using namespace nurbsrt::testing;
 
 namespace {
 
-// The sphere octant, and a plane patch with a circular hole of radius 0.2 at
-// (u, v) = (0.5, 0.5) cut by a 64-gon trim loop (plus the outer boundary loop).
-Scene test_scene(AnalyticPatch& sphere, AnalyticPatch& plane) {
-    sphere = sphere_patch(1.5);
-    plane = plane_patch();
-    // Move the plane beside the sphere, scaled up, so both are well in view.
-    const Vec3 off{-1.5, 1.5, -0.5};
-    for (Vec4& c : plane.surface.cp) c = Vec4{1.5 * c.x + off.x * c.w, 1.5 * c.y + off.y * c.w, 1.5 * c.z + off.z * c.w, c.w};
-    plane.box = BBox{};
-    finish_box(plane);
-    const auto hit = plane.hit;
-    plane.hit = [hit, off](const Ray& r) {
-        const std::optional<double> t = hit(Ray{(r.origin - off) / 1.5, r.dir});
-        return t ? std::optional<double>(*t * 1.5) : std::nullopt;
-    };
-    Scene s;
-    s.faces.push_back(make_face(sphere, 1, 12));
-    Face pf = make_face(plane, 2, 12);
-    TrimLoop outer, hole;
-    outer.outer = true;
-    outer.points = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    for (int k = 0; k < 64; ++k)
-        hole.points.push_back({0.5 + 0.2 * std::cos(2 * M_PI * k / 64), 0.5 + 0.2 * std::sin(2 * M_PI * k / 64)});
-    pf.loops = {outer, hole};
-    pf.color = {0.2f, 0.5f, 0.9f};
-    pf.has_color = true;
-    s.faces.push_back(pf);
-    s.bbox.extend(sphere.box);
-    s.bbox.extend(plane.box);
-    return s;
-}
-
 CameraSpec scene_view(const Scene& s, int w, int h) {
     CameraSpec base;
     base.width = w;
@@ -61,7 +29,7 @@ CameraSpec scene_view(const Scene& s, int w, int h) {
 
 TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
     AnalyticPatch sphere, plane;
-    const Scene scene = test_scene(sphere, plane);
+    const Scene scene = sphere_and_holed_plane(sphere, plane);
     const Camera cam(scene_view(scene, 200, 150));
     for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
         RenderOptions opt;
@@ -111,7 +79,7 @@ TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
 
 TEST(RendererRender, SameOutputForOneAndTwoThreads) {
     AnalyticPatch sphere, plane;
-    const Scene scene = test_scene(sphere, plane);
+    const Scene scene = sphere_and_holed_plane(sphere, plane);
     const Camera cam(scene_view(scene, 160, 120));
     RenderOptions o1, o2;
     o1.threads = 1;
@@ -303,7 +271,7 @@ TEST(RendererRender, SilhouetteMatchesAnalyticSphere) {
 
 TEST(RendererRender, ProgressIsMonotoneAndEndsAtOne) {
     AnalyticPatch sphere, plane;
-    const Scene scene = test_scene(sphere, plane);
+    const Scene scene = sphere_and_holed_plane(sphere, plane);
     const Camera cam(scene_view(scene, 160, 120));
     std::vector<double> seen;
     RenderOptions opt;
@@ -323,7 +291,7 @@ TEST(RendererRender, ProgressIsMonotoneAndEndsAtOne) {
 // Error(canceled) instead of a partial image; an unset flag changes nothing.
 TEST(RendererRender, CancelFlagStopsTheFrame) {
     AnalyticPatch sphere, plane;
-    const Scene scene = test_scene(sphere, plane);
+    const Scene scene = sphere_and_holed_plane(sphere, plane);
     const Camera cam(scene_view(scene, 160, 120));
     auto flag = std::make_shared<std::atomic<bool>>(true);
     RenderOptions opt;
@@ -355,7 +323,7 @@ TEST(RendererRender, CancelFlagStopsTheFrame) {
 
 TEST(RendererRender, WritesExrWithAovsAndPng) {
     AnalyticPatch sphere, plane;
-    const Scene scene = test_scene(sphere, plane);
+    const Scene scene = sphere_and_holed_plane(sphere, plane);
     const Camera cam(scene_view(scene, 64, 48));
     const RenderResult r = render(scene, cam, RenderOptions{});
     const auto dir = std::filesystem::temp_directory_path() / "nurbsrt_render_test";

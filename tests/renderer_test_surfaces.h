@@ -307,4 +307,36 @@ inline Face make_face(const AnalyticPatch& p, uint32_t index, int n = 8) {
     return f;
 }
 
+// The sphere octant, and a plane patch with a circular hole of radius 0.2 at
+// (u, v) = (0.5, 0.5) cut by a 64-gon trim loop (plus the outer boundary loop).
+inline Scene sphere_and_holed_plane(AnalyticPatch& sphere, AnalyticPatch& plane) {
+    sphere = sphere_patch(1.5);
+    plane = plane_patch();
+    // Move the plane beside the sphere, scaled up, so both are well in view.
+    const Vec3 off{-1.5, 1.5, -0.5};
+    for (Vec4& c : plane.surface.cp) c = Vec4{1.5 * c.x + off.x * c.w, 1.5 * c.y + off.y * c.w, 1.5 * c.z + off.z * c.w, c.w};
+    plane.box = BBox{};
+    finish_box(plane);
+    const auto hit = plane.hit;
+    plane.hit = [hit, off](const Ray& r) {
+        const std::optional<double> t = hit(Ray{(r.origin - off) / 1.5, r.dir});
+        return t ? std::optional<double>(*t * 1.5) : std::nullopt;
+    };
+    Scene s;
+    s.faces.push_back(make_face(sphere, 1, 12));
+    Face pf = make_face(plane, 2, 12);
+    TrimLoop outer, hole;
+    outer.outer = true;
+    outer.points = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (int k = 0; k < 64; ++k)
+        hole.points.push_back({0.5 + 0.2 * std::cos(2 * M_PI * k / 64), 0.5 + 0.2 * std::sin(2 * M_PI * k / 64)});
+    pf.loops = {outer, hole};
+    pf.color = {0.2f, 0.5f, 0.9f};
+    pf.has_color = true;
+    s.faces.push_back(pf);
+    s.bbox.extend(sphere.box);
+    s.bbox.extend(plane.box);
+    return s;
+}
+
 }  // namespace nurbsrt::testing

@@ -197,3 +197,75 @@ def test_one_side_keeps_the_default_aspect(url):
         r = post_raw(url, "/v1/renders", step, params=params)
         assert r.status_code == 200, r.text[:300]
         assert corner_pixel(r.content)[0] == size, params
+
+
+# ---- anti-aliasing and feature lines (the same options and checks as the CLI) ------------------------------
+
+def render_png(url, data, **params):
+    from test_jobs import png_pixels
+    r = post_raw(url, "/v1/renders", data, params={"width": 160, "height": 120, **params},
+                 headers={"Accept": "application/json"})
+    assert r.status_code == 200, r.text[:300]
+    body = r.json()
+    validate(body["statistics"], "Statistics")
+    width, height, ch, rows = png_pixels(base64.b64decode(body["image_base64"]))
+    return body["statistics"], [row[i:i + ch] for row in rows for i in range(0, width * ch, ch)]
+
+
+def test_antialias_default_on_for_png_and_only_on_edge_pixels(url):
+    step = SCREW.read_bytes()
+    stats_on, on = render_png(url, step)  # PNG: on by default
+    stats_off, off = render_png(url, step, antialias=0)
+    assert stats_on["antialias"]["rays_per_edge_pixel"] == 4
+    assert stats_off["antialias"] == {"rays_per_edge_pixel": 0, "pixels": 0, "rays": 0}
+    edge_pixels = stats_on["antialias"]["pixels"]
+    assert 0 < edge_pixels < stats_on["pixels_hit"]
+    assert stats_on["antialias"]["rays"] == 4 * edge_pixels
+    assert "antialias" in stats_on["timings_ms"]
+    changed = sum(a != b for a, b in zip(on, off))
+    # Only edge pixels change, and most of them do (partly covered, blended).
+    assert 0 < changed <= edge_pixels
+    # Partial coverage on a transparent background: alpha strictly between 0 and 255.
+    assert sum(0 < p[3] < 255 for p in on) > 20
+    assert all(p[3] in (0, 255) for p in off)
+    # More rays: same edge pixels, 8 rays each.
+    stats8, _ = render_png(url, step, antialias=8)
+    assert stats8["antialias"]["pixels"] == edge_pixels and stats8["antialias"]["rays"] == 8 * edge_pixels
+
+
+def test_antialias_off_by_default_for_exr_and_tiff(url):
+    step = SCREW.read_bytes()
+    for fmt in ("exr", "tiff"):
+        r = post_raw(url, "/v1/renders", step, params={"width": 64, "height": 48, "format": fmt},
+                     headers={"Accept": "application/json"})
+        assert r.status_code == 200, r.text[:300]
+        assert r.json()["statistics"]["antialias"]["rays_per_edge_pixel"] == 0, fmt
+
+
+def test_edges_drawn_over_the_shading(url):
+    step = SCREW.read_bytes()
+    stats_plain, plain = render_png(url, step, antialias=0, background="1,1,1")
+    stats_lines, lines = render_png(url, step, antialias=0, background="1,1,1", edges="true",
+                                    edge_color="1,0,0", edge_width=2)
+    assert "edges" in stats_lines["timings_ms"]
+    red = sum(p[0] > 240 and p[1] < 15 and p[2] < 15 for p in lines)
+    assert sum(p[0] > 240 and p[1] < 15 and p[2] < 15 for p in plain) == 0
+    assert red > 100, red  # the silhouette and the face borders of the screw, 2 px wide
+    files = {"file": ("s.step", step), "options": (None, json.dumps(
+        {"width": 160, "height": 120, "antialias": 0, "background": [1, 1, 1], "edges": True,
+         "edge_color": [1, 0, 0], "edge_width": 2}))}
+    r = requests.post(url + "/v1/renders", files=files, timeout=TIMEOUT)
+    from test_jobs import png_pixels
+    width, _, ch, rows = png_pixels(r.content)
+    as_json = [row[i:i + ch] for row in rows for i in range(0, width * ch, ch)]
+    assert as_json == lines  # the JSON options and the query parameters mean the same
+
+
+@pytest.mark.parametrize("params,field", [
+    ({"antialias": -1}, "antialias"), ({"antialias": 65}, "antialias"), ({"antialias": 2.5}, "antialias"),
+    ({"antialias": "many"}, "antialias"), ({"edges": "yes"}, "edges"), ({"edge_width": 0}, "edge_width"),
+    ({"edge_width": 100}, "edge_width"), ({"edge_color": "1,0"}, "edge_color"), ({"edge_color": "2,0,0"}, "edge_color"),
+])
+def test_bad_antialias_and_edge_options(url, params, field):
+    body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params=params), 400, "invalid_argument")
+    assert field in body["detail"], body

@@ -1,0 +1,90 @@
+// Feature lines over the shading: silhouettes, face borders and creases, found
+// in the exact per-pixel hits the way Saito & Takahashi 1990 ("Comprehensible
+// rendering of 3-D shapes") find them in a G-buffer: between two adjacent pixels
+// that show background and a face, two faces, a step in depth, or normals at an
+// angle. The line lies on the boundary between the two pixels; each pixel's
+// coverage comes from its distance to the nearest such boundary point (half the
+// width plus half a pixel of falloff), which anti-aliases the line and keeps its
+// width in pixels whatever the resolution.
+#include <algorithm>
+#include <cmath>
+
+#include "renderer/passes.h"
+
+namespace nurbsrt {
+
+namespace {
+
+// A crease: the shading normals of two adjacent pixels differ by more than 30
+// degrees (cos 30 = 0.866). A smooth face turns by far less between pixels
+// except seen almost edge-on, where a silhouette is next anyway.
+constexpr double kCreaseCos = 0.866;
+// A depth step on one face (a fold occluding itself, or one sheet of a closed
+// face behind another): adjacent hits farther apart in depth than this many
+// pixel footprints. On one sheet, neighbouring depths differ by about one
+// footprint times the slope, so only sheets seen within ~20 degrees of edge-on
+// (slope 3) count as steps.
+constexpr double kDepthStepFootprints = 3.0;
+
+}  // namespace
+
+bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
+                   size_t n) {
+    const PixelHit &p = hits[k], &q = hits[n];
+    if (!p.face && !q.face) return false;
+    if (!p.face || !q.face || p.face != q.face) return true;  // silhouette, face border
+    const double footprint = 2.0 * c.camera.image_to_model_scale(std::min(p.t, q.t)) / c.height;
+    if (std::abs(p.t - q.t) > kDepthStepFootprints * footprint) return true;  // one face folding over itself
+    const float *a = &img.normal[3 * k], *b = &img.normal[3 * n];
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < kCreaseCos;
+}
+
+void edges_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) {
+    const RenderOptions& o = c.options;
+    if (!o.edges || !(o.edge_width > 0)) return;
+    const int W = c.width, H = c.height;
+    // Boundary points: the midpoints of the right and lower sides of pixels whose
+    // neighbour there differs, in pixel coordinates (pixel (i, j) spans [i, i+1) x [j, j+1)).
+    std::vector<uint8_t> right(c.pixels(), 0), down(c.pixels(), 0);
+    parallel_rows(c, false, [&](int j) {
+        for (int i = 0; i < W; ++i) {
+            const size_t k = c.map.index(i, j);
+            if (i + 1 < W) right[k] = pixels_differ(c, b.hits, img, k, k + 1);
+            if (j + 1 < H) down[k] = pixels_differ(c, b.hits, img, k, k + W);
+        }
+    });
+    throw_if_canceled(o);
+    // A pixel's coverage by the line: 1 within half the width of a boundary
+    // point, falling to 0 over one more pixel (a box filter's footprint).
+    const double half = 0.5 * o.edge_width;
+    const int reach = static_cast<int>(std::ceil(half + 1.0));
+    std::vector<float> coverage(c.pixels(), 0.0f);
+    parallel_rows(c, false, [&](int j) {
+        for (int i = 0; i < W; ++i) {
+            double d2 = HUGE_VAL;
+            for (int nj = std::max(j - reach, 0); nj <= std::min(j + reach, H - 1); ++nj)
+                for (int ni = std::max(i - reach, 0); ni <= std::min(i + reach, W - 1); ++ni) {
+                    const size_t n = c.map.index(ni, nj);
+                    const double cx = ni + 0.5 - (i + 0.5), cy = nj + 0.5 - (j + 0.5);
+                    if (right[n]) d2 = std::min(d2, (cx + 0.5) * (cx + 0.5) + cy * cy);
+                    if (down[n]) d2 = std::min(d2, cx * cx + (cy + 0.5) * (cy + 0.5));
+                }
+            coverage[c.map.index(i, j)] = static_cast<float>(std::clamp(half + 0.5 - std::sqrt(d2), 0.0, 1.0));
+        }
+    });
+    throw_if_canceled(o);
+    // "Over" the image (Porter & Duff 1984), in the image's straight alpha.
+    const float er = o.edge_color.r, eg = o.edge_color.g, eb = o.edge_color.b;
+    for (size_t k = 0; k < c.pixels(); ++k) {
+        const float a = coverage[k];
+        if (a <= 0) continue;
+        float* px = &img.rgba[4 * k];
+        const float below = px[3] * (1 - a), alpha = a + below;
+        px[0] = (er * a + px[0] * below) / alpha;
+        px[1] = (eg * a + px[1] * below) / alpha;
+        px[2] = (eb * a + px[2] * below) / alpha;
+        px[3] = alpha;
+    }
+}
+
+}  // namespace nurbsrt
