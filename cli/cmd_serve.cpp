@@ -91,9 +91,10 @@ void add_serve_command(CLI::App& app) {
                     "open connections from one client address; beyond: 503")
         ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")->check(CLI::Range(1, 100000))->capture_default_str();
     cmd->add_option("--api-keys-file", c->api_keys_file,
-                    "require 'Authorization: Bearer <key>' with a key from this file (one per line,\n"
-                    "'#' comments, at least 16 characters) on every route but /healthz, /readyz and\n"
-                    "/v1/openapi.json; keys can also be given comma-separated in NURBSRT_API_KEYS")
+                    "require 'Authorization: Bearer <key>' (or 'X-Api-Key: <key>') with a key from this\n"
+                    "file (one per line, '#' comments, at least 16 characters) on every route but\n"
+                    "/healthz, /readyz, /v1/openapi.json and the web page; keys can also be given\n"
+                    "comma-separated in NURBSRT_API_KEYS")
         ->envname("NURBSRT_API_KEYS_FILE");
     cmd->add_option("--cors-origin", c->cors_origins,
                     "a web origin (scheme://host[:port]) whose pages may call the API from a browser;\n"

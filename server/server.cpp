@@ -92,11 +92,13 @@ std::optional<EarlyAnswer> check_route(const httplib::Request& req) {
 
 std::optional<EarlyAnswer> check_before_body(const httplib::Request& req, const ServerConfig& config,
                                              const ApiKeys& keys) {
-    if (keys.enabled() && !ApiKeys::is_public_path(req.path) && !keys.accepts(req.get_header_value("Authorization")))
+    if (keys.enabled() && !ApiKeys::is_public_path(req.path) && !keys.accepts(req.get_header_value("Authorization")) &&
+        !keys.accepts_key(req.get_header_value("X-Api-Key")))
         return EarlyAnswer{401, ErrorCode::unauthorized,
-                           req.has_header("Authorization")
+                           req.has_header("Authorization") || req.has_header("X-Api-Key")
                                ? "the API key is not valid"
-                               : "this service requires an API key: send 'Authorization: Bearer <key>'"};
+                               : "this service requires an API key: send 'Authorization: Bearer <key>' or "
+                                 "'X-Api-Key: <key>'"};
     if (std::optional<EarlyAnswer> a = check_route(req)) return a;
     // Compressed request bodies are refused, not inflated: cpp-httplib 0.11
     // inflates them without any bound (a 2 MB gzip body can expand to GiBs).

@@ -246,6 +246,24 @@ def test_cors_simple_and_refused_answers_carry_the_origin(cors_server):
     assert "Access-Control-Allow-Origin" not in r.headers and "Origin" in r.headers["Vary"]
 
 
+def test_api_key_in_x_api_key(cors_server):
+    """The key a preflight allows as X-Api-Key is accepted as well as Authorization: Bearer."""
+    base = cors_server.url
+    r = requests.get(base + "/v1/jobs", headers={"Origin": ORIGIN, "X-Api-Key": KEY}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Access-Control-Allow-Origin"] == ORIGIN
+    validate(r.json(), "JobList")
+    r = requests.get(base + "/v1/jobs", headers={"X-Api-Key": KEY + "x"}, timeout=TIMEOUT)
+    assert check_problem(r, 401, "unauthorized")["detail"] == "the API key is not valid"
+    r = requests.get(base + "/v1/jobs", headers={"X-Api-Key": ""}, timeout=TIMEOUT)
+    check_problem(r, 401, "unauthorized")
+    r = requests.get(base + "/v1/jobs", timeout=TIMEOUT)
+    assert "'X-Api-Key: <key>'" in check_problem(r, 401, "unauthorized")["detail"]
+    r = post_raw(base, "/v1/renders", SCREW.read_bytes(), params={"width": 32, "height": 24},
+                 headers={"X-Api-Key": KEY})
+    assert r.status_code == 200 and r.content.startswith(b"\x89PNG")
+
+
 def test_cors_is_off_by_default(url):
     r = preflight(url, "/v1/renders", ORIGIN)
     assert r.status_code == 204 and r.headers["Allow"] == "POST, OPTIONS"
