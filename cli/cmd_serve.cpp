@@ -48,10 +48,10 @@ void add_serve_command(CLI::App& app) {
                     "memory of the whole service, MiB: renders wait (or 503) rather than exceed it "
                     "(0: 3/4 of RAM or of the cgroup limit)")
         ->envname("NURBSRT_MEMORY_BUDGET_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--max-render-mb", *render_mb, "largest estimated memory of one render, MiB (413 beyond)")
+    cmd->add_option("--max-render-mb", *render_mb, "largest estimated memory of one render, MiB (422 beyond)")
         ->envname("NURBSRT_MAX_RENDER_MB")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--max-render-cost", c->max_render_cost_s,
-                    "largest estimated work of one render, core-seconds (413 beyond)")
+                    "largest estimated work of one render, core-seconds (422 beyond)")
         ->envname("NURBSRT_MAX_RENDER_COST")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--max-upload-mb", *upload_mb, "largest upload, MiB (413 beyond)")
         ->envname("NURBSRT_MAX_UPLOAD_MB")->check(CLI::PositiveNumber)->capture_default_str();
@@ -91,10 +91,15 @@ void add_serve_command(CLI::App& app) {
                     "open connections from one client address; beyond: 503")
         ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")->check(CLI::Range(1, 100000))->capture_default_str();
     cmd->add_option("--api-keys-file", c->api_keys_file,
-                    "require 'Authorization: Bearer <key>' with a key from this file (one per line,\n"
-                    "'#' comments, at least 16 characters) on every route but /healthz, /readyz and\n"
-                    "/v1/openapi.json; keys can also be given comma-separated in NURBSRT_API_KEYS")
+                    "require 'Authorization: Bearer <key>' (or 'X-Api-Key: <key>') with a key from this\n"
+                    "file (one per line, '#' comments, at least 16 characters) on every route but\n"
+                    "/healthz, /readyz, /v1/openapi.json and the web page; keys can also be given\n"
+                    "comma-separated in NURBSRT_API_KEYS")
         ->envname("NURBSRT_API_KEYS_FILE");
+    cmd->add_option("--cors-origin", c->cors_origins,
+                    "a web origin (scheme://host[:port]) whose pages may call the API from a browser;\n"
+                    "repeat for several (the environment variable: comma-separated). None: no CORS headers")
+        ->envname("NURBSRT_CORS_ORIGIN")->delimiter(',');
     cmd->add_option("--job-runners", c->job_runners, "batch jobs running at once (their work shares --workers)")
         ->envname("NURBSRT_JOB_RUNNERS")->check(CLI::Range(1, 256))->capture_default_str();
     cmd->add_option("--max-queued-jobs", c->max_queued_jobs, "batch jobs waiting to run; beyond: 503 + Retry-After")

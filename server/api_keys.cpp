@@ -79,7 +79,12 @@ bool ApiKeys::accepts(std::string_view authorization) const {
     if (authorization.size() <= scheme.size()) return false;
     for (size_t i = 0; i < scheme.size(); ++i)
         if (std::tolower(static_cast<unsigned char>(authorization[i])) != scheme[i]) return false;
-    const std::string_view presented = trim(authorization.substr(scheme.size()));
+    return accepts_key(authorization.substr(scheme.size()));
+}
+
+bool ApiKeys::accepts_key(std::string_view key) const {
+    const std::string_view presented = trim(key);
+    if (presented.empty()) return false;
     bool ok = false;
     for (const std::string& k : keys_) ok |= constant_time_equal(presented, k);  // no early exit
     return ok;

@@ -1,6 +1,6 @@
 // Optional API keys: when any key is configured, every request except the
 // unauthenticated probes (/healthz, /readyz), the API document and the web page needs
-// `Authorization: Bearer <key>`; otherwise it gets 401 (problem+json) before
+// `Authorization: Bearer <key>` (or `X-Api-Key: <key>`); otherwise it gets 401 (problem+json) before
 // any work starts. Keys come from a file (one per line, '#' comments) and/or the
 // NURBSRT_API_KEYS environment variable (comma-separated), never from the
 // command line (it would show in `ps`), and are never logged.
@@ -27,6 +27,9 @@ public:
     // ("Bearer <key>", scheme case-insensitive). Compared in time independent
     // of where the strings differ, so a key cannot be guessed byte by byte.
     bool accepts(std::string_view authorization) const;
+    // The same for a bare key, as the X-Api-Key header carries it (the header
+    // name many API gateways use; a page may find it simpler than Bearer).
+    bool accepts_key(std::string_view key) const;
 
     // Paths open without a key: liveness/readiness probes, the API document and
     // the web page (GET / and /web/{name}).

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "renderer/error.h"
+#include "server/cors.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -85,6 +86,7 @@ void ServerConfig::validate() const {
     if (!(lease_s >= 1 && lease_s <= 86400)) fail("lease seconds must be in 1..86400");
     if (!job_store.empty() && job_store.rfind("postgresql://", 0) != 0 && job_store.rfind("postgres://", 0) != 0)
         fail("job store must be a postgresql:// URL (or empty for SQLite in the data dir)");
+    for (const std::string& origin : cors_origins) (void)normalized_origin(origin);
     for (const char ch : instance_id)
         if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_' && ch != '.')
             fail("instance id may hold only letters, digits, '-', '_' and '.'");

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace nurbsrt::server {
 
@@ -25,8 +26,8 @@ struct ServerConfig {
     int render_threads = 0;          // threads per render (0: all cores)
     int max_renders = 8;             // renders at once (each also within the memory budget)
     size_t memory_budget_bytes = 0;  // the whole process (0: 3/4 of RAM or of the cgroup limit)
-    size_t max_render_bytes = size_t(4) << 30;  // one render's estimated memory; beyond -> 413
-    double max_render_cost_s = 900;  // one render's estimated work, core-seconds; beyond -> 413
+    size_t max_render_bytes = size_t(4) << 30;  // one render's estimated memory; beyond -> 422
+    double max_render_cost_s = 900;  // one render's estimated work, core-seconds; beyond -> 422
 
     // Limits, all checked before work starts.
     size_t max_upload_bytes = size_t(64) << 20;
@@ -55,6 +56,9 @@ struct ServerConfig {
     // open service.
     std::string api_keys_file;
     std::optional<std::string> api_keys;  // set when NURBSRT_API_KEYS is in the environment, even empty
+    // Web origins whose pages may call the API from a browser (server/cors.h);
+    // empty: no CORS headers at all.
+    std::vector<std::string> cors_origins;
     // Batch jobs (POST /v1/jobs): kept in DATA_DIR/jobs.db and DATA_DIR/jobs/.
     int job_runners = 2;             // jobs run at once (their outputs still pass the admission gate)
     int max_queued_jobs = 100;       // jobs waiting; beyond -> 503

@@ -11,7 +11,11 @@ int http_status(ErrorCode code) {
         case ErrorCode::not_found: return 404;
         case ErrorCode::request_timeout: return 408;
         case ErrorCode::canceled: return 409;                // the resource's work was canceled
-        case ErrorCode::limit_exceeded: return 413;          // upload, pixels, faces, memory
+        // Pixels, faces, render memory, files or outputs of a job: the request is
+        // well formed but asks for more than this service is configured to do,
+        // RFC 9110 §15.5.21 422 Unprocessable Content. An upload over the size
+        // limit is answered 413 Content Too Large (§15.5.14) with that status given explicitly.
+        case ErrorCode::limit_exceeded: return 422;
         case ErrorCode::unsupported_format: return 415;
         case ErrorCode::unreadable_file:                     // the CAD content is the problem
         case ErrorCode::no_faces:
@@ -52,11 +56,27 @@ const char* problem_title(ErrorCode code) {
     return "Internal error";
 }
 
+namespace {
+
+// The title of a status given instead of the code's own: the status's reason
+// phrase (RFC 9110 §15), which says more than the code's title there.
+const char* status_title(int status, ErrorCode code) {
+    switch (status) {
+        case 405: return "Method not allowed";
+        case 413: return "Content too large";
+        case 414: return "URI too long";
+        case 431: return "Request header fields too large";
+        default: return problem_title(code);
+    }
+}
+
+}  // namespace
+
 Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id, int status) {
     if (status == 0) status = http_status(code);
     const nlohmann::json j = {
         {"type", std::string("urn:nurbsrt:error:") + error_code_name(code)},
-        {"title", problem_title(code)},
+        {"title", status == http_status(code) ? problem_title(code) : status_title(status, code)},
         {"status", status},
         {"detail", detail},
         {"code", error_code_name(code)},

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include "renderer/error.h"
@@ -131,7 +132,14 @@ unsigned aov_bits(const json& v, const std::string& key) {
     return bits;
 }
 
-void camera_field(RenderRequest& r, const std::string& key, const json& v) {
+// The option names, for messages that list them (kept in step with the parsers below).
+constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height";
+constexpr const char* kRenderOptions =
+    "width, height, format, background, method, map_precision, aovs, camera, view, eye, target, up, projection, "
+    "fov_deg, ortho_height";
+
+// Sets the camera field `key`; false when no camera field has that name.
+bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
     if (key == "eye") r.eye = vec3(v, key);
     else if (key == "target") r.target = vec3(v, key);
     else if (key == "up") r.up = vec3(v, key);
@@ -150,9 +158,13 @@ void camera_field(RenderRequest& r, const std::string& key, const json& v) {
     } else if (key == "view") {
         r.view = one_of(v, key, {"iso", "front", "back", "left", "right", "top", "bottom"});
     } else {
-        bad("unknown camera option '" + key.substr(0, 64) + "'");
+        return false;
     }
+    return true;
 }
+
+// The name as the client sent it, bounded (a message must not echo megabytes).
+std::string quoted_name(const std::string& key) { return "'" + key.substr(0, 64) + "'"; }
 
 json parse_object(const std::string& options_json) {
     const json o = json::parse(options_json, nullptr, false);
@@ -226,10 +238,12 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.look.edge_width = parse_edge_width(number(v, key), "option '" + key + "'");
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
-            for (const auto& [ck, cv] : v.items()) camera_field(r, ck, cv);
-        } else {
-            // Flat camera fields (query parameters): view, eye, target, up, projection, fov_deg, ortho_height.
-            camera_field(r, key, v);
+            for (const auto& [ck, cv] : v.items())
+                if (!camera_field(r, ck, cv))
+                    bad("unknown option " + quoted_name(ck) + " in 'camera' (camera options: " + kCameraOptions + ")");
+        } else if (!camera_field(r, key, v)) {
+            // Flat camera fields (query parameters) were tried last.
+            bad("unknown option " + quoted_name(key) + " (render options: " + kRenderOptions + ")");
         }
     }
     complete_size(width, height, r.width, r.height);
@@ -316,14 +330,16 @@ void complete_size(std::optional<int> width, std::optional<int> height, int& out
 }
 
 void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
-    if (r.width > c.max_dimension || r.height > c.max_dimension)
-        throw Error(ErrorCode::limit_exceeded, "image " + std::to_string(r.width) + "x" + std::to_string(r.height) +
-                                                   " exceeds the limit of " + std::to_string(c.max_dimension) +
-                                                   " pixels per side");
-    if (static_cast<long long>(r.width) * r.height > c.max_pixels)
-        throw Error(ErrorCode::limit_exceeded, "image of " +
-                                                   std::to_string(static_cast<long long>(r.width) * r.height) +
-                                                   " pixels exceeds the limit of " + std::to_string(c.max_pixels));
+    for (const auto& [name, value] : {std::pair{"width", r.width}, std::pair{"height", r.height}})
+        if (value > c.max_dimension)
+            throw Error(ErrorCode::limit_exceeded, std::string("option '") + name + "' is " + std::to_string(value) +
+                                                       ", over the limit of " + std::to_string(c.max_dimension) +
+                                                       " pixels per side");
+    const long long pixels = static_cast<long long>(r.width) * r.height;
+    if (pixels > c.max_pixels)
+        throw Error(ErrorCode::limit_exceeded, "options 'width' x 'height' give " + std::to_string(r.width) + "x" +
+                                                   std::to_string(r.height) + " = " + std::to_string(pixels) +
+                                                   " pixels, over the limit of " + std::to_string(c.max_pixels));
 }
 
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
@@ -334,7 +350,7 @@ ConversionFormat parse_conversion_format(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format;
     for (const auto& [key, v] : o.items()) {
-        if (key != "format") bad("unknown conversion option '" + key.substr(0, 64) + "'");
+        if (key != "format") bad("unknown option " + quoted_name(key) + " (a conversion takes only 'format')");
         format = text(v, key);
     }
     if (format.empty()) bad("option 'format' is required (step, iges, stl, glb or json)");

@@ -20,12 +20,19 @@
 namespace nurbsrt::server {
 namespace {
 
+// The extension of a download: STEP as .stp, the three-letter form most CAD
+// systems write, like IGES's .igs (the worker's own file keeps .step, which
+// picks its writer).
+const char* download_extension(ConversionFormat f) {
+    return f == ConversionFormat::step ? ".stp" : conversion_format_extension(f);
+}
+
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const auto t0 = std::chrono::steady_clock::now();
     const Upload upload = read_upload(req, {"format"});
     const ConversionFormat format = parse_conversion_format(upload.options_json);
     const std::string& bytes = *upload.bytes;
-    if (bytes.empty()) throw Error(ErrorCode::invalid_argument, "empty upload: send a STEP or IGES file");
+    if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
         throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
 
@@ -67,7 +74,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         res.set_content(body.dump(), kBulkJsonContentType);
     } else {
         res.set_header("Content-Disposition", "attachment; filename=\"" +
-                                                  download_name(upload.filename, conversion_format_extension(format)) +
+                                                  download_name(upload.filename, download_extension(format)) +
                                                   "\"");
         res.set_content(data, content_type.c_str());
     }

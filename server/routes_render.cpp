@@ -38,7 +38,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
         throw Error(ErrorCode::invalid_argument,
                     "option 'aovs' needs a JSON answer: send 'Accept: application/json' (or use format exr)");
     const std::string& bytes = *upload.bytes;
-    if (bytes.empty()) throw Error(ErrorCode::invalid_argument, "empty upload: send a STEP or IGES file");
+    if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
         throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
 

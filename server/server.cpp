@@ -16,47 +16,23 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
-#include <regex>
 #include <thread>
 
 #include "renderer/error.h"
 #include "server/api_keys.h"
 #include "server/context.h"
+#include "server/cors.h"
 #include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/job_runner.h"
 #include "server/problem.h"
 #include "server/request_log.h"
+#include "server/route_table.h"
 #include "server/routes.h"
+#include "server/upload.h"
 
 namespace nurbsrt::server {
 namespace {
-
-// Route label for logs and metrics: a known route, or "other" (never the raw
-// path, which is the client's and unbounded).
-std::string route_of(const httplib::Request& req) {
-    static const char* known[] = {"/v1/renders", "/v1/conversions", "/v1/jobs", "/healthz", "/readyz", "/metrics",
-                                  "/v1/openapi.json", "/"};
-    for (const char* k : known)
-        if (req.path == k) return k;
-    // Job resources by template (the id and name are the client's, unbounded).
-    static const std::regex job("^/v1/jobs/[^/]+$"), artifact("^/v1/jobs/[^/]+/artifacts/[^/]+$");
-    if (std::regex_match(req.path, job)) return "/v1/jobs/{id}";
-    if (std::regex_match(req.path, artifact)) return "/v1/jobs/{id}/artifacts/{name}";
-    static const std::regex web_file("^/web/[A-Za-z0-9_.-]+$");
-    if (std::regex_match(req.path, web_file)) return "/web/{name}";
-    return "other";
-}
-
-// The methods a known route answers (for 405 and its Allow header); "" for
-// "other" (no such resource: 404).
-const char* allowed_methods(const std::string& route) {
-    if (route == "/v1/renders" || route == "/v1/conversions") return "POST";
-    if (route == "/v1/jobs") return "GET, POST";
-    if (route == "/v1/jobs/{id}") return "GET, DELETE";
-    if (route == "other") return "";
-    return "GET";  // probes, metrics, the API document, artifacts, the web page
-}
 
 ErrorCode code_for_status(int status) {
     switch (status) {
@@ -96,15 +72,34 @@ struct EarlyAnswer {
     int status;
     ErrorCode code;
     std::string detail;
+    std::string allow = {};  // the Allow header of a 405
 };
+
+// No such resource (404), or a method the resource does not answer (405 with
+// Allow, RFC 9110 §15.5.6), answered before the body is read: cpp-httplib 0.11
+// reads the body of a PUT or PATCH without Content-Length until the client
+// closes, so an unrouted one would otherwise wait for the body timeout.
+std::optional<EarlyAnswer> check_route(const httplib::Request& req) {
+    const std::string route = route_of(req.path);
+    if (route == "other") return EarlyAnswer{404, ErrorCode::not_found, "no such resource"};
+    if (!allows_method(route, req.method))
+        return EarlyAnswer{405, ErrorCode::not_found,
+                           "method " + req.method + " is not allowed on " + route + " (allowed: " +
+                               allowed_methods(route) + ")",
+                           allowed_methods(route)};
+    return std::nullopt;
+}
 
 std::optional<EarlyAnswer> check_before_body(const httplib::Request& req, const ServerConfig& config,
                                              const ApiKeys& keys) {
-    if (keys.enabled() && !ApiKeys::is_public_path(req.path) && !keys.accepts(req.get_header_value("Authorization")))
+    if (keys.enabled() && !ApiKeys::is_public_path(req.path) && !keys.accepts(req.get_header_value("Authorization")) &&
+        !keys.accepts_key(req.get_header_value("X-Api-Key")))
         return EarlyAnswer{401, ErrorCode::unauthorized,
-                           req.has_header("Authorization")
+                           req.has_header("Authorization") || req.has_header("X-Api-Key")
                                ? "the API key is not valid"
-                               : "this service requires an API key: send 'Authorization: Bearer <key>'"};
+                               : "this service requires an API key: send 'Authorization: Bearer <key>' or "
+                                 "'X-Api-Key: <key>'"};
+    if (std::optional<EarlyAnswer> a = check_route(req)) return a;
     // Compressed request bodies are refused, not inflated: cpp-httplib 0.11
     // inflates them without any bound (a 2 MB gzip body can expand to GiBs).
     const std::string encoding = req.get_header_value("Content-Encoding");
@@ -125,6 +120,10 @@ std::optional<EarlyAnswer> check_before_body(const httplib::Request& req, const 
             return EarlyAnswer{413, ErrorCode::limit_exceeded,
                                "the upload exceeds the limit of " + std::to_string(config.max_upload_bytes) + " bytes"};
     }
+    // A request with neither Content-Length nor Transfer-Encoding has no body
+    // (RFC 9112 §6.3); cpp-httplib 0.11 would wait for one until the client closes.
+    if (req.method == "POST" && !req.has_header("Content-Length") && !req.has_header("Transfer-Encoding"))
+        return EarlyAnswer{400, ErrorCode::invalid_argument, no_body_detail(route_of(req.path))};
     return std::nullopt;
 }
 
@@ -138,20 +137,47 @@ void write_port_file(const std::string& path, int port) {
     std::filesystem::rename(tmp, path);
 }
 
-void install_early_answers(GuardedServer& svr, const ServerConfig& config, const ApiKeys& keys) {
-    // An answer before the body is read (auth, encoding, declared size) also
-    // closes the connection: the unread body must not be parsed as a request.
+// OPTIONS on a known resource: 204 with Allow (RFC 9110 §9.3.7), and for a
+// CORS preflight from an allowed origin the Access-Control-Allow-* headers.
+// Answered before the API key is checked: browsers send a preflight without
+// credentials (Fetch standard, CORS-preflight request).
+bool answer_options(const httplib::Request& req, httplib::Response& res, const CorsPolicy& cors) {
+    if (req.method != "OPTIONS") return false;
+    const std::string route = route_of(req.path);
+    if (route == "other") return false;
+    res.status = 204;
+    res.set_header("Allow", allowed_methods(route));
+    if (req.has_header("Access-Control-Request-Method"))
+        for (const auto& [name, value] : cors.preflight_headers(req.get_header_value("Origin"), allowed_methods(route)))
+            res.set_header(name, value);
+    if (has_body(req)) {
+        GuardedServer::close_after_response();
+        res.set_header("Connection", "close");
+    }
+    return true;
+}
+
+void install_early_answers(GuardedServer& svr, const ServerConfig& config, const ApiKeys& keys,
+                           const CorsPolicy& cors) {
+    // An answer before the body is read (route, auth, encoding, declared size)
+    // also closes the connection: the unread body must not be parsed as a request.
     // Captured by address: the objects live in run_server, beyond the server.
-    auto answer_early = [cfg = &config, k = &keys](const httplib::Request& req, httplib::Response& res,
-                                                   bool expecting) {
-        const std::optional<EarlyAnswer> a = check_before_body(req, *cfg, *k);
-        if (!a) return false;
+    auto answer_early = [cfg = &config, k = &keys, c = &cors](const httplib::Request& req, httplib::Response& res,
+                                                              bool expecting) {
         if (!res.has_header("X-Request-Id")) {
             const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
             res.set_header("X-Request-Id", id);
             note_request_start(id);
         }
+        // On every answer, refusals included: a page reads a 401 or 413 only with them.
+        if (!res.has_header("Vary"))
+            for (const auto& [name, value] : c->response_headers(req.get_header_value("Origin")))
+                res.set_header(name, value);
+        if (answer_options(req, res, *c)) return true;
+        const std::optional<EarlyAnswer> a = check_before_body(req, *cfg, *k);
+        if (!a) return false;
         if (a->code == ErrorCode::unauthorized) res.set_header("WWW-Authenticate", "Bearer realm=\"nurbsrt\"");
+        if (!a->allow.empty()) res.set_header("Allow", a->allow);
         send_problem_with_status(res, a->status, a->code, a->detail);
         if (has_body(req)) {
             GuardedServer::close_after_response();
@@ -162,10 +188,9 @@ void install_early_answers(GuardedServer& svr, const ServerConfig& config, const
         if (expecting) res.set_header("Content-Length", std::to_string(res.body.size()));
         return true;
     };
+    // The request id and CORS headers are set once: by the 100-continue
+    // handler when the client expects one, else here.
     svr.set_pre_routing_handler([answer_early](const httplib::Request& req, httplib::Response& res) {
-        const std::string id = request_id_from_header(req.get_header_value("X-Request-Id"));
-        res.set_header("X-Request-Id", id);
-        note_request_start(id);
         return answer_early(req, res, false) ? httplib::Server::HandlerResponse::Handled
                                       : httplib::Server::HandlerResponse::Unhandled;
     });
@@ -207,17 +232,13 @@ void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
                              " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");
             return httplib::Server::HandlerResponse::Handled;
         }
-        // A known resource asked with another method: 405 with what it allows.
-        const char* allow = res.status == 404 ? allowed_methods(route_of(req)) : "";
-        if (*allow) res.set_header("Allow", allow);
+        // (A method a known resource does not answer got its 405 before routing.)
         const int status = failure == ReadFailure::body_too_large     ? 413
                            : failure == ReadFailure::header_too_large ? 431
-                           : *allow                                   ? 405
                                                                       : res.status;
         const std::string detail = status == 413   ? "the upload exceeds the limit of " +
                                                        std::to_string(config.max_upload_bytes) + " bytes"
                                    : status == 404 ? "no such resource"
-                                   : status == 405 ? "method not allowed on this resource"
                                    : status == 414 ? "the request target is too long"
                                    : status == 431 ? "the request headers exceed " +
                                                          std::to_string(kMaxRequestHeaderBytes) + " bytes"
@@ -243,7 +264,7 @@ void install_request_log(GuardedServer& svr, ServerContext& ctx) {
         RequestLogEntry e;
         e.request_id = res.get_header_value("X-Request-Id");
         e.method = req.method;
-        e.route = route_of(req);
+        e.route = route_of(req.path);
         e.remote = req.remote_addr;
         e.status = res.status;
         e.duration_ms = note.elapsed_s * 1000.0;
@@ -291,7 +312,8 @@ int run_server(const ServerConfig& given) {
     ctx.jobs = &jobs;
     GuardedServer svr(connection_limits(config));
 
-    install_early_answers(svr, config, keys);
+    const CorsPolicy cors(config.cors_origins);
+    install_early_answers(svr, config, keys, cors);
     install_error_answers(svr, config);
     install_request_log(svr, ctx);
 
@@ -323,6 +345,7 @@ int run_server(const ServerConfig& given) {
                                    {"import_timeout_s", config.import_timeout_s},
                                    {"cache_bytes", config.cache_bytes},
                                    {"api_keys", keys.size()},  // how many, never which
+                                   {"cors_origins", config.cors_origins},
                                    {"header_timeout_s", config.header_timeout_s},
                                    {"min_body_rate_bytes", config.min_body_rate_bytes},
                                    {"max_connections", config.max_connections},

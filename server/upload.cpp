@@ -53,6 +53,7 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
                                                                   "(several files: POST /v1/jobs)");
         up.bytes = &file->second.content;
         up.filename = file->second.filename;
+        up.multipart = true;
         if (const auto part = req.files.find("options"); part != req.files.end()) {
             const json o = json::parse(part->second.content, nullptr, false);
             if (o.is_discarded() || !o.is_object())
@@ -87,6 +88,24 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
     }
     up.options_json = options.dump();
     return up;
+}
+
+namespace {
+constexpr const char* kHowToSendAFile =
+    "send a STEP or IGES file, raw (Content-Type: application/octet-stream) or as the 'file' part of "
+    "multipart/form-data";
+constexpr const char* kHowToSendAJob =
+    "a job is multipart/form-data with one or more 'file' parts (STEP or IGES) and one 'job' part (JSON)";
+}  // namespace
+
+std::string empty_upload_detail(const Upload& upload) {
+    return std::string(upload.multipart ? "the 'file' part is empty: " : "the request body is empty: ") +
+           kHowToSendAFile;
+}
+
+std::string no_body_detail(const std::string& route) {
+    return std::string("the request has no body (neither Content-Length nor Transfer-Encoding): ") +
+           (route == "/v1/jobs" ? kHowToSendAJob : kHowToSendAFile);
 }
 
 std::string download_name(const std::string& upload_filename, const std::string& extension) {

@@ -19,6 +19,7 @@ struct Upload {
     const std::string* bytes = nullptr;  // the file's content (points into the request)
     std::string options_json;            // JSON object text: query parameters overlaid by the options part
     std::string filename;                // the `file` part's file name as sent ("" for a raw body)
+    bool multipart = false;              // the file came as the `file` part of multipart/form-data
 };
 // Throws Error(invalid_argument) for a multipart body without `file`, or a bad
 // options part; Error(unsupported_format) for a raw body whose Content-Type is
@@ -27,6 +28,13 @@ struct Upload {
 // such a field given more than once, or also as a query parameter or in the
 // options part, is refused.
 Upload read_upload(const httplib::Request& req, std::initializer_list<const char*> form_options = {});
+
+// The 400 detail for an upload without content: an empty raw body, or an
+// empty `file` part; both say what to send instead.
+std::string empty_upload_detail(const Upload& upload);
+// The 400 detail for a POST without any body (neither Content-Length nor
+// Transfer-Encoding) to `route` (server/route_table.h): what that route expects.
+std::string no_body_detail(const std::string& route);
 
 // A download name for a result made from `upload_filename`: its stem (path,
 // quotes and anything but letters, digits, '.', '-', '_' removed; "converted"

@@ -1,5 +1,5 @@
 """Cost-based admission: a render's memory and work are estimated before it runs
-and refused with 413 and the estimate beyond the per-render caps; renders share
+and refused with 422 and the estimate beyond the per-render caps; renders share
 the process's memory budget; the estimate and the time spent waiting for
 admission are in the statistics and in Server-Timing; a small render is not
 stuck behind a large one."""
@@ -43,10 +43,10 @@ def test_per_render_caps_refuse_with_the_estimate(own_server):
     s = own_server(args=["--max-render-mb", "100", "--max-render-cost", "1"])
     step = SCREW.read_bytes()
     assert render(s.url, step, width=320, height=240).status_code == 200
-    body = check_problem(render(s.url, step, width=2000, height=2000), 413, "limit_exceeded")
+    body = check_problem(render(s.url, step, width=2000, height=2000), 422, "limit_exceeded")
     assert "estimated" in body["detail"] and "MiB" in body["detail"] and "100 MiB per render" in body["detail"]
     s2 = own_server(args=["--max-render-cost", "0.05"])
-    body = check_problem(render(s2.url, step, width=1000, height=1000), 413, "limit_exceeded")
+    body = check_problem(render(s2.url, step, width=1000, height=1000), 422, "limit_exceeded")
     assert "core-seconds" in body["detail"], body
     healthy(s2.url)
 
@@ -59,7 +59,7 @@ def test_memory_budget_bounds_the_renders_together(own_server):
     assert ready["renders"]["memory_capacity_mb"] == 200
     assert ready["renders"]["memory_used_mb"] == 0
     # One render estimated beyond all the renders' memory: refused at once, not queued for ever.
-    body = check_problem(render(s.url, SCREW.read_bytes(), width=1400, height=1400), 413, "limit_exceeded")
+    body = check_problem(render(s.url, SCREW.read_bytes(), width=1400, height=1400), 422, "limit_exceeded")
     assert "200 MiB in all" in body["detail"], body
     assert render(s.url, SCREW.read_bytes(), width=320, height=240).status_code == 200
     m = requests.get(s.url + "/metrics", timeout=TIMEOUT).text

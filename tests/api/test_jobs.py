@@ -355,8 +355,8 @@ def test_validation_errors_before_202(url):
         (submit(url, step, render(width=-1)), 400),
         (submit(url, step, render(format="gif")), 400),
         (submit(url, step, render(view="sideways")), 400),
-        (submit(url, step, render(width=5000, height=10)), 413),     # over --max-dimension 4096
-        (submit(url, step, render(width=4000, height=4000)), 413),   # over --max-pixels 4000000
+        (submit(url, step, render(width=5000, height=10)), 422),     # over --max-dimension 4096
+        (submit(url, step, render(width=4000, height=4000)), 422),   # over --max-pixels 4000000
         (submit(url, step + step, conv), 400),                        # file 1 has no outputs
         (submit(url, [("a.step", SCREW.read_bytes()), ("a.step", SCREW.read_bytes())],
                 {"outputs": [{"file": "a.step", "type": "render"}, {"file": 1, "type": "render"}]}), 400),
@@ -380,8 +380,8 @@ def test_job_limits_and_queue_bound(own_server):
     step = SCREW.read_bytes()
     render = {"file": 0, "type": "render", "options": {"width": 16, "height": 16}}
     check_problem(submit(s.url, [("a.step", step)] * 3, {"outputs": [dict(render, file=i) for i in range(3)]}),
-                  413, "limit_exceeded")
-    check_problem(submit(s.url, [("a.step", step)], {"outputs": [render] * 4}), 413, "limit_exceeded")
+                  422, "limit_exceeded")
+    check_problem(submit(s.url, [("a.step", step)], {"outputs": [render] * 4}), 422, "limit_exceeded")
     # One slow job runs, one waits: the next is turned away with Retry-After.
     slow = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}}]}
     running = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], slow))

@@ -197,9 +197,10 @@ def test_messages_name_no_scratch_files(own_server):
 
 
 def test_other_methods_on_known_resources(url):
-    for method, path, allow in (("PUT", "/v1/renders", "POST"), ("GET", "/v1/renders", "POST"),
-                                ("DELETE", "/v1/jobs", "GET, POST"), ("POST", "/healthz", "GET"),
-                                ("PUT", "/v1/jobs/0123456789abcdef0123456789abcdef", "GET, DELETE")):
+    for method, path, allow in (("PUT", "/v1/renders", "POST, OPTIONS"), ("GET", "/v1/renders", "POST, OPTIONS"),
+                                ("DELETE", "/v1/jobs", "GET, HEAD, POST, OPTIONS"),
+                                ("POST", "/healthz", "GET, HEAD, OPTIONS"),
+                                ("PUT", "/v1/jobs/0123456789abcdef0123456789abcdef", "GET, HEAD, DELETE, OPTIONS")):
         r = requests.request(method, url + path, timeout=TIMEOUT)
         check_problem(r, 405, "not_found")
         assert r.headers["Allow"] == allow

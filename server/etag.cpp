@@ -1,0 +1,70 @@
+#include "server/etag.h"
+
+#include <openssl/evp.h>
+
+#include <algorithm>
+#include <fstream>
+#include <memory>
+#include <vector>
+
+#include "renderer/error.h"
+
+namespace nurbsrt::server {
+namespace {
+
+// Read size of the hash: large enough that reads cost little next to SHA-256
+// itself, small enough for a pool thread's heap.
+constexpr size_t kHashChunkBytes = 1 << 16;
+
+std::string trimmed(const std::string& s, size_t from, size_t to) {
+    while (from < to && (s[from] == ' ' || s[from] == '\t')) ++from;
+    while (to > from && (s[to - 1] == ' ' || s[to - 1] == '\t')) --to;
+    return s.substr(from, to - from);
+}
+
+std::string opaque_tag(std::string tag) {
+    if (tag.rfind("W/", 0) == 0) tag.erase(0, 2);
+    return tag;
+}
+
+}  // namespace
+
+std::string file_etag(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(ErrorCode::io, "cannot read " + path);
+    const std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+    if (!ctx || EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) != 1)
+        throw Error(ErrorCode::internal, "SHA-256 is not available");
+    std::vector<char> buf(kHashChunkBytes);
+    while (in) {
+        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+        const auto n = in.gcount();
+        if (n > 0 && EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<size_t>(n)) != 1)
+            throw Error(ErrorCode::internal, "SHA-256 failed");
+    }
+    if (in.bad()) throw Error(ErrorCode::io, "cannot read " + path);
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned len = 0;
+    if (EVP_DigestFinal_ex(ctx.get(), digest, &len) != 1) throw Error(ErrorCode::internal, "SHA-256 failed");
+    static const char* hex = "0123456789abcdef";
+    std::string tag = "\"";
+    for (unsigned i = 0; i < len; ++i) {
+        tag += hex[digest[i] >> 4];
+        tag += hex[digest[i] & 15];
+    }
+    return tag + "\"";
+}
+
+bool if_none_match_matches(const std::string& header, const std::string& etag) {
+    if (trimmed(header, 0, header.size()) == "*") return true;
+    const std::string mine = opaque_tag(etag);
+    // Entity tags hold no commas (RFC 9110 §8.8.3: etagc excludes them), so a split at commas is exact.
+    for (size_t start = 0; start <= header.size();) {
+        const size_t comma = std::min(header.find(',', start), header.size());
+        if (opaque_tag(trimmed(header, start, comma)) == mine) return true;
+        start = comma + 1;
+    }
+    return false;
+}
+
+}  // namespace nurbsrt::server

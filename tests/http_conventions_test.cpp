@@ -1,0 +1,96 @@
+// The pure parts of the service's HTTP conventions: the route table behind 405
+// and Allow, the CORS policy, and entity tags with If-None-Match matching.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "renderer/error.h"
+#include "server/cors.h"
+#include "server/etag.h"
+#include "server/route_table.h"
+
+using namespace nurbsrt::server;
+
+TEST(RouteTable, TemplatesAndAllowedMethods) {
+    EXPECT_EQ(route_of("/v1/renders"), "/v1/renders");
+    EXPECT_EQ(route_of("/v1/jobs/abc"), "/v1/jobs/{id}");
+    EXPECT_EQ(route_of("/v1/jobs/abc/artifacts/0-render-0.png"), "/v1/jobs/{id}/artifacts/{name}");
+    EXPECT_EQ(route_of("/web/app.js"), "/web/{name}");
+    EXPECT_EQ(route_of("/web/a/b.js"), "other");
+    EXPECT_EQ(route_of("/v1/renders/"), "other");
+    EXPECT_STREQ(allowed_methods("other"), "");
+    EXPECT_STREQ(allowed_methods("/v1/renders"), "POST, OPTIONS");
+    EXPECT_TRUE(allows_method("/v1/renders", "POST"));
+    EXPECT_TRUE(allows_method("/v1/renders", "OPTIONS"));
+    EXPECT_FALSE(allows_method("/v1/renders", "GET"));
+    EXPECT_FALSE(allows_method("/v1/renders", "POS"));   // whole names only
+    EXPECT_FALSE(allows_method("/v1/renders", "POST, OPTIONS"));
+    EXPECT_FALSE(allows_method("/v1/renders", ""));
+    EXPECT_TRUE(allows_method("/v1/jobs/{id}", "DELETE"));
+    EXPECT_TRUE(allows_method("/healthz", "HEAD"));
+    EXPECT_FALSE(allows_method("/healthz", "DELETE"));
+    EXPECT_FALSE(allows_method("other", "GET"));
+}
+
+TEST(Cors, OriginsAreCheckedAndNormalized) {
+    EXPECT_EQ(normalized_origin("HTTPS://App.Example.com:8443"), "https://app.example.com:8443");
+    EXPECT_EQ(normalized_origin("http://[::1]:3000"), "http://[::1]:3000");
+    for (const char* bad : {"*", "https://app.example.com/", "https://app.example.com/x", "app.example.com",
+                            "ftp://x.org", "https://", "https://a b.org", "null", "https://x.org:123456"})
+        EXPECT_THROW((void)normalized_origin(bad), nurbsrt::Error) << bad;
+}
+
+TEST(Cors, OnlyConfiguredOriginsGetHeaders) {
+    const CorsPolicy off;
+    EXPECT_FALSE(off.enabled());
+    EXPECT_TRUE(off.response_headers("https://a.org").empty()) << "CORS off: not even Vary";
+
+    const CorsPolicy cors({"https://a.org", "http://localhost:3000"});
+    EXPECT_TRUE(cors.allows("https://a.org"));
+    EXPECT_TRUE(cors.allows("HTTPS://A.ORG"));
+    EXPECT_FALSE(cors.allows("https://a.org.evil.net"));
+    EXPECT_FALSE(cors.allows("https://a.org:443"));
+    EXPECT_FALSE(cors.allows(""));
+
+    const HeaderList other = cors.response_headers("https://b.org");
+    ASSERT_EQ(other.size(), 1u);
+    EXPECT_EQ(other[0], (std::pair<std::string, std::string>{"Vary", "Origin"}));
+    EXPECT_TRUE(cors.preflight_headers("https://b.org", "POST, OPTIONS").empty());
+
+    const HeaderList mine = cors.response_headers("HTTPS://A.ORG");
+    ASSERT_EQ(mine.size(), 3u);
+    EXPECT_EQ(mine[1].first, "Access-Control-Allow-Origin");
+    EXPECT_EQ(mine[1].second, "HTTPS://A.ORG") << "echoed as sent";
+    const HeaderList pre = cors.preflight_headers("https://a.org", "POST, OPTIONS");
+    ASSERT_EQ(pre.size(), 3u);
+    EXPECT_EQ(pre[0].second, "POST, OPTIONS");
+    EXPECT_NE(pre[1].second.find("X-Api-Key"), std::string::npos);
+    EXPECT_NE(pre[1].second.find("Authorization"), std::string::npos);
+    EXPECT_EQ(pre[2].second, std::to_string(kCorsPreflightMaxAgeS));
+}
+
+TEST(Etag, Sha256OfTheFile) {
+    const std::string path = (std::filesystem::temp_directory_path() / "nurbsrt-etag-test.bin").string();
+    {
+        std::ofstream out(path, std::ios::binary);
+        out << "abc";
+    }
+    // SHA-256("abc"), FIPS 180-2 appendix B.1.
+    EXPECT_EQ(file_etag(path), "\"ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad\"");
+    std::filesystem::remove(path);
+    EXPECT_THROW((void)file_etag(path), nurbsrt::Error);
+}
+
+TEST(Etag, IfNoneMatchUsesTheWeakComparison) {
+    const std::string tag = "\"abc\"";
+    EXPECT_TRUE(if_none_match_matches("\"abc\"", tag));
+    EXPECT_TRUE(if_none_match_matches(" W/\"abc\" ", tag));
+    EXPECT_TRUE(if_none_match_matches("\"x\", \"abc\"", tag));
+    EXPECT_TRUE(if_none_match_matches("*", tag));
+    EXPECT_FALSE(if_none_match_matches("\"abcd\"", tag));
+    EXPECT_FALSE(if_none_match_matches("abc", tag)) << "unquoted is no entity tag";
+    EXPECT_FALSE(if_none_match_matches("", tag));
+    EXPECT_FALSE(if_none_match_matches("\"x\", W/\"y\"", tag));
+}
