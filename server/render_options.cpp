@@ -135,8 +135,8 @@ unsigned aov_bits(const json& v, const std::string& key) {
 // The option names, for messages that list them (kept in step with the parsers below).
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height";
 constexpr const char* kRenderOptions =
-    "width, height, format, background, method, map_precision, aovs, camera, view, eye, target, up, projection, "
-    "fov_deg, ortho_height";
+    "width, height, format, background, antialias, edges, edge_color, edge_width, method, map_precision, aovs, "
+    "camera, view, eye, target, up, projection, fov_deg, ortho_height";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
