@@ -290,6 +290,9 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o " + out + " --background 2,0,0", "--background: the value has a component outside [0, 1] (got '2,0,0')"},
         {"-o " + out + " --stats " + (dir / "s.txt").string(), "--stats"},
         {"-o " + out + " --widht 100", "not expected: --widht"},
+        {"-o " + out + " --eye 1,1,1 --target 1,1,1", "--target: camera: eye and target must differ"},
+        {"-o " + out + " --eye 0,0,9 --target 0,0,0 --up 0,0,2", "--up: camera: up must not be parallel"},
+        {"-o " + out + " --fit-margin 0.6", "--fit-margin: Value 0.6 not in range"},
         {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},
     };
     for (const auto& c : cases) {
