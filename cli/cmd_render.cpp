@@ -109,7 +109,8 @@ void add_render_command(CLI::App& app) {
         "render",
         "Ray trace the exact trimmed NURBS faces of STEP/IGES models (preliminary map\n"
         "with OpenGL, then Newton iteration per pixel).\n"
-        "MODEL is a STEP/IGES file or a JSON scene file listing files with transforms:\n"
+        "MODEL is a STEP/IGES file, the NURBS JSON that 'nurbsrt convert IN OUT.json' writes,\n"
+        "or a JSON scene file listing such files with transforms:\n"
         "  {\"models\": [{\"file\": \"duck.igs\", \"translate\": [5,0,0], \"rotate_deg\": [0,0,90], \"scale\": 1}]}\n"
         "Examples:\n"
         "  nurbsrt render part.step -o part.png --view iso --width 800 --height 600\n"
@@ -118,7 +119,7 @@ void add_render_command(CLI::App& app) {
         "  nurbsrt render part.step -o p.png --eye=-100,50,80 --target 0,0,0 --up 0,0,1 --fov 30");
     // Checked in the callback, after CLI11 has reported unknown options: with a
     // CLI11 check here, `--widht 100` would be reported as a missing file "100".
-    cmd->add_option("MODEL", a->models, "STEP/IGES file(s) or a JSON scene file")->required();
+    cmd->add_option("MODEL", a->models, "STEP/IGES file(s), NURBS JSON, or a JSON scene file")->required();
     cmd->add_option("-o,--output", a->output, "image to write: .png, .jpg, .tif or .exr")->required()
         ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
     cmd->add_option("--aov", a->aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")

@@ -305,4 +305,48 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
     fs::remove_all(dir);
 }
 
+// The exit statuses in `nurbsrt --help` are the README's table, line for line.
+TEST(Cli, HelpExitStatusTableIsTheReadmes) {
+    std::ifstream readme(std::string(NURBSRT_SOURCE_DIR) + "/README.md");
+    const std::string text((std::istreambuf_iterator<char>(readme)), {});
+    const size_t begin = text.find("```\nExit status:\n");
+    ASSERT_NE(begin, std::string::npos) << "README has no exit status table";
+    const size_t end = text.find("```", begin + 3);
+    const std::string table = text.substr(begin + 4, end - begin - 4);
+    const CliRun r = run_nurbsrt("--help");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.out.find(table), std::string::npos) << "--help:\n" << r.out << "\nREADME:\n" << table;
+    EXPECT_EQ(run_nurbsrt("render --help").status, 0);
+}
+
+// `nurbsrt render x.json` renders the NURBS JSON that `nurbsrt convert` wrote:
+// the same faces, and (Newton solves on the same exact surfaces) the same
+// silhouette as the STEP file up to a few edge pixels, although the map's mesh
+// is a trimmed grid instead of BRepMesh's.
+TEST(CliRender, RendersTheNurbsJsonThatConvertWrites) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-json-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string conv = (dir / "conv.json").string();
+    ASSERT_EQ(run_nurbsrt("convert " + kScrew + " " + conv).status, 0);
+    nlohmann::json stats[2];
+    int k = 0;
+    for (const std::string& model : {kScrew, conv}) {
+        const std::string st = (dir / ("s" + std::to_string(k) + ".json")).string();
+        const CliRun r = run_nurbsrt("render " + model + " -q -o " + (dir / "x.png").string() +
+                                     " --width 160 --height 120 --view front --stats " + st);
+        ASSERT_EQ(r.status, 0) << model << "\n" << r.err;
+        std::ifstream in(st);
+        stats[k++] = nlohmann::json::parse(in);
+    }
+    EXPECT_EQ(stats[1]["faces"], stats[0]["faces"]);
+    const double hit0 = stats[0]["pixels_hit"].get<double>(), hit1 = stats[1]["pixels_hit"].get<double>();
+    EXPECT_GT(hit0, 2000);
+    EXPECT_NEAR(hit1, hit0, 0.02 * hit0);
+    std::ofstream(conv) << R"({"format": "nurbsrt-nurbs-scene", "version": 1, "faces": 3})";
+    const CliRun bad = run_nurbsrt("render " + conv + " -q -o " + (dir / "y.png").string());
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("NURBS scene JSON"), std::string::npos) << bad.err;
+    fs::remove_all(dir);
+}
+
 }  // namespace
