@@ -316,7 +316,11 @@ TEST(Cli, HelpExitStatusTableIsTheReadmes) {
     const CliRun r = run_nurbsrt("--help");
     EXPECT_EQ(r.status, 0);
     EXPECT_NE(r.out.find(table), std::string::npos) << "--help:\n" << r.out << "\nREADME:\n" << table;
-    EXPECT_EQ(run_nurbsrt("render --help").status, 0);
+    for (const char* command : {"render", "convert", "info"}) {
+        const CliRun sub = run_nurbsrt(std::string(command) + " --help");
+        EXPECT_EQ(sub.status, 0) << command;
+        EXPECT_NE(sub.out.find(table), std::string::npos) << command << " --help:\n" << sub.out;
+    }
 }
 
 // `nurbsrt render x.json` renders the NURBS JSON that `nurbsrt convert` wrote:
