@@ -239,3 +239,22 @@ def test_fit_margin_frames_the_part(url):
     for bad in (-0.1, 0.5, "wide"):
         body = check_problem(post_raw(url, "/v1/renders", data, params={"fit_margin": bad}), 400, "invalid_argument")
         assert "fit_margin" in body["detail"], body
+
+
+def test_eye_alone_looks_at_the_model_centre(url):
+    """An eye without a target looks at the middle of the model's box (as
+    `nurbsrt info` reports it), and an orthographic height is fitted from there."""
+    import subprocess
+    info = json.loads(subprocess.run([os.environ["NURBSRT_BIN"], "info", "--json", str(SCREW)],
+                                     capture_output=True, check=True, text=True).stdout)
+    centre = [(a + b) / 2 for a, b in zip(info["bbox"]["min"], info["bbox"]["max"])]
+    for projection in ("perspective", "orthographic"):
+        r = post_raw(url, "/v1/renders", SCREW.read_bytes(),
+                     params={"width": 80, "height": 60, "eye": "100,-200,50", "projection": projection},
+                     headers={"Accept": "application/json"})
+        assert r.status_code == 200, r.text[:300]
+        cam = r.json()["statistics"]["camera"]
+        assert cam["eye"] == [100, -200, 50]
+        assert all(abs(t - c) < 1e-6 for t, c in zip(cam["target"], centre)), (cam["target"], centre)
+        if projection == "orthographic":
+            assert 0 < cam["ortho_height"] < info["bbox"]["diagonal"] / 0.9 + 1e-9, cam
