@@ -46,6 +46,7 @@ struct Args {
     std::string view = "iso";
     std::string eye, target, up;
     double fov = 0, ortho_height = 0;
+    double fit_margin = kDefaultFitMargin;
     std::string projection = "perspective";
     std::string method = "proposed";
     std::string map_precision = "float";
@@ -67,20 +68,43 @@ std::string output_format_name(const std::string& path) {
     return ext == ".jpg" || ext == ".jpeg" ? "jpeg" : ext.empty() ? "" : ext.substr(1);
 }
 
-CameraSpec camera_from_args(const Args& a, const Scene& scene) {
+CameraSpec base_camera(const Args& a) {
     CameraSpec base;
     server::complete_size(a.width ? std::optional<int>(a.width) : std::nullopt,
                           a.height ? std::optional<int>(a.height) : std::nullopt, base.width, base.height);
     base.projection = (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic
                                                                               : Projection::perspective;
     if (a.fov > 0) base.fov_deg = a.fov;
-    CameraSpec spec = fit_view(a.view, scene, base);
-    // Explicit vectors override the named view's fit, one by one.
-    if (!a.eye.empty()) spec.eye = parse_vec3(a.eye, "--eye");
-    if (!a.target.empty()) spec.target = parse_vec3(a.target, "--target");
-    if (!a.up.empty()) spec.up = parse_vec3(a.up, "--up");
-    if (a.ortho_height > 0) spec.ortho_height = a.ortho_height;
-    return spec;
+    return base;
+}
+
+// The named view, then the explicit vectors one by one (checked by CLI11's
+// vec3_validator, parsed here).
+ViewRequest view_request(const Args& a) {
+    ViewRequest v;
+    v.view = a.view;
+    if (!a.eye.empty()) v.eye = parse_vec3(a.eye, "--eye");
+    if (!a.target.empty()) v.target = parse_vec3(a.target, "--target");
+    if (!a.up.empty()) v.up = parse_vec3(a.up, "--up");
+    if (a.ortho_height > 0) v.ortho_height = a.ortho_height;
+    v.fit_margin = a.fit_margin;
+    return v;
+}
+
+// The camera checks that need no model (eye at the target, up along the view),
+// made by the renderer's own Camera on the request fitted to a unit box, so that
+// they are usage errors found before the import, as the API finds them.
+void check_camera_before_import(const Args& a) {
+    BBox unit;
+    unit.extend(Vec3{-1, -1, -1});
+    unit.extend(Vec3{1, 1, 1});
+    try {
+        const Camera checked(fitted_camera(view_request(a), unit, base_camera(a)));
+        (void)checked;
+    } catch (const Error& e) {
+        const char* flag = !a.up.empty() ? "--up" : !a.target.empty() ? "--target" : "--eye";
+        throw CLI::ValidationError(flag, e.what());
+    }
 }
 
 }  // namespace
@@ -91,7 +115,8 @@ void add_render_command(CLI::App& app) {
         "render",
         "Ray trace the exact trimmed NURBS faces of STEP/IGES models (preliminary map\n"
         "with OpenGL, then Newton iteration per pixel).\n"
-        "MODEL is a STEP/IGES file or a JSON scene file listing files with transforms:\n"
+        "MODEL is a STEP/IGES file, the NURBS JSON that 'nurbsrt convert IN OUT.json' writes,\n"
+        "or a JSON scene file listing such files with transforms:\n"
         "  {\"models\": [{\"file\": \"duck.igs\", \"translate\": [5,0,0], \"rotate_deg\": [0,0,90], \"scale\": 1}]}\n"
         "Examples:\n"
         "  nurbsrt render part.step -o part.png --view iso --width 800 --height 600\n"
@@ -100,7 +125,7 @@ void add_render_command(CLI::App& app) {
         "  nurbsrt render part.step -o p.png --eye=-100,50,80 --target 0,0,0 --up 0,0,1 --fov 30");
     // Checked in the callback, after CLI11 has reported unknown options: with a
     // CLI11 check here, `--widht 100` would be reported as a missing file "100".
-    cmd->add_option("MODEL", a->models, "STEP/IGES file(s) or a JSON scene file")->required();
+    cmd->add_option("MODEL", a->models, "STEP/IGES file(s), NURBS JSON, or a JSON scene file")->required();
     cmd->add_option("-o,--output", a->output, "image to write: .png, .jpg, .tif or .exr")->required()
         ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
     cmd->add_option("--aov", a->aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
@@ -121,6 +146,9 @@ void add_render_command(CLI::App& app) {
         ->check(CLI::Range(0.01, 179.0));
     cmd->add_option("--ortho-height", a->ortho_height, "orthographic view height in model units (implies orthographic)")
         ->check(CLI::PositiveNumber);
+    cmd->add_option("--fit-margin", a->fit_margin,
+                    "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
+        ->check(CLI::Range(0.0, kMaxFitMargin))->capture_default_str();
     cmd->add_option("--projection", a->projection, "perspective or orthographic")
         ->check(CLI::IsMember({"perspective", "orthographic"}))->capture_default_str();
     cmd->add_option("--method", a->method, "Newton method: proposed (paper eq. 9-11) or martin (Martin et al. 2000)")
@@ -181,6 +209,7 @@ void add_render_command(CLI::App& app) {
     cmd->callback([a] {
         for (const std::string& m : a->models)
             if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
+        check_camera_before_import(*a);
         const auto t0 = clock_type::now();
         auto say = [&](const char* fmt, auto... xs) {
             if (a->quiet) return;
@@ -193,7 +222,7 @@ void add_render_command(CLI::App& app) {
         say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
             scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-        const Camera camera(camera_from_args(*a, scene));
+        const Camera camera(fitted_camera(view_request(*a), scene, base_camera(*a)));
         RenderOptions options;
         // The option strings were checked by CLI11 (IsMember): parsed here, once.
         options.method = *parse_newton_method(a->method);

@@ -14,11 +14,15 @@ int main(int argc, char** argv) {
         "Run 'nurbsrt <command> --help' for the options of a command."};
     app.require_subcommand(1);
     app.set_version_flag("--version", "nurbsrt 0.1.0");
+    // The same table is in the README's "Commands" section (a test compares them).
     app.footer(
-        "Exit status: 0 success, 1 the command failed (the message says why, with an\n"
-        "error code such as unreadable_file or no_faces), 2 bad command line (unknown\n"
-        "option, bad value, missing input, output path or format we cannot write: all\n"
-        "checked before any import, with a message naming the option).");
+        "Exit status:\n"
+        "  0  success\n"
+        "  1  the command failed; the message names an error code such as\n"
+        "     unreadable_file, no_faces, import_timeout or io\n"
+        "  2  bad command line: unknown option, bad value, missing input, an output\n"
+        "     path or format that cannot be written; all checked before any import,\n"
+        "     with CLI11's message naming the option");
     nurbsrt::cli::add_render_command(app);
     nurbsrt::cli::add_info_command(app);
     nurbsrt::cli::add_convert_command(app);

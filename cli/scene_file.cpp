@@ -3,10 +3,12 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 
 #include "cli/scene_placements.h"
 #include "importer/isolated.h"
 #include "renderer/error.h"
+#include "renderer/scene_json.h"
 #include "renderer/scene_ops.h"
 
 namespace nurbsrt::cli {
@@ -22,13 +24,37 @@ bool is_scene_file(const std::string& path) {
     return c == '{';
 }
 
+std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in && !in.eof()) throw Error(ErrorCode::io, "cannot read '" + path + "'");
+    return text.str();
+}
+
+// A CAD file, or the NURBS scene JSON that `nurbsrt convert` writes.
+Scene import_one(const std::string& path, const LoadOptions& options) {
+    if (is_scene_file(path)) {
+        const std::string text = read_text(path);
+        if (is_scene_json(text)) {
+            Scene s = scene_from_json(text);
+            s.source_name = fs::path(path).filename().string();
+            return s;
+        }
+    }
+    IsolationLimits limits;
+    limits.time_limit_s = options.time_limit_s;
+    return options.isolated ? import_isolated(path, options.import, limits) : import_file(path, options.import);
+}
+
 }  // namespace
 
 Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options) {
     std::vector<Placement> placements;
     for (const std::string& in : inputs) {
-        if (is_scene_file(in)) {
-            std::ifstream file(in);
+        std::string text;
+        if (is_scene_file(in) && !is_scene_json(text = read_text(in))) {
+            std::istringstream file(text);
             for (Placement& p : parse_scene_file(file, in)) placements.push_back(std::move(p));
         } else {
             placements.push_back({in, Affine{}});
@@ -42,10 +68,7 @@ Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& opt
             copy = it->second;
             copy.timings = {};  // a further copy costs no import stage
         } else {
-            IsolationLimits limits;
-            limits.time_limit_s = options.time_limit_s;
-            copy = options.isolated ? import_isolated(p.file, options.import, limits)
-                                    : import_file(p.file, options.import);
+            copy = import_one(p.file, options);
             imported.emplace(p.file, copy);
         }
         transform_scene(copy, p.xf);

@@ -2,7 +2,9 @@
 // that lists CAD files with transforms, e.g. the paper's "27 Ducks":
 //   {"models": [{"file": "duck.igs", "translate": [0, 0, 0], "rotate_deg": [0, 0, 90], "scale": 1}, ...]}
 // Relative paths are taken from the JSON file's folder. Each distinct file is
-// imported once; copies are transformed duplicates of its scene.
+// imported once; copies are transformed duplicates of its scene. A file (given
+// or listed) may also be the NURBS scene JSON that `nurbsrt convert` writes
+// (renderer/scene_json.h), read without OCCT.
 #pragma once
 
 #include <string>

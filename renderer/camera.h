@@ -4,6 +4,7 @@
 // "Projection to R^2", the x, y, w of eq. 8).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -115,25 +116,57 @@ private:
 // by Camera::project_h). Made once per frame per patch.
 NurbsSurface project_surface(const Camera& camera, const NurbsSurface& s);
 
-// Named views fitted to a bounding box. View directions (from eye towards target,
-// model axes; Z is up for every view except top/bottom, whose up is +Y):
+// Named views fitted to the model (renderer/view_fit.cpp). View directions
+// (from eye towards target, model axes; Z is up for every view except
+// top/bottom, whose up is +Y):
 //   front  looks along +Y (eye at -Y)     back   along -Y (eye at +Y)
 //   left   looks along +X (eye at -X)     right  along -X (eye at +X)
 //   top    looks along -Z (eye at +Z)     bottom along +Z (eye at -Z)
 //   iso    looks along (-1,-1,-1)/sqrt(3) (eye at +X+Y+Z), up +Z
-// Fit: target = box centre; perspective: the eye is moved back along the view
-// direction until all 8 box corners lie inside the frustum with a 5% margin;
-// orthographic: the view height is the smallest that holds all corners with a 5%
-// margin, and the eye plane sits one box diagonal before the centre.
-// `projection`, width and height are taken from `base`; returns the full spec.
-// Throws Error(invalid_argument) for an unknown name or an empty box.
-CameraSpec named_view(const std::string& name, const BBox& box, const CameraSpec& base);
-// The same fit for a set of points: the target is centred on the points' extent
-// across the view, so an oblique view of a flat part is not framed by its box.
-CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, const CameraSpec& base);
+// Fit, for any aspect: perspective puts the eye where the frustum, narrowed by
+// the margin, touches the points on its binding pair of sides (the exact
+// solution of the four plane constraints, not an iteration), centred across
+// the other pair; orthographic takes the smallest view height holding the
+// points' extent across the view, centred on it, with the eye plane one box
+// diagonal before the centre.
+//
+// The margin: the fraction of the frame's width and of its height left empty
+// on each side of the fitted model. 5 % keeps a thumbnail's silhouette clear
+// of the border (and of the edge anti-aliasing's reach) while the model still
+// fills 90 % of the frame along its binding axis.
+inline constexpr double kDefaultFitMargin = 0.05;
+// Beyond this the model would shrink to under a tenth of the frame.
+inline constexpr double kMaxFitMargin = 0.45;
+
+// `projection`, fov, width and height are taken from `base`; returns the full
+// spec. Throws Error(invalid_argument) for an unknown name, an empty box or a
+// margin outside [0, kMaxFitMargin].
+CameraSpec named_view(const std::string& name, const BBox& box, const CameraSpec& base,
+                      double margin = kDefaultFitMargin);
+// The same fit for a set of points (their extent in the view, not their box).
+// `slack` is how far the true surface may lie outside the points (it widens
+// every point to a ball of that radius).
+CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, const CameraSpec& base,
+                      double margin = kDefaultFitMargin, double slack = 0);
 // The named view fitted to the scene's geometry (its preliminary-map mesh
-// vertices; the box when there are none). What users of named views want.
-CameraSpec fit_view(const std::string& name, const Scene& scene, const CameraSpec& base);
+// vertices, widened by the mesh's deflection; the box when there are none).
+CameraSpec fit_view(const std::string& name, const Scene& scene, const CameraSpec& base,
+                    double margin = kDefaultFitMargin);
 bool is_named_view(const std::string& name);
+
+// What a user asks of the camera: a named view, optionally overridden vector
+// by vector. An eye without a target looks at the model's centre (the middle
+// of its box), and an orthographic view height not given is fitted to the
+// model as seen from there; a target or up given replace the fitted ones.
+struct ViewRequest {
+    std::string view = "iso";
+    std::optional<Vec3> eye, target, up;
+    std::optional<double> ortho_height;
+    double fit_margin = kDefaultFitMargin;
+};
+// The camera of `request` over `scene` (the scene's geometry as fit_view uses it).
+CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base);
+// The same over a box (its 8 corners), for checks made before any model exists.
+CameraSpec fitted_camera(const ViewRequest& request, const BBox& box, const CameraSpec& base);
 
 }  // namespace nurbsrt

@@ -133,10 +133,10 @@ unsigned aov_bits(const json& v, const std::string& key) {
 }
 
 // The option names, for messages that list them (kept in step with the parsers below).
-constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height";
+constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, method, map_precision, aovs, "
-    "camera, view, eye, target, up, projection, fov_deg, ortho_height";
+    "camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -155,6 +155,10 @@ bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
         if (!(h > 0)) bad("option 'ortho_height' must be positive");
         r.ortho_height = h;
         r.projection = Projection::orthographic;
+    } else if (key == "fit_margin") {
+        const double m = number(v, key);
+        if (!(m >= 0 && m <= kMaxFitMargin)) bad("option 'fit_margin' must be in [0, 0.45]");
+        r.fit_margin = m;
     } else if (key == "view") {
         r.view = one_of(v, key, {"iso", "front", "back", "left", "right", "top", "bottom"});
     } else {
@@ -181,13 +185,15 @@ CameraSpec base_spec(const RenderRequest& r) {
     return base;
 }
 
-// The request's explicit camera values over a fitted view.
-CameraSpec with_explicit_values(const RenderRequest& r, CameraSpec spec) {
-    if (r.eye) spec.eye = *r.eye;
-    if (r.target) spec.target = *r.target;
-    if (r.up) spec.up = *r.up;
-    if (r.ortho_height) spec.ortho_height = *r.ortho_height;
-    return spec;
+ViewRequest view_request(const RenderRequest& r) {
+    ViewRequest v;
+    v.view = r.view;
+    v.eye = r.eye;
+    v.target = r.target;
+    v.up = r.up;
+    v.ortho_height = r.ortho_height;
+    v.fit_margin = r.fit_margin;
+    return v;
 }
 
 // Every camera check that needs no scene (up along the view direction, eye at
@@ -198,7 +204,7 @@ void check_camera_without_scene(const RenderRequest& r) {
     BBox unit;
     unit.extend(Vec3{-1, -1, -1});
     unit.extend(Vec3{1, 1, 1});
-    const Camera checked(with_explicit_values(r, named_view(r.view, unit, base_spec(r))));
+    const Camera checked(fitted_camera(view_request(r), unit, base_spec(r)));
     (void)checked;
 }
 
@@ -343,7 +349,7 @@ void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
 }
 
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
-    return with_explicit_values(r, fit_view(r.view, scene, base_spec(r)));
+    return fitted_camera(view_request(r), scene, base_spec(r));
 }
 
 ConversionFormat parse_conversion_format(const std::string& options_json) {

@@ -74,6 +74,7 @@ struct RenderRequest {
     Projection projection = Projection::perspective;
     std::optional<double> fov_deg, ortho_height;
     std::optional<Vec3> eye, target, up;
+    double fit_margin = kDefaultFitMargin;  // of the frame, each side (named views, and an eye alone)
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
     OutputFormat format{"png", ".png", "image/png"};

@@ -293,6 +293,9 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o " + out + " --edge-width 0", "--edge-width: the value must be from 0.25 to 16 pixels"},
         {"-o " + out + " --edge-color 2,0,0", "--edge-color: the value has a component outside [0, 1]"},
         {"-o " + out + " --widht 100", "not expected: --widht"},
+        {"-o " + out + " --eye 1,1,1 --target 1,1,1", "--target: camera: eye and target must differ"},
+        {"-o " + out + " --eye 0,0,9 --target 0,0,0 --up 0,0,2", "--up: camera: up must not be parallel"},
+        {"-o " + out + " --fit-margin 0.6", "--fit-margin: Value 0.6 not in range"},
         {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},
     };
     for (const auto& c : cases) {
@@ -302,6 +305,54 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         EXPECT_EQ(r.err.find("importing"), std::string::npos) << c.args << ": the import started\n" << r.err;
         EXPECT_FALSE(fs::exists(out)) << c.args;
     }
+    fs::remove_all(dir);
+}
+
+// The exit statuses in `nurbsrt --help` are the README's table, line for line.
+TEST(Cli, HelpExitStatusTableIsTheReadmes) {
+    std::ifstream readme(std::string(NURBSRT_SOURCE_DIR) + "/README.md");
+    const std::string text((std::istreambuf_iterator<char>(readme)), {});
+    const size_t begin = text.find("```\nExit status:\n");
+    ASSERT_NE(begin, std::string::npos) << "README has no exit status table";
+    const size_t end = text.find("```", begin + 3);
+    const std::string table = text.substr(begin + 4, end - begin - 4);
+    const CliRun r = run_nurbsrt("--help");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.out.find(table), std::string::npos) << "--help:\n" << r.out << "\nREADME:\n" << table;
+    for (const char* command : {"render", "convert", "info"}) {
+        const CliRun sub = run_nurbsrt(std::string(command) + " --help");
+        EXPECT_EQ(sub.status, 0) << command;
+        EXPECT_NE(sub.out.find(table), std::string::npos) << command << " --help:\n" << sub.out;
+    }
+}
+
+// `nurbsrt render x.json` renders the NURBS JSON that `nurbsrt convert` wrote:
+// the same faces, and (Newton solves on the same exact surfaces) the same
+// silhouette as the STEP file up to a few edge pixels, although the map's mesh
+// is a trimmed grid instead of BRepMesh's.
+TEST(CliRender, RendersTheNurbsJsonThatConvertWrites) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-json-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string conv = (dir / "conv.json").string();
+    ASSERT_EQ(run_nurbsrt("convert " + kScrew + " " + conv).status, 0);
+    nlohmann::json stats[2];
+    int k = 0;
+    for (const std::string& model : {kScrew, conv}) {
+        const std::string st = (dir / ("s" + std::to_string(k) + ".json")).string();
+        const CliRun r = run_nurbsrt("render " + model + " -q -o " + (dir / "x.png").string() +
+                                     " --width 160 --height 120 --view front --stats " + st);
+        ASSERT_EQ(r.status, 0) << model << "\n" << r.err;
+        std::ifstream in(st);
+        stats[k++] = nlohmann::json::parse(in);
+    }
+    EXPECT_EQ(stats[1]["faces"], stats[0]["faces"]);
+    const double hit0 = stats[0]["pixels_hit"].get<double>(), hit1 = stats[1]["pixels_hit"].get<double>();
+    EXPECT_GT(hit0, 2000);
+    EXPECT_NEAR(hit1, hit0, 0.02 * hit0);
+    std::ofstream(conv) << R"({"format": "nurbsrt-nurbs-scene", "version": 1, "faces": 3})";
+    const CliRun bad = run_nurbsrt("render " + conv + " -q -o " + (dir / "y.png").string());
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("NURBS scene JSON"), std::string::npos) << bad.err;
     fs::remove_all(dir);
 }
 

@@ -57,7 +57,7 @@ const char* const kModelDirs[] = {"step", "iges", "duck"};
 // else (every fixture, every other model and view) it demands 0. When a fix
 // lands, the entry's counts go down to 0 and the entry is removed.
 struct Known {
-    const char* model;  // relative to ../shared/models
+    const char* model;  // relative to ../shared/models, or a generated fixture's name
     const char* view;
     long holes, speckles;
     const char* cause;
@@ -145,7 +145,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         RecordProperty(std::string(view.name) + "_speckles", static_cast<int>(rep.speckles));
         RecordProperty(std::string(view.name) + "_candidates", static_cast<int>(rep.enclosed + rep.spikes));
         RecordProperty(std::string(view.name) + "_unchecked", static_cast<int>(rep.unchecked));
-        const Known* known = known_remaining(c.rel, view.name);
+        const Known* known = known_remaining(c.rel.empty() ? c.fixture : c.rel, view.name);
         if (known)
             std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles
                       << " speckles (" << known->cause << ")\n";

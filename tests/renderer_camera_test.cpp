@@ -1,8 +1,10 @@
 // Camera: DESIGN.md pixel-ray contract, the projection to R^2 and named views.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "renderer/camera.h"
 #include "renderer/error.h"
@@ -200,4 +202,71 @@ TEST(RendererCamera, NamedViewsContainTheBox) {
     expect_near(top.forward(), {0, 0, -1}, 1e-15);
     EXPECT_THROW(named_view("diagonal", box, base), Error);
     EXPECT_THROW(named_view("iso", BBox{}, base), Error);
+}
+
+// The fit is exact: the corners' projection spans 1 - 2 margin of the frame on
+// its binding axis and is centred on both axes, for any aspect, both projections.
+TEST(RendererCamera, NamedViewsFitExactlyWithTheMargin) {
+    BBox box;
+    box.extend(Vec3{-10, 5, 2});
+    box.extend(Vec3{30, 8, 40});
+    for (double margin : {0.0, 0.05, 0.2})
+        for (Projection proj : {Projection::perspective, Projection::orthographic})
+            for (auto [w, h] : {std::pair{640, 480}, {300, 300}, {200, 600}})
+                for (const char* name : {"iso", "front", "back", "left", "right", "top", "bottom"}) {
+                    CameraSpec base;
+                    base.projection = proj;
+                    base.width = w;
+                    base.height = h;
+                    const Camera cam(named_view(name, box, base, margin));
+                    const double a = cam.aspect();
+                    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+                    for (int c = 0; c < 8; ++c) {
+                        const Vec3 p{c & 1 ? box.hi.x : box.lo.x, c & 2 ? box.hi.y : box.lo.y,
+                                     c & 4 ? box.hi.z : box.lo.z};
+                        const Vec4 P = cam.project_h({p.x, p.y, p.z, 1});
+                        ASSERT_GT(cam.depth(P), 0) << name;
+                        x0 = std::min(x0, P.x / P.z / a), x1 = std::max(x1, P.x / P.z / a);
+                        y0 = std::min(y0, P.y / P.z), y1 = std::max(y1, P.y / P.z);
+                    }
+                    const std::string what = std::string(name) + " " + std::to_string(w) + "x" + std::to_string(h);
+                    EXPECT_NEAR(std::max(x1 - x0, y1 - y0), 2 * (1 - 2 * margin), 1e-9) << what;
+                    EXPECT_NEAR(x0 + x1, 0, 1e-9) << what << ": not centred across";
+                    EXPECT_NEAR(y0 + y1, 0, 1e-9) << what << ": not centred up";
+                }
+    CameraSpec base;
+    EXPECT_THROW(named_view("iso", box, base, -0.01), Error);
+    EXPECT_THROW(named_view("iso", box, base, 0.5), Error);
+}
+
+// An eye alone looks at the model's centre; an orthographic height not given is
+// fitted around that axis; target and up given replace the fitted ones.
+TEST(RendererCamera, FittedCameraFromAnEye) {
+    BBox box;
+    box.extend(Vec3{-10, 5, 2});
+    box.extend(Vec3{30, 8, 40});
+    CameraSpec base;
+    base.width = 400;
+    base.height = 300;
+    ViewRequest rq;
+    rq.eye = Vec3{100, -50, 80};
+    CameraSpec s = fitted_camera(rq, box, base);
+    expect_near(s.eye, *rq.eye, 0);
+    expect_near(s.target, box.center(), 1e-12);
+    // Straight above the centre the iso up (+Z) is along the view: +Y is taken.
+    rq.eye = Vec3{10, 6.5, 500};
+    s = fitted_camera(rq, box, base);
+    expect_near(s.up, {0, 1, 0}, 0);
+    EXPECT_NO_THROW(Camera{s});
+    base.projection = Projection::orthographic;
+    s = fitted_camera(rq, box, base);
+    // Seen from above: 40 x 3 in x, y around the centre; binding is x: 20 / a / 0.9.
+    EXPECT_NEAR(s.ortho_height, 2 * 20.0 / (4.0 / 3.0) / 0.9, 1e-9);
+    rq.ortho_height = 7;
+    rq.target = Vec3{0, 0, 0};
+    rq.up = Vec3{1, 0, 0};
+    s = fitted_camera(rq, box, base);
+    EXPECT_EQ(s.ortho_height, 7);
+    expect_near(s.target, {0, 0, 0}, 0);
+    expect_near(s.up, {1, 0, 0}, 0);
 }

@@ -183,7 +183,8 @@ def test_background_alpha_and_defaults(url):
     assert corner(background="1,1,1") == (255, 255, 255, 255)  # a colour alone is opaque
     assert corner(background="0,0,1,0.5") == (0, 0, 255, 128)
     for bad in ("2,0,0", "1,1", "white", "0,0,0,1.5"):
-        check_problem(post_raw(url, "/v1/renders", step, params={"background": bad}), 400, "invalid_argument")
+        body = check_problem(post_raw(url, "/v1/renders", step, params={"background": bad}), 400, "invalid_argument")
+        assert "background" in body["detail"], body
     files = {"file": ("s.step", step), "options": (None, json.dumps({"width": 40, "height": 30,
                                                                      "background": [0, 1, 0]}))}
     r = requests.post(url + "/v1/renders", files=files, timeout=TIMEOUT)
@@ -269,3 +270,63 @@ def test_edges_drawn_over_the_shading(url):
 def test_bad_antialias_and_edge_options(url, params, field):
     body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params=params), 400, "invalid_argument")
     assert field in body["detail"], body
+
+
+def hit_box(png):
+    """Bounding box (x0, y0, x1, y1) of the non-transparent pixels, and the image size."""
+    from test_jobs import png_pixels
+    width, height, ch, rows = png_pixels(png)
+    assert ch == 4
+    xs, ys = [], []
+    for y, row in enumerate(rows):
+        hit = [x for x in range(width) if row[4 * x + 3] > 0]
+        if hit:
+            xs += [hit[0], hit[-1]]
+            ys.append(y)
+    return (min(xs), min(ys), max(xs), max(ys)), (width, height)
+
+
+def test_fit_margin_frames_the_part(url):
+    """Named views frame the whole part: 5 % of the frame empty on each side by
+    default (the part spans 90 % on its binding axis); fit_margin sets it."""
+    data = BEARING.read_bytes()
+
+    def fill(**params):
+        r = post_raw(url, "/v1/renders", data, params={"width": 160, "height": 120, **params})
+        assert r.status_code == 200, r.text[:300]
+        (x0, y0, x1, y1), (w, h) = hit_box(r.content)
+        assert x0 > 0 and y0 > 0 and x1 < w - 1 and y1 < h - 1, (params, (x0, y0, x1, y1))
+        return max((x1 - x0 + 1) / w, (y1 - y0 + 1) / h), min(x0, y0, w - 1 - x1, h - 1 - y1)
+
+    for view in ("front", "iso", "top"):
+        for projection in ("perspective", "orthographic"):
+            spans, border = fill(view=view, projection=projection)
+            assert 0.8 <= spans <= 0.92, (view, projection, spans)
+            spans, border = fill(view=view, projection=projection, fit_margin=0.2)
+            assert 0.55 <= spans <= 0.62 and border >= 23, (view, projection, spans, border)
+    files = {"file": ("b.iges", data),
+             "options": (None, json.dumps({"width": 160, "height": 120, "camera": {"view": "left", "fit_margin": 0}}))}
+    r = requests.post(url + "/v1/renders", files=files, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    for bad in (-0.1, 0.5, "wide"):
+        body = check_problem(post_raw(url, "/v1/renders", data, params={"fit_margin": bad}), 400, "invalid_argument")
+        assert "fit_margin" in body["detail"], body
+
+
+def test_eye_alone_looks_at_the_model_centre(url):
+    """An eye without a target looks at the middle of the model's box (as
+    `nurbsrt info` reports it), and an orthographic height is fitted from there."""
+    import subprocess
+    info = json.loads(subprocess.run([os.environ["NURBSRT_BIN"], "info", "--json", str(SCREW)],
+                                     capture_output=True, check=True, text=True).stdout)
+    centre = [(a + b) / 2 for a, b in zip(info["bbox"]["min"], info["bbox"]["max"])]
+    for projection in ("perspective", "orthographic"):
+        r = post_raw(url, "/v1/renders", SCREW.read_bytes(),
+                     params={"width": 80, "height": 60, "eye": "100,-200,50", "projection": projection},
+                     headers={"Accept": "application/json"})
+        assert r.status_code == 200, r.text[:300]
+        cam = r.json()["statistics"]["camera"]
+        assert cam["eye"] == [100, -200, 50]
+        assert all(abs(t - c) < 1e-6 for t, c in zip(cam["target"], centre)), (cam["target"], centre)
+        if projection == "orthographic":
+            assert 0 < cam["ortho_height"] < info["bbox"]["diagonal"] / 0.9 + 1e-9, cam

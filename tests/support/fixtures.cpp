@@ -337,6 +337,11 @@ std::string cone() {
 std::string torus() {
     return step_fixture("torus", [] { return BRepPrimAPI_MakeTorus(20.0, 6.0).Shape(); });
 }
+std::string elongated_rod() {
+    return step_fixture("elongated_rod", [] {
+        return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(1.0, 0.25, 0.1)), 4.0, 120.0).Shape();
+    });
+}
 std::string freeform_bspline() {
     return step_fixture("freeform_bspline", [] {
         Handle(Geom2d_Circle) c = new Geom2d_Circle(gp_Ax2d(gp_Pnt2d(10.0, 1.0), gp_Dir2d(1, 0)), 1.2);

@@ -41,6 +41,10 @@ std::string cylinder();  // r 10, h 30, 3 faces
 std::string sphere();    // r 15, 1 face (two degenerate pole edges)
 std::string cone();      // r1 12, r2 4, h 25, 3 faces (lateral + 2 discs)
 std::string torus();     // R 20, r 6, 1 face (doubly periodic)
+// A rod 15 times longer than thick: cylinder r 4, h 120 along (1, 0.25, 0.1),
+// so that no named view sees it square (not in fixture_names(): only the
+// fitted-view test needs its shape).
+std::string elongated_rod();
 
 // --- free-form faces ----------------------------------------------------------
 // A non-planar, non-rational degree 3x3 Geom_BSplineSurface (6 x 5 poles,
