@@ -37,7 +37,7 @@ void throw_if_canceled(const RenderOptions& o) {
     if (canceled(o)) throw Error(ErrorCode::canceled, "the render was canceled");
 }
 
-const std::vector<MeshScreenPoints::Projected>& MeshScreenPoints::projected(uint32_t id) const {
+const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
     Entry& e = faces_[id - 1];
     std::call_once(e.once, [&] {
         const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
@@ -46,10 +46,17 @@ const std::vector<MeshScreenPoints::Projected>& MeshScreenPoints::projected(uint
         for (size_t m = 0; m < n; ++m) {
             const Vec4 ph = c_.camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
             const double depth = c_.camera.depth(ph);
-            e.pts[m] = {depth > 0 ? Vec2{ph.x / ph.z, ph.y / ph.z} : Vec2{NAN, NAN}, depth};
+            if (!(depth > 0)) {
+                e.pts[m] = {Vec2{NAN, NAN}, depth};
+                continue;
+            }
+            const Vec2 s{ph.x / ph.z, ph.y / ph.z};
+            e.pts[m] = {s, depth};
+            e.lo = {std::min(e.lo.x, s.x), std::min(e.lo.y, s.y)};
+            e.hi = {std::max(e.hi.x, s.x), std::max(e.hi.y, s.y)};
         }
     });
-    return e.pts;
+    return e;
 }
 
 namespace {
@@ -79,7 +86,7 @@ Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (
 }  // namespace
 
 int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2) const {
-    const std::vector<Projected>& pts = projected(id);
+    const std::vector<Projected>& pts = projected(id).pts;
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
     const Vec2 p{sp.sx, sp.sy};
     NearestPoint best;
@@ -126,8 +133,8 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
     return n;
 }
 
-int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out,
-                                         int max_out) const {
+int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
+                                         double max_d2) const {
     // Candidates whose distance is measured (an O(triangles) scan each): bounds
     // the cost where a near face has very many neighbours; the near faces' own
     // lists are in face order, so which ones are cut off is still deterministic.
@@ -139,10 +146,14 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
             if (std::find(near, near + nn, id) != near + nn ||
                 std::any_of(all.begin(), all.end(), [&](const FarFace& f) { return f.id == id; }))
                 continue;
+            const Entry& e = projected(id);
+            const double bx = std::max({e.lo.x - sp.sx, 0.0, sp.sx - e.hi.x});
+            const double by = std::max({e.lo.y - sp.sy, 0.0, sp.sy - e.hi.y});
+            if (!(bx * bx + by * by <= max_d2)) continue;  // also a face wholly behind the eye (empty box)
             FarFace f;
             f.id = id;
             f.nstarts = nearest_starts(id, sp, f.starts, &f.d2);
-            if (f.nstarts) all.push_back(f);
+            if (f.nstarts && f.d2 <= max_d2) all.push_back(f);
         }
     const size_t n = std::min(all.size(), static_cast<size_t>(std::max(max_out, 0)));
     std::partial_sort(all.begin(), all.begin() + n, all.end(),

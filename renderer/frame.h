@@ -129,18 +129,22 @@ public:
     // the near faces lies at the pixel; a face with many neighbours, a hub or a
     // base plate, would otherwise fill the list with faces far away). Returns the
     // number written to out.
-    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out) const;
+    // Faces whose mesh lies farther than sqrt(max_d2) from sp (screen units) are
+    // left out, most of them by their screen box alone, without a scan.
+    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
+                           double max_d2 = HUGE_VAL) const;
 
 private:
     struct Projected {
         Vec2 s;        // screen position (NaN behind the eye)
         double depth;  // along the view direction
     };
-    const std::vector<Projected>& projected(uint32_t id) const;
     struct Entry {
         std::once_flag once;
         std::vector<Projected> pts;
+        Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye
     };
+    const Entry& projected(uint32_t id) const;
     const FrameContext& c_;
     const std::unique_ptr<Entry[]> faces_;
 };

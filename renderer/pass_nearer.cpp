@@ -42,6 +42,9 @@ constexpr double kSheetFootprints = 1.0;
 // fills it; a thin face in front touches one of them. Bounds the cost at a
 // vertex where many faces meet.
 constexpr int kMaxAdjacentFaces = 12;
+// ... and only those whose mesh comes within 2 pixels of the pit on screen (the
+// faces adjacent to a pit's are sorted nearest first, so the rest are farther).
+constexpr double kPitFacePixels = 2.0;
 
 struct Update {
     size_t k;
@@ -143,16 +146,25 @@ private:
     // to these that none of them shows: a face too thin for the map to show any
     // pixel of it here (a fillet or blend strip seen edge-on) lies in front,
     // between the faces it touches.
+    // One start per face (the first in for_each_neighbour's order): the 3x3's
+    // starts of one face lie on one sheet within a pixel or two and end at one root.
     void fill_pit(int i, int j, PixelHit& best) const {
         const PixelHit p = best;
         auto found = [&] { return best.face != p.face || best.t != p.t; };
+        uint32_t tried[2 * 9];
+        int ntried = 0;
+        auto once = [&](uint32_t id) {
+            if (!id || id > c_.nfaces || std::find(tried, tried + ntried, id) != tried + ntried) return false;
+            tried[ntried++] = id;
+            return true;
+        };
         for (int kind = 0; kind < 2 && !found(); ++kind)
             for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
                 const size_t n = c_.map.index(ni, nj);
                 if (ni == i && nj == j) return;
-                if (kind == 0 && hits_[n].face)
+                if (kind == 0 && once(hits_[n].face))
                     consider(hits_[n].face, i, j, hits_[n].u, hits_[n].v, solver_.robust, false, best);
-                if (kind == 1 && c_.map.face[n] && c_.map.face[n] <= c_.nfaces)
+                if (kind == 1 && once(c_.map.face[n]))
                     consider(c_.map.face[n], i, j, c_.map.u[n], c_.map.v[n], solver_.robust, false, best);
             });
         if (!found()) adjacent_faces(i, j, best);
@@ -168,8 +180,11 @@ private:
                 if (id && id <= c_.nfaces && std::find(near, near + nn, id) == near + nn) near[nn++] = id;
         });
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+        // A face in front of the pixel covers it on screen: its mesh comes within
+        // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
+        const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
         MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-        const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces);
+        const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
         for (int q = 0; q < nf; ++q)
             for (int k = 0; k < faces[q].nstarts; ++k)
                 consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),

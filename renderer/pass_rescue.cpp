@@ -39,6 +39,10 @@ constexpr int kFarStartsPerFace = 3;
 // faces touches at least one of them. 12 faces' far starts stay within the start
 // budget after A's and B's usual few.
 constexpr int kMaxAdjacentFaces = 12;
+// ... whose mesh comes within this many pixels of the pixel on screen: the face
+// that covers it has its mesh within the deflection of its true extent, a pixel
+// or two at most; a face farther away cannot close a hole here.
+constexpr double kAdjacentReachPixels = 8.0;
 // At most this many distinct starts (face, u, v) are solved per rescued pixel. A
 // needs at most 8 + 8 + 2 (each neighbour's hit and map start, the own map start
 // and one own converged start), B the rest of the first 64, C at most
@@ -167,8 +171,9 @@ public:
                     near[nn++] = id;
         });
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
+        const double reach = kAdjacentReachPixels * 2.0 / c_.height;  // screen units span 2 over the height
         MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-        const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces);
+        const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
         limit_ = kMaxStarts;
         for (int q = 0; q < nf; ++q) far_starts(faces[q]);
     }

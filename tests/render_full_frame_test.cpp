@@ -66,10 +66,19 @@ const Known kKnownRemaining[] = {
     {"step/trj3_s1-al-214.stp", "iso", 1, 0,
      "a thin face next to a map-background pixel: robust Newton from its nearest mesh point misses the root "
      "(the reference's root needs 9 iterations from a start beside it)"},
-    {"step/bug29715_slow.stp", "front", 0, 2,
+    {"step/bug29715_slow.stp", "front", 0, 3,
      "one dense folded face seen edge-on: a grown silhouette pixel keeps a farther root that no depth spike "
      "reveals; and a root within Newton's tolerance of the ray whose depth, at grazing incidence, differs by "
      "2.6e-6 of it"},
+    // At the fitted views' framing (5 % margin) these pixels land on defects the
+    // old framing did not sample: a farther root of the pixel's own face kept
+    // where a neighbour's start reaches the nearer one (a depth spike the pass
+    // does not re-solve), and on the capsule a face in front not in the candidates.
+    {"iges/bearing.iges", "iso", 0, 1, "a farther root of the pixel's own face; the nearer one from a neighbour's start"},
+    {"iges/marsCapsule.igs", "iso", 0, 1, "a face in front not in the candidates (not adjacent to the 3x3's)"},
+    {"iges/heartValve.igs", "iso", 0, 1, "a farther root of the pixel's own face; the nearer one from a neighbour's start"},
+    {"duck/duck_from_glscene.igs", "front", 0, 1, "a neighbour's start runs to the far side of the same closed face"},
+    {"duck/duck_from_glscene.stp", "front", 0, 1, "a neighbour's start runs to the far side of the same closed face"},
 };
 
 // Models the reference cannot check in CI time: IntCurvesFace_ShapeIntersector
