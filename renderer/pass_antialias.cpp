@@ -89,6 +89,7 @@ private:
     struct Start {
         uint32_t face;
         float u, v;
+        double t;    // the depth of that pixel's hit
         int di, dj;  // the pixel it comes from, relative to the edge pixel
     };
     // The hits of the 3x3 around (i, j): every sample's candidate starts.
@@ -97,22 +98,30 @@ private:
         ci_ = i, cj_ = j;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
-            if (h.face) starts_[nstarts_++] = {h.face, h.u, h.v, ni - i, nj - j};
+            if (h.face) starts_[nstarts_++] = {h.face, h.u, h.v, h.t, ni - i, nj - j};
         });
+        // Front first: a sample's nearest hit is on the face that is in front
+        // around it, so the first hit inside a trim ends the sample's search.
+        std::stable_sort(starts_, starts_ + nstarts_, [](const Start& a, const Start& b) { return a.t < b.t; });
+        own_hit_ = hits_[c_.map.index(i, j)].face != 0;
     }
     // The premultiplied colour of the exact ray through pixel coordinates (px, py).
     void trace(double px, double py, double out[4]) const {
         const ScreenPoint sp = c_.camera.screen(px, py);
         PixelHit best, best_near;
-        // Per face, the start nearest to the sample (its pixel centre), robust
-        // Newton only where the plain one found nothing on any face.
+        // Per face, the start nearest to the sample (its pixel centre), front
+        // faces first; the robust Newton only where the plain one found nothing
+        // on any face and the pixel itself is hit (a sample of a background pixel
+        // that the plain solves from neighbours a pixel away miss is background:
+        // the robust retries there cost more than the rest of the pass).
         for (const NewtonParams* p : {&solver_.params, &solver_.robust}) {
-            for (int q = 0; q < nstarts_; ++q) {
+            if (p == &solver_.robust && !own_hit_) break;
+            for (int q = 0; q < nstarts_ && !best.face; ++q) {
                 const Start& s = starts_[q];
                 if (!nearest_of_its_face(q, px, py)) continue;
                 PixelHit h;
                 const Outcome o = solver_.solve(s.face, sp, s.u, s.v, *p, true, h);
-                if (o == kConverged && h.t < best.t) best = h;
+                if (o == kConverged) best = h;
                 if (o == kNearTrim && h.t < best_near.t) best_near = h;
             }
             if (best.face || best_near.face) break;
@@ -151,6 +160,7 @@ private:
     // Scratch of the pixel being resolved; one EdgeSampler per thread.
     mutable Start starts_[kNeighbours];
     mutable int nstarts_ = 0, ci_ = 0, cj_ = 0;
+    mutable bool own_hit_ = false;
 };
 
 }  // namespace
