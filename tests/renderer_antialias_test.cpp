@@ -53,20 +53,12 @@ Coverage exact_coverage(const AnalyticPatch& sphere, const AnalyticPatch& plane,
     return c;
 }
 
-CameraSpec view(const Scene& s, int w, int h) {
-    CameraSpec base;
-    base.width = w;
-    base.height = h;
-    base.fov_deg = 35;
-    return named_view("iso", s.bbox, base);
-}
-
 }  // namespace
 
 TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(view(scene, 120, 90));
+    const Camera cam(iso_view(scene, 120, 90));
     const Coverage exact = exact_coverage(sphere, plane, cam);
     RenderOptions off, on;
     on.antialias = 8;
@@ -119,7 +111,7 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
 TEST(RendererAntialias, SameImageForOneAndTwoThreads) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(view(scene, 100, 80));
+    const Camera cam(iso_view(scene, 100, 80));
     RenderOptions o1, o2;
     o1.antialias = o2.antialias = 6;
     o1.threads = 1;
@@ -135,7 +127,7 @@ TEST(RendererAntialias, OpaqueBackgroundBlendsIntoEdges) {
     // the face's and the background's.
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(view(scene, 80, 60));
+    const Camera cam(iso_view(scene, 80, 60));
     RenderOptions o;
     o.antialias = 4;
     o.background = {1, 0, 0};

@@ -13,14 +13,6 @@ using namespace nurbsrt::testing;
 
 namespace {
 
-CameraSpec view(const Scene& s, int w, int h) {
-    CameraSpec base;
-    base.width = w;
-    base.height = h;
-    base.fov_deg = 35;
-    return named_view("iso", s.bbox, base);
-}
-
 RenderOptions with_edges(float width) {
     RenderOptions o;
     o.background = {1, 1, 1};
@@ -40,7 +32,7 @@ bool same_pixel(const RenderImage& a, const RenderImage& b, size_t k) {
 TEST(RendererEdges, LinesAlongEveryBoundaryAndNowhereElse) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(view(scene, 160, 120));
+    const Camera cam(iso_view(scene, 160, 120));
     RenderOptions plain = with_edges(1);
     plain.edges = false;
     // Two pixels wide: the line on a pixel boundary covers the pixel on each side fully.
@@ -85,7 +77,7 @@ TEST(RendererEdges, WidthIsInPixels) {
     const Scene scene = sphere_and_holed_plane(sphere, plane);
     double ink_at[2] = {0, 0};
     for (const int size : {120, 240}) {
-        const Camera cam(view(scene, size, size * 3 / 4));
+        const Camera cam(iso_view(scene, size, size * 3 / 4));
         RenderOptions plain = with_edges(1);
         plain.edges = false;
         const RenderResult a = render(scene, cam, plain), thin = render(scene, cam, with_edges(1)),

@@ -14,23 +14,10 @@
 using namespace nurbsrt;
 using namespace nurbsrt::testing;
 
-namespace {
-
-CameraSpec scene_view(const Scene& s, int w, int h) {
-    CameraSpec base;
-    base.width = w;
-    base.height = h;
-    base.fov_deg = 35;
-    CameraSpec v = named_view("iso", s.bbox, base);
-    return v;
-}
-
-}  // namespace
-
 TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(scene_view(scene, 200, 150));
+    const Camera cam(iso_view(scene, 200, 150));
     for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
         RenderOptions opt;
         opt.method = m;
@@ -80,7 +67,7 @@ TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
 TEST(RendererRender, SameOutputForOneAndTwoThreads) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(scene_view(scene, 160, 120));
+    const Camera cam(iso_view(scene, 160, 120));
     RenderOptions o1, o2;
     o1.threads = 1;
     o2.threads = 2;
@@ -272,7 +259,7 @@ TEST(RendererRender, SilhouetteMatchesAnalyticSphere) {
 TEST(RendererRender, ProgressIsMonotoneAndEndsAtOne) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(scene_view(scene, 160, 120));
+    const Camera cam(iso_view(scene, 160, 120));
     std::vector<double> seen;
     RenderOptions opt;
     opt.threads = 2;
@@ -292,7 +279,7 @@ TEST(RendererRender, ProgressIsMonotoneAndEndsAtOne) {
 TEST(RendererRender, CancelFlagStopsTheFrame) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(scene_view(scene, 160, 120));
+    const Camera cam(iso_view(scene, 160, 120));
     auto flag = std::make_shared<std::atomic<bool>>(true);
     RenderOptions opt;
     opt.threads = 2;
@@ -324,7 +311,7 @@ TEST(RendererRender, CancelFlagStopsTheFrame) {
 TEST(RendererRender, WritesExrWithAovsAndPng) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
-    const Camera cam(scene_view(scene, 64, 48));
+    const Camera cam(iso_view(scene, 64, 48));
     const RenderResult r = render(scene, cam, RenderOptions{});
     const auto dir = std::filesystem::temp_directory_path() / "nurbsrt_render_test";
     std::filesystem::create_directories(dir);
@@ -377,7 +364,7 @@ TEST(RendererRender, MethodTiming) {
         scene.faces.push_back(f);
         for (const Vec3& x : f.mesh.xyz) scene.bbox.extend(x);
     }
-    const Camera cam(scene_view(scene, 512, 512));
+    const Camera cam(iso_view(scene, 512, 512));
     double ms[2] = {0, 0};
     for (int rep = 0; rep < 3; ++rep)
         for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {

@@ -339,4 +339,13 @@ inline Scene sphere_and_holed_plane(AnalyticPatch& sphere, AnalyticPatch& plane)
     return s;
 }
 
+// The CLI's default view of a scene (iso, perspective, 35 degrees), w x h pixels.
+inline CameraSpec iso_view(const Scene& s, int w, int h) {
+    CameraSpec base;
+    base.width = w;
+    base.height = h;
+    base.fov_deg = 35;
+    return named_view("iso", s.bbox, base);
+}
+
 }  // namespace nurbsrt::testing
