@@ -2,6 +2,8 @@
 // fails only its own call, with the right typed error, and the caller goes on.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -52,7 +54,11 @@ TEST_P(IsolatedImport, SameSceneAsInProcess) {
 TEST_P(IsolatedImport, ChildErrorsKeepTheirCode) {
     EXPECT_EQ(code_of([this] { nurbsrt::import_isolated("/nonexistent.step", {}, limits(60)); }),
               nurbsrt::ErrorCode::io);
-    const std::string junk = (std::filesystem::temp_directory_path() / "nurbsrt-isolated-junk.igs").string();
+    // Per process: ctest runs the two instances of this test at once, and a shared
+    // name let one remove the file while the other's child read it (io, not unsupported_format).
+    const std::string junk = (std::filesystem::temp_directory_path() /
+                              ("nurbsrt-isolated-junk-" + std::to_string(::getpid()) + ".igs"))
+                                 .string();
     std::ofstream(junk) << "this is not a CAD file\n";
     EXPECT_EQ(code_of([&, this] { nurbsrt::import_isolated(junk, {}, limits(60)); }),
               nurbsrt::ErrorCode::unsupported_format);
