@@ -57,6 +57,7 @@ struct Args {
     bool edges = false;
     std::string edge_color;
     double edge_width = 1.0;
+    bool shadows = false;
     LoadOptions load;
     bool quiet = false;
 };
@@ -200,6 +201,8 @@ void add_render_command(CLI::App& app) {
     cmd->add_option("--edge-width", a->edge_width, "feature line width in pixels, at any resolution")
         ->check(shared_check([](const std::string& s) { server::parse_edge_width(std::stod(s), "the value"); }, "PX"))
         ->capture_default_str();
+    cmd->add_flag("--shadows", a->shadows,
+                  "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
     cmd->add_option("--mesh-deflection", a->load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
         ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
@@ -239,6 +242,7 @@ void add_render_command(CLI::App& app) {
         look.edges = a->edges;
         if (!a->edge_color.empty()) look.edge_color = server::parse_rgb(a->edge_color, "--edge-color");
         look.edge_width = a->edge_width;
+        look.shadows = a->shadows;
         server::apply_look(look, output_format_name(a->output), options);
         say("rendering %dx%d with %s", camera.width(), camera.height(), a->method.c_str());
         // Progress on stderr: live on a terminal; otherwise a line per 10% once the

@@ -49,8 +49,9 @@ uint32_t hash32(uint32_t x) {
 
 class EdgeSampler {
 public:
-    EdgeSampler(const FrameContext& c, const Solver& solver, const FrameBuffers& b, const RenderImage& img)
-        : c_(c), solver_(solver), hits_(b.hits), img_(img), shader_(c) {}
+    EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
+                const RenderImage& img)
+        : c_(c), solver_(solver), hits_(b.hits), img_(img), shader_(shader) {}
 
     // Whether pixel (i, j) differs from one of its 8 neighbours in what it shows.
     bool is_edge(int i, int j) const {
@@ -137,7 +138,7 @@ private:
             return;
         }
         Vec3 n;
-        const Vec3 rgb = shader_.colour(best, c_.camera.ray(sp).dir, n);
+        const Vec3 rgb = shader_.colour(best, c_.camera.ray(sp), n);
         out[0] = rgb.x, out[1] = rgb.y, out[2] = rgb.z, out[3] = 1.0;
     }
     // Whether start q is its face's start nearest to (px, py) (ties: the first).
@@ -156,7 +157,7 @@ private:
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;
     const RenderImage& img_;
-    const Shader shader_;
+    const Shader& shader_;
     // Scratch of the pixel being resolved; one EdgeSampler per thread.
     mutable Start starts_[kNeighbours];
     mutable int nstarts_ = 0, ci_ = 0, cj_ = 0;
@@ -165,8 +166,8 @@ private:
 
 }  // namespace
 
-void antialias_pass(const FrameContext& c, const Solver& solver, const FrameBuffers& b, RenderImage& img,
-                    RenderStats& st) {
+void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
+                    RenderImage& img, RenderStats& st) {
     const int n = c.options.antialias;
     st.antialias = std::max(n, 0);
     if (n <= 0) return;
@@ -174,12 +175,12 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const FrameBuff
     // colour changes, so the result does not depend on the order of the rows.
     std::vector<uint8_t> edge(c.pixels(), 0);
     parallel_rows(c, false, [&](int j) {
-        const EdgeSampler sampler(c, solver, b, img);
+        const EdgeSampler sampler(c, solver, shader, b, img);
         for (int i = 0; i < c.width; ++i) edge[c.map.index(i, j)] = sampler.is_edge(i, j);
     });
     std::atomic<uint64_t> pixels{0}, rays{0};
     parallel_rows(c, true, [&](int j) {
-        const EdgeSampler sampler(c, solver, b, img);
+        const EdgeSampler sampler(c, solver, shader, b, img);
         uint64_t p = 0, r = 0;
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);

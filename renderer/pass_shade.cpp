@@ -1,5 +1,6 @@
 // Shading from the exact normal (the last Newton iteration's partials), and the AOVs.
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "renderer/nurbs.h"
@@ -9,33 +10,48 @@ namespace nurbsrt {
 
 namespace {
 
-// A fixed two-light rig, so every view of a model reads alike: ambient, a key
-// light from the upper left behind the viewer, and a headlight along the ray
-// (lights faces seen edge-on to the key light). The weights sum to 1.05: a face
-// facing both lights saturates slightly, the rest stays below 1.
-constexpr double kAmbient = 0.15, kKey = 0.55, kHeadlight = 0.35;
+// Weights of the rig (lighting.h). Key and fill lie about 75 degrees apart, so no
+// normal faces both fully: a face turned between them gets ~0.7 of its colour
+// from the two, plus the ambient term, and stays below saturation; the key's
+// side is the brighter by 2:1, a usual key-to-fill ratio.
+constexpr double kKey = 0.6, kFill = 0.3;
+// Ambient light on faces turned to the camera's up and down; between them it
+// follows the normal (a hemisphere light), so even unlit sides show their form.
+constexpr double kAmbientSky = 0.18, kAmbientGround = 0.06;
+// A white Blinn-Phong highlight of the key light (Blinn 1977): curvature reads
+// from how it stretches along a fillet or a cylinder. Small and tight, so flat
+// faces keep their colour.
+constexpr double kSpecular = 0.12, kShininess = 40;
 
 }  // namespace
 
-Shader::Shader(const FrameContext& c)
-    : scene_(c.scene),
-      key_(normalize(-1.0 * c.camera.forward() + 0.6 * c.camera.up() - 0.5 * c.camera.right())) {}
+Shader::Shader(const FrameContext& c, const KeyLightShadows* shadows)
+    : scene_(c.scene), rig_(light_rig(c.camera)), shadows_(shadows) {}
 
-Vec3 Shader::colour(const PixelHit& h, Vec3 dir, Vec3& n) const {
+Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed) const {
     const Face& f = scene_.faces[h.face - 1];
     // The solve's normal (exact at the double-precision hit); the limits of
     // surface_normal only where its partials were degenerate.
     n = {h.nx, h.ny, h.nz};
     if (n.x == 0 && n.y == 0 && n.z == 0) n = surface_normal(f.surface, h.u, h.v, f.reversed);
-    if (dot(n, dir) > 0) n = -n;  // two-sided: light the side facing the viewer
+    if (dot(n, ray.dir) > 0) n = -n;  // two-sided: light the side facing the viewer
     Color col = f.color;
     if (!f.has_color && f.body < scene_.bodies.size() && scene_.bodies[f.body].has_color)
         col = scene_.bodies[f.body].color;
-    const double lambert = kAmbient + kKey * std::max(0.0, dot(n, key_)) + kHeadlight * std::max(0.0, -dot(n, dir));
-    return {col.r * lambert, col.g * lambert, col.b * lambert};
+    const bool blocked = shadows_ && shadows_->blocked(ray.origin + h.t * ray.dir, n);
+    if (shadowed) *shadowed = blocked;
+    const double key = blocked ? 0.0 : std::max(0.0, dot(n, rig_.key));
+    const double ambient = kAmbientGround + (kAmbientSky - kAmbientGround) * 0.5 * (1 + dot(n, rig_.sky));
+    const double diffuse = ambient + kKey * key + kFill * std::max(0.0, dot(n, rig_.fill));
+    double specular = 0;
+    if (key > 0) {
+        const Vec3 half = normalize(rig_.key - ray.dir);  // between the light and the viewer
+        specular = kSpecular * std::pow(std::max(0.0, dot(n, half)), kShininess);
+    }
+    return {col.r * diffuse + specular, col.g * diffuse + specular, col.b * diffuse + specular};
 }
 
-void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) {
+void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers& b, RenderImage& img) {
     const size_t npx = c.pixels();
     const Camera& camera = c.camera;
     const RenderOptions& options = c.options;
@@ -48,7 +64,7 @@ void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) 
     img.u.assign(npx, 0.0f);
     img.v.assign(npx, 0.0f);
     img.iterations.assign(npx, 0);
-    const Shader shader(c);
+    if (shader.shadows()) img.shadow.assign(npx, 0);
     parallel_rows(c, true, [&](int j) {
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);
@@ -63,7 +79,9 @@ void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) 
                 continue;
             }
             Vec3 n;
-            const Vec3 rgb = shader.colour(h, camera.pixel_ray(i, j).dir, n);
+            bool shadowed = false;
+            const Vec3 rgb = shader.colour(h, camera.pixel_ray(i, j), n, &shadowed);
+            if (shadowed) img.shadow[k] = 1;
             px[0] = static_cast<float>(rgb.x);
             px[1] = static_cast<float>(rgb.y);
             px[2] = static_cast<float>(rgb.z);

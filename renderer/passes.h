@@ -4,7 +4,8 @@
 //   rescue_pass        pixels without a primary hit, from their neighbours' faces
 //                      and starts; then silhouette growth (pass_rescue.cpp)
 //   nearer_sheet_pass  depth spikes re-solved from their neighbours (pass_nearer.cpp)
-//   shade_pass         shading from the exact normal, AOVs
+//   shade_pass         shading from the exact normal (lighting.h), exact shadows
+//                      of the key light (shadow_rays.h), AOVs
 //   antialias_pass     extra exact sub-pixel rays on edge pixels (pass_antialias.cpp)
 //   edges_pass         feature lines over the shading (pass_edges.cpp)
 //   frame_statistics   RenderStats from the buffers
@@ -15,8 +16,10 @@
 #include <cstdint>
 
 #include "renderer/frame.h"
+#include "renderer/lighting.h"
 #include "renderer/pixel_solver.h"
 #include "renderer/render.h"
+#include "renderer/shadow_rays.h"
 
 namespace nurbsrt {
 
@@ -29,21 +32,24 @@ void rescue_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
 // Replaces hits on a farther sheet by nearer ones in b.hits; returns how many.
 uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
 
-// The lights of a frame and the colour of one hit under them (pass_shade.cpp).
+// The lights of a frame (lighting.h) and the colour of one hit under them (pass_shade.cpp).
 class Shader {
 public:
-    explicit Shader(const FrameContext& c);
-    // Linear RGB of hit h seen along the ray direction dir; n receives the
-    // shading normal (facing the viewer).
-    Vec3 colour(const PixelHit& h, Vec3 dir, Vec3& n) const;
+    // shadows: the key light's shadow rays, or null for no shadows.
+    explicit Shader(const FrameContext& c, const KeyLightShadows* shadows = nullptr);
+    // Linear RGB of hit h on `ray`; n receives the shading normal (facing the
+    // viewer), *shadowed (when given) whether the key light is blocked there.
+    Vec3 colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed = nullptr) const;
+    const KeyLightShadows* shadows() const { return shadows_; }
 
 private:
     const Scene& scene_;
-    Vec3 key_;
+    LightRig rig_;
+    const KeyLightShadows* shadows_;
 };
 
 // The image and AOVs from b.hits.
-void shade_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img);
+void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers& b, RenderImage& img);
 
 // Whether adjacent pixels k and n show different things: background and a face,
 // two faces, a step in depth, or normals at a crease angle (pass_edges.cpp). The
@@ -55,8 +61,8 @@ bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, con
 // c.options.antialias extra sub-pixel rays, each solved exactly, and their colour
 // becomes the mean of all their samples; img's AOVs stay the pixel-centre sample.
 // Adds the pixels and rays to st.
-void antialias_pass(const FrameContext& c, const Solver& solver, const FrameBuffers& b, RenderImage& img,
-                    RenderStats& st);
+void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
+                    RenderImage& img, RenderStats& st);
 
 // Feature lines (c.options.edges): silhouettes, face borders and creases drawn
 // over img's colour, c.options.edge_width pixels wide, anti-aliased.

@@ -10,6 +10,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <thread>
 
 #include "renderer/error.h"
@@ -17,6 +18,7 @@
 #include "renderer/nurbs.h"
 #include "renderer/passes.h"
 #include "renderer/pixel_solver.h"
+#include "renderer/shadow_rays.h"
 
 namespace nurbsrt {
 
@@ -110,16 +112,32 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     }
     st.newton_ms = ms_since(t0);
 
-    // 5. Shading from the exact normal; AOVs.
+    // 5. Shading from the exact normal, with the key light's exact shadows
+    // when asked for (their map drawn first); AOVs.
+    std::optional<KeyLightShadows> shadows;
+    st.shadows = options.shadows;
+    if (options.shadows) {
+        t0 = Clock::now();
+        throw_if_canceled(options);
+        shadows.emplace(ctx, solver, light_rig(camera).key);
+        st.shadow_map_ms = ms_since(t0);
+        st.shadow_map_size = shadows->map_size();
+    }
+    const Shader shader(ctx, shadows ? &*shadows : nullptr);
     t0 = Clock::now();
-    shade_pass(ctx, buf, res.image);
+    shade_pass(ctx, shader, buf, res.image);
     st.shade_ms = ms_since(t0);
+    if (shadows) {
+        st.shadow_rays = shadows->rays();
+        st.shadowed_pixels = static_cast<uint64_t>(std::count(res.image.shadow.begin(), res.image.shadow.end(), 1));
+    }
     t0 = Clock::now();
-    antialias_pass(ctx, solver, buf, res.image, st);
+    antialias_pass(ctx, solver, shader, buf, res.image, st);
     st.antialias_ms = ms_since(t0);
     t0 = Clock::now();
     edges_pass(ctx, buf, res.image);
     st.edges_ms = ms_since(t0);
+    if (shadows) st.shadow_rays = shadows->rays();  // with the anti-aliasing samples'
 
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.map_triangles = prepared.map_mesh().triangles();

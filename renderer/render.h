@@ -43,6 +43,9 @@ struct RenderOptions {
     bool edges = false;
     Color edge_color{0.02f, 0.02f, 0.02f};
     float edge_width = 1.0f;
+    // Exact shadows of the key light (shadow_rays.h): a second preliminary map
+    // from the light, and Newton along the light ray of every shaded sample.
+    bool shadows = false;
     Color background{0, 0, 0}; // of pixels no face covers
     float background_alpha = 0; // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
@@ -64,6 +67,10 @@ struct RenderImage {
     std::vector<uint32_t> face;     // face index, 0 background
     std::vector<float> u, v;        // parameters of the hit
     std::vector<uint8_t> iterations;// Newton iterations of the pixel's final solve
+    // 1 where the key light is blocked at the pixel-centre hit (RenderOptions::shadows;
+    // empty without shadows). Points facing away from the key light are 0: their
+    // darkness is their orientation, not a cast shadow.
+    std::vector<uint8_t> shadow;
 };
 
 struct RenderStats {
@@ -97,6 +104,13 @@ struct RenderStats {
     // edge pixels that got them, and the rays traced for them.
     int antialias = 0;
     uint64_t antialias_pixels = 0, antialias_rays = 0;
+    // Shadows (RenderOptions::shadows): the light map's size (square), the light
+    // rays' Newton solves (pixel centres and anti-aliasing samples), and the hit
+    // pixels whose centre the key light does not reach.
+    bool shadows = false;
+    int shadow_map_size = 0;
+    uint64_t shadow_rays = 0, shadowed_pixels = 0;
+    double shadow_map_ms = 0;  // drawing the light's preliminary map (the solves are in shade_ms, antialias_ms)
     double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, antialias_ms = 0, edges_ms = 0, total_ms = 0;
     // prepare() of the Scene when render() was given one (then included in
     // total_ms); 0 when it was given a PreparedScene.

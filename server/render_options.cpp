@@ -135,8 +135,8 @@ unsigned aov_bits(const json& v, const std::string& key) {
 // The option names, for messages that list them (kept in step with the parsers below).
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
-    "width, height, format, background, antialias, edges, edge_color, edge_width, method, map_precision, aovs, "
-    "camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
+    "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
+    "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -249,6 +249,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
                                               : parse_rgb(background_text(v, key, 3), "option '" + key + "'");
         } else if (key == "edge_width") {
             r.look.edge_width = parse_edge_width(number(v, key), "option '" + key + "'");
+        } else if (key == "shadows") {
+            r.look.shadows = boolean(v, key);
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items())
@@ -327,6 +329,7 @@ void apply_look(const ImageLook& look, const std::string& format_name, RenderOpt
     options.edges = look.edges;
     options.edge_color = look.edge_color;
     options.edge_width = static_cast<float>(look.edge_width);
+    options.shadows = look.shadows;
 }
 
 Background default_background(const std::string& format_name) {

@@ -45,6 +45,7 @@ struct ImageLook {
     bool edges = false;
     Color edge_color{0.02f, 0.02f, 0.02f};
     double edge_width = 1.0;
+    bool shadows = false;
 };
 // On for PNG and JPEG, pictures for people; off for TIFF and EXR, which carry
 // exact per-pixel values into other tools (one centre sample per pixel).

@@ -272,6 +272,22 @@ TEST(CliRender, BackgroundAlphaAndDefaultSize) {
     fs::remove_all(dir);
 }
 
+TEST(CliRender, ShadowsFlagInStats) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-shadows-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    for (const bool on : {false, true}) {
+        const CliRun r = run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --stats - -o " +
+                                     (dir / "s.png").string() + (on ? " --shadows" : ""));
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json st = nlohmann::json::parse(r.out);
+        EXPECT_EQ(st["shadows"]["enabled"], on);
+        EXPECT_EQ(st["shadows"]["rays"].get<uint64_t>() > 0, on);
+        EXPECT_EQ(st["shadows"]["map_size"].get<int>(), on ? 256 : 0);  // the light map's minimum size
+        EXPECT_EQ(st["timings_ms"]["shadow_map"].get<double>() > 0, on);
+    }
+    fs::remove_all(dir);
+}
+
 // Every option is checked before any import: a usage error exits 2 with
 // CLI11's message naming the flag, and the import never starts (the progress
 // line "importing" is the first thing a render prints once the options are good).

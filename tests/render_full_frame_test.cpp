@@ -15,7 +15,10 @@
 // Runs on generated fixtures always (filleted boxes whose vertex blends meet edge
 // fillets, a fan of thin twisted blades) and on every good model of
 // ../shared/models (step/, iges/, duck/; not broken/) when that directory exists.
-// One test case per model, so ctest runs them in parallel.
+// One test case per model, so ctest runs them in parallel. The frames are
+// rendered with exact shadows, and every shadowed pixel (and a sample of the lit
+// ones) re-cast towards the light against the same reference
+// (tests/support/shadow_check.h): no acne, no leaks.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -32,6 +35,7 @@
 #include "renderer/render.h"
 #include "tests/support/fixtures.h"
 #include "tests/support/full_frame_check.h"
+#include "tests/support/shadow_check.h"
 
 namespace {
 
@@ -144,7 +148,11 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         base.width = base.height = kSize;
         base.projection = view.projection;
         const Camera camera(fit_view(view.name, scene, base));
-        const RenderResult r = render(prepared, camera, RenderOptions{});
+        // With the key light's shadows: they change no hit, and their isolated
+        // flags are checked below for acne and leaks.
+        RenderOptions options;
+        options.shadows = true;
+        const RenderResult r = render(prepared, camera, options);
         const std::string label = c.name + "/" + view.name;
         const T::FullFrameReport rep = T::full_frame_check(label, scene, model, inter, camera, r.image);
         std::cout << rep.text() << "   render " << std::fixed << std::setprecision(0) << r.stats.total_ms << " ms"
@@ -167,6 +175,11 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
             << label << ": pixels showing a farther sheet than the exact nearest hit";
         // A blank frame must not pass trivially.
         EXPECT_GT(rep.pixels_hit, 100) << label << ": too few hits to judge";
+        const T::ShadowCheckReport shadows = T::shadow_check(scene, inter, camera, r.image);
+        std::cout << shadows.text(label) << std::flush;
+        RecordProperty(std::string(view.name) + "_shadow_checked", static_cast<int>(shadows.checked));
+        EXPECT_EQ(shadows.false_shadows, 0) << label << ": shadowed (acne?) where the exact light ray is free";
+        EXPECT_EQ(shadows.leaks, 0) << label << ": the key light leaks through an occluder";
     }
 }
 

@@ -262,10 +262,29 @@ def test_edges_drawn_over_the_shading(url):
     assert as_json == lines  # the JSON options and the query parameters mean the same
 
 
+def test_shadows_darken_only_shadowed_pixels(url):
+    """Exact shadows of the key light: the linkrods cast shadows on each other;
+    shadowed pixels only darken, hits and coverage stay, and the statistics say
+    what the light's map and rays cost."""
+    step = (OCCT_DATA / "step" / "linkrods.step").read_bytes()
+    stats_plain, plain = render_png(url, step, antialias=0)
+    stats_shadow, shadowed = render_png(url, step, antialias=0, shadows="true")
+    assert stats_plain["shadows"] == {"enabled": False, "map_size": 0, "rays": 0, "shadowed_pixels": 0}
+    sh = stats_shadow["shadows"]
+    assert sh["enabled"] and sh["map_size"] >= 256 and sh["rays"] > 0 and sh["shadowed_pixels"] > 0, sh
+    assert stats_shadow["timings_ms"]["shadow_map"] > 0
+    assert stats_plain["pixels_hit"] == stats_shadow["pixels_hit"]
+    darker = sum(1 for a, b in zip(plain, shadowed) if a != b)
+    assert all(b[3] == a[3] for a, b in zip(plain, shadowed))
+    assert all(sum(b[:3]) <= sum(a[:3]) for a, b in zip(plain, shadowed))
+    assert 0 < darker <= sh["shadowed_pixels"] + 2, (darker, sh)  # sRGB rounding may hide a few
+
+
 @pytest.mark.parametrize("params,field", [
     ({"antialias": -1}, "antialias"), ({"antialias": 65}, "antialias"), ({"antialias": 2.5}, "antialias"),
     ({"antialias": "many"}, "antialias"), ({"edges": "yes"}, "edges"), ({"edge_width": 0}, "edge_width"),
     ({"edge_width": 100}, "edge_width"), ({"edge_color": "1,0"}, "edge_color"), ({"edge_color": "2,0,0"}, "edge_color"),
+    ({"shadows": "maybe"}, "shadows"),
 ])
 def test_bad_antialias_and_edge_options(url, params, field):
     body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params=params), 400, "invalid_argument")
