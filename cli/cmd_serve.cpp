@@ -14,6 +14,7 @@ void add_serve_command(CLI::App& app) {
     auto upload_mb = std::make_shared<double>(static_cast<double>(c->max_upload_bytes) / (1 << 20));
     auto import_memory_mb = std::make_shared<double>(static_cast<double>(c->import_memory_bytes >> 20));
     auto cache_mb = std::make_shared<double>(static_cast<double>(c->cache_bytes >> 20));
+    auto stored_mb = std::make_shared<double>(static_cast<double>(c->max_stored_bytes >> 20));
     auto budget_mb = std::make_shared<double>(0.0);
     auto render_mb = std::make_shared<double>(static_cast<double>(c->max_render_bytes >> 20));
     auto body_rate_kib = std::make_shared<double>(c->min_body_rate_bytes / 1024);
@@ -111,6 +112,10 @@ void add_serve_command(CLI::App& app) {
     cmd->add_option("--job-retention", c->job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
         ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--max-stored-mb", *stored_mb,
+                    "stored files (POST /v1/files) together, MiB (507 beyond); unpinned ones expire\n"
+                    "with --job-retention")
+        ->envname("NURBSRT_MAX_STORED_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--job-store", c->job_store,
                     "where batch jobs are queued: empty = SQLite in DATA_DIR/jobs.db (one instance);\n"
                     "postgresql://user[:password]@host[:port]/db = one queue for every instance started\n"
@@ -124,7 +129,7 @@ void add_serve_command(CLI::App& app) {
     cmd->add_option("--instance-id", c->instance_id,
                     "this instance's name in leases, logs and metrics (default: host name + random suffix)")
         ->envname("NURBSRT_INSTANCE_ID");
-    cmd->callback([c, upload_mb, import_memory_mb, cache_mb, body_rate_kib, budget_mb, render_mb] {
+    cmd->callback([c, upload_mb, import_memory_mb, cache_mb, stored_mb, body_rate_kib, budget_mb, render_mb] {
         c->memory_budget_bytes = static_cast<size_t>(*budget_mb * (1 << 20));
         c->max_render_bytes = static_cast<size_t>(*render_mb * (1 << 20));
         // Keys themselves only from the environment: a command line shows in `ps`.
@@ -132,6 +137,7 @@ void add_serve_command(CLI::App& app) {
         c->max_upload_bytes = static_cast<size_t>(*upload_mb * (1 << 20));
         c->import_memory_bytes = static_cast<size_t>(*import_memory_mb * (1 << 20));
         c->cache_bytes = static_cast<size_t>(*cache_mb * (1 << 20));
+        c->max_stored_bytes = static_cast<size_t>(*stored_mb * (1 << 20));
         c->min_body_rate_bytes = *body_rate_kib * 1024;
         const int rc = server::run_server(*c);
         if (rc != 0) std::exit(rc);

@@ -70,20 +70,21 @@ public:
                 const server::Upload up = server::read_upload(req);
                 const server::RenderRequest r = server::parse_render_options(up.options_json);
                 server::check_render_limits(config_, r);
-                (void)detect_format_bytes(up.bytes->data(), up.bytes->size());
+                if (up.bytes) (void)detect_format_bytes(up.bytes->data(), up.bytes->size());  // else a file_id
             });
         });
         Post("/v1/conversions", [](const httplib::Request& req, httplib::Response& res) {
             handle(res, [&] {
                 const server::Upload up = server::read_upload(req);
                 (void)server::parse_conversion_format(up.options_json);
-                (void)detect_format_bytes(up.bytes->data(), up.bytes->size());
+                if (up.bytes) (void)detect_format_bytes(up.bytes->data(), up.bytes->size());  // else a file_id
             });
         });
         Post("/v1/jobs", [this](const httplib::Request& req, httplib::Response& res) {
             handle(res, [&] {
                 const server::JobUpload up = server::read_job_upload(req, config_.max_job_files);
-                if (up.inputs.size() != up.bytes.size() || !up.job_json) __builtin_trap();
+                if (up.inputs.size() != up.bytes.size() || up.inputs.size() != up.file_ids.size() || !up.job_json)
+                    __builtin_trap();
                 (void)server::parse_job_spec(*up.job_json, up.inputs, config_);
             });
         });

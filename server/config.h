@@ -65,6 +65,12 @@ struct ServerConfig {
     int max_job_files = 16;          // files per job
     int max_job_outputs = 64;        // outputs per job
     double job_retention_s = 7 * 86400.0;  // finished jobs are deleted this long after they finished
+    // Stored files (POST /v1/files, server/file_store.h): the bytes they may
+    // hold together; beyond -> 507. 1 GiB: sixteen uploads of the default
+    // 64 MiB limit, or hundreds of typical parts of a few MiB, small next to
+    // the disk a data directory of job artifacts needs anyway. Unpinned files
+    // expire job_retention_s after their upload.
+    size_t max_stored_bytes = size_t(1) << 30;
     // Where jobs are kept: empty = SQLite in DATA_DIR/jobs.db (one instance);
     // postgresql://user@host:port/db = a queue shared by every instance started
     // with it and the same DATA_DIR (a shared volume holding inputs and artifacts).

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "renderer/error.h"
+#include "server/file_store.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -53,6 +54,21 @@ std::string file_etag(const std::string& path) {
         tag += hex[digest[i] & 15];
     }
     return tag + "\"";
+}
+
+std::string render_etag(const std::string& file_sha256, const std::string& options_json) {
+    // Hashed once per process (tens of MB, some tens of milliseconds).
+    static const std::string build = file_etag("/proc/self/exe");
+    // Appended piecewise: GCC 12 warns falsely (-Wrestrict) about a chain of operator+ here.
+    std::string key = build;
+    key += '\n';
+    key += file_sha256;
+    key += '\n';
+    key += options_json;
+    std::string tag = "\"";
+    tag += sha256_hex(key);
+    tag += '"';
+    return tag;
 }
 
 bool if_none_match_matches(const std::string& header, const std::string& etag) {

@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cstdio>
+#include <ctime>
 
 #include "server/context.h"
 #include "server/problem.h"
@@ -69,6 +71,22 @@ std::string without_service_paths(const std::string& message, const ServerContex
     // Scratch files first: the scratch dir usually lies inside the data dir.
     auto dir_prefix = [](const std::string& d) { return d.empty() ? d : d + "/"; };  // "" erases nothing
     return without_prefixes(with_scratch_files_named(message, ctx.scratch.path()), {dir_prefix(data)});
+}
+
+std::string rfc3339_utc(int64_t ms) {
+    const std::time_t s = static_cast<std::time_t>(ms / 1000);
+    std::tm tm{};
+    gmtime_r(&s, &tm);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                  tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms % 1000));
+    return buf;
+}
+
+void load_stored_file(ServerContext& ctx, Upload& upload, StoredContent& stored) {
+    stored = ctx.files.open(upload.file_id);
+    upload.bytes = stored.bytes.get();
+    upload.filename = stored.file.filename;
 }
 
 }  // namespace nurbsrt::server

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "renderer/error.h"
+#include "server/file_store.h"
 #include "server/upload.h"
 
 namespace nurbsrt::server {
@@ -52,6 +53,14 @@ inline constexpr const char* kBulkJsonContentType = "application/json; charset=u
 
 // True when the client asked for JSON (Accept contains application/json).
 bool wants_json(const httplib::Request& req);
+
+// RFC 3339 UTC with milliseconds ("2026-12-02T00:04:46.123Z") of Unix ms.
+std::string rfc3339_utc(int64_t ms);
+
+// For a request naming a stored file (upload.file_id, server/file_store.h):
+// loads its record and bytes into `stored` and points upload.bytes and
+// upload.filename at them. Throws Error(not_found) naming the id.
+void load_stored_file(ServerContext& ctx, Upload& upload, StoredContent& stored);
 
 
 }  // namespace nurbsrt::server

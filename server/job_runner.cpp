@@ -214,6 +214,9 @@ int JobService::sweep() {
             ++removed;
         }
     if (removed) log_event("jobs_expired", nlohmann::json{{"removed", removed}}.dump());
+    // Stored files expire with the same retention, counted from their upload (pinned ones never).
+    if (const int files = ctx_.files.expire(now_ms() - retention_ms))
+        log_event("files_expired", nlohmann::json{{"removed", files}}.dump());
     if (store_->shared()) sweep_shared_leftovers();
     return removed;
 }

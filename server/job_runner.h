@@ -53,7 +53,8 @@ public:
     JobStore& store() { return *store_; }
     // The path of a stored artifact; the name must have passed valid_artifact_name.
     std::string artifact_path(const std::string& id, const std::string& artifact) const;
-    // Removes expired jobs now; returns how many.
+    // Removes expired jobs (and expired stored files, server/file_store.h) now;
+    // returns how many jobs.
     int sweep();
 
 private:

@@ -66,6 +66,7 @@ const char* status_title(int status, ErrorCode code) {
         case 413: return "Content too large";
         case 414: return "URI too long";
         case 431: return "Request header fields too large";
+        case 507: return "Insufficient storage";
         default: return problem_title(code);
     }
 }

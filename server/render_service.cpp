@@ -33,37 +33,6 @@ AdmissionWait admission_wait(const RenderControl& control) {
     return w;
 }
 
-// The imported and prepared scene for these bytes: from the cache, by waiting
-// for a simultaneous request's import of the same bytes, or imported in a child
-// process (holding an import slot) and prepared here (once, for every later
-// render of the same bytes). `queue_ms` gets the wait for the import slot.
-std::shared_ptr<const PreparedScene> scene_for(ServerContext& ctx, const std::string& bytes,
-                                               const RenderControl& control, bool& cache_hit, double& queue_ms) {
-    const ImportOptions options;
-    SceneCache::Source source = SceneCache::Source::loaded;
-    auto scene = ctx.cache.get_or_load(
-        scene_cache_key(bytes, options),
-        [&] {
-            const auto tq = clock_type::now();
-            const auto slot = admit(ctx, ctx.gate, 0, admission_wait(control));
-            queue_ms += ms_since(tq);
-            const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
-            std::shared_ptr<const Scene> scene;
-            try {
-                scene = std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
-            } catch (const Error& e) {
-                ctx.metrics.count_import_failure(error_code_name(e.code()));
-                throw;
-            }
-            return std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx.config.render_threads));
-        },
-        source);
-    // A request that waited for another's import of the same bytes paid no import.
-    cache_hit = source != SceneCache::Source::loaded;
-    ctx.metrics.count_cache(cache_hit);
-    return scene;
-}
-
 // Frames estimated below this many core-seconds are interactive (a thumbnail,
 // a dragged view, up to ~1600x1200 of a typical part): they go ahead of others.
 // Above kHeavyCoreSeconds (several seconds of a core: 3000x2000 of a typical
@@ -169,12 +138,39 @@ std::vector<AovBuffer> aov_buffers(const RenderImage& image, unsigned bits) {
 
 }  // namespace
 
+std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& bytes,
+                                               const RenderControl& control, bool& cache_hit, double& queue_ms) {
+    const ImportOptions options;
+    SceneCache::Source source = SceneCache::Source::loaded;
+    auto scene = ctx.cache.get_or_load(
+        scene_cache_key(bytes, options),
+        [&] {
+            const auto tq = clock_type::now();
+            const auto slot = admit(ctx, ctx.gate, 0, admission_wait(control));
+            queue_ms += ms_since(tq);
+            const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
+            std::shared_ptr<const Scene> scene;
+            try {
+                scene = std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
+            } catch (const Error& e) {
+                ctx.metrics.count_import_failure(error_code_name(e.code()));
+                throw;
+            }
+            return std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx.config.render_threads));
+        },
+        source);
+    // A request that waited for another's import of the same bytes paid no import.
+    cache_hit = source != SceneCache::Source::loaded;
+    ctx.metrics.count_cache(cache_hit);
+    return scene;
+}
+
 RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const RenderRequest& r,
                             const RenderControl& control) {
     const auto t0 = control.start.value_or(clock_type::now());
     RenderedImage out;
     double queue_ms = 0;
-    const std::shared_ptr<const PreparedScene> prepared = scene_for(ctx, bytes, control, out.cache_hit, queue_ms);
+    const std::shared_ptr<const PreparedScene> prepared = imported_scene(ctx, bytes, control, out.cache_hit, queue_ms);
     const Scene& scene = prepared->scene();
     if (scene.faces.size() > ctx.config.max_faces)
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +

@@ -47,6 +47,16 @@ struct RenderControl {
     bool patient = false;
 };
 
+// The imported and prepared scene of `cad_bytes` (STEP/IGES, checked by
+// content): from the scene cache, by waiting for a simultaneous request's
+// import of the same bytes, or imported in a child process (holding an import
+// slot, importer/isolated.h) and prepared here, once for every later render of
+// the same bytes. Throws the import's Error (unreadable_file, import_crashed,
+// ...). `cache_hit`: no import was paid; `queue_ms` gets the wait for the slot.
+// Also what POST /v1/files imports, so a stored file's first render is a hit.
+std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& cad_bytes,
+                                                    const RenderControl& control, bool& cache_hit, double& queue_ms);
+
 // Renders `cad_bytes` (STEP/IGES, already checked by content) with `r`.
 // Admission happens here, in two steps: an import slot (ctx.gate) when the
 // scene is not cached, then the render's estimated memory and work

@@ -1,4 +1,5 @@
-// POST /v1/conversions: one synchronous conversion of a STEP/IGES upload to
+// POST /v1/conversions: one synchronous conversion of a STEP/IGES upload (or
+// of a stored file named by `file_id`, server/file_store.h) to
 // STEP, IGES, STL, glb or NURBS JSON, run in a child process
 // (importer/isolated.h) under the import time and memory limits.
 #include <httplib.h>
@@ -29,8 +30,10 @@ const char* download_extension(ConversionFormat f) {
 
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const auto t0 = std::chrono::steady_clock::now();
-    const Upload upload = read_upload(req, {"format"});
+    Upload upload = read_upload(req, {"format"});
     const ConversionFormat format = parse_conversion_format(upload.options_json);
+    StoredContent stored;
+    if (!upload.file_id.empty()) load_stored_file(ctx, upload, stored);
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)

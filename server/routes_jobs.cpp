@@ -1,4 +1,5 @@
-// Batch jobs: POST /v1/jobs (several STEP/IGES files, each with render and
+// Batch jobs: POST /v1/jobs (several STEP/IGES files, uploaded or stored
+// ones named by `file_id` (server/file_store.h), each with render and
 // conversion outputs; everything is validated before 202 Accepted), GET
 // /v1/jobs (paged), GET and DELETE /v1/jobs/{id}, and GET
 // /v1/jobs/{id}/artifacts/{name}. The work itself is server/job_runner.h.
@@ -33,13 +34,7 @@ constexpr int kJobPollAfterS = 1;
 // RFC 3339 UTC with milliseconds, or null for "not yet".
 json timestamp(int64_t ms) {
     if (ms <= 0) return nullptr;
-    const std::time_t s = static_cast<std::time_t>(ms / 1000);
-    std::tm tm{};
-    gmtime_r(&s, &tm);
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
-                  tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms % 1000));
-    return buf;
+    return rfc3339_utc(ms);
 }
 
 json span(int64_t from, int64_t to) {
@@ -111,6 +106,18 @@ JobService& jobs_of(ServerContext& ctx) {
 
 void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     JobUpload up = read_job_upload(req, ctx.config.max_job_files);
+    // Stored files are copied into the job's inputs when it is accepted (as
+    // uploads are): deleting or expiring a stored file later never breaks a job.
+    std::vector<StoredContent> stored;
+    for (size_t i = 0; i < up.inputs.size(); ++i) {
+        if (up.file_ids[i].empty()) continue;
+        stored.push_back(ctx.files.open(up.file_ids[i]));
+        const StoredFile& f = stored.back().file;
+        up.inputs[i].filename = f.filename;
+        up.inputs[i].format = f.format;
+        up.inputs[i].bytes = f.bytes;
+        up.bytes[i] = stored.back().bytes.get();
+    }
     JobRecord job;
     job.inputs = std::move(up.inputs);
     job.outputs = parse_job_spec(*up.job_json, job.inputs, ctx.config);

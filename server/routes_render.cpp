@@ -1,4 +1,5 @@
-// POST /v1/renders: one synchronous render of an uploaded STEP/IGES file.
+// POST /v1/renders: one synchronous render of an uploaded STEP/IGES file, or
+// of a stored one (server/file_store.h) named by `file_id`.
 // Order of work: parse and check every limit, then admission, then
 // render_upload (server/render_service.h): scene, bounded render, encoding.
 #include <httplib.h>
@@ -11,6 +12,7 @@
 #include "renderer/error.h"
 #include "server/base64.h"
 #include "server/context.h"
+#include "server/etag.h"
 #include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/render_options.h"
@@ -31,12 +33,29 @@ nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
 
 void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const auto t0 = std::chrono::steady_clock::now();
-    const Upload upload = read_upload(req);
+    Upload upload = read_upload(req);
     const RenderRequest r = parse_render_options(upload.options_json);
     check_render_limits(ctx.config, r);
     if (r.aovs && !wants_json(req))
         throw Error(ErrorCode::invalid_argument,
                     "option 'aovs' needs a JSON answer: send 'Accept: application/json' (or use format exr)");
+    StoredContent stored;
+    if (!upload.file_id.empty()) {
+        load_stored_file(ctx, upload, stored);
+        // The image of a stored file is known by its content and options
+        // before any work: a client holding it gets 304 without a render.
+        // JSON answers carry timings and a request id, so they get no tag.
+        if (!wants_json(req)) {
+            const std::string etag = render_etag(stored.file.id, upload.options_json);
+            res.set_header("ETag", etag);
+            res.set_header("Vary", "Accept");
+            if (req.has_header("If-None-Match") &&
+                if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
+                res.status = 304;
+                return;
+            }
+        }
+    }
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)

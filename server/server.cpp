@@ -320,6 +320,7 @@ int run_server(const ServerConfig& given) {
     add_render_routes(svr, ctx);
     add_conversion_routes(svr, ctx);
     add_job_routes(svr, ctx);
+    add_file_routes(svr, ctx);
     add_service_routes(svr, ctx);
     add_page_routes(svr, ctx);
 
@@ -353,6 +354,7 @@ int run_server(const ServerConfig& given) {
                                    {"job_runners", config.job_runners},
                                    {"max_queued_jobs", config.max_queued_jobs},
                                    {"job_retention_s", config.job_retention_s},
+                                   {"max_stored_bytes", config.max_stored_bytes},
                                    {"instance", config.instance_id},
                                    {"job_store", ctx.jobs->store().describe()}};
     log_event("listening", fields.dump());

@@ -25,6 +25,72 @@ bool is_utf8(const std::string& s) {
     }
 }
 
+// The parts of a multipart upload: `file` or `file_id`, `options`, and the
+// plain form fields named in `form_options`.
+void read_multipart(const httplib::Request& req, std::initializer_list<const char*> form_options,
+                    nlohmann::json& options, Upload& up) {
+    using nlohmann::json;
+    const auto file = req.files.find("file");
+    const auto file_id = req.files.find("file_id");
+    if (file == req.files.end() && file_id == req.files.end())
+        throw Error(ErrorCode::invalid_argument,
+                    "multipart upload without a 'file' part (or a 'file_id' field naming a stored file)");
+    if (file != req.files.end() && file_id != req.files.end())
+        throw Error(ErrorCode::invalid_argument, "send either a 'file' part or a 'file_id' field, not both");
+    for (const char* name : {"file", "file_id", "options"})
+        if (req.files.count(name) > 1)
+            throw Error(ErrorCode::invalid_argument,
+                        std::string("more than one '") + name + "' part: send one file and one options part "
+                                                              "(several files: POST /v1/jobs)");
+    if (file != req.files.end()) {
+        up.bytes = &file->second.content;
+        up.filename = file->second.filename;
+    } else {
+        up.file_id = file_id->second.content;
+    }
+    up.multipart = true;
+    if (const auto part = req.files.find("options"); part != req.files.end()) {
+        const json o = json::parse(part->second.content, nullptr, false);
+        if (o.is_discarded() || !o.is_object())
+            throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
+        options.merge_patch(o);
+    }
+    for (const auto& [name, part] : req.files) {
+        if (name == "file" || name == "file_id" || name == "options") continue;
+        bool field = false;
+        for (const char* f : form_options) field = field || name == f;
+        if (!field) throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
+        if (req.files.count(name) > 1 || options.contains(name))
+            throw Error(ErrorCode::invalid_argument, "option '" + name + "' is given more than once");
+        if (!is_utf8(part.content))
+            throw Error(ErrorCode::invalid_argument, "form field '" + name + "' must be UTF-8 text");
+        options[name] = part.content;
+    }
+}
+
+// {"file_id": "...", <options>}: a stored file and the options, over the query parameters.
+void read_json_body(const std::string& body, nlohmann::json& options, Upload& up) {
+    nlohmann::json j = nlohmann::json::parse(body, nullptr, false);
+    // Not JSON at all: most likely a CAD file sent with the wrong type.
+    if (j.is_discarded())
+        throw Error(ErrorCode::unsupported_format,
+                    "the body of type 'application/json' is not JSON: send the STEP/IGES file raw "
+                    "(application/octet-stream, model/step, model/iges) or as the 'file' part of multipart/form-data, "
+                    "or name a stored file in a JSON body {\"file_id\": ...}");
+    if (!j.is_object())
+        throw Error(ErrorCode::invalid_argument, "a JSON body must be an object: {\"file_id\": \"...\", <options>}");
+    if (!j.contains("file_id") || !j["file_id"].is_string())
+        throw Error(ErrorCode::invalid_argument,
+                    "a JSON body names a stored file: {\"file_id\": \"...\", <options>} (send a CAD file raw or "
+                    "as the 'file' part of multipart/form-data)");
+    up.file_id = j["file_id"].get<std::string>();
+    j.erase("file_id");
+    for (const auto& [k, v] : j.items())
+        if (options.contains(k))
+            throw Error(ErrorCode::invalid_argument, "option '" + k.substr(0, 64) + "' is given more than once");
+    options.merge_patch(j);
+}
+
 }  // namespace
 
 Upload read_upload(const httplib::Request& req, std::initializer_list<const char*> form_options) {
@@ -43,48 +109,25 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
 
     Upload up;
     if (req.is_multipart_form_data()) {
-        const auto file = req.files.find("file");
-        if (file == req.files.end())
-            throw Error(ErrorCode::invalid_argument, "multipart upload without a 'file' part");
-        for (const char* name : {"file", "options"})
-            if (req.files.count(name) > 1)
-                throw Error(ErrorCode::invalid_argument,
-                            std::string("more than one '") + name + "' part: send one file and one options part "
-                                                                  "(several files: POST /v1/jobs)");
-        up.bytes = &file->second.content;
-        up.filename = file->second.filename;
-        up.multipart = true;
-        if (const auto part = req.files.find("options"); part != req.files.end()) {
-            const json o = json::parse(part->second.content, nullptr, false);
-            if (o.is_discarded() || !o.is_object())
-                throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
-            options.merge_patch(o);
-        }
-        for (const auto& [name, part] : req.files) {
-            if (name == "file" || name == "options") continue;
-            bool field = false;
-            for (const char* f : form_options) field = field || name == f;
-            if (!field)
-                throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
-            if (req.files.count(name) > 1 || options.contains(name))
-                throw Error(ErrorCode::invalid_argument, "option '" + name + "' is given more than once");
-            if (!is_utf8(part.content))
-                throw Error(ErrorCode::invalid_argument, "form field '" + name + "' must be UTF-8 text");
-            options[name] = part.content;
-        }
+        read_multipart(req, form_options, options, up);
     } else {
         const std::string type = lower(req.get_header_value("Content-Type"));
         const std::string base = type.substr(0, type.find(';'));
-        static const char* accepted[] = {"",           "application/octet-stream", "model/step", "model/iges",
-                                         "application/step", "application/iges", "application/p21"};
-        bool ok = false;
-        for (const char* a : accepted) ok = ok || base == a;
-        if (!ok)
-            throw Error(ErrorCode::unsupported_format,
-                        "request body of type '" + base.substr(0, 64) +
-                            "': send the STEP/IGES file raw (application/octet-stream, model/step, model/iges) "
-                            "or as the 'file' part of multipart/form-data");
-        up.bytes = &req.body;
+        if (base == "application/json") {
+            read_json_body(req.body, options, up);
+        } else {
+            static const char* accepted[] = {"",           "application/octet-stream", "model/step", "model/iges",
+                                             "application/step", "application/iges", "application/p21"};
+            bool ok = false;
+            for (const char* a : accepted) ok = ok || base == a;
+            if (!ok)
+                throw Error(ErrorCode::unsupported_format,
+                            "request body of type '" + base.substr(0, 64) +
+                                "': send the STEP/IGES file raw (application/octet-stream, model/step, model/iges) "
+                                "or as the 'file' part of multipart/form-data, or name a stored file in a JSON body "
+                                "{\"file_id\": ...}");
+            up.bytes = &req.body;
+        }
     }
     up.options_json = options.dump();
     return up;
@@ -140,6 +183,8 @@ JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {
             // The filename is only a label for the client (and to refer to the file): bounded, never a path.
             up.inputs.push_back({index, part.filename.substr(0, 255), format_name(f), static_cast<int64_t>(b.size())});
             up.bytes.push_back(&b);
+        } else if (name == "file_id") {
+            continue;  // after the uploaded files, below
         } else if (name == "job") {
             if (up.job_json) throw Error(ErrorCode::invalid_argument, "more than one 'job' part");
             up.job_json = &part.content;
@@ -147,7 +192,19 @@ JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {
             throw Error(ErrorCode::invalid_argument, "unexpected multipart part '" + name.substr(0, 64) + "'");
         }
     }
-    if (up.inputs.empty()) throw Error(ErrorCode::invalid_argument, "a job needs at least one 'file' part");
+    up.file_ids.assign(up.inputs.size(), std::string());
+    // cpp-httplib keeps the parts by name, so their order among other names is
+    // lost: stored files come after the uploaded ones, each in its own order.
+    const auto [first, last] = req.files.equal_range("file_id");
+    for (auto it = first; it != last; ++it) {
+        if (static_cast<int>(up.inputs.size()) >= max_job_files)
+            throw Error(ErrorCode::limit_exceeded, "more than " + std::to_string(max_job_files) + " files in one job");
+        up.inputs.push_back({static_cast<int>(up.inputs.size()), "", "", 0});
+        up.bytes.push_back(nullptr);
+        up.file_ids.push_back(it->second.content);
+    }
+    if (up.inputs.empty())
+        throw Error(ErrorCode::invalid_argument, "a job needs at least one 'file' part or 'file_id' field");
     if (!up.job_json) throw Error(ErrorCode::invalid_argument, "a job needs a 'job' part (JSON with 'outputs')");
     return up;
 }

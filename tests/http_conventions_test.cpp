@@ -18,6 +18,13 @@ TEST(RouteTable, TemplatesAndAllowedMethods) {
     EXPECT_EQ(route_of("/v1/jobs/abc"), "/v1/jobs/{id}");
     EXPECT_EQ(route_of("/v1/jobs/abc/artifacts/0-render-0.png"), "/v1/jobs/{id}/artifacts/{name}");
     EXPECT_EQ(route_of("/web/app.js"), "/web/{name}");
+    EXPECT_EQ(route_of("/v1/files"), "/v1/files");
+    EXPECT_EQ(route_of("/v1/files/abc"), "/v1/files/{id}");
+    EXPECT_EQ(route_of("/v1/files/abc/content"), "/v1/files/{id}/content");
+    EXPECT_EQ(route_of("/v1/files/abc/other"), "other");
+    EXPECT_TRUE(allows_method("/v1/files/{id}", "PATCH"));
+    EXPECT_TRUE(allows_method("/v1/files/{id}", "DELETE"));
+    EXPECT_FALSE(allows_method("/v1/files/{id}/content", "DELETE"));
     EXPECT_EQ(route_of("/web/a/b.js"), "other");
     EXPECT_EQ(route_of("/v1/renders/"), "other");
     EXPECT_STREQ(allowed_methods("other"), "");
