@@ -15,8 +15,12 @@ void add_convert_command(CLI::App& app) {
         "convert",
         "Convert a STEP or IGES file. The input format is recognised from the content,\n"
         "the output format from OUT's extension:\n"
-        "  .stp/.step  STEP AP214 (exact geometry)\n"
-        "  .igs/.iges  IGES 5.3, BRep mode (exact geometry)\n"
+        "  .stp/.step  STEP AP214 (exact geometry) with face colours, names, layers and\n"
+        "              the assembly structure\n"
+        "  .igs/.iges  IGES 5.3, BRep mode (exact geometry) with face colours, names and\n"
+        "              layers; IGES has no assemblies: instances become a flat list\n"
+        "              (STEP/IGES: the written file is read back; what it lost is printed\n"
+        "              as warnings)\n"
         "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal)\n"
         "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
         "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
@@ -40,6 +44,7 @@ void add_convert_command(CLI::App& app) {
         if (r.unmeshed_faces > 0)
             std::fprintf(stderr, "nurbsrt: warning: %d face(s) could not be meshed and are missing from %s\n",
                          r.unmeshed_faces, out->c_str());
+        for (const std::string& w : r.warnings) std::fprintf(stderr, "nurbsrt: warning: %s\n", w.c_str());
     });
 }
 

@@ -1,50 +1,223 @@
-// STEP/IGES output of convert_file: OCCT's writers on the shape as read.
+// STEP/IGES output of convert_file through OCCT's XDE document, so that face
+// colours, names, layers and (STEP only) the assembly structure of the input
+// survive (OCCT User Guide: "Extended Data Exchange (XDE)", STEP/IGES with XDE).
+//
+// What was carried is measured, not assumed: the written file is read back
+// with XDE and compared with the input's document (coloured faces and their
+// colours, names, assemblies/components/instances, faces); every shortfall
+// becomes a warning of the ConvertReport.
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <set>
+
 #include <IFSelect_ReturnStatus.hxx>
+#include <IGESCAFControl_Writer.hxx>
 #include <IGESControl_Controller.hxx>
-#include <IGESControl_Writer.hxx>
 #include <Interface_Static.hxx>
-#include <STEPControl_Writer.hxx>
+#include <STEPCAFControl_Writer.hxx>
 #include <Standard_Failure.hxx>
+#include <TDF_ChildIterator.hxx>
+#include <TDF_LabelMap.hxx>
+#include <TDF_LabelSequence.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+#include <XCAFPrs_DocumentExplorer.hxx>
 
 #include "importer/convert_writers.h"
 #include "importer/internal.h"
 #include "renderer/error.h"
 
 namespace nurbsrt::occt {
+namespace {
+
+// Two colours are the same when every channel differs by less than this. IGES
+// stores colours as percentages and STEP as reals, both written with enough
+// digits for far better; 1/255 is the step of 8-bit colour, so anything closer
+// is the same colour on every display.
+constexpr double kColourTolerance = 1.0 / 255.0;
+// A warning quotes at most this many of the names it counts (the count says
+// how many; a longer list is noise).
+constexpr size_t kNamesListed = 8;
+
+// What a model's XDE document carries, counted the same way for the input and
+// the written file.
+struct XdeContent {
+    int faces = 0;           // face occurrences (an instanced part's faces per instance)
+    int coloured_faces = 0;  // of those, with a surface colour
+    std::vector<std::pair<Color, int>> colours;  // distinct colour -> coloured faces
+    std::set<std::string> names;  // of parts, assemblies, components and named sub-shapes
+    int assemblies = 0;  // distinct assembly definitions
+    int components = 0;  // component labels: placements of a part or sub-assembly
+    int instances = 0;   // part occurrences in the expanded tree
+};
+
+bool same_colour(const Color& a, const Color& b) {
+    return std::abs(a.r - b.r) < kColourTolerance && std::abs(a.g - b.g) < kColourTolerance &&
+           std::abs(a.b - b.b) < kColourTolerance;
+}
+
+void add_colour(XdeContent& c, const Color& colour) {
+    ++c.coloured_faces;
+    for (auto& [known, n] : c.colours)
+        if (same_colour(known, colour)) {
+            ++n;
+            return;
+        }
+    c.colours.emplace_back(colour, 1);
+}
+
+// Walks a shape definition once (shared definitions are counted once).
+void walk_definition(const TDF_Label& def, TDF_LabelMap& seen, XdeContent& c) {
+    if (!seen.Add(def)) return;
+    if (std::string n = label_name(def); !n.empty()) c.names.insert(std::move(n));
+    if (XCAFDoc_ShapeTool::IsAssembly(def)) {
+        ++c.assemblies;
+        TDF_LabelSequence comps;
+        XCAFDoc_ShapeTool::GetComponents(def, comps, Standard_False);
+        for (const TDF_Label& comp : comps) {
+            ++c.components;
+            if (std::string n = label_name(comp); !n.empty()) c.names.insert(std::move(n));
+            TDF_Label ref;
+            if (XCAFDoc_ShapeTool::GetReferredShape(comp, ref)) walk_definition(ref, seen, c);
+        }
+        return;
+    }
+    for (TDF_ChildIterator ci(def); ci.More(); ci.Next())  // named faces/solids of a part
+        if (std::string n = label_name(ci.Value()); !n.empty()) c.names.insert(std::move(n));
+}
+
+XdeContent content_of(const OcctModel& m) {
+    XdeContent c;
+    c.faces = m.faces.Extent();
+    for (const FaceAttributes& a : m.attributes)
+        if (a.has_color) add_colour(c, a.color);
+    if (m.document.IsNull()) return c;
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(m.document->Main());
+    TDF_LabelSequence roots;
+    shapes->GetFreeShapes(roots);
+    TDF_LabelMap seen;
+    for (const TDF_Label& root : roots) walk_definition(root, seen, c);
+    for (XCAFPrs_DocumentExplorer ex(m.document, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More();
+         ex.Next())
+        ++c.instances;
+    return c;
+}
+
+// Faces whose input colour has no face of that colour left in the output
+// (a colour kept on fewer faces counts the difference).
+int faces_losing_colour(const XdeContent& in, const XdeContent& out) {
+    int lost = 0;
+    for (const auto& [colour, n] : in.colours) {
+        int kept = 0;
+        for (const auto& [c, m] : out.colours)
+            if (same_colour(colour, c)) kept += m;
+        lost += std::max(0, n - kept);
+    }
+    return lost;
+}
+
+std::string listed_names(const std::vector<std::string>& names) {
+    std::string s;
+    for (size_t i = 0; i < names.size() && i < kNamesListed; ++i) s += (i ? ", '" : "'") + names[i] + "'";
+    if (names.size() > kNamesListed) s += ", ...";
+    return s;
+}
+
+std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out, CadFormat out_format) {
+    std::vector<std::string> w;
+    const std::string fmt = format_name(out_format);
+    // IGES 5.3 has no product structure like STEP's; its subfigure instances
+    // (entities 308/408) are not used by OCCT's IGESCAFControl_Writer, which
+    // writes each free shape of the document as one compound with the
+    // placements applied (measured: one root named as the top assembly).
+    if (out_format == CadFormat::iges && in.components > 0)
+        w.push_back("IGES has no assembly structure: " + std::to_string(in.instances) +
+                    " part instance(s) (" + std::to_string(in.components) + " component(s) in " +
+                    std::to_string(in.assemblies) + " assembly(ies)) written as a flat list of shapes");
+    else if (in.assemblies != out.assemblies || in.components != out.components || in.instances != out.instances)
+        w.push_back("assembly structure changed: the input has " + std::to_string(in.assemblies) +
+                    " assembly(ies), " + std::to_string(in.components) + " component(s), " +
+                    std::to_string(in.instances) + " part instance(s); the written " + fmt + " file " +
+                    std::to_string(out.assemblies) + ", " + std::to_string(out.components) + ", " +
+                    std::to_string(out.instances));
+    if (out.faces != in.faces)
+        w.push_back("the written " + fmt + " file holds " + std::to_string(out.faces) + " face(s), the input " +
+                    std::to_string(in.faces));
+    if (const int lost = faces_losing_colour(in, out); lost > 0)
+        w.push_back(std::to_string(lost) + " of " + std::to_string(in.coloured_faces) +
+                    " coloured face(s) lost their colour (the written " + fmt + " file has " +
+                    std::to_string(out.coloured_faces) + " coloured face(s))");
+    std::vector<std::string> missing;
+    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
+                        std::back_inserter(missing));
+    if (!missing.empty())
+        w.push_back(std::to_string(missing.size()) + " of " + std::to_string(in.names.size()) +
+                    " name(s) not in the written " + fmt + " file: " + listed_names(missing));
+    return w;
+}
+
+// The document written by OCCT's XDE writers; callers hold exchange_mutex and
+// catch Standard_Failure.
+void write_document(const Handle(TDocStd_Document)& doc, const std::string& out_path, CadFormat out_format) {
+    if (out_format == CadFormat::iges) {
+        IGESControl_Controller::Init();
+        // The XDE writer takes unit and mode from these statics. BRep mode
+        // (186/514/510 entities) keeps faces and solids; the default "faces"
+        // mode writes trimmed surfaces without topology. Our readers deliver mm.
+        Interface_Static::SetIVal("write.iges.brep.mode", 1);
+        Interface_Static::SetCVal("write.iges.unit", "MM");
+        IGESCAFControl_Writer writer;
+        writer.SetColorMode(Standard_True);
+        writer.SetNameMode(Standard_True);
+        writer.SetLayerMode(Standard_True);
+        if (!writer.Transfer(doc)) throw Error(ErrorCode::occt_failure, "IGES writer: transfer failed");
+        writer.ComputeModel();
+        if (!writer.Write(out_path.c_str()))
+            throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
+    } else {
+        STEPCAFControl_Writer writer;
+        writer.SetColorMode(Standard_True);
+        writer.SetNameMode(Standard_True);
+        writer.SetLayerMode(Standard_True);
+        if (!writer.Transfer(doc, STEPControl_AsIs))
+            throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
+        if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
+            throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
+    }
+}
+
+}  // namespace
 
 void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
-    const OcctModel model = read_model(in_path, /*read_attributes=*/false);
+    OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
+    DocumentCloser closer{model.document};
     r.in_format = model.format;
     r.faces = model.faces.Extent();
     r.read_ms = model.read_ms;
+    if (model.document.IsNull())
+        throw Error(ErrorCode::occt_failure,
+                    std::string("XDE reader gave no document for the ") + format_name(r.out_format) + " export");
 
     const auto t0 = std::chrono::steady_clock::now();
     {
         std::lock_guard<std::mutex> lock(exchange_mutex());
         try {
-            if (r.out_format == CadFormat::iges) {
-                IGESControl_Controller::Init();
-                // BRep mode (186/514/510 entities) keeps faces and solids; the
-                // default "faces" mode writes trimmed surfaces without topology.
-                Interface_Static::SetIVal("write.iges.brep.mode", 1);
-                IGESControl_Writer writer("MM", 1);
-                if (!writer.AddShape(model.shape))
-                    throw Error(ErrorCode::occt_failure, "IGES writer: shape not accepted");
-                writer.ComputeModel();
-                if (!writer.Write(out_path.c_str()))
-                    throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
-            } else {
-                STEPControl_Writer writer;
-                const IFSelect_ReturnStatus st = writer.Transfer(model.shape, STEPControl_AsIs);
-                if (st != IFSelect_RetDone)
-                    throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
-                if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
-                    throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
-            }
+            write_document(model.document, out_path, r.out_format);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure,
                         std::string(format_name(r.out_format)) + " writer: " + failure_text(f));
         }
+    }
+    // Read back what was written (read_model takes exchange_mutex itself).
+    try {
+        OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
+        DocumentCloser written_closer{written.document};
+        r.warnings = shortfalls(content_of(model), content_of(written), r.out_format);
+    } catch (const Error& e) {
+        // The file is written; that OCCT cannot read it back is worth knowing
+        // but does not undo the conversion.
+        r.warnings.push_back(std::string("the written file could not be read back to check it: ") + e.what());
     }
     r.write_ms = ms_since(t0);
 }

@@ -8,6 +8,7 @@
 // (x, z, -y) / 1000 m in the glb. Reading it back with RWGltf_CafReader and
 // SetSystemLengthUnit(0.001) + SetSystemCoordinateSystem(Zup) restores the
 // model's coordinates (tests/convert_test.cpp checks both directions).
+#include <Message_ProgressRange.hxx>
 #include <RWGltf_CafWriter.hxx>
 #include <RWMesh_CoordinateSystem.hxx>
 #include <Standard_Failure.hxx>
@@ -15,7 +16,6 @@
 #include <TDF_LabelSequence.hxx>
 #include <TopoDS_Compound.hxx>
 #include <BRep_Builder.hxx>
-#include <XCAFApp_Application.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 
@@ -24,18 +24,6 @@
 #include "renderer/error.h"
 
 namespace nurbsrt::occt {
-namespace {
-
-// Closes the XDE document on every exit path (it is registered with the
-// process-wide application until closed).
-struct DocumentCloser {
-    Handle(TDocStd_Document) doc;
-    ~DocumentCloser() {
-        if (!doc.IsNull()) XCAFApp_Application::GetApplication()->Close(doc);
-    }
-};
-
-}  // namespace
 
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
     OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);

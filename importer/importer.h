@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "renderer/scene.h"
 
@@ -73,7 +74,13 @@ struct ConvertReport {
     long long triangles = 0;                       // STL and glb: triangles written; 0 otherwise
     int unmeshed_faces = 0;                        // STL and glb: faces BRepMesh left empty (missing)
     double read_ms = 0, mesh_ms = 0, write_ms = 0; // mesh_ms: BRepMesh (STL, glb) or the import's
-                                                   // conversion + meshing (JSON); 0 for STEP/IGES
+                                                   // conversion + meshing (JSON); 0 for STEP/IGES.
+                                                   // write_ms of STEP/IGES includes reading the
+                                                   // written file back (see warnings)
+    // STEP/IGES outputs: what the written file, read back with XDE, does not
+    // carry of the input (colours, names, assembly structure, faces), one
+    // sentence each without line breaks; empty when all of it was kept.
+    std::vector<std::string> warnings;
 };
 ConvertReport convert_file(const std::string& in_path, const std::string& out_path);
 

@@ -12,6 +12,7 @@
 #include "renderer/scene.h"
 
 class Standard_Failure;
+class TDF_Label;
 
 namespace nurbsrt::occt {
 
@@ -74,6 +75,16 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
                 const std::vector<const std::vector<TrimLoop>*>& loops,
                 const std::vector<double>& face_sizes, const MeshParams& p,
                 std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings);
+
+// Closes an XDE document (registered with the process-wide application until
+// closed) on every exit path of its user.
+struct DocumentCloser {
+    Handle(TDocStd_Document) doc;
+    ~DocumentCloser();
+};
+
+// The TDataStd_Name of an XDE label as UTF-8 ("" when it has none).
+std::string label_name(const TDF_Label& label);
 
 // Serializes STEP/IGES reading, transfer and writing process-wide (STACK.md:
 // concurrent use corrupts OCCT's heap).

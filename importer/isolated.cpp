@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cerrno>
 #include <cmath>
@@ -303,6 +304,10 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
     r.in_format = static_cast<CadFormat>(in_format);
     r.out_format = static_cast<CadFormat>(out_format);
     r.output = static_cast<ConversionFormat>(output);
+    std::string line;
+    std::getline(in, line);  // the rest of the numbers' line
+    while (std::getline(in, line))
+        if (!line.empty()) r.warnings.push_back(line);
     return r;
 }
 
@@ -317,6 +322,11 @@ int run_convert_worker(const std::string& in_path, const std::string& out_path, 
         out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' '
             << static_cast<int>(r.output) << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' '
             << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << '\n';
+        // Then one warning a line (a line break inside one would split it).
+        for (std::string w : r.warnings) {
+            std::replace(w.begin(), w.end(), '\n', ' ');
+            out << w << '\n';
+        }
         if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");
         return 0;
     } catch (const Error& e) {

@@ -111,13 +111,6 @@ std::string iges_units(const IGESControl_Reader& reader) {
     }
 }
 
-std::string label_name(const TDF_Label& label) {
-    Handle(TDataStd_Name) attr;
-    if (label.IsNull() || !label.FindAttribute(TDataStd_Name::GetID(), attr)) return {};
-    // TCollection_AsciiString from an extended string with no replacement char is UTF-8.
-    return TCollection_AsciiString(attr->Get()).ToCString();
-}
-
 Color to_color(const Quantity_Color& c) {
     // Quantity_Color stores linear RGB in OCCT 7.6, as the Scene wants.
     return Color{static_cast<float>(c.Red()), static_cast<float>(c.Green()),
@@ -238,7 +231,9 @@ void read_step(const std::string& path, bool attributes, bool keep_document, Occ
     if (attributes) {
         caf.SetColorMode(true);
         caf.SetNameMode(true);
-        caf.SetLayerMode(false);
+        // Layers only matter to a document handed on (the STEP/IGES writers
+        // carry them); the renderer's import does not use them.
+        caf.SetLayerMode(keep_document);
         caf.SetPropsMode(false);
         caf.SetGDTMode(false);
         caf.SetMatMode(false);
@@ -285,7 +280,7 @@ void read_iges(const std::string& path, bool attributes, bool keep_document, Occ
     if (attributes) {
         caf.SetColorMode(true);
         caf.SetNameMode(true);
-        caf.SetLayerMode(false);
+        caf.SetLayerMode(keep_document);  // as for STEP
     }
     const IFSelect_ReturnStatus st = reader.ReadFile(path.c_str());
     // RetVoid: parsed fine but holds no entities at all.
@@ -321,6 +316,17 @@ void read_iges(const std::string& path, bool attributes, bool keep_document, Occ
 }
 
 }  // namespace
+
+std::string label_name(const TDF_Label& label) {
+    Handle(TDataStd_Name) attr;
+    if (label.IsNull() || !label.FindAttribute(TDataStd_Name::GetID(), attr)) return {};
+    // TCollection_AsciiString from an extended string with no replacement char is UTF-8.
+    return TCollection_AsciiString(attr->Get()).ToCString();
+}
+
+DocumentCloser::~DocumentCloser() {
+    if (!doc.IsNull()) XCAFApp_Application::GetApplication()->Close(doc);
+}
 
 std::mutex& exchange_mutex() {
     static std::mutex m;

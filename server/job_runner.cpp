@@ -463,6 +463,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
         result = {{"input_format", format_name(report.in_format)},
                   {"output_format", out_format},
                   {"faces", report.faces},
+                  {"warnings", report.warnings},
                   {"timings_ms", {{"read", report.read_ms}, {"write", report.write_ms}, {"total", total}}}};
     }
     std::error_code ec;

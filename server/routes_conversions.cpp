@@ -68,6 +68,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                      {"faces", report.faces},
                                      {"triangles", report.triangles},
                                      {"unmeshed_faces", report.unmeshed_faces},
+                                     {"warnings", report.warnings},
                                      {"content_type", content_type},
                                      {"data_base64", base64_encode(data)},
                                      {"timings_ms", {{"read", report.read_ms},

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "renderer/newton.h"
+#include "tests/support/fixtures.h"
 
 namespace {
 
@@ -125,6 +126,21 @@ TEST(Cli, ConvertRoundTripKeepsFaces) {
     EXPECT_NE(bad.err.find("OUT: "), std::string::npos) << bad.err;
     EXPECT_NE(bad.err.find("must end in one of .stp"), std::string::npos) << bad.err;
     fs::remove_all(dir);
+}
+
+// STEP/IGES outputs print what they lose as warnings: the fixture assembly (one
+// part placed twice) has no assembly structure in IGES; its STEP copy loses nothing.
+TEST(Cli, ConvertPrintsWhatTheOutputLoses) {
+    const std::string in = nurbsrt::test::assembly();
+    const std::string dir = nurbsrt::test::fixture_dir();
+    const CliRun igs = run_nurbsrt("convert " + in + " " + dir + "/cli-assembly.igs");
+    ASSERT_EQ(igs.status, 0) << igs.err;
+    EXPECT_NE(igs.err.find("nurbsrt: warning: IGES has no assembly structure: 2 part instance(s)"),
+              std::string::npos)
+        << igs.err;
+    const CliRun stp = run_nurbsrt("convert " + in + " " + dir + "/cli-assembly.stp");
+    ASSERT_EQ(stp.status, 0) << stp.err;
+    EXPECT_EQ(stp.err.find("nurbsrt: warning"), std::string::npos) << stp.err;
 }
 
 // The mesh and JSON outputs by extension: each file starts as its format says,

@@ -148,6 +148,30 @@ def test_glb_keeps_assembly_names_and_colours(url):
     assert len({tuple(m["pbrMetallicRoughness"]["baseColorFactor"]) for m in gltf["materials"]}) > 1
 
 
+def convert_json(url, path, fmt):
+    r = requests.post(url + "/v1/conversions", data=path.read_bytes(), params={"format": fmt},
+                      headers={"Content-Type": "application/octet-stream", "Accept": "application/json"},
+                      timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    body = r.json()
+    validate(body, "ConversionResponse")
+    return body
+
+
+def test_step_and_iges_outputs_report_what_they_lose(url):
+    """STEP and IGES outputs go through XDE: a STEP copy of the AS1 assembly keeps
+    its colours, names and tree (no warnings); IGES has no assembly structure, and
+    the answer says so."""
+    if not ASSEMBLY.is_file():
+        pytest.skip(f"{ASSEMBLY} is absent")
+    assert convert_json(url, ASSEMBLY, "step")["warnings"] == []
+    warnings = convert_json(url, ASSEMBLY, "iges")["warnings"]
+    assert any(w.startswith("IGES has no assembly structure") for w in warnings), warnings
+    assert not any("colour" in w for w in warnings), warnings
+    # Mesh outputs have nothing of the kind to report.
+    assert convert_json(url, SCREW, "stl")["warnings"] == []
+
+
 @pytest.mark.parametrize("model", real_models())
 def test_nurbs_json(url, model):
     r = convert(url, model, "json")
