@@ -1,5 +1,5 @@
-// `nurbsrt bench`: the paper's Table 1 (Sisojevs & Glazs 2010, section 3) and the peers and
-// scaling figures, measured on this machine and returned as one JSON
+// `nurbsrt bench`: the paper's Table 1 (Sisojevs & Glazs 2010, section 3), the peers and
+// scaling figures and the cost of the image options (anti-aliasing, feature lines, shadows), measured on this machine and returned as one JSON
 // document; the Markdown report is generated from that same document.
 #pragma once
 
@@ -12,7 +12,7 @@ namespace nurbsrt::bench {
 
 // Sections, in the order they run and are reported.
 inline const std::vector<std::string> kSections = {"table1", "precision", "occt", "tessellation", "meshtracer",
-                                                   "scaling"};
+                                                   "scaling", "look"};
 
 struct BenchOptions {
     bool quick = false;          // small images, few runs, small budgets (a smoke run)

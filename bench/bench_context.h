@@ -116,6 +116,7 @@ void run_occt(BenchContext& ctx);
 void run_tessellation(BenchContext& ctx);
 void run_scaling(BenchContext& ctx);
 void run_mesh_tracer(BenchContext& ctx);
+void run_look(BenchContext& ctx);
 
 // The machine and build the figures come from.
 nlohmann::json machine_json();

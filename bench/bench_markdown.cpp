@@ -273,6 +273,45 @@ void scaling(std::string& o, const json& t) {
     o += "\n";
 }
 
+void look(std::string& o, const json& t) {
+    o += "## Image options: anti-aliasing + feature lines, shadows\n\n";
+    o += "Whole-frame times of one prepared scene and camera rendered three ways, interleaved and their order "
+         "rotated from run to run (at least " + std::to_string(n(t, "min_runs")) +
+         (d(t, "min_ms") > 0 ? " runs, more until each variant has " + num(d(t, "min_ms") / 1e3, 0) + " s of frames"
+                             : " runs") +
+         "), " + std::to_string(n(t, "width")) + "x" + std::to_string(n(t, "height")) + ", " +
+         std::to_string(n(t, "threads")) + " thread(s): `plain` (one ray per pixel), `aa_edges` (" +
+         std::to_string(n(t, "antialias_rays")) + " extra exact rays per edge pixel and feature lines), `shadows` "
+         "(the key light's map and Newton along light rays). Ratios to `plain` from the medians, in brackets from "
+         "the minima (interference from other work only adds time); targets: aa_edges <= " +
+         num(d(t, "target_aa_edges_over_plain"), 1) + "x, shadows <= " + num(d(t, "target_shadows_over_plain"), 1) +
+         "x.\n\n";
+    o += "| scene | runs | plain ms (min) | aa_edges ms (min) | shadows ms (min) | aa_edges / plain | shadows / plain "
+         "|\n|---|---:|---:|---:|---:|---:|---:|\n";
+    auto ratio = [](const json& r) {
+        return "**" + num(d(r, "median"), 2) + "x** (" + num(d(r, "min"), 2) + "x) " +
+               (r.value("meets_target", false) ? "ok" : "over " + num(d(r, "target"), 1) + "x");
+    };
+    for (const json& r : t["rows"]) {
+        o += "| " + s(r, "title") + " | " + std::to_string(n(r, "runs"));
+        for (const char* v : {"plain", "aa_edges", "shadows"})
+            o += " | " + ms(d(r[v], "frame_ms")) + " (" + ms(d(r[v], "frame_ms_min")) + ")";
+        o += " | " + ratio(r["aa_edges_over_plain"]) + " | " + ratio(r["shadows_over_plain"]) + " |\n";
+    }
+    o += "\nWhere the extra time goes: median stage times, ms (`shadow_map` draws the light's map; the light rays' "
+         "solves are part of `shade` and `antialias`).\n\n";
+    o += "| scene | variant | map | Newton | shade | antialias | edges | shadow_map | frame |\n"
+         "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& r : t["rows"])
+        for (const char* v : {"plain", "aa_edges", "shadows"}) {
+            const json& st = r[v]["stages_ms"];
+            o += "| " + s(r, "title") + " | " + v;
+            for (const char* k : {"map", "newton", "shade", "antialias", "edges", "shadow_map"}) o += " | " + ms(d(st, k));
+            o += " | " + ms(d(r[v], "frame_ms")) + " |\n";
+        }
+    o += "\n";
+}
+
 }  // namespace
 
 std::string bench_markdown(const json& doc) {
@@ -284,6 +323,7 @@ std::string bench_markdown(const json& doc) {
     if (doc.contains("tessellation")) tessellation(o, doc, doc["tessellation"]);
     if (doc.contains("meshtracer")) mesh_tracer(o, doc["meshtracer"]);
     if (doc.contains("scaling")) scaling(o, doc["scaling"]);
+    if (doc.contains("look")) look(o, doc["look"]);
     return o;
 }
 

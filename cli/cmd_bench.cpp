@@ -36,7 +36,8 @@ void add_bench_command(CLI::App& app) {
         "bench",
         "Benchmarks on this machine: the paper's Table 1 (proposed vs Martin et al. on the same\n"
         "preliminary map), map precision, OCCT's exact intersector and a BRepMesh tessellation as\n"
-        "peers, and scaling with resolution, patches and threads. Progress goes to stderr.\n"
+        "peers, scaling with resolution, patches and threads, and the frame-time cost of\n"
+        "anti-aliasing + feature lines and of shadows (`look`). Progress goes to stderr.\n"
         "Examples:\n"
         "  nurbsrt bench --json docs/bench.json --markdown docs/bench.md\n"
         "  nurbsrt bench --quick --json out.json\n"
@@ -56,7 +57,7 @@ void add_bench_command(CLI::App& app) {
         ->check(CLI::Range(1, 1024))->capture_default_str();
     cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")
         ->check(CLI::Range(16, 8192));
-    cmd->add_option("--only", *only, "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling");
+    cmd->add_option("--only", *only, "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling,look");
     cmd->add_flag("-q,--quiet", *quiet, "no progress on stderr");
 
     cmd->callback([o, json_path, md_path, only, quiet] {

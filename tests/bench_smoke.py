@@ -10,7 +10,7 @@ import subprocess
 import sys
 import tempfile
 
-SECTIONS = ["table1", "precision", "occt", "tessellation", "meshtracer", "scaling"]
+SECTIONS = ["table1", "precision", "occt", "tessellation", "meshtracer", "scaling", "look"]
 errors = []
 
 
@@ -188,8 +188,31 @@ def main():
         for f in ("threads_1.frame_ms", "threads_2.frame_ms", "frame_speedup", "newton_speedup"):
             positive(r, f, f"scaling threads {r['scene']}")
 
+    lk = doc["look"]
+    check([r["scene"] for r in lk["rows"]] == keys, "look: one row per scene")
+    for r in lk["rows"]:
+        w = f"look {r['scene']}"
+        for v in ("plain", "aa_edges", "shadows"):
+            positive(r, f"{v}.frame_ms", w)
+            positive(r, f"{v}.frame_ms_min", w)
+            check(len(r[v]["frame_ms_runs"]) == r["runs"] >= runs, f"{w}: {v} runs")
+            for st in ("map", "newton", "shade", "antialias", "edges", "shadow_map"):
+                nonneg(r, f"{v}.stages_ms.{st}", w)
+        # Each variant's own stages ran, and only those.
+        positive(r, "aa_edges.stages_ms.edges", w)
+        positive(r, "aa_edges.antialias_rays", w)
+        positive(r, "shadows.stages_ms.shadow_map", w)
+        positive(r, "shadows.shadow_rays", w)
+        check(r["plain"]["antialias_rays"] == 0 and r["plain"]["shadow_rays"] == 0, f"{w}: plain traced extra rays")
+        for ratio in ("aa_edges_over_plain", "shadows_over_plain"):
+            for f in ("median", "min", "pair_median", "target"):
+                positive(r, f"{ratio}.{f}", w)
+            check(isinstance(get(r, f"{ratio}.meets_target"), bool), f"{w}: {ratio}.meets_target")
+        check(abs(r["aa_edges_over_plain"]["median"] - r["aa_edges"]["frame_ms"] / r["plain"]["frame_ms"]) < 1e-9 *
+              r["aa_edges_over_plain"]["median"] + 1e-12, f"{w}: aa_edges/plain is the ratio of the medians")
+
     for heading in ("## Table 1", "## Map precision", "## Exact peer", "## Tessellating peer",
-                    "## Frame vs mesh tracer", "## Scaling"):
+                    "## Frame vs mesh tracer", "## Scaling", "## Image options"):
         check(heading in report, f"Markdown report lacks '{heading}'")
     for k in keys:
         check(k in report, f"Markdown report lacks scene {k}")

@@ -1,7 +1,8 @@
 // The page: a file in, the exact render out, then orbit/pan/zoom (previews at
 // a quarter of the size while the pointer moves, the full size when it stops),
-// AOV views, stage times, the method comparison, jobs and conversions. Only
-// the public REST API is used (api.js).
+// the image options (anti-aliasing, feature lines, shadows), AOV views, stage
+// times, the method comparison, jobs and conversions. Only the public REST API
+// is used (api.js).
 
 import { apiKey, setApiKey, render, base64Bytes } from './api.js';
 import { Camera } from './camera.js';
@@ -13,6 +14,8 @@ import { bindJobs, bindConversions } from './jobs.js';
 
 const $ = (id) => document.getElementById(id);
 const PREVIEW_DIVISOR = 4;
+// The service's range of edge_width, px (api_schema/openapi.json).
+const EDGE_WIDTH_MIN = 0.25, EDGE_WIDTH_MAX = 16;
 const canvas = $('view');
 const state = { file: null, camera: null, view: 'iso', frame: null, dirty: false };
 
@@ -41,14 +44,49 @@ function fullSize() {
   return { width, height };
 }
 
+// The colour picker's value is sRGB-encoded; the renderer's colours are linear
+// (it sRGB-encodes its PNG), so the line shows the colour picked: the inverse of
+// the IEC 61966-2-1 transfer function.
+function linearRgb(hex) {
+  return [1, 3, 5].map((i) => {
+    const c = parseInt(hex.slice(i, i + 2), 16) / 255;
+    return (c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4).toFixed(4);
+  }).join(',');
+}
+
+// The look of a full-size frame: anti-aliasing, feature lines and shadows.
+function lookOptions() {
+  const o = { antialias: Number($('antialias').value), edges: $('edges').checked, shadows: $('shadows').checked };
+  if (o.edges) {
+    o.edge_color = linearRgb($('edge-color').value);
+    const w = Number($('edge-width').value);
+    o.edge_width = Math.min(EDGE_WIDTH_MAX, Math.max(EDGE_WIDTH_MIN, Number.isFinite(w) && w > 0 ? w : 1));
+  }
+  return o;
+}
+
+// A drag-time preview is a quarter-size frame scaled up: anti-aliasing would be
+// blurred away by the scaling, and shadows cost a second map and a solve per
+// pixel (about a second frame), so previews go without both and orbiting stays
+// fluid; the full-size frame on release has them. Feature lines cost one image
+// pass and are much of the look, so previews keep them, a quarter as wide so
+// that the scaled-up preview shows them as wide as the final frame will.
+function previewLook(look) {
+  const o = { ...look, antialias: 0, shadows: false };
+  if (o.edges) o.edge_width = Math.max(EDGE_WIDTH_MIN, o.edge_width / PREVIEW_DIVISOR);
+  return o;
+}
+
 function imageOptions() {
-  return { method: $('method').value, map_precision: $('map-precision').value, background: $('background').value };
+  return { method: $('method').value, map_precision: $('map-precision').value, background: $('background').value,
+    ...lookOptions() };
 }
 
 function requestOptions(job) {
   const { width, height } = fullSize();
   const d = job.final ? 1 : PREVIEW_DIVISOR;
-  const o = { ...imageOptions(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
+  const image = job.final ? imageOptions() : previewLook(imageOptions());
+  const o = { ...image, ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
   else o.view = job.view;
   if (job.aovs) o.aovs = aovsFor($('look').value);
@@ -196,7 +234,16 @@ for (const b of document.querySelectorAll('button.view')) {
     renderFinal({ view: state.view });
   });
 }
-for (const id of ['resolution', 'method', 'map-precision', 'background']) $(id).addEventListener('change', () => renderFinal());
+for (const id of ['resolution', 'method', 'map-precision', 'background', 'antialias', 'shadows'])
+  $(id).addEventListener('change', () => renderFinal());
+// The line colour and width only matter with the lines on: disabled without them.
+const syncLineControls = () => { for (const id of ['edge-color', 'edge-width']) $(id).disabled = !$('edges').checked; };
+syncLineControls();  // a reload may restore the checkbox's state
+$('edges').addEventListener('change', () => {
+  syncLineControls();
+  renderFinal();
+});
+for (const id of ['edge-color', 'edge-width']) $(id).addEventListener('change', () => { if ($('edges').checked) renderFinal(); });
 $('look').addEventListener('change', () => {
   const look = $('look').value, aov = state.frame?.aov;
   if (state.frame && look !== 'shaded' && (!aov || (look === 'normal' && !aov.normal))) renderFinal();

@@ -1,5 +1,6 @@
-// "Where the time goes": the stage-time bar of a render's statistics and the
-// iteration histograms of the method comparison.
+// "Where the time goes": the stage-time bar of a render's statistics (with the
+// image options' stages, anti-aliasing, feature lines and the shadow map, when
+// they ran) and the iteration histograms of the method comparison.
 
 const STAGES = [
   ['queue', 'queue', '#b0b7c3'],
@@ -9,7 +10,10 @@ const STAGES = [
   ['prepare', 'prepare', '#5a8f47'],
   ['preliminary_map', 'preliminary map', '#d6b656'],
   ['newton', 'Newton', '#d0542e'],
+  ['shadow_map', 'shadow map', '#8c6d3f'],
   ['shade', 'shading', '#9673a6'],
+  ['antialias', 'anti-aliasing', '#c27ba0'],
+  ['edges', 'feature lines', '#3d3d3d'],
   ['encode', 'encoding', '#7aa6a6'],
 ];
 
@@ -42,6 +46,12 @@ export function showStages(bar, list, statistics) {
     swatch.style.background = p.colour;
     list.append(el('li', {}, swatch, `${p.label} ${fmt(p.ms)} ms`));
   }
+  const aa = statistics.antialias, sh = statistics.shadows;
+  if (aa && aa.rays_per_edge_pixel > 0)
+    list.append(el('li', { className: 'look-antialias' }, `anti-aliasing: ${aa.rays} rays over ${aa.pixels} edge pixels`));
+  if (sh && sh.enabled)
+    list.append(el('li', { className: 'look-shadows' },
+      `shadows: ${sh.shadowed_pixels} of ${statistics.pixels_hit} hit pixels in shadow (light map ${sh.map_size}², ${sh.rays} light rays)`));
   list.append(el('li', {}, `total ${fmt(total)} ms (${statistics.cache === 'hit' ? 'cached scene' : 'imported'})`));
   bar.setAttribute('aria-label', `Stage times of the last render, total ${fmt(total)} ms`);
 }

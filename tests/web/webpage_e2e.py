@@ -246,6 +246,102 @@ def step_compare(page):
     assert bars > 0, "no iteration histogram"
 
 
+def render_exchanges(page, since):
+    """(options sent or None, statistics answered) of each POST /v1/renders since `since` that finished."""
+    sent, out = {}, []
+    for e in page.b.events:
+        if e["time"] < since:
+            continue
+        m, p = e["method"], e.get("params", {})
+        if m == "Network.requestWillBeSent" and p["request"]["url"].endswith(RENDERS):
+            sent[p["requestId"]] = p
+        elif m == "Network.loadingFinished" and p["requestId"] in sent:
+            rid = p["requestId"]
+            body = page.b.call("Network.getResponseBody", requestId=rid)
+            stats = json.loads(body["body"])["statistics"]
+            options = None
+            try:  # the multipart body, where Chromium keeps it (the options part is an in-memory blob)
+                data = page.b.call("Network.getRequestPostData", requestId=rid)["postData"]
+                start = data.find('{"')
+                options = json.JSONDecoder().raw_decode(data[start:])[0] if start >= 0 else None
+            except (RuntimeError, ValueError):
+                pass
+            out.append((options, stats))
+    return out
+
+
+def click(page, element_id):
+    page.ev(f"document.getElementById('{element_id}').click()")
+
+
+def step_image_options(page):
+    """Shadows, then feature lines on: each re-renders, the answer's statistics say the stage ran, and the
+    image changes; a drag with both on sends previews without anti-aliasing and shadows and a final with them."""
+    page.set_select("look", "shaded")
+    page.scroll_to("shadows")
+    page.set_select("antialias", "4")
+    px0 = page.ev(PIXELS_JS)
+    since, before = time.monotonic(), page.frames()
+    click(page, "shadows")
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    px1 = page.ev(PIXELS_JS)
+    options, stats = render_exchanges(page, since)[-1]
+    sh = stats["shadows"]
+    log(f"shadows on: {sh['shadowed_pixels']} of {stats['pixels_hit']} hit pixels shadowed, light map {sh['map_size']}, "
+        f"shadow_map {stats['timings_ms']['shadow_map']:.1f} ms; options sent: {options}")
+    assert sh["enabled"] and sh["map_size"] > 0 and sh["rays"] > 0, f"statistics.shadows: {sh}"
+    assert options is None or options.get("shadows") is True, f"the page sent {options}"
+    assert px1["sum"] != px0["sum"], "the image did not change with shadows on"
+    stages = page.ev("[...document.querySelectorAll('#stages > div')].map(d => d.dataset.stage)")
+    assert "shadow_map" in stages and "antialias" in stages, f"stage bar with shadows and anti-aliasing: {stages}"
+    assert page.ev("!!document.querySelector('#stage-list .look-shadows')"), "the stage list does not report shadows"
+
+    assert page.ev("document.getElementById('edge-width').disabled"), "line width enabled with the lines off"
+    since, before = time.monotonic(), page.frames()
+    click(page, "edges")
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    px2 = page.ev(PIXELS_JS)
+    options, stats = render_exchanges(page, since)[-1]
+    log(f"feature lines on: edges {stats['timings_ms']['edges']:.1f} ms, antialias "
+        f"{stats['antialias']['rays']} rays over {stats['antialias']['pixels']} pixels; options sent: {options}")
+    assert stats["timings_ms"]["edges"] > 0, "no edges stage in the answer's timings"
+    assert stats["shadows"]["enabled"] and stats["antialias"]["rays_per_edge_pixel"] == 4, stats["antialias"]
+    assert options is None or (options.get("edges") is True and options.get("shadows") is True), options
+    assert px2["sum"] != px1["sum"], "the image did not change with feature lines on"
+    assert not page.ev("document.getElementById('edge-width').disabled"), "line width disabled with the lines on"
+    stages = page.ev("[...document.querySelectorAll('#stages > div')].map(d => d.dataset.stage)")
+    assert "edges" in stages, f"stage bar with feature lines: {stages}"
+
+    # Orbiting with both on: quarter-size previews skip anti-aliasing and shadows, the release frame has them.
+    since, before = time.monotonic(), page.frames()
+    drag(page, 80, 12, 0.03)
+    page.wait_final_after(before)
+    page.b.pump(0.3)
+    exchanges = render_exchanges(page, since)
+    previews = [(o, s) for o, s in exchanges if s["width"] < 800]
+    finals = [(o, s) for o, s in exchanges if s["width"] == 800]
+    log(f"drag with shadows and lines: {len(previews)} previews answered, {len(finals)} full-size; previews "
+        f"shadows {sorted({s['shadows']['enabled'] for _, s in previews})}, anti-aliasing "
+        f"{sorted({s['antialias']['rays_per_edge_pixel'] for _, s in previews})}")
+    assert previews and finals, f"{len(previews)} previews, {len(finals)} full-size frames"
+    for o, s in previews:
+        assert not s["shadows"]["enabled"] and s["antialias"]["rays_per_edge_pixel"] == 0, "a preview paid for the look"
+        assert s["timings_ms"]["edges"] > 0, "a preview without its feature lines"
+    o, s = finals[-1]
+    assert s["shadows"]["enabled"] and s["antialias"]["rays_per_edge_pixel"] == 4 and s["timings_ms"]["edges"] > 0, \
+        "the release frame lacks anti-aliasing, shadows or lines"
+
+    # Off again, so that the later steps time the plain frame as before.
+    before = page.frames()
+    click(page, "shadows")
+    page.wait_final_after(before)
+    before = page.frames()
+    click(page, "edges")
+    page.wait_final_after(before)
+
+
 def step_job(page, files, downloads):
     try:
         page.b.call("Browser.setDownloadBehavior", behavior="allow", downloadPath=str(downloads))
@@ -286,7 +382,7 @@ def step_conversion(page):
 def step_accessibility(page):
     nodes = page.b.call("Accessibility.getFullAXTree")["nodes"]
     controls = {"button", "checkbox", "combobox", "textbox", "spinbutton", "slider", "radio", "link", "searchbox",
-                "listbox", "switch", "menuitem"}
+                "listbox", "switch", "menuitem", "ColorWell"}
     nameless, seen = [], 0
     for n in nodes:
         role = n.get("role", {}).get("value")
@@ -298,6 +394,18 @@ def step_accessibility(page):
     log(f"accessibility: {seen} controls, {len(nameless)} without a name")
     assert seen >= 20, f"only {seen} controls in the accessibility tree"
     assert not nameless, f"controls without an accessible name: {nameless}"
+    # The image options by name and role, as a screen reader announces them.
+    root = page.b.call("DOM.getDocument")["root"]["nodeId"]
+    wanted_names = {"antialias": ("combobox", "Anti-aliasing"), "edges": ("checkbox", "Feature lines"),
+                    "edge-color": (None, "Line colour"), "edge-width": ("spinbutton", "Line width (px)"),
+                    "shadows": ("checkbox", "Shadows")}
+    for element_id, (role, name) in wanted_names.items():
+        node = page.b.call("DOM.querySelector", nodeId=root, selector=f"#{element_id}")["nodeId"]
+        ax = page.b.call("Accessibility.getPartialAXTree", nodeId=node, fetchRelatives=False)["nodes"][0]
+        got_role, got_name = ax.get("role", {}).get("value"), str(ax.get("name", {}).get("value", "")).strip()
+        assert not ax.get("ignored") and got_name.startswith(name) and (role is None or got_role == role), \
+            f"#{element_id}: role {got_role}, name {got_name!r} (want {role} {name!r})"
+    log(f"accessibility: image options named: {', '.join(n for _, n in wanted_names.values())}")
     # Tab order follows the page: key, file, views, options, image, ..., compare.
     page.ev("document.getElementById('api-key').focus()")
     order = []
@@ -378,6 +486,7 @@ def main():
         px = page.ev(PIXELS_JS)
         current = "look inside"; step_look_inside(page, px)
         current = "compare"; step_compare(page)
+        current = "image options"; step_image_options(page)
         if SCREENSHOT:
             before = page.frames()
             page.set_select("look", "face")  # the Iso frame has no AOVs yet: fetched now
