@@ -38,7 +38,7 @@ Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed) 
     Color col = f.color;
     if (!f.has_color && f.body < scene_.bodies.size() && scene_.bodies[f.body].has_color)
         col = scene_.bodies[f.body].color;
-    const bool blocked = shadows_ && shadows_->blocked(ray.origin + h.t * ray.dir, n);
+    const bool blocked = shadows_ && shadows_->blocked(ray.origin + h.t * ray.dir, n, h.face, h.u, h.v);
     if (shadowed) *shadowed = blocked;
     const double key = blocked ? 0.0 : std::max(0.0, dot(n, rig_.key));
     const double ambient = kAmbientGround + (kAmbientSky - kAmbientGround) * 0.5 * (1 + dot(n, rig_.sky));

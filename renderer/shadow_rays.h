@@ -34,16 +34,18 @@ public:
     // The solves use the view's method and tolerances.
     KeyLightShadows(const FrameContext& view, const Solver& view_solver, Vec3 key);
 
-    // Whether a face blocks the key light at surface point p with shading
-    // normal n. False where the point faces away from the light: the shading
-    // gives it no key light anyway.
-    bool blocked(Vec3 p, Vec3 n) const;
+    // Whether a face blocks the key light at surface point p, at (u, v) of
+    // face `face`, with shading normal n. False where the point faces away from
+    // the light: the shading gives it no key light anyway.
+    bool blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v) const;
 
     uint64_t rays() const { return rays_.load(std::memory_order_relaxed); }  // Newton solves so far
     int map_size() const { return size_; }
 
 private:
     static CameraSpec light_view(const Scene& scene, Vec3 key, int size);
+    // Whether the map's pixel (ci, cj) shows face `face` at (u, v) itself (see the .cpp).
+    bool own_face_first(int ci, int cj, uint32_t face, double u, double v) const;
     Vec3 key_;
     int size_;
     Camera camera_;
