@@ -30,6 +30,10 @@ constexpr double kMinCosine = 0.01;
 // interpolated (u, v) is off by the mesh's deflection, well under a pixel. A
 // part of the face folded in front of the point has its (u, v) far away.
 constexpr double kOwnReachPixels = 1.5;
+// Within a 3x3 of one smooth part of a face, pixel steps in (u, v) differ by the
+// perspective and the parametrization's stretch over 3 pixels: a few percent to
+// a factor ~2 on a strongly non-uniform B-spline. Beyond 4x it is two parts.
+constexpr double kMaxStepSpread = 4;
 // The 3x3 around a pixel, the centre first, then the 4-neighbours, then the corners.
 constexpr int kFirstRing = 9;
 constexpr int kRingOrder[kFirstRing][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
@@ -81,7 +85,7 @@ KeyLightShadows::KeyLightShadows(const FrameContext& view, const Solver& view_so
 bool KeyLightShadows::own_face_first(int ci, int cj, uint32_t face, double u, double v) const {
     // The (u, v) step of one map pixel on this face here: the largest difference
     // between 4-adjacent pixels of the 3x3 that both show the face.
-    double du = 0, dv = 0;
+    double du = 0, dv = 0, step_lo = HUGE_VAL, step_hi = 0;
     int pairs = 0;
     for (int dj = -1; dj <= 1; ++dj)
         for (int di = -1; di <= 1; ++di) {
@@ -92,12 +96,17 @@ bool KeyLightShadows::own_face_first(int ci, int cj, uint32_t face, double u, do
                 if (ni > ci + 1 || nj > cj + 1 || !ctx_.in_frame(ni, nj) || map_.face[map_.index(ni, nj)] != face)
                     continue;
                 const size_t m = map_.index(ni, nj);
-                du = std::max(du, static_cast<double>(std::fabs(map_.u[m] - map_.u[k])));
-                dv = std::max(dv, static_cast<double>(std::fabs(map_.v[m] - map_.v[k])));
+                const double pu = std::fabs(map_.u[m] - map_.u[k]), pv = std::fabs(map_.v[m] - map_.v[k]);
+                du = std::max(du, pu);
+                dv = std::max(dv, pv);
+                step_lo = std::min(step_lo, pu + pv);
+                step_hi = std::max(step_hi, pu + pv);
                 ++pairs;
             }
         }
-    if (!pairs || !ctx_.in_frame(ci, cj)) return false;
+    // Steps that differ much mean two parts of the face (a fold seen from the
+    // light, or a seam) meet in the 3x3: no telling which part the centre shows.
+    if (!pairs || !ctx_.in_frame(ci, cj) || step_hi > kMaxStepSpread * step_lo) return false;
     const size_t c = map_.index(ci, cj);
     return map_.face[c] == face && std::fabs(map_.u[c] - u) <= kOwnReachPixels * du &&
            std::fabs(map_.v[c] - v) <= kOwnReachPixels * dv;

@@ -1,7 +1,5 @@
 #include "server/etag.h"
 
-#include <openssl/evp.h>
-
 #include <algorithm>
 #include <fstream>
 #include <memory>
@@ -9,6 +7,7 @@
 
 #include "renderer/error.h"
 #include "server/file_store.h"
+#include "server/sha256.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -33,27 +32,18 @@ std::string opaque_tag(std::string tag) {
 std::string file_etag(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(ErrorCode::io, "cannot read " + path);
-    const std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-    if (!ctx || EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) != 1)
-        throw Error(ErrorCode::internal, "SHA-256 is not available");
+    Sha256 h;
     std::vector<char> buf(kHashChunkBytes);
     while (in) {
         in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-        const auto n = in.gcount();
-        if (n > 0 && EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<size_t>(n)) != 1)
-            throw Error(ErrorCode::internal, "SHA-256 failed");
+        h.update(buf.data(), static_cast<size_t>(in.gcount()));
     }
     if (in.bad()) throw Error(ErrorCode::io, "cannot read " + path);
-    unsigned char digest[EVP_MAX_MD_SIZE];
-    unsigned len = 0;
-    if (EVP_DigestFinal_ex(ctx.get(), digest, &len) != 1) throw Error(ErrorCode::internal, "SHA-256 failed");
-    static const char* hex = "0123456789abcdef";
+    // Built by appends: GCC 12 warns falsely (-Wrestrict) on "\"" + std::string&&.
     std::string tag = "\"";
-    for (unsigned i = 0; i < len; ++i) {
-        tag += hex[digest[i] >> 4];
-        tag += hex[digest[i] & 15];
-    }
-    return tag + "\"";
+    tag += h.hex();
+    tag += '"';
+    return tag;
 }
 
 std::string render_etag(const std::string& file_sha256, const std::string& options_json) {

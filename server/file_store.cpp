@@ -1,9 +1,5 @@
 #include "server/file_store.h"
 
-#include <fcntl.h>
-#include <openssl/evp.h>
-#include <unistd.h>
-
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -14,6 +10,7 @@
 #include <iterator>
 
 #include "renderer/error.h"
+#include "server/durable_file.h"
 #include "server/request_log.h"
 
 namespace nurbsrt::server {
@@ -36,28 +33,20 @@ constexpr auto kLeftoverAge = std::chrono::hours(1);
 // flushed so the new name survives a power loss too.
 void write_atomically(const std::string& dir, const std::string& path, const std::string& bytes) {
     const std::string tmp = dir + "/" + kTempPrefix + new_request_id();
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-    if (fd < 0) throw Error(ErrorCode::io, "cannot create a stored file");
-    size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;
-        done += static_cast<size_t>(n);
-    }
-    const bool ok = done == bytes.size() && ::fsync(fd) == 0;
-    ::close(fd);
-    std::error_code ec;
-    if (ok) fs::rename(tmp, path, ec);
-    if (!ok || ec) {
+    try {
+        write_durably(tmp, bytes);
+    } catch (const Error&) {
+        std::error_code ec;
         fs::remove(tmp, ec);
         throw Error(ErrorCode::io, "cannot write a stored file (disk full?)");
     }
-    const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-        ::fsync(dfd);
-        ::close(dfd);
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw Error(ErrorCode::io, "cannot write a stored file (disk full?)");
     }
+    sync_dir(dir);
 }
 
 json record_json(const StoredFile& f) {
@@ -113,20 +102,6 @@ std::pair<int64_t, std::string> parse_cursor(const std::string& c, bool newest_f
 }
 
 }  // namespace
-
-std::string sha256_hex(const std::string& bytes) {
-    unsigned char digest[EVP_MAX_MD_SIZE];
-    unsigned int len = 0;
-    if (EVP_Digest(bytes.data(), bytes.size(), digest, &len, EVP_sha256(), nullptr) != 1)
-        throw Error(ErrorCode::internal, "SHA-256 failed");
-    static const char* hex = "0123456789abcdef";
-    std::string out;
-    for (unsigned i = 0; i < len; ++i) {
-        out += hex[digest[i] >> 4];
-        out += hex[digest[i] & 15];
-    }
-    return out;
-}
 
 bool FileStore::valid_id(const std::string& id) {
     constexpr size_t kSha256HexDigits = 64;

@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "server/sha256.h"
+
 namespace nurbsrt::server {
 
 struct StoredFile {
@@ -48,8 +50,6 @@ struct FilePage {
     std::optional<std::string> next_cursor;  // opaque; set when more may follow
 };
 
-// SHA-256 of `bytes` in lowercase hex.
-std::string sha256_hex(const std::string& bytes);
 
 class FileStore {
 public:

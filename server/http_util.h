@@ -42,6 +42,21 @@ void send_problem_with_status(httplib::Response& res, int status, ErrorCode code
 // path of an upload, which is none of the client's business.
 std::string without_service_paths(const std::string& message, const ServerContext& ctx);
 
+// A route handler f(ctx, req, res) whose Error becomes the problem+json answer
+// of its code (the service's own paths cut out of the message). Ctx is
+// ServerContext (a template parameter so that this header needs only its
+// declaration).
+template <typename Ctx, typename F>
+httplib::Server::Handler guarded(Ctx& ctx, F f) {
+    return [&ctx, f](const httplib::Request& req, httplib::Response& res) {
+        try {
+            f(ctx, req, res);
+        } catch (const Error& e) {
+            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
+        }
+    };
+}
+
 // The content type of JSON answers that carry megabytes of base64 (images,
 // AOVs, converted files). cpp-httplib 0.11 compresses every body of the exact
 // type "application/json" for a client that accepts it, with Brotli at that

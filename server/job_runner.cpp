@@ -18,6 +18,7 @@
 #include "importer/isolated.h"
 #include "renderer/error.h"
 #include "server/context.h"
+#include "server/durable_file.h"
 #include "server/job_spec.h"
 #include "server/redact.h"
 #include "server/render_options.h"
@@ -40,32 +41,6 @@ int64_t now_ms() {
         .count();
 }
 
-// Writes the file and flushes it to the disk before returning: an accepted
-// job's inputs (and a finished output's artifact) must outlive a power loss
-// as its database row does. The file name is never the job's own path.
-void write_file(const std::string& path, const std::string& bytes) {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-    if (fd < 0) throw Error(ErrorCode::io, "cannot create " + fs::path(path).filename().string());
-    size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;
-        done += static_cast<size_t>(n);
-    }
-    const bool ok = done == bytes.size() && ::fsync(fd) == 0;
-    ::close(fd);
-    if (!ok) throw Error(ErrorCode::io, "cannot write " + fs::path(path).filename().string());
-}
-
-void sync_dir(const std::string& dir) {
-    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd >= 0) {
-        ::fsync(fd);
-        ::close(fd);
-    }
-}
-
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
 
 // An error message for the client: the service's own paths (the job and
@@ -86,7 +61,7 @@ JobService::JobService(ServerContext& ctx)
     // Inputs and artifacts go there: find out now, not at the first job.
     try {
         const std::string probe = jobs_dir_ + "/.write-test-" + new_request_id();
-        write_file(probe, "x");
+        write_durably(probe, "x");
         fs::remove(probe, ec);
     } catch (const Error&) {
         throw Error(ErrorCode::io, "the job directory " + jobs_dir_ + " is not writable");
@@ -174,7 +149,7 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
     try {
         fs::create_directory(dir);
         for (size_t i = 0; i < input_bytes.size(); ++i)
-            write_file(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+            write_durably(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
         sync_dir(dir);
         sync_dir(jobs_dir_);
         store_->create(job);
@@ -442,7 +417,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
             }
         };
         const RenderedImage image = render_upload(ctx_, read_file_bytes(input), r, control);
-        write_file(partial, image.bytes);
+        write_durably(partial, image.bytes);
         result = nlohmann::json::parse(image.stats_json);
     } else {
         ConvertReport report;

@@ -264,16 +264,6 @@ void handle_artifact(ServerContext& ctx, const httplib::Request& req, httplib::R
     throw Error(ErrorCode::not_found, "no such artifact");
 }
 
-template <typename F>
-httplib::Server::Handler guarded(ServerContext& ctx, F f) {
-    return [&ctx, f](const httplib::Request& req, httplib::Response& res) {
-        try {
-            f(ctx, req, res);
-        } catch (const Error& e) {
-            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
-        }
-    };
-}
 
 }  // namespace
 

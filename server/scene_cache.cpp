@@ -1,32 +1,19 @@
 #include "server/scene_cache.h"
 
-#include <openssl/evp.h>
-
 #include "importer/isolated.h"
 #include "renderer/error.h"
+#include "server/sha256.h"
 
 namespace nurbsrt::server {
 
 std::string scene_cache_key(const std::string& bytes, const ImportOptions& options) {
     std::string opts;
     for (const std::string& a : import_options_to_args(options)) opts += a + '\n';
-    EVP_MD_CTX* ctx = EVP_MD_CTX_new();
-    unsigned char digest[EVP_MAX_MD_SIZE];
-    unsigned int len = 0;
-    const bool ok = ctx && EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr) == 1 &&
-                    EVP_DigestUpdate(ctx, bytes.data(), bytes.size()) == 1 &&
-                    EVP_DigestUpdate(ctx, "\0options\n", 9) == 1 &&
-                    EVP_DigestUpdate(ctx, opts.data(), opts.size()) == 1 &&
-                    EVP_DigestFinal_ex(ctx, digest, &len) == 1;
-    EVP_MD_CTX_free(ctx);
-    if (!ok) throw Error(ErrorCode::internal, "SHA-256 failed");
-    static const char* hex = "0123456789abcdef";
-    std::string out;
-    for (unsigned i = 0; i < len; ++i) {
-        out += hex[digest[i] >> 4];
-        out += hex[digest[i] & 15];
-    }
-    return out;
+    Sha256 h;
+    h.update(bytes);
+    h.update("\0options\n", 9);
+    h.update(opts);
+    return h.hex();
 }
 
 size_t scene_memory_bytes(const Scene& s) {
