@@ -128,7 +128,6 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     shade_pass(ctx, shader, buf, res.image);
     st.shade_ms = ms_since(t0);
     if (shadows) {
-        st.shadow_rays = shadows->rays();
         st.shadowed_pixels = static_cast<uint64_t>(std::count(res.image.shadow.begin(), res.image.shadow.end(), 1));
     }
     t0 = Clock::now();
@@ -137,7 +136,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     t0 = Clock::now();
     edges_pass(ctx, buf, res.image);
     st.edges_ms = ms_since(t0);
-    if (shadows) st.shadow_rays = shadows->rays();  // with the anti-aliasing samples'
+    if (shadows) st.shadow_rays = shadows->rays();  // the pixel centres' and the anti-aliasing samples'
 
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.map_triangles = prepared.map_mesh().triangles();

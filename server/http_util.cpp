@@ -65,6 +65,28 @@ bool wants_json(const httplib::Request& req) {
     return lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
 }
 
+PageQuery parse_page_query(const httplib::Request& req, std::initializer_list<const char*> extra) {
+    for (const auto& [k, v] : req.params) {
+        bool known = k == "limit" || k == "order" || k == "cursor";
+        for (const char* e : extra) known = known || k == e;
+        if (!known) throw Error(ErrorCode::invalid_argument, "unknown query parameter '" + k.substr(0, 64) + "'");
+    }
+    PageQuery q;
+    if (req.has_param("limit")) {
+        const std::string v = req.get_param_value("limit");
+        char* end = nullptr;
+        const long n = std::strtol(v.c_str(), &end, 10);
+        if (v.empty() || *end || n < 1 || n > 100)
+            throw Error(ErrorCode::invalid_argument, "'limit' must be an integer in 1..100");
+        q.limit = static_cast<int>(n);
+    }
+    const std::string order = req.has_param("order") ? req.get_param_value("order") : "newest";
+    if (order != "newest" && order != "oldest")
+        throw Error(ErrorCode::invalid_argument, "'order' must be newest or oldest");
+    q.newest = order == "newest";
+    return q;
+}
+
 std::string without_service_paths(const std::string& message, const ServerContext& ctx) {
     std::string data = ctx.config.data_dir;
     while (data.size() > 1 && data.back() == '/') data.pop_back();

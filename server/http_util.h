@@ -5,6 +5,7 @@
 
 #include <httplib.h>
 
+#include <initializer_list>
 #include <map>
 #include <string>
 
@@ -41,6 +42,16 @@ void send_problem_with_status(httplib::Response& res, int status, ErrorCode code
 // dir): an error from a child process or the file system may name the private
 // path of an upload, which is none of the client's business.
 std::string without_service_paths(const std::string& message, const ServerContext& ctx);
+
+// The paging parameters of a list route (GET /v1/jobs, /v1/files): `limit`
+// (1..100, default 20) and `order` (newest, the default, or oldest); `cursor`
+// and the names in `extra` are allowed and left to the route, any other
+// parameter is refused. Throws Error(invalid_argument) naming the parameter.
+struct PageQuery {
+    int limit = 20;
+    bool newest = true;
+};
+PageQuery parse_page_query(const httplib::Request& req, std::initializer_list<const char*> extra);
 
 // A route handler f(ctx, req, res) whose Error becomes the problem+json answer
 // of its code (the service's own paths cut out of the message). Ctx is

@@ -194,24 +194,10 @@ void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Res
 }
 
 void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
-    for (const auto& [k, v] : req.params)
-        if (k != "limit" && k != "order" && k != "cursor")
-            throw Error(ErrorCode::invalid_argument, "unknown query parameter '" + k.substr(0, 64) + "'");
-    int limit = 20;
-    if (req.has_param("limit")) {
-        const std::string v = req.get_param_value("limit");
-        char* end = nullptr;
-        const long n = std::strtol(v.c_str(), &end, 10);
-        if (v.empty() || *end || n < 1 || n > 100)
-            throw Error(ErrorCode::invalid_argument, "'limit' must be an integer in 1..100");
-        limit = static_cast<int>(n);
-    }
-    const std::string order = req.has_param("order") ? req.get_param_value("order") : "newest";
-    if (order != "newest" && order != "oldest")
-        throw Error(ErrorCode::invalid_argument, "'order' must be newest or oldest");
+    const PageQuery q = parse_page_query(req, {});
     std::optional<std::string> cursor;
     if (req.has_param("cursor")) cursor = req.get_param_value("cursor");
-    const FilePage page = ctx.files.list(order == "newest", limit, cursor);
+    const FilePage page = ctx.files.list(q.newest, q.limit, cursor);
     json list = json::array();
     for (const StoredFile& f : page.files) list.push_back(file_json(ctx, f));
     send_json(res, {{"files", list},

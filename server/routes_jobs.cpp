@@ -151,22 +151,9 @@ int64_t parse_cursor(const std::string& c, bool newest_first) {
 }
 
 void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
-    for (const auto& [k, v] : req.params)
-        if (k != "limit" && k != "order" && k != "state" && k != "cursor")
-            throw Error(ErrorCode::invalid_argument, "unknown query parameter '" + k.substr(0, 64) + "'");
-    int limit = 20;
-    if (req.has_param("limit")) {
-        const std::string v = req.get_param_value("limit");
-        char* end = nullptr;
-        const long n = std::strtol(v.c_str(), &end, 10);
-        if (v.empty() || *end || n < 1 || n > 100)
-            throw Error(ErrorCode::invalid_argument, "'limit' must be an integer in 1..100");
-        limit = static_cast<int>(n);
-    }
-    const std::string order = req.has_param("order") ? req.get_param_value("order") : "newest";
-    if (order != "newest" && order != "oldest")
-        throw Error(ErrorCode::invalid_argument, "'order' must be newest or oldest");
-    const bool newest = order == "newest";
+    const PageQuery q = parse_page_query(req, {"state"});
+    const int limit = q.limit;
+    const bool newest = q.newest;
     std::optional<std::string> state;
     if (req.has_param("state")) {
         state = req.get_param_value("state");
