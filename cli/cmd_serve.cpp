@@ -129,11 +129,27 @@ void add_serve_command(CLI::App& app) {
     cmd->add_option("--instance-id", c->instance_id,
                     "this instance's name in leases, logs and metrics (default: host name + random suffix)")
         ->envname("NURBSRT_INSTANCE_ID");
+    cmd->add_option("--webhook-secret-file", c->webhook_secret_file,
+                    "the key that signs job callbacks (HMAC-SHA256, X-Nurbsrt-Signature), read from this\n"
+                    "file; or give it in NURBSRT_WEBHOOK_SECRET. None: jobs naming a callback_url are refused")
+        ->envname("NURBSRT_WEBHOOK_SECRET_FILE");
+    cmd->add_flag("--webhook-allow-private", c->webhook_allow_private,
+                  "let callbacks reach loopback, private and link-local addresses (refused by default:\n"
+                  "an upload must not make the service call into the network it runs in)")
+        ->envname("NURBSRT_WEBHOOK_ALLOW_PRIVATE");
+    cmd->add_option("--webhook-attempts", c->webhook_attempts, "attempts per job callback before it is given up")
+        ->envname("NURBSRT_WEBHOOK_ATTEMPTS")->check(CLI::Range(1, 100))->capture_default_str();
+    cmd->add_option("--webhook-backoff", c->webhook_backoff_s,
+                    "seconds before the second attempt of a callback; doubled after each (at most an hour)")
+        ->envname("NURBSRT_WEBHOOK_BACKOFF")->check(CLI::Range(0.01, 3600.0))->capture_default_str();
+    cmd->add_option("--webhook-timeout", c->webhook_timeout_s, "seconds a callback receiver has to connect and answer")
+        ->envname("NURBSRT_WEBHOOK_TIMEOUT")->check(CLI::Range(0.1, 300.0))->capture_default_str();
     cmd->callback([c, upload_mb, import_memory_mb, cache_mb, stored_mb, body_rate_kib, budget_mb, render_mb] {
         c->memory_budget_bytes = static_cast<size_t>(*budget_mb * (1 << 20));
         c->max_render_bytes = static_cast<size_t>(*render_mb * (1 << 20));
         // Keys themselves only from the environment: a command line shows in `ps`.
         if (const char* k = std::getenv("NURBSRT_API_KEYS")) c->api_keys = k;
+        if (const char* k = std::getenv("NURBSRT_WEBHOOK_SECRET")) c->webhook_secret = k;
         c->max_upload_bytes = static_cast<size_t>(*upload_mb * (1 << 20));
         c->import_memory_bytes = static_cast<size_t>(*import_memory_mb * (1 << 20));
         c->cache_bytes = static_cast<size_t>(*cache_mb * (1 << 20));

@@ -84,6 +84,9 @@ void ServerConfig::validate() const {
     if (max_job_outputs < 1 || max_job_outputs > 10000) fail("max job outputs must be in 1..10000");
     if (!(job_retention_s > 0)) fail("job retention must be positive");
     if (!(lease_s >= 1 && lease_s <= 86400)) fail("lease seconds must be in 1..86400");
+    if (webhook_attempts < 1 || webhook_attempts > 100) fail("webhook attempts must be in 1..100");
+    if (!(webhook_backoff_s >= 0.01 && webhook_backoff_s <= 3600)) fail("webhook backoff must be in 0.01..3600 s");
+    if (!(webhook_timeout_s >= 0.1 && webhook_timeout_s <= 300)) fail("webhook timeout must be in 0.1..300 s");
     if (!job_store.empty() && job_store.rfind("postgresql://", 0) != 0 && job_store.rfind("postgres://", 0) != 0)
         fail("job store must be a postgresql:// URL (or empty for SQLite in the data dir)");
     for (const std::string& origin : cors_origins) (void)normalized_origin(origin);

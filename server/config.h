@@ -84,6 +84,29 @@ struct ServerConfig {
     double lease_s = 30;
     std::string instance_id;  // names this process in leases, logs, metrics (default: host name + random)
 
+    // Webhooks (server/webhooks.h). The HMAC-SHA256 key that signs every
+    // callback body, from NURBSRT_WEBHOOK_SECRET or --webhook-secret-file
+    // (never the command line: `ps` shows it); none: a job naming a
+    // callback_url is refused (callbacks are never sent unsigned).
+    std::string webhook_secret;
+    std::string webhook_secret_file;
+    // Callbacks to loopback, private, link-local and other non-public
+    // addresses are refused unless allowed: an upload must not make the
+    // service reach into the network it runs in (SSRF; the cloud metadata
+    // address 169.254.169.254 is link-local).
+    bool webhook_allow_private = false;
+    // Attempts per callback, the first delay between them (doubling up to an
+    // hour, plus up to 25 % jitter so receivers coming back are not hit by
+    // every sender at once). 15 attempts from 2 s: the last one about four
+    // hours after the job ended, long enough to ride out a receiver's
+    // redeploy or a night's outage, well inside the job retention.
+    int webhook_attempts = 15;
+    double webhook_backoff_s = 2;
+    // One attempt's connect / read timeout: a receiver should answer at once
+    // and do its work later; 10 s tolerates a slow one without holding a
+    // sender long.
+    double webhook_timeout_s = 10;
+
     // Throws nurbsrt::Error(invalid_argument) with a message naming the setting.
     void validate() const;
     // memory_budget_bytes, or the automatic budget when it is 0.

@@ -71,6 +71,7 @@ JobService::JobService(ServerContext& ctx)
     else
         store_ = open_sqlite_job_store(ctx.config.job_store.empty() ? ctx.config.data_dir + "/jobs.db"
                                                                     : ctx.config.job_store);
+    webhooks_ = std::make_unique<WebhookSender>(*store_, ctx.config, ctx.metrics);
     log_event("job_store", nlohmann::json{{"store", store_->describe()}, {"instance", instance_},
                                           {"shared", store_->shared()}, {"lease_ms", store_->lease_ms()}}
                                .dump());
@@ -121,6 +122,7 @@ void JobService::start() {
     for (int i = 0; i < ctx_.config.job_runners; ++i) runners_.emplace_back([this] { run_loop(); });
     sweeper_ = std::thread([this] { sweep_loop(); });
     if (store_->lease_ms() > 0) heartbeat_ = std::thread([this] { heartbeat_loop(); });
+    webhooks_->start();
 }
 
 void JobService::stop() {
@@ -135,6 +137,7 @@ void JobService::stop() {
     runners_.clear();
     if (sweeper_.joinable()) sweeper_.join();
     if (heartbeat_.joinable()) heartbeat_.join();
+    webhooks_->stop();
 }
 
 void JobService::submit(JobRecord& job, const std::vector<const std::string*>& input_bytes) {
@@ -372,6 +375,7 @@ void JobService::end_claim(const JobClaim& claim) {
     if (*state == "running") return;  // other outputs are still at work (shared store)
     ctx_.metrics.count_job_finished(*state);
     log_event("job_finished", nlohmann::json{{"job_id", claim.id}, {"state", *state}}.dump());
+    webhooks_->notify();  // its callback (if any) became due with the finish
 }
 
 void JobService::run_output(const JobClaim& job, const JobOutput& out,

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "server/job_store.h"
+#include "server/webhooks.h"
 
 namespace nurbsrt::server {
 
@@ -86,6 +87,7 @@ private:
     uint64_t next_active_ = 0;
     std::vector<std::thread> runners_;
     std::thread sweeper_, heartbeat_;
+    std::unique_ptr<WebhookSender> webhooks_;  // callbacks of finished jobs (of any instance, with a shared store)
 };
 
 }  // namespace nurbsrt::server

@@ -7,6 +7,7 @@
 #include "importer/importer.h"
 #include "renderer/error.h"
 #include "server/render_options.h"
+#include "server/webhooks.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -42,19 +43,27 @@ int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::
 
 }  // namespace
 
-std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs,
-                                      const ServerConfig& config) {
+JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs, const ServerConfig& config) {
     const json j = json::parse(job_json, nullptr, false);
     if (j.is_discarded() || !j.is_object()) bad("the 'job' part must be a JSON object");
     for (const auto& [key, v] : j.items())
-        if (key != "outputs") bad("unknown job field '" + key.substr(0, 64) + "'");
+        if (key != "outputs" && key != "callback_url") bad("unknown job field '" + key.substr(0, 64) + "'");
+    JobSpec spec;
+    if (j.contains("callback_url")) {
+        if (!j["callback_url"].is_string()) bad("'callback_url' must be a string (an http or https URL)");
+        spec.callback_url = j["callback_url"].get<std::string>();
+        if (config.webhook_secret.empty())
+            bad("'callback_url' needs a signing secret, and this service has none (it is started with "
+                "NURBSRT_WEBHOOK_SECRET or --webhook-secret-file to sign callbacks)");
+        check_callback_url(spec.callback_url, config.webhook_allow_private);
+    }
     if (!j.contains("outputs") || !j["outputs"].is_array() || j["outputs"].empty())
         bad("the job needs a non-empty 'outputs' array");
     const json& list = j["outputs"];
     if (list.size() > static_cast<size_t>(config.max_job_outputs))
         throw Error(ErrorCode::limit_exceeded, "the job has " + std::to_string(list.size()) +
                                                    " outputs; the limit is " + std::to_string(config.max_job_outputs));
-    std::vector<JobOutput> outputs;
+    std::vector<JobOutput>& outputs = spec.outputs;
     std::vector<bool> used(inputs.size(), false);
     for (size_t i = 0; i < list.size(); ++i) {
         const std::string where = "output " + std::to_string(i);
@@ -106,7 +115,7 @@ std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::ve
     }
     for (size_t f = 0; f < used.size(); ++f)
         if (!used[f]) bad("file " + std::to_string(f) + " has no outputs");
-    return outputs;
+    return spec;
 }
 
 std::string artifact_name(int file, const std::string& type, int output, const std::string& extension) {

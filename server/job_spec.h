@@ -13,13 +13,18 @@
 
 namespace nurbsrt::server {
 
+struct JobSpec {
+    std::vector<JobOutput> outputs;
+    std::string callback_url;  // empty: no webhook
+};
+
 // Parses `job_json` ({"outputs": [{"file": 0 | "name.igs", "type": "render",
-// "options": {...}} | {"file": ..., "type": "conversion", "format": "step"}]})
-// for these inputs. Throws Error(invalid_argument) naming the problem,
-// Error(limit_exceeded) beyond max_job_outputs or the image size limits.
-// The outputs come back numbered, with their artifact names and content types.
-std::vector<JobOutput> parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs,
-                                      const ServerConfig& config);
+// "options": {...}} | {"file": ..., "type": "conversion", "format": "step"}],
+// "callback_url": "https://..."}) for these inputs. Throws
+// Error(invalid_argument) naming the problem, Error(limit_exceeded) beyond
+// max_job_outputs or the image size limits. The outputs come back numbered,
+// with their artifact names and content types.
+JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs, const ServerConfig& config);
 
 // `<file>-<type>-<output><extension>`, e.g. 0-render-1.png, 1-conversion-0.stl.
 std::string artifact_name(int file, const std::string& type, int output, const std::string& extension);

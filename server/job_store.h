@@ -43,6 +43,31 @@ struct JobOutput {
     std::string result_json;                  // statistics / report object, or empty
 };
 
+// Webhook delivery of a job that names a callback URL (server/webhooks.h):
+// waiting while the job runs, pending once it ended (succeeded or failed) until
+// an attempt is answered 2xx (delivered) or the attempts are spent (failed).
+enum class CallbackState { none, waiting, pending, delivered, failed };
+const char* callback_state_name(CallbackState s);        // "", waiting, pending, ...
+CallbackState parse_callback_state(const std::string& s);  // as stored; unknown text -> none
+
+struct CallbackStatus {
+    CallbackState state = CallbackState::none;
+    int attempts = 0;
+    int64_t due_ms = 0;       // next attempt (pending), Unix ms
+    int last_status = 0;      // HTTP status of the last attempt; 0: no answer (or none yet)
+    std::string last_error;   // why the last attempt did not deliver
+    int64_t done_ms = 0;      // delivered or given up, Unix ms
+};
+
+// The outcome of one delivery attempt, as JobStore::callback_attempted records it.
+struct CallbackAttempt {
+    CallbackState state = CallbackState::pending;  // pending (retry at next_ms), delivered or failed
+    int64_t next_ms = 0;
+    int status = 0;
+    std::string error;
+    int64_t now_ms = 0;
+};
+
 struct JobRecord {
     std::string id;
     int64_t seq = 0;  // submission order
@@ -50,6 +75,8 @@ struct JobRecord {
     int64_t created_ms = 0, started_ms = 0, finished_ms = 0;
     int attempts = 0;  // runs started (a restart or a lost instance interrupting one re-queues it)
     std::string error_code, error_message;
+    std::string callback_url;  // empty: no webhook
+    CallbackStatus callback;
     std::vector<JobInput> inputs;
     std::vector<JobOutput> outputs;
 };
@@ -136,6 +163,18 @@ public:
     // that no live lease holds any more (their runner died before removing).
     virtual std::vector<std::string> finished_before(int64_t before_ms) = 0;
     virtual std::vector<std::string> all_ids() = 0;
+
+    // Webhooks. A job with a callback URL becomes `pending` (due at once) in
+    // the same transaction that ends it succeeded or failed (finish(), and
+    // recover() / an expired last lease failing it `interrupted`); a canceled
+    // job is deleted and has none. claim_callback takes the oldest due one and
+    // moves its due time `hold_ms` ahead, so no other sender (thread or
+    // instance) takes it while this attempt is in flight; a sender that dies
+    // leaves it due again after hold_ms: delivery is at least once.
+    virtual std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) = 0;
+    // Records an attempt (attempts + 1). False when the job is gone or its
+    // callback is no longer pending.
+    virtual bool callback_attempted(const std::string& id, const CallbackAttempt& a) = 0;
 
     // Several instances share this store (and the data directory): nothing
     // there belongs to this process alone, so no start-up sweep may run.

@@ -8,7 +8,8 @@
 namespace nurbsrt::server {
 namespace {
 
-constexpr int kSchemaVersion = 1;
+// 1: jobs, inputs, outputs. 2: the webhook columns of jobs.
+constexpr int kSchemaVersion = 2;
 // Any constant: instances starting together migrate one after the other.
 constexpr const char* kMigrationLock = "7353021";
 
@@ -63,8 +64,21 @@ CREATE TABLE IF NOT EXISTS job_outputs (
 CREATE INDEX IF NOT EXISTS job_outputs_open ON job_outputs(state, lease_expires_ms);
 )sql";
 
+// Version 2: a job's callback URL and its delivery (server/webhooks.h).
+const char* kSchemaV2 = R"sql(
+ALTER TABLE jobs ADD COLUMN callback_url TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_state TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_attempts INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_due_ms BIGINT NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_status INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_error TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_done_ms BIGINT NOT NULL DEFAULT 0;
+CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
+)sql";
+
 constexpr const char* kJobColumns =
-    "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message FROM jobs ";
+    "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, callback_url, "
+    "callback_state, callback_attempts, callback_due_ms, callback_status, callback_error, callback_done_ms FROM jobs ";
 
 JobRecord read_job(const PgResult& r, int row) {
     JobRecord j;
@@ -77,6 +91,13 @@ JobRecord read_job(const PgResult& r, int row) {
     j.attempts = static_cast<int>(r.i64(row, 6));
     j.error_code = r.text(row, 7);
     j.error_message = r.text(row, 8);
+    j.callback_url = r.text(row, 9);
+    j.callback.state = parse_callback_state(r.text(row, 10));
+    j.callback.attempts = static_cast<int>(r.i64(row, 11));
+    j.callback.due_ms = r.i64(row, 12);
+    j.callback.last_status = static_cast<int>(r.i64(row, 13));
+    j.callback.last_error = r.text(row, 14);
+    j.callback.done_ms = r.i64(row, 15);
     return j;
 }
 
@@ -111,7 +132,8 @@ void PgJobStore::migrate() {
                                        ", newer than this nurbsrt's " + std::to_string(kSchemaVersion) +
                                        ": run the newer nurbsrt, or point --job-store at another database");
     if (version < kSchemaVersion) {
-        conn_->exec(kSchema);
+        if (version < 1) conn_->exec(kSchema);
+        if (version < 2) conn_->exec(kSchemaV2);
         conn_->exec("DELETE FROM schema_version");
         conn_->exec("INSERT INTO schema_version(version) VALUES ($1)", {std::to_string(kSchemaVersion)});
     }
@@ -121,8 +143,12 @@ void PgJobStore::migrate() {
 void PgJobStore::create(JobRecord& job) {
     std::lock_guard<std::mutex> lock(m_);
     PgConn::Transaction t(*conn_);
-    const PgResult r = conn_->exec("INSERT INTO jobs(id, state, created_ms) VALUES ($1, 'queued', $2) RETURNING seq",
-                                   {job.id, std::to_string(job.created_ms)});
+    job.callback = {};
+    if (!job.callback_url.empty()) job.callback.state = CallbackState::waiting;
+    const PgResult r = conn_->exec(
+        "INSERT INTO jobs(id, state, created_ms, callback_url, callback_state) VALUES ($1, 'queued', $2, $3, $4) "
+        "RETURNING seq",
+        {job.id, std::to_string(job.created_ms), job.callback_url, callback_state_name(job.callback.state)});
     job.seq = r.i64(0, 0);
     job.state = "queued";
     for (const JobInput& in : job.inputs)
@@ -288,6 +314,34 @@ std::vector<std::string> PgJobStore::all_ids() {
     std::vector<std::string> ids;
     for (int i = 0; i < r.rows(); ++i) ids.push_back(r.text(i, 0));
     return ids;
+}
+
+std::optional<JobRecord> PgJobStore::claim_callback(int64_t now_ms, int64_t hold_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    PgConn::Transaction t(*conn_);
+    // SKIP LOCKED: instances polling at once each take a different delivery.
+    const PgResult r = conn_->exec(
+        "SELECT id FROM jobs WHERE callback_state = 'pending' AND callback_due_ms <= $1 "
+        "ORDER BY callback_due_ms, seq LIMIT 1 FOR UPDATE SKIP LOCKED",
+        {std::to_string(now_ms)});
+    if (r.rows() == 0) return std::nullopt;
+    const std::string id = r.text(0, 0);
+    conn_->exec("UPDATE jobs SET callback_due_ms = $1 WHERE id = $2", {std::to_string(now_ms + hold_ms), id});
+    auto job = read(id);
+    t.commit();
+    return job;
+}
+
+bool PgJobStore::callback_attempted(const std::string& id, const CallbackAttempt& a) {
+    std::lock_guard<std::mutex> lock(m_);
+    const bool done = a.state != CallbackState::pending;
+    return conn_
+               ->exec("UPDATE jobs SET callback_attempts = callback_attempts + 1, callback_state = $1, "
+                      "callback_due_ms = $2, callback_status = $3, callback_error = $4, callback_done_ms = $5 "
+                      "WHERE id = $6 AND callback_state = 'pending'",
+                      {callback_state_name(a.state), std::to_string(done ? 0 : a.next_ms), std::to_string(a.status),
+                       a.error, std::to_string(done ? a.now_ms : 0), id})
+               .affected() > 0;
 }
 
 }  // namespace nurbsrt::server

@@ -46,6 +46,8 @@ public:
     RecoveryReport recover(int, int64_t) override { return {}; }
     std::vector<std::string> finished_before(int64_t before_ms) override;
     std::vector<std::string> all_ids() override;
+    std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) override;
+    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override;
     bool shared() const override { return true; }
     int64_t lease_ms() const override { return lease_ms_; }
     std::string describe() const override { return conn_->where(); }

@@ -37,7 +37,10 @@ std::optional<std::string> PgJobStore::finish_locked(const std::string& id, int6
     const std::string state = failed ? "failed" : "succeeded";
     const std::string message =
         failed ? str(failed) + " of " + str(total) + " outputs failed; first: " + first_message : std::string();
-    conn_->exec("UPDATE jobs SET state = $1, finished_ms = $2, error_code = $3, error_message = $4 WHERE id = $5",
+    // The callback becomes due in the same transaction (server/webhooks.h).
+    conn_->exec("UPDATE jobs SET state = $1, finished_ms = $2, error_code = $3, error_message = $4, "
+                "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = $2 "
+                "WHERE id = $5",
                 {state, str(now_ms), failed ? first_code : std::string(), message, id});
     return state;
 }

@@ -5,9 +5,28 @@
 namespace nurbsrt::server {
 
 using sqlite_store::kSchema;
+using sqlite_store::kSchemaV2;
 using sqlite_store::kSchemaVersion;
 
 bool is_finished_state(const std::string& s) { return s == "succeeded" || s == "failed" || s == "canceled"; }
+
+const char* callback_state_name(CallbackState s) {
+    switch (s) {
+        case CallbackState::none: return "";
+        case CallbackState::waiting: return "waiting";
+        case CallbackState::pending: return "pending";
+        case CallbackState::delivered: return "delivered";
+        case CallbackState::failed: return "failed";
+    }
+    return "";
+}
+
+CallbackState parse_callback_state(const std::string& s) {
+    for (CallbackState c : {CallbackState::waiting, CallbackState::pending, CallbackState::delivered,
+                            CallbackState::failed})
+        if (s == callback_state_name(c)) return c;
+    return CallbackState::none;
+}
 
 SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_unique<Impl>()) {
     impl_->path = db_path;
@@ -37,7 +56,8 @@ SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_uni
                                            ", newer than this nurbsrt's " + std::to_string(kSchemaVersion));
         if (version < kSchemaVersion) {
             Impl::Transaction t(*impl_);
-            impl_->exec(kSchema);
+            if (version < 1) impl_->exec(kSchema);
+            if (version < 2) impl_->exec(kSchemaV2);
             impl_->exec("DELETE FROM schema_version");
             Impl::Stmt(*impl_, "INSERT INTO schema_version(version) VALUES (?)").bind(1, kSchemaVersion).run();
             t.commit();
@@ -59,8 +79,12 @@ void SqliteJobStore::create(JobRecord& job) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     {
-        Impl::Stmt s(*impl_, "INSERT INTO jobs(id, state, created_ms) VALUES (?, 'queued', ?)");
-        s.bind(1, job.id).bind(2, job.created_ms).run();
+        Impl::Stmt s(*impl_,
+                     "INSERT INTO jobs(id, state, created_ms, callback_url, callback_state) VALUES (?, 'queued', ?, ?, ?)");
+        job.callback = {};
+        if (!job.callback_url.empty()) job.callback.state = CallbackState::waiting;
+        s.bind(1, job.id).bind(2, job.created_ms).bind(3, job.callback_url);
+        s.bind(4, std::string(callback_state_name(job.callback.state))).run();
     }
     job.seq = sqlite3_last_insert_rowid(impl_->db);
     job.state = "queued";
@@ -95,12 +119,10 @@ JobPage SqliteJobStore::list(const std::optional<std::string>& state, bool newes
     std::lock_guard<std::mutex> lock(m_);
     // One more than asked tells whether a next page exists.
     const char* sql = newest_first
-                          ? "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, "
-                            "error_message FROM jobs WHERE (?1 = '' OR state = ?1) AND seq < ?2 ORDER BY seq DESC "
-                            "LIMIT ?3"
-                          : "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, "
-                            "error_message FROM jobs WHERE (?1 = '' OR state = ?1) AND seq > ?2 ORDER BY seq ASC "
-                            "LIMIT ?3";
+                          ? "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
+                            " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq < ?2 ORDER BY seq DESC LIMIT ?3"
+                          : "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
+                            " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq > ?2 ORDER BY seq ASC LIMIT ?3";
     JobPage page;
     {
         Impl::Stmt s(*impl_, sql);
@@ -220,8 +242,11 @@ std::optional<std::string> SqliteJobStore::finish(const std::string& id, int64_t
     std::string message;
     if (failed)
         message = std::to_string(failed) + " of " + std::to_string(total) + " outputs failed; first: " + first_message;
-    Impl::Stmt s(*impl_, "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ? WHERE id = ?");
-    s.bind(1, state).bind(2, now_ms).bind(3, failed ? first_code : std::string()).bind(4, message).bind(5, id).run();
+    Impl::Stmt s(*impl_,
+                 "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ?, "
+                 NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?");
+    s.bind(1, state).bind(2, now_ms).bind(3, failed ? first_code : std::string()).bind(4, message).bind(5, now_ms);
+    s.bind(6, id).run();
     t.commit();
     return state;
 }

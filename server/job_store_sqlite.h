@@ -42,6 +42,8 @@ public:
     RecoveryReport recover(int max_attempts, int64_t now_ms) override;
     std::vector<std::string> finished_before(int64_t before_ms) override;
     std::vector<std::string> all_ids() override;
+    std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) override;
+    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override;
     bool shared() const override { return false; }
     int64_t lease_ms() const override { return 0; }
     std::string describe() const override;

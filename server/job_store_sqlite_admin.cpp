@@ -81,10 +81,11 @@ RecoveryReport SqliteJobStore::recover(int max_attempts, int64_t now_ms) {
     for (const std::string& id : r.failed) {
         Impl::Stmt(*impl_,
                    "UPDATE jobs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
-                   "error_message = ? WHERE id = ?")
+                   "error_message = ?, " NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?")
             .bind(1, now_ms)
             .bind(2, reason)
-            .bind(3, id)
+            .bind(3, now_ms)
+            .bind(4, id)
             .run();
         Impl::Stmt(*impl_,
                    "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
@@ -115,6 +116,36 @@ std::vector<std::string> SqliteJobStore::all_ids() {
     Impl::Stmt s(*impl_, "SELECT id FROM jobs ORDER BY seq");
     while (s.step()) ids.push_back(s.text(0));
     return ids;
+}
+
+std::optional<JobRecord> SqliteJobStore::claim_callback(int64_t now_ms, int64_t hold_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    Impl::Transaction t(*impl_);
+    std::string id;
+    {
+        Impl::Stmt s(*impl_,
+                     "SELECT id FROM jobs WHERE callback_state = 'pending' AND callback_due_ms <= ? "
+                     "ORDER BY callback_due_ms, seq LIMIT 1");
+        s.bind(1, now_ms);
+        if (!s.step()) return std::nullopt;
+        id = s.text(0);
+    }
+    Impl::Stmt(*impl_, "UPDATE jobs SET callback_due_ms = ? WHERE id = ?").bind(1, now_ms + hold_ms).bind(2, id).run();
+    auto job = impl_->get(id);
+    t.commit();
+    return job;
+}
+
+bool SqliteJobStore::callback_attempted(const std::string& id, const CallbackAttempt& a) {
+    std::lock_guard<std::mutex> lock(m_);
+    Impl::Stmt s(*impl_,
+                 "UPDATE jobs SET callback_attempts = callback_attempts + 1, callback_state = ?, callback_due_ms = ?, "
+                 "callback_status = ?, callback_error = ?, callback_done_ms = ? WHERE id = ? AND "
+                 "callback_state = 'pending'");
+    const bool done = a.state != CallbackState::pending;
+    s.bind(1, std::string(callback_state_name(a.state))).bind(2, done ? int64_t(0) : a.next_ms).bind(3, a.status);
+    s.bind(4, a.error).bind(5, done ? a.now_ms : int64_t(0)).bind(6, id).run();
+    return s.changes() > 0;
 }
 
 }  // namespace nurbsrt::server

@@ -14,7 +14,8 @@
 namespace nurbsrt::server {
 namespace sqlite_store {
 
-inline constexpr int kSchemaVersion = 1;
+// 1: jobs, inputs, outputs. 2: the webhook columns of jobs.
+inline constexpr int kSchemaVersion = 2;
 
 inline constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS jobs (
@@ -56,6 +57,29 @@ CREATE TABLE IF NOT EXISTS job_outputs (
   PRIMARY KEY (job_id, idx)
 );
 )sql";
+
+// Version 2: a job's callback URL and its delivery (server/webhooks.h).
+inline constexpr const char* kSchemaV2 = R"sql(
+ALTER TABLE jobs ADD COLUMN callback_url TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_state TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_attempts INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_due_ms INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_status INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_error TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_done_ms INTEGER NOT NULL DEFAULT 0;
+CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
+)sql";
+
+// The columns read_job() reads, in its order.
+#define NURBSRT_SQLITE_JOB_COLUMNS                                                                      \
+    "seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, "       \
+    "callback_url, callback_state, callback_attempts, callback_due_ms, callback_status, callback_error, " \
+    "callback_done_ms"
+
+// The SET clause that ends a job (succeeded or failed): its callback becomes
+// due at the same time (the first parameter is the time).
+#define NURBSRT_SQLITE_CALLBACK_DUE \
+    "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = ?"
 
 }  // namespace sqlite_store
 
@@ -166,6 +190,13 @@ struct SqliteJobStore::Impl {
         j.attempts = static_cast<int>(s.i64(6));
         j.error_code = s.text(7);
         j.error_message = s.text(8);
+        j.callback_url = s.text(9);
+        j.callback.state = parse_callback_state(s.text(10));
+        j.callback.attempts = static_cast<int>(s.i64(11));
+        j.callback.due_ms = s.i64(12);
+        j.callback.last_status = static_cast<int>(s.i64(13));
+        j.callback.last_error = s.text(14);
+        j.callback.done_ms = s.i64(15);
         return j;
     }
 
@@ -202,9 +233,7 @@ struct SqliteJobStore::Impl {
     std::optional<JobRecord> get(const std::string& id) {
         std::optional<JobRecord> j;
         {
-            Stmt s(*this,
-                   "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, "
-                   "error_message FROM jobs WHERE id = ?");
+            Stmt s(*this, "SELECT " NURBSRT_SQLITE_JOB_COLUMNS " FROM jobs WHERE id = ?");
             s.bind(1, id);
             if (s.step()) j = read_job(s);
         }

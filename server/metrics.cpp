@@ -55,6 +55,11 @@ void Metrics::count_job_finished(const std::string& result) {
     ++jobs_finished_[result];
 }
 
+void Metrics::count_webhook_attempt(const std::string& outcome) {
+    std::lock_guard<std::mutex> lock(m_);
+    ++webhook_attempts_[outcome];
+}
+
 void Metrics::write_histogram(std::string& out, const std::string& name, const std::string& labels,
                               const Histogram& h, const std::vector<double>& bounds) {
     uint64_t cumulative = 0;
@@ -99,6 +104,14 @@ std::string Metrics::exposition(const Gauges& g) const {
         const auto it = jobs_finished_.find(result);
         out += std::string("nurbsrt_jobs_finished_total{result=\"") + result + "\"} " +
                std::to_string(it == jobs_finished_.end() ? 0 : it->second) + "\n";
+    }
+    out += "# HELP nurbsrt_webhook_attempts_total Job callback attempts made by this instance, by outcome "
+           "(retry: not delivered, tried again later; failed: given up).\n";
+    out += "# TYPE nurbsrt_webhook_attempts_total counter\n";
+    for (const char* outcome : {"delivered", "retry", "failed"}) {
+        const auto it = webhook_attempts_.find(outcome);
+        out += std::string("nurbsrt_webhook_attempts_total{outcome=\"") + outcome + "\"} " +
+               std::to_string(it == webhook_attempts_.end() ? 0 : it->second) + "\n";
     }
     out += "# HELP nurbsrt_jobs Batch jobs in the store by state (queued: the job queue's depth).\n";
     out += "# TYPE nurbsrt_jobs gauge\n";

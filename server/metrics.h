@@ -20,6 +20,7 @@ public:
     void count_import_failure(const std::string& code);
     void count_cache(bool hit);
     void count_job_finished(const std::string& result);  // succeeded | failed | canceled
+    void count_webhook_attempt(const std::string& outcome);  // delivered | retry | failed
 
     // Gauges are sampled by the caller when the text is produced.
     struct Gauges {
@@ -48,6 +49,7 @@ private:
     std::map<std::string, uint64_t> import_failures_;
     uint64_t cache_hits_ = 0, cache_misses_ = 0;
     std::map<std::string, uint64_t> jobs_finished_;
+    std::map<std::string, uint64_t> webhook_attempts_;
 };
 
 }  // namespace nurbsrt::server

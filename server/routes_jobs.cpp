@@ -15,6 +15,7 @@
 #include "server/etag.h"
 #include "server/http_util.h"
 #include "server/job_runner.h"
+#include "server/job_document.h"
 #include "server/job_spec.h"
 #include "server/routes.h"
 
@@ -23,76 +24,11 @@ namespace {
 
 using nlohmann::json;
 
-std::string job_url(const std::string& id) { return "/v1/jobs/" + id; }
-
 // Retry-After of a job that is not done yet (202 on submit or cancel, 200 for
 // a queued or running job), RFC 9110 §10.2.3: a poll a second later follows a
 // typical render of a few hundred milliseconds to seconds closely, and costs
 // one small GET.
 constexpr int kJobPollAfterS = 1;
-
-// RFC 3339 UTC with milliseconds, or null for "not yet".
-json timestamp(int64_t ms) {
-    if (ms <= 0) return nullptr;
-    return rfc3339_utc(ms);
-}
-
-json span(int64_t from, int64_t to) {
-    if (from <= 0 || to <= 0) return nullptr;
-    return to - from;
-}
-
-json parse_or_null(const std::string& text) {
-    if (text.empty()) return nullptr;
-    json j = json::parse(text, nullptr, false);
-    return j.is_discarded() ? json(nullptr) : j;
-}
-
-json job_json(const JobRecord& j) {
-    json files = json::array();
-    for (const JobInput& in : j.inputs)
-        files.push_back({{"index", in.index}, {"filename", in.filename}, {"format", in.format}, {"bytes", in.bytes}});
-    json outputs = json::array();
-    double progress = 0;
-    for (const JobOutput& o : j.outputs) {
-        json out = {{"index", o.index},
-                    {"file", o.file},
-                    {"type", o.kind},
-                    {"format", artifact_format(o.artifact)},
-                    {"state", o.state},
-                    {"progress", o.state == "succeeded" ? 1.0 : o.progress},
-                    {"started_at", timestamp(o.started_ms)},
-                    {"finished_at", timestamp(o.finished_ms)},
-                    {"duration_ms", span(o.started_ms, o.finished_ms)}};
-        const json options = parse_or_null(o.options_json);
-        if (o.kind == "render") out["options"] = options.is_object() ? options : json::object();
-        if (!o.error_code.empty()) out["error"] = {{"code", o.error_code}, {"message", o.error_message}};
-        if (o.state == "succeeded") {
-            out["artifact"] = {{"name", o.artifact},
-                               {"url", job_url(j.id) + "/artifacts/" + o.artifact},
-                               {"content_type", o.content_type},
-                               {"bytes", o.artifact_bytes}};
-            const json result = parse_or_null(o.result_json);
-            if (result.is_object()) out[o.kind == "render" ? "statistics" : "report"] = result;
-        }
-        progress += o.state == "succeeded" || o.state == "failed" ? 1.0 : o.progress;
-        outputs.push_back(std::move(out));
-    }
-    json body = {
-        {"id", j.id},
-        {"url", job_url(j.id)},
-        {"state", j.state},
-        {"progress", j.outputs.empty() ? 0.0 : progress / static_cast<double>(j.outputs.size())},
-        {"attempts", j.attempts},
-        {"created_at", timestamp(j.created_ms)},
-        {"started_at", timestamp(j.started_ms)},
-        {"finished_at", timestamp(j.finished_ms)},
-        {"timings_ms", {{"queued", span(j.created_ms, j.started_ms)}, {"run", span(j.started_ms, j.finished_ms)}}},
-        {"files", files},
-        {"outputs", outputs}};
-    if (!j.error_code.empty()) body["error"] = {{"code", j.error_code}, {"message", j.error_message}};
-    return body;
-}
 
 void send_json(httplib::Response& res, const json& body, int status = 200) {
     res.status = status;
@@ -120,7 +56,9 @@ void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Res
     }
     JobRecord job;
     job.inputs = std::move(up.inputs);
-    job.outputs = parse_job_spec(*up.job_json, job.inputs, ctx.config);
+    JobSpec spec = parse_job_spec(*up.job_json, job.inputs, ctx.config);
+    job.outputs = std::move(spec.outputs);
+    job.callback_url = std::move(spec.callback_url);
     jobs_of(ctx).submit(job, up.bytes);
     res.set_header("Location", job_url(job.id));
     res.set_header("Retry-After", std::to_string(kJobPollAfterS));

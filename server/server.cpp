@@ -25,6 +25,7 @@
 #include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/job_runner.h"
+#include "server/webhooks.h"
 #include "server/problem.h"
 #include "server/request_log.h"
 #include "server/route_table.h"
@@ -293,6 +294,8 @@ int run_server(const ServerConfig& given) {
     given.validate();
     ServerConfig config = given;
     if (config.instance_id.empty()) config.instance_id = default_instance_id();
+    if (!config.webhook_secret_file.empty()) config.webhook_secret = read_webhook_secret_file(config.webhook_secret_file);
+    if (!config.webhook_secret.empty()) check_webhook_secret(config.webhook_secret);
     // SIGINT/SIGTERM are taken by a waiting thread (blocked everywhere else,
     // before any thread starts); a peer closing its socket must not kill us.
     sigset_t stop_signals;
@@ -356,6 +359,8 @@ int run_server(const ServerConfig& given) {
                                    {"job_retention_s", config.job_retention_s},
                                    {"max_stored_bytes", config.max_stored_bytes},
                                    {"instance", config.instance_id},
+                                   {"webhooks_signed", !config.webhook_secret.empty()},
+                                   {"webhook_allow_private", config.webhook_allow_private},
                                    {"job_store", ctx.jobs->store().describe()}};
     log_event("listening", fields.dump());
     jobs.start();

@@ -1,10 +1,12 @@
 // SHA-256 (FIPS 180-4) through OpenSSL's EVP interface, as lowercase hex: the
-// content address of stored files, the scene cache's key, and strong ETags.
+// content address of stored files, the scene cache's key, and strong ETags;
+// and HMAC-SHA256 (RFC 2104), the signature of webhook bodies.
 #pragma once
 
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <string_view>
 
 namespace nurbsrt::server {
 
@@ -27,5 +29,7 @@ private:
 
 // SHA-256 of `bytes` in lowercase hex.
 std::string sha256_hex(const std::string& bytes);
+// HMAC-SHA256 of `data` under `key`, lowercase hex.
+std::string hmac_sha256_hex(std::string_view key, std::string_view data);
 
 }  // namespace nurbsrt::server

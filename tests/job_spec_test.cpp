@@ -30,7 +30,7 @@ TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
         {"file": 0, "type": "conversion", "format": "glb"},
         {"file": 1, "type": "conversion", "format": "json"},
         {"file": 1, "type": "conversion", "format": "step"}]})",
-                                     two_inputs(), config);
+                                     two_inputs(), config).outputs;
     ASSERT_EQ(outs.size(), 7u);
     const std::vector<std::string> names = {"0-render-0.png",     "1-render-1.exr",     "1-conversion-2.igs",
                                             "0-conversion-3.stl", "0-conversion-4.glb", "1-conversion-5.json",

@@ -12,7 +12,10 @@
 #include <thread>
 
 #include "server/job_store_pg.h"
+#include "server/pg_conn.h"
 
+using nurbsrt::server::CallbackAttempt;
+using nurbsrt::server::CallbackState;
 using nurbsrt::server::JobClaim;
 using nurbsrt::server::JobOutput;
 using nurbsrt::server::JobRecord;
@@ -131,6 +134,68 @@ TEST_F(PgJobStoreTest, GracefulStopRequeuesWithoutCountingTheRun) {
     auto cb = b_->claim_next(2000);  // at once: no lease to wait for
     ASSERT_TRUE(cb);
     EXPECT_EQ(cb->attempts, 1);
+}
+
+TEST_F(PgJobStoreTest, ACallbackIsDueOnceTheLastOutputEndsAndOneInstanceTakesIt) {
+    JobRecord j = make_job(std::string(32, 'f'), 1);
+    j.callback_url = "https://hooks.example.com/done";
+    a_->create(j);
+    EXPECT_EQ(b_->get(j.id)->callback.state, CallbackState::waiting);
+    auto c = a_->claim_next(1000);
+    ASSERT_TRUE(c);
+    ASSERT_TRUE(a_->output_running(j.id, 0, 1100, c->lease));
+    ASSERT_TRUE(a_->output_succeeded(j.id, 0, 5, "{}", 1200, c->lease));
+    EXPECT_EQ(a_->finish(j.id, 1300), std::optional<std::string>("succeeded"));
+    auto due = b_->claim_callback(1300, 60'000);
+    ASSERT_TRUE(due);
+    EXPECT_EQ(due->callback.state, CallbackState::pending);
+    EXPECT_FALSE(a_->claim_callback(1400, 60'000));  // held by b's attempt
+    ASSERT_TRUE(b_->callback_attempted(j.id, {CallbackState::pending, 2000, 0, "no answer: Connection", 1500}));
+    EXPECT_FALSE(a_->claim_callback(1999, 60'000));
+    due = a_->claim_callback(2000, 60'000);  // the retry, on the other instance
+    ASSERT_TRUE(due);
+    ASSERT_TRUE(a_->callback_attempted(j.id, {CallbackState::failed, 0, 500, "answered HTTP 500", 2100}));
+    const auto done = b_->get(j.id);
+    EXPECT_EQ(done->callback.state, CallbackState::failed);
+    EXPECT_EQ(done->callback.attempts, 2);
+    EXPECT_EQ(done->callback.last_status, 500);
+    EXPECT_FALSE(b_->callback_attempted(j.id, {CallbackState::delivered, 0, 200, "", 2200}));
+}
+
+TEST_F(PgJobStoreTest, AVersion1SchemaIsMigrated) {
+    a_.reset();
+    b_.reset();
+    {
+        nurbsrt::server::PgConn c(url());
+        c.exec("DROP TABLE IF EXISTS job_outputs, job_inputs, jobs, schema_version");
+        c.exec("CREATE TABLE schema_version (version INTEGER NOT NULL); INSERT INTO schema_version VALUES (1)");
+        c.exec("CREATE TABLE jobs (seq BIGSERIAL PRIMARY KEY, id TEXT NOT NULL UNIQUE, state TEXT NOT NULL, "
+               "created_ms BIGINT NOT NULL, started_ms BIGINT NOT NULL DEFAULT 0, finished_ms BIGINT NOT NULL "
+               "DEFAULT 0, attempts INTEGER NOT NULL DEFAULT 0, error_code TEXT NOT NULL DEFAULT '', "
+               "error_message TEXT NOT NULL DEFAULT '')");
+        c.exec("CREATE TABLE job_inputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER "
+               "NOT NULL, filename TEXT NOT NULL, format TEXT NOT NULL, bytes BIGINT NOT NULL, "
+               "PRIMARY KEY (job_id, idx))");
+        c.exec("CREATE TABLE job_outputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER "
+               "NOT NULL, file INTEGER NOT NULL, kind TEXT NOT NULL, options TEXT NOT NULL, artifact TEXT NOT NULL, "
+               "content_type TEXT NOT NULL, state TEXT NOT NULL, progress DOUBLE PRECISION NOT NULL DEFAULT 0, "
+               "error_code TEXT NOT NULL DEFAULT '', error_message TEXT NOT NULL DEFAULT '', artifact_bytes BIGINT "
+               "NOT NULL DEFAULT 0, started_ms BIGINT NOT NULL DEFAULT 0, finished_ms BIGINT NOT NULL DEFAULT 0, "
+               "result TEXT NOT NULL DEFAULT '', attempts INTEGER NOT NULL DEFAULT 0, lease_token TEXT NOT NULL "
+               "DEFAULT '', lease_owner TEXT NOT NULL DEFAULT '', lease_expires_ms BIGINT NOT NULL DEFAULT 0, "
+               "completions INTEGER NOT NULL DEFAULT 0, PRIMARY KEY (job_id, idx))");
+        c.exec("INSERT INTO jobs(id, state, created_ms) VALUES ($1, 'succeeded', 1000)", {std::string(32, '9')});
+    }
+    PgJobStore store(url(), "test-migrate", 1.0);
+    const auto old = store.get(std::string(32, '9'));
+    ASSERT_TRUE(old);
+    EXPECT_EQ(old->callback.state, CallbackState::none);
+    JobRecord j = make_job(std::string(32, '8'), 1);
+    j.callback_url = "https://hooks.example.com/done";
+    store.create(j);
+    EXPECT_EQ(store.get(j.id)->callback_url, j.callback_url);
+    nurbsrt::server::PgConn c(url());
+    EXPECT_EQ(c.exec("SELECT MAX(version) FROM schema_version").i64(0, 0), 2);
 }
 
 }  // namespace

@@ -21,6 +21,8 @@ using nurbsrt::server::JobOutput;
 using nurbsrt::server::JobRecord;
 using nurbsrt::server::JobStore;
 using nurbsrt::server::SqliteJobStore;
+using nurbsrt::server::CallbackAttempt;
+using nurbsrt::server::CallbackState;
 
 namespace {
 
@@ -301,6 +303,100 @@ TEST_F(JobStoreTest, NewerSchemaIsRefused) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("schema version 99"), std::string::npos) << e.what();
     }
+}
+
+TEST_F(JobStoreTest, CallbacksBecomeDueWhenTheJobEndsAndAreClaimedOnce) {
+    SqliteJobStore store(db_);
+    JobRecord with = make_job(1, 1), without = make_job(2, 1);
+    with.callback_url = "https://hooks.example.com/done";
+    store.create(with);
+    store.create(without);
+    EXPECT_EQ(with.callback.state, CallbackState::waiting);
+    EXPECT_EQ(store.get(with.id)->callback.state, CallbackState::waiting);
+    EXPECT_EQ(store.get(without.id)->callback.state, CallbackState::none);
+    EXPECT_FALSE(store.claim_callback(10'000, 1000));  // nothing ended yet
+    for (int n = 0; n < 2; ++n) {
+        auto c = store.claim_next(5000);
+        ASSERT_TRUE(c);
+        ASSERT_TRUE(store.output_running(c->id, 0, 5000));
+        ASSERT_TRUE(store.output_succeeded(c->id, 0, 10, "{}", 6000));
+        ASSERT_TRUE(store.finish(c->id, 7000));
+    }
+    EXPECT_EQ(store.get(without.id)->callback.state, CallbackState::none);
+    auto due = store.claim_callback(7000, 1000);
+    ASSERT_TRUE(due);
+    EXPECT_EQ(due->id, with.id);
+    EXPECT_EQ(due->callback_url, with.callback_url);
+    EXPECT_EQ(due->state, "succeeded");
+    EXPECT_FALSE(store.claim_callback(7500, 1000));  // held while the attempt is in flight
+    // A failed attempt: due again at next_ms, not before.
+    CallbackAttempt retry{CallbackState::pending, 9000, 503, "answered HTTP 503", 7600};
+    ASSERT_TRUE(store.callback_attempted(with.id, retry));
+    EXPECT_FALSE(store.claim_callback(8999, 1000));
+    due = store.claim_callback(9000, 1000);
+    ASSERT_TRUE(due);
+    EXPECT_EQ(due->callback.attempts, 1);
+    EXPECT_EQ(due->callback.last_status, 503);
+    EXPECT_EQ(due->callback.last_error, "answered HTTP 503");
+    ASSERT_TRUE(store.callback_attempted(with.id, {CallbackState::delivered, 0, 204, "", 9100}));
+    const auto done = store.get(with.id);
+    EXPECT_EQ(done->callback.state, CallbackState::delivered);
+    EXPECT_EQ(done->callback.attempts, 2);
+    EXPECT_EQ(done->callback.done_ms, 9100);
+    EXPECT_FALSE(store.callback_attempted(with.id, retry));  // no longer pending
+    EXPECT_FALSE(store.claim_callback(100'000, 1000));
+    // Kept across a reopen (a restart).
+    SqliteJobStore reopened(db_);
+    EXPECT_EQ(reopened.get(with.id)->callback.state, CallbackState::delivered);
+}
+
+TEST_F(JobStoreTest, AJobFailedByRecoveryHasItsCallbackDue) {
+    {
+        SqliteJobStore store(db_);
+        JobRecord j = make_job(3, 1);
+        j.callback_url = "https://hooks.example.com/done";
+        store.create(j);
+        for (int run = 0; run < 2; ++run) {  // two runs cut short by restarts
+            ASSERT_TRUE(store.claim_next(1000));
+            store.recover(2, 2000);
+        }
+    }
+    SqliteJobStore store(db_);
+    const auto due = store.claim_callback(2000, 1000);
+    ASSERT_TRUE(due);
+    EXPECT_EQ(due->state, "failed");
+    EXPECT_EQ(due->error_code, "interrupted");
+}
+
+TEST_F(JobStoreTest, AVersion1DatabaseIsMigrated) {
+    // The schema as version 1 wrote it, with a finished job (the shell: the store has no SQL entry point).
+    const std::string v1 =
+        "CREATE TABLE schema_version (version INTEGER NOT NULL); INSERT INTO schema_version VALUES (1);"
+        "CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, state TEXT NOT NULL,"
+        " created_ms INTEGER NOT NULL, started_ms INTEGER NOT NULL DEFAULT 0, finished_ms INTEGER NOT NULL DEFAULT 0,"
+        " attempts INTEGER NOT NULL DEFAULT 0, error_code TEXT NOT NULL DEFAULT '',"
+        " error_message TEXT NOT NULL DEFAULT '');"
+        "CREATE TABLE job_inputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER NOT NULL,"
+        " filename TEXT NOT NULL, format TEXT NOT NULL, bytes INTEGER NOT NULL, PRIMARY KEY (job_id, idx));"
+        "CREATE TABLE job_outputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER NOT NULL,"
+        " file INTEGER NOT NULL, kind TEXT NOT NULL, options TEXT NOT NULL, artifact TEXT NOT NULL,"
+        " content_type TEXT NOT NULL, state TEXT NOT NULL, progress REAL NOT NULL DEFAULT 0,"
+        " error_code TEXT NOT NULL DEFAULT '', error_message TEXT NOT NULL DEFAULT '',"
+        " artifact_bytes INTEGER NOT NULL DEFAULT 0, started_ms INTEGER NOT NULL DEFAULT 0,"
+        " finished_ms INTEGER NOT NULL DEFAULT 0, result TEXT NOT NULL DEFAULT '', PRIMARY KEY (job_id, idx));"
+        "INSERT INTO jobs(id, state, created_ms, finished_ms) VALUES ('" + std::string(32, 'e') +
+        "', 'succeeded', 1000, 2000);";
+    const std::string cmd = "sqlite3 '" + db_ + "' \"" + v1 + "\"";
+    if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "sqlite3 shell not available";
+    SqliteJobStore store(db_);
+    const auto old = store.get(std::string(32, 'e'));
+    ASSERT_TRUE(old);
+    EXPECT_EQ(old->state, "succeeded");
+    EXPECT_EQ(old->callback.state, CallbackState::none);
+    JobRecord j = make_job(4, 1);
+    j.callback_url = "https://hooks.example.com/done";
+    store.create(j);
+    EXPECT_EQ(store.get(j.id)->callback_url, j.callback_url);
 }
 
 }  // namespace

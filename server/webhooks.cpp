@@ -1,0 +1,318 @@
+#include "server/webhooks.h"
+
+#include <arpa/inet.h>
+#include <httplib.h>
+#include <netdb.h>
+#include <nlohmann/json.hpp>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include "renderer/error.h"
+#include "server/job_document.h"
+#include "server/metrics.h"
+#include "server/request_log.h"
+#include "server/sha256.h"
+
+namespace nurbsrt::server {
+namespace {
+
+// A URL longer than this is no receiver's address but an attempt to store data.
+constexpr size_t kMaxCallbackUrlLength = 2048;
+constexpr size_t kMinSecretLength = 16;
+// How often idle senders look for due callbacks another instance's jobs (or a
+// retry's due time) made: a second of latency on a webhook is unnoticed, and
+// one indexed query a second per sender costs the store nothing.
+constexpr auto kPollInterval = std::chrono::milliseconds(1000);
+// Doubling stops here: a receiver that is down for hours is still tried hourly.
+constexpr double kMaxBackoffS = 3600;
+// Two senders: one slow receiver (up to the timeout) does not hold up the others.
+constexpr int kSenderThreads = 2;
+const char* const kCaBundle = "/etc/ssl/certs/ca-certificates.crt";
+
+[[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, "callback_url " + what); }
+
+int64_t unix_ms() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+bool public_v4(uint32_t a) {  // host byte order
+    auto in = [a](uint32_t net, int bits) { return (a >> (32 - bits)) == (net >> (32 - bits)); };
+    return !(in(0x00000000, 8) || in(0x0A000000, 8) || in(0x64400000, 10) || in(0x7F000000, 8) ||
+             in(0xA9FE0000, 16) || in(0xAC100000, 12) || in(0xC0000000, 24) || in(0xC0000200, 24) ||
+             in(0xC0A80000, 16) || in(0xC6120000, 15) || in(0xC6336400, 24) || in(0xCB007100, 24) ||
+             in(0xE0000000, 4) || in(0xF0000000, 4));
+}
+
+bool public_v6(const unsigned char* b) {
+    static const unsigned char mapped[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff};
+    static const unsigned char nat64[12] = {0, 0x64, 0xff, 0x9b, 0, 0, 0, 0, 0, 0, 0, 0};
+    if (std::equal(mapped, mapped + 12, b) || std::equal(nat64, nat64 + 12, b))
+        return public_v4(uint32_t(b[12]) << 24 | uint32_t(b[13]) << 16 | uint32_t(b[14]) << 8 | b[15]);
+    if (std::all_of(b, b + 15, [](unsigned char c) { return c == 0; })) return false;  // :: and ::1
+    if ((b[0] & 0xfe) == 0xfc) return false;                                            // fc00::/7 unique local
+    if (b[0] == 0xfe && (b[1] & 0xc0) == 0x80) return false;                            // fe80::/10 link-local
+    if (b[0] == 0xff) return false;                                                     // multicast
+    if (b[0] == 0x20 && b[1] == 0x01 && b[2] == 0x0d && b[3] == 0xb8) return false;    // 2001:db8::/32 documentation
+    return true;
+}
+
+// The literal address of `host`, when it is one.
+bool literal_address(const std::string& host, sockaddr_storage& out) {
+    out = {};
+    auto* v4 = reinterpret_cast<sockaddr_in*>(&out);
+    if (inet_pton(AF_INET, host.c_str(), &v4->sin_addr) == 1) {
+        v4->sin_family = AF_INET;
+        return true;
+    }
+    auto* v6 = reinterpret_cast<sockaddr_in6*>(&out);
+    if (inet_pton(AF_INET6, host.c_str(), &v6->sin6_addr) == 1) {
+        v6->sin6_family = AF_INET6;
+        return true;
+    }
+    return false;
+}
+
+bool is_localhost_name(std::string host) {
+    std::transform(host.begin(), host.end(), host.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (!host.empty() && host.back() == '.') host.pop_back();
+    return host == "localhost" || (host.size() > 10 && host.compare(host.size() - 10, 10, ".localhost") == 0);
+}
+
+struct Outcome {
+    bool delivered = false;
+    bool permanent = false;  // no retry can help (the URL or what it resolves to is refused)
+    int status = 0;
+    std::string error;
+};
+
+// The address to connect to: the first that getaddrinfo gives, after every
+// address the name has was checked (a name with one private address among
+// public ones is refused: which one a client picks is not ours to know).
+Outcome resolve(const CallbackUrl& u, bool allow_private, std::string& numeric) {
+    addrinfo hints{};
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* list = nullptr;
+    const int rc = getaddrinfo(u.host.c_str(), std::to_string(u.port).c_str(), &hints, &list);
+    if (rc != 0) return {false, false, 0, "cannot resolve " + u.host + ": " + gai_strerror(rc)};
+    Outcome refused;
+    for (addrinfo* a = list; a; a = a->ai_next) {
+        char text[INET6_ADDRSTRLEN] = {};
+        getnameinfo(a->ai_addr, a->ai_addrlen, text, sizeof text, nullptr, 0, NI_NUMERICHOST);
+        if (numeric.empty()) numeric = text;
+        if (!allow_private && !is_public_address(a->ai_addr))
+            refused = {false, true, 0, u.host + " resolves to the non-public address " + std::string(text)};
+    }
+    freeaddrinfo(list);
+    return refused;
+}
+
+Outcome post(const CallbackUrl& u, const std::string& body, const JobRecord& job, int attempt,
+             const ServerConfig& config) {
+    std::string address;
+    if (Outcome r = resolve(u, config.webhook_allow_private, address); r.permanent || !r.error.empty()) return r;
+    const bool v6 = u.host.find(':') != std::string::npos;
+    httplib::Client cli(u.scheme + "://" + (v6 ? "[" + u.host + "]" : u.host) + ":" + std::to_string(u.port));
+    // Connect to the address just checked, not to whatever a second lookup
+    // answers (DNS rebinding); TLS still verifies the certificate for the name.
+    cli.set_hostname_addr_map({{u.host, address}});
+    const auto timeout = std::chrono::duration<double>(config.webhook_timeout_s);
+    cli.set_connection_timeout(std::chrono::duration_cast<std::chrono::microseconds>(timeout));
+    cli.set_read_timeout(std::chrono::duration_cast<std::chrono::microseconds>(timeout));
+    cli.set_write_timeout(std::chrono::duration_cast<std::chrono::microseconds>(timeout));
+    cli.set_follow_location(false);
+    if (u.scheme == "https") {
+        cli.enable_server_certificate_verification(true);
+        if (std::ifstream(kCaBundle).good()) cli.set_ca_cert_path(kCaBundle);
+    }
+    const httplib::Headers headers = {
+        {"User-Agent", "nurbsrt-webhook"},
+        {"X-Nurbsrt-Event", "job.finished"},
+        {"X-Nurbsrt-Delivery", job.id},
+        {"X-Nurbsrt-Attempt", std::to_string(attempt)},
+        {"X-Nurbsrt-Signature", "sha256=" + hmac_sha256_hex(config.webhook_secret, body)}};
+    const auto res = cli.Post(u.target, headers, body, "application/json");
+    if (!res) return {false, false, 0, "no answer: " + httplib::to_string(res.error())};
+    if (res->status >= 200 && res->status < 300) return {true, false, res->status, ""};
+    return {false, false, res->status, "answered HTTP " + std::to_string(res->status)};
+}
+
+}  // namespace
+
+CallbackUrl check_callback_url(const std::string& url, bool allow_private) {
+    if (url.empty()) bad("must not be empty");
+    if (url.size() > kMaxCallbackUrlLength)
+        bad("is " + std::to_string(url.size()) + " characters; at most " + std::to_string(kMaxCallbackUrlLength));
+    for (unsigned char c : url)
+        if (c <= 0x20 || c >= 0x7f) bad("must be an ASCII URL without spaces or control characters (percent-encode)");
+    const size_t colon = url.find("://");
+    std::string scheme = colon == std::string::npos ? "" : url.substr(0, colon);
+    std::transform(scheme.begin(), scheme.end(), scheme.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (scheme != "http" && scheme != "https") bad("must be an http:// or https:// URL");
+    const size_t authority_end = url.find_first_of("/?#", colon + 3);
+    const std::string authority = url.substr(colon + 3, authority_end == std::string::npos ? std::string::npos
+                                                                                          : authority_end - colon - 3);
+    if (authority.find('@') != std::string::npos)
+        bad("must not carry user information (user:password@): receivers check the signature instead");
+    if (url.find('#') != std::string::npos) bad("must not have a fragment (#...)");
+    static const std::regex pattern(R"(^(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9.\-]+)(?::([0-9]{1,5}))?$)");
+    std::smatch m;
+    if (!std::regex_match(authority, m, pattern)) bad("has no valid host[:port]");
+    CallbackUrl u;
+    u.scheme = scheme;
+    u.host = m[1].str();
+    if (u.host.front() == '[') u.host = u.host.substr(1, u.host.size() - 2);
+    u.port = m[2].matched ? std::stoi(m[2].str()) : (scheme == "https" ? 443 : 80);
+    if (u.port < 1 || u.port > 65535) bad("has a port outside 1..65535");
+    u.target = authority_end == std::string::npos ? "/" : url.substr(authority_end);
+    if (u.target.front() == '?') u.target = "/" + u.target;
+    sockaddr_storage address;
+    const bool literal = literal_address(u.host, address);
+    if (!literal && u.host.find(':') != std::string::npos) bad("has an invalid IPv6 address");
+    if (!allow_private &&
+        (is_localhost_name(u.host) || (literal && !is_public_address(reinterpret_cast<sockaddr*>(&address)))))
+        bad("points at a loopback, private or link-local address; this service sends callbacks only to public "
+            "addresses (it is started with --webhook-allow-private to allow others)");
+    return u;
+}
+
+bool is_public_address(const sockaddr* address) {
+    if (address->sa_family == AF_INET)
+        return public_v4(ntohl(reinterpret_cast<const sockaddr_in*>(address)->sin_addr.s_addr));
+    if (address->sa_family == AF_INET6)
+        return public_v6(reinterpret_cast<const sockaddr_in6*>(address)->sin6_addr.s6_addr);
+    return false;
+}
+
+std::string read_webhook_secret_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error(ErrorCode::invalid_argument, "cannot read the webhook secret file " + path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string s = ss.str();
+    const auto space = [](unsigned char c) { return std::isspace(c) != 0; };
+    s.erase(s.begin(), std::find_if_not(s.begin(), s.end(), space));
+    s.erase(std::find_if_not(s.rbegin(), s.rend(), space).base(), s.end());
+    return s;
+}
+
+void check_webhook_secret(const std::string& secret) {
+    if (secret.size() < kMinSecretLength)
+        throw Error(ErrorCode::invalid_argument, "the webhook secret must have at least " +
+                                                     std::to_string(kMinSecretLength) + " characters");
+    for (unsigned char c : secret)
+        if (c < 0x20 || c == 0x7f)
+            throw Error(ErrorCode::invalid_argument, "the webhook secret must not contain control characters");
+}
+
+int64_t webhook_backoff_ms(int attempt, double base_s, double jitter) {
+    const double delay = std::min(base_s * std::pow(2.0, std::max(attempt - 1, 0)), kMaxBackoffS);
+    return static_cast<int64_t>(std::llround(delay * (1.0 + 0.25 * std::clamp(jitter, 0.0, 1.0)) * 1000.0));
+}
+
+WebhookSender::WebhookSender(JobStore& store, const ServerConfig& config, Metrics& metrics)
+    : store_(store), config_(config), metrics_(metrics) {}
+
+WebhookSender::~WebhookSender() { stop(); }
+
+void WebhookSender::start() {
+    for (int i = 0; i < kSenderThreads; ++i) threads_.emplace_back([this] { loop(); });
+}
+
+void WebhookSender::stop() {
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        stopping_ = true;
+    }
+    cv_.notify_all();
+    for (std::thread& t : threads_) t.join();
+    threads_.clear();
+}
+
+void WebhookSender::notify() {
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        ++wakeups_;
+    }
+    cv_.notify_all();
+}
+
+void WebhookSender::loop() {
+    // An attempt in flight is held this long: past it, a sender that died
+    // mid-attempt leaves the callback to another.
+    const auto hold_ms = static_cast<int64_t>(config_.webhook_timeout_s * 3 * 1000) + 5000;
+    for (;;) {
+        uint64_t seen;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (stopping_) return;
+            seen = wakeups_;
+        }
+        std::optional<JobRecord> job;
+        try {
+            job = store_.claim_callback(unix_ms(), hold_ms);
+        } catch (const std::exception& e) {
+            log_event("webhook_store_error", nlohmann::json{{"error", e.what()}}.dump());
+        }
+        if (job) {
+            attempt(*job);
+            continue;
+        }
+        std::unique_lock<std::mutex> lock(m_);
+        const int64_t now = unix_ms();
+        if (next_due_ms_ <= now) next_due_ms_ = INT64_MAX;  // come due: the claim above took it (or another sender)
+        const auto wait = std::min<int64_t>(std::chrono::milliseconds(kPollInterval).count(),
+                                            std::max<int64_t>(next_due_ms_ - now, 1));
+        cv_.wait_for(lock, std::chrono::milliseconds(wait), [&] { return stopping_ || wakeups_ != seen; });
+    }
+}
+
+void WebhookSender::attempt(const JobRecord& job) {
+    const int number = job.callback.attempts + 1;
+    Outcome out;
+    try {
+        const CallbackUrl u = check_callback_url(job.callback_url, config_.webhook_allow_private);
+        out = post(u, job_webhook_body(job), job, number, config_);
+    } catch (const std::exception& e) {
+        out = {false, true, 0, e.what()};
+    }
+    static thread_local std::mt19937_64 rng{std::random_device{}()};
+    CallbackAttempt a;
+    a.now_ms = unix_ms();
+    a.status = out.status;
+    a.error = out.error;
+    if (out.delivered) {
+        a.state = CallbackState::delivered;
+    } else if (out.permanent || number >= config_.webhook_attempts) {
+        a.state = CallbackState::failed;
+    } else {
+        a.state = CallbackState::pending;
+        a.next_ms = a.now_ms + webhook_backoff_ms(number, config_.webhook_backoff_s,
+                                                  std::uniform_real_distribution<double>(0, 1)(rng));
+        std::lock_guard<std::mutex> lock(m_);
+        next_due_ms_ = std::min(next_due_ms_, a.next_ms);
+    }
+    const char* outcome = out.delivered ? "delivered" : a.state == CallbackState::failed ? "failed" : "retry";
+    metrics_.count_webhook_attempt(outcome);
+    log_event("webhook_attempt", nlohmann::json{{"job_id", job.id},
+                                                {"attempt", number},
+                                                {"outcome", outcome},
+                                                {"status", out.status},
+                                                {"error", out.error}}
+                                     .dump());
+    try {
+        store_.callback_attempted(job.id, a);
+    } catch (const std::exception& e) {
+        log_event("webhook_store_error", nlohmann::json{{"job_id", job.id}, {"error", e.what()}}.dump());
+    }
+}
+
+}  // namespace nurbsrt::server

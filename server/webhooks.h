@@ -1,0 +1,96 @@
+// Webhooks: a batch job may name a `callback_url`; when the job ends
+// (succeeded or failed) the service POSTs the job document there, signed with
+// HMAC-SHA256 over the exact body bytes under the service's secret:
+//
+//   X-Nurbsrt-Signature: sha256=<hex>    X-Nurbsrt-Event: job.finished
+//   X-Nurbsrt-Delivery: <job id>         X-Nurbsrt-Attempt: <1, 2, ...>
+//
+// A 2xx answer delivers it; anything else (another status, no answer within
+// the timeout, a refused connection) is retried with exponential back-off
+// until the attempts are spent. The state lives in the job store, so a
+// restart (or, with PostgreSQL, another instance) carries on where a sender
+// stopped; delivery is at least once (the receiver tells repeats apart by the
+// delivery id). Redirects are not followed, and non-public addresses
+// (loopback, private, link-local, ...) are refused unless allowed, at
+// submission for literal addresses and at delivery for what a name resolves
+// to, connecting to the very address that was checked.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/config.h"
+#include "server/job_store.h"
+
+struct sockaddr;
+
+namespace nurbsrt::server {
+
+class Metrics;
+
+struct CallbackUrl {
+    std::string scheme;  // http | https
+    std::string host;    // a name, an IPv4 address, or an IPv6 address without brackets
+    int port = 0;
+    std::string target;  // path and query, at least "/"
+};
+
+// Parses and checks a callback URL: http or https, a host, an optional port,
+// no user information (credentials would be stored and shown with the job),
+// no fragment, at most 2048 characters; a literal non-public address (or
+// "localhost") only when allowed. Throws Error(invalid_argument) naming
+// callback_url and the problem.
+CallbackUrl check_callback_url(const std::string& url, bool allow_private);
+
+// False for addresses a callback must not reach unless allowed: unspecified,
+// loopback, private (RFC 1918, RFC 4193), shared (RFC 6598), link-local,
+// multicast, benchmarking, reserved and documentation ranges, and IPv4-mapped
+// or NAT64 forms of those.
+bool is_public_address(const sockaddr* address);
+
+// The secret from a file (surrounding whitespace trimmed). Throws
+// Error(invalid_argument) when unreadable; check_webhook_secret for its form.
+std::string read_webhook_secret_file(const std::string& path);
+// At least 16 characters (a guessable secret signs nothing), no control characters.
+void check_webhook_secret(const std::string& secret);
+
+// The delay before attempt `attempt + 1` after attempt `attempt` (1-based)
+// failed: base * 2^(attempt-1), at most an hour, plus `jitter` (0..1) times 25 %.
+int64_t webhook_backoff_ms(int attempt, double base_s, double jitter);
+
+// Sender threads: each takes the next due callback from the store, attempts
+// it and records the outcome. notify() wakes them (a job just ended here);
+// otherwise they poll, which is also how other instances' jobs reach them.
+class WebhookSender {
+public:
+    WebhookSender(JobStore& store, const ServerConfig& config, Metrics& metrics);
+    ~WebhookSender();  // stop()
+    WebhookSender(const WebhookSender&) = delete;
+    WebhookSender& operator=(const WebhookSender&) = delete;
+
+    void start();
+    // Stops after the attempts in flight (bounded by the timeout).
+    void stop();
+    void notify();
+
+private:
+    void loop();
+    void attempt(const JobRecord& job);
+
+    JobStore& store_;
+    const ServerConfig& config_;
+    Metrics& metrics_;
+    std::mutex m_;
+    std::condition_variable cv_;
+    bool stopping_ = false;
+    uint64_t wakeups_ = 0;
+    int64_t next_due_ms_ = INT64_MAX;  // the earliest retry this process scheduled: wake for it, not a poll later
+    std::vector<std::thread> threads_;
+};
+
+}  // namespace nurbsrt::server
