@@ -40,7 +40,9 @@ void add_convert_command(CLI::App& app) {
         if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
         std::fprintf(stderr, "): read %.1f ms", r.read_ms);
         if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);
-        std::fprintf(stderr, ", write %.1f ms\n", r.write_ms);
+        std::fprintf(stderr, ", write %.1f ms", r.write_ms);
+        if (r.verify_ms > 0) std::fprintf(stderr, ", read back %.1f ms", r.verify_ms);
+        std::fputc('\n', stderr);
         if (r.unmeshed_faces > 0)
             std::fprintf(stderr, "nurbsrt: warning: %d face(s) could not be meshed and are missing from %s\n",
                          r.unmeshed_faces, out->c_str());

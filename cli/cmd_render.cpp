@@ -20,6 +20,7 @@
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
 #include "server/render_options.h"
+#include "server/stage_timings.h"
 
 namespace nurbsrt::cli {
 namespace {
@@ -29,6 +30,12 @@ using clock_type = std::chrono::steady_clock;
 double ms_since(clock_type::time_point t0) {
     return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count();
 }
+
+// The stages of --stats timings_ms, in the order they run (with --isolated also
+// prescan, isolation and transfer, the child process's share of the import).
+constexpr const char* kCliRenderStages[] = {"read",    "nurbs_convert",   "mesh",   "assemble",   "frame_setup",
+                                            "prepare", "preliminary_map", "newton", "shadow_map", "shade",
+                                            "antialias", "edges",         "statistics", "encode"};
 
 // "x,y,z" -> Vec3 (CLI11 validator + converter).
 Vec3 parse_vec3(const std::string& s, const char* what) {
@@ -221,7 +228,17 @@ void add_render_command(CLI::App& app) {
             std::fputc('\n', stderr);
         };
         say("importing %zu model(s)", a->models.size());
-        const Scene scene = load_models(a->models, a->load);
+        // --stats timings: stages marked end to end from t0, so they sum to the total.
+        StageClock stages(t0);
+        IsolationTimings isolation;
+        const Scene scene = load_models(a->models, a->load, &isolation);
+        add_import_stages(scene.timings, stages);
+        if (a->load.isolated) {
+            stages.add("prescan", isolation.prescan_ms);
+            stages.add("isolation", isolation.isolation_ms);
+            stages.add("transfer", isolation.transfer_ms);
+        }
+        stages.mark("assemble");  // the rest: scene files, placing and joining the models
         say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
             scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
@@ -265,22 +282,26 @@ void add_render_command(CLI::App& app) {
                 }
                 std::fflush(stderr);
             };
+        stages.mark("frame_setup");
         const RenderResult result = render(scene, camera, options);
+        add_frame_stages(result.stats, stages);
+        stages.mark("frame_setup");  // the rest of the call of render()
         if (live) std::fputc('\n', stderr);
         say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms",
             result.stats.pixels_hit, result.stats.mean_iterations, result.stats.total_ms);
 
-        const auto te = clock_type::now();
         write_image(result.image, a->output);
         if (!a->aov.empty()) write_image(result.image, a->aov);
-        const double encode_ms = ms_since(te);
+        stages.mark("encode");
         say("wrote %s%s%s", a->output.c_str(), a->aov.empty() ? "" : " and ", a->aov.c_str());
 
         if (!a->stats.empty()) {
-            nlohmann::json j = render_stats_json(result.stats, scene.timings, encode_ms, ms_since(t0));
+            nlohmann::json j = render_stats_json(result.stats, nlohmann::json::object());
             j["camera"] = camera_json(camera);
             j["map_precision"] = a->map_precision;
             j["warnings"] = scene.warnings;
+            stages.mark("statistics");
+            j["timings_ms"] = server::stage_timings_json(stages, kCliRenderStages);
             if (a->stats == "-") {
                 std::cout << j.dump(2) << "\n";
             } else {

@@ -33,7 +33,7 @@ std::string read_text(const std::string& path) {
 }
 
 // A CAD file, or the NURBS scene JSON that `nurbsrt convert` writes.
-Scene import_one(const std::string& path, const LoadOptions& options) {
+Scene import_one(const std::string& path, const LoadOptions& options, IsolationTimings* isolation) {
     if (is_scene_file(path)) {
         const std::string text = read_text(path);
         if (is_scene_json(text)) {
@@ -44,12 +44,21 @@ Scene import_one(const std::string& path, const LoadOptions& options) {
     }
     IsolationLimits limits;
     limits.time_limit_s = options.time_limit_s;
-    return options.isolated ? import_isolated(path, options.import, limits) : import_file(path, options.import);
+    if (!options.isolated) return import_file(path, options.import);
+    IsolationTimings t;
+    Scene scene = import_isolated(path, options.import, limits, &t);
+    if (isolation) {
+        isolation->prescan_ms += t.prescan_ms;
+        isolation->isolation_ms += t.isolation_ms;
+        isolation->transfer_ms += t.transfer_ms;
+    }
+    return scene;
 }
 
 }  // namespace
 
-Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options) {
+Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options,
+                  IsolationTimings* isolation) {
     std::vector<Placement> placements;
     for (const std::string& in : inputs) {
         std::string text;
@@ -68,7 +77,7 @@ Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& opt
             copy = it->second;
             copy.timings = {};  // a further copy costs no import stage
         } else {
-            copy = import_one(p.file, options);
+            copy = import_one(p.file, options, isolation);
             imported.emplace(p.file, copy);
         }
         transform_scene(copy, p.xf);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "importer/importer.h"
+#include "importer/isolated.h"
 
 namespace nurbsrt::cli {
 
@@ -21,6 +22,9 @@ struct LoadOptions {
 };
 
 // Throws nurbsrt::Error (invalid_argument for a malformed scene file).
-Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options);
+// `isolation`, when given, gets the isolated imports' time beside their
+// stages (Scene::timings), summed over the files.
+Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options,
+                  IsolationTimings* isolation = nullptr);
 
 }  // namespace nurbsrt::cli

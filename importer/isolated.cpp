@@ -272,31 +272,25 @@ void write_error_file(const std::string& path, ErrorCode code, const std::string
 
 }  // namespace
 
-Scene import_isolated(const std::string& path, const ImportOptions& options,
-                      const IsolationLimits& limits) {
-    prescan_input(path, limits);
-    const std::string exe = worker_executable(limits);
-    ScratchFiles scratch;
-    make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-import");
-    std::vector<std::string> args = {exe, "import-worker", path, scratch.scene};
-    for (std::string& a : import_options_to_args(options)) args.push_back(std::move(a));
-    run_worker(std::move(args), limits, scratch.error, "import", path);
-    return read_scene_file(scratch.scene);
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
-                               const IsolationLimits& limits) {
-    prescan_input(in_path, limits);
-    const std::string exe = worker_executable(limits);
-    ScratchFiles scratch;  // here: the worker's report (and its error file)
-    make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-convert");
-    run_worker({exe, "convert-worker", in_path, out_path, scratch.scene}, limits, scratch.error, "conversion",
-               in_path);
-    std::istringstream in(read_small_file(scratch.scene));
+// The child's own stages are measured inside its lifetime, so what is left of
+// the parent's wait is the isolation's cost (never below 0 but for clock noise).
+double isolation_ms(Clock::time_point t0, Clock::time_point child_end, double child_stages_ms) {
+    return std::max(0.0, ms_between(t0, child_end) - child_stages_ms);
+}
+
+ConvertReport parse_convert_report(const std::string& text) {
+    std::istringstream in(text);
     ConvertReport r;
     int in_format = 0, out_format = 0, output = 0;
     if (!(in >> in_format >> out_format >> output >> r.faces >> r.triangles >> r.unmeshed_faces >> r.read_ms >>
-          r.mesh_ms >> r.write_ms) ||
+          r.mesh_ms >> r.write_ms >> r.verify_ms) ||
         in_format < 0 || in_format > static_cast<int>(CadFormat::iges) || out_format < 0 ||
         out_format > static_cast<int>(CadFormat::iges) || output < 0 ||
         output > static_cast<int>(ConversionFormat::nurbs_json))
@@ -311,6 +305,50 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
     return r;
 }
 
+}  // namespace
+
+Scene import_isolated(const std::string& path, const ImportOptions& options, const IsolationLimits& limits,
+                      IsolationTimings* timings) {
+    const auto t0 = Clock::now();
+    prescan_input(path, limits);
+    const auto t_child = Clock::now();
+    const std::string exe = worker_executable(limits);
+    ScratchFiles scratch;
+    make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-import");
+    std::vector<std::string> args = {exe, "import-worker", path, scratch.scene};
+    for (std::string& a : import_options_to_args(options)) args.push_back(std::move(a));
+    run_worker(std::move(args), limits, scratch.error, "import", path);
+    const auto t_read = Clock::now();
+    Scene scene = read_scene_file(scratch.scene);
+    if (timings) {
+        const ImportTimings& c = scene.timings;
+        timings->prescan_ms = ms_between(t0, t_child);
+        timings->isolation_ms = isolation_ms(t_child, t_read, c.read_ms + c.nurbs_convert_ms + c.mesh_ms);
+        timings->transfer_ms = ms_between(t_read, Clock::now());
+    }
+    return scene;
+}
+
+ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
+                               const IsolationLimits& limits, IsolationTimings* timings) {
+    const auto t0 = Clock::now();
+    prescan_input(in_path, limits);
+    const auto t_child = Clock::now();
+    const std::string exe = worker_executable(limits);
+    ScratchFiles scratch;  // here: the worker's report (and its error file)
+    make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-convert");
+    run_worker({exe, "convert-worker", in_path, out_path, scratch.scene}, limits, scratch.error, "conversion",
+               in_path);
+    const auto t_read = Clock::now();
+    ConvertReport r = parse_convert_report(read_small_file(scratch.scene));
+    if (timings) {
+        timings->prescan_ms = ms_between(t0, t_child);
+        timings->isolation_ms = isolation_ms(t_child, t_read, r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms);
+        timings->transfer_ms = ms_between(t_read, Clock::now());
+    }
+    return r;
+}
+
 int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path) {
     apply_fault_hook();
     const std::string error_path = report_path + ".error";
@@ -321,7 +359,7 @@ int run_convert_worker(const std::string& in_path, const std::string& out_path, 
         // One line, the order convert_isolated reads it in.
         out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' '
             << static_cast<int>(r.output) << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' '
-            << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << '\n';
+            << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << ' ' << r.verify_ms << '\n';
         // Then one warning a line (a line break inside one would split it).
         for (std::string w : r.warnings) {
             std::replace(w.begin(), w.end(), '\n', ' ');

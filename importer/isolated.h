@@ -36,16 +36,28 @@ struct IsolationLimits {
     PrescanLimits prescan;
 };
 
+// Where an isolated call's time went besides the stages the child measured
+// itself (Scene::timings; ConvertReport's read, mesh, write and verify): with
+// them, the whole call.
+struct IsolationTimings {
+    double prescan_ms = 0;    // the pre-scan of the input's text, in this process
+    // The child process less its own stages: creating it, loading the program and
+    // its libraries, writing its result for this process, and its exit.
+    double isolation_ms = 0;
+    double transfer_ms = 0;   // reading the child's result (scene, report) into this process
+};
+
 // Runs import_file(path, options) in a child process. Throws nurbsrt::Error with
 // the child's own error (io, unreadable_file, no_faces, ...), or import_timeout
 // when it ran over, or import_crashed when it died (signal, out of memory).
+// `timings`, when given, gets this call's time beside scene.timings.
 Scene import_isolated(const std::string& path, const ImportOptions& options,
-                      const IsolationLimits& limits = {});
+                      const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr);
 
 // Runs convert_file(in_path, out_path) in a child process (`nurbsrt
 // convert-worker IN OUT REPORT`) under the same limits, with the same errors.
 ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
-                               const IsolationLimits& limits = {});
+                               const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr);
 
 // The command-line arguments that carry `options` to the worker, and their
 // parser (used by the import-worker subcommand); kept together so they cannot drift.

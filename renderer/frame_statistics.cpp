@@ -37,6 +37,7 @@ void frame_statistics(const FrameContext& c, const FrameBuffers& b, const Render
         }
     }
     st.fallback = st.rescue_neighbour + st.rescue_silhouette + st.rescue_general + st.rescue_trim_tolerance;
+    st.solves = solves;
     st.mean_iterations = solves ? double(its) / solves : 0.0;
     // Holes: background pixels whose 4 neighbours are all hit.
     auto hit = [&](int i, int j) { return c.in_frame(i, j) && img.face[c.map.index(i, j)]; };

@@ -70,12 +70,22 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     st.threads = threads;
     st.faces = st.patches = scene.faces.size();
 
+    // The stages are laps of one clock, end to end, so they sum to total_ms: the
+    // set-up before a pass is part of that pass's time.
+    Clock::time_point last = t_total;
+    const auto lap = [&last] {
+        const auto now = Clock::now();
+        const double ms = std::chrono::duration<double, std::milli>(now - last).count();
+        last = now;
+        return ms;
+    };
+    st.setup_ms = lap();
+
     // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
-    auto t0 = Clock::now();
     throw_if_canceled(options);
     const PreliminaryMap map = render_preliminary_map(prepared, camera, options.map_precision);
     throw_if_canceled(options);
-    st.preliminary_map_ms = ms_since(t0);
+    st.preliminary_map_ms = lap();
 
     // 3-4. Newton per pixel from the map's start, trim test, then rescue.
     // Progress units: rows of the per-pixel passes (Newton, rescue, shading, and
@@ -84,7 +94,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     const FrameContext ctx{prepared, scene, camera, map, options, arena, progress, W, H,
                            static_cast<uint32_t>(scene.faces.size())};
     FrameBuffers buf(ctx.pixels());
-    t0 = Clock::now();
+    st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of
     // the control points (the rest was done once by prepare()).
     std::vector<NurbsSurface> projected(options.method == NewtonMethod::proposed ? scene.faces.size() : 0);
@@ -101,7 +111,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     solver.robust.max_iterations = std::max(solver.robust.max_iterations, kRescueMinIterations);
 
     primary_pass(ctx, solver, buf);
-    st.newton_primary_ms = ms_since(t0);
+    st.newton_primary_ms = ms_since(last);  // a part of newton_ms, not a stage of its own
 
     buf.hits = buf.first;
     if (options.rescue) {
@@ -110,39 +120,36 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     } else {
         progress.add(H);
     }
-    st.newton_ms = ms_since(t0);
+    st.newton_ms = lap();
 
     // 5. Shading from the exact normal, with the key light's exact shadows
     // when asked for (their map drawn first); AOVs.
     std::optional<KeyLightShadows> shadows;
     st.shadows = options.shadows;
     if (options.shadows) {
-        t0 = Clock::now();
         throw_if_canceled(options);
         shadows.emplace(ctx, solver, light_rig(camera).key);
-        st.shadow_map_ms = ms_since(t0);
         st.shadow_map_size = shadows->map_size();
+        st.shadow_map_ms = lap();
     }
     const Shader shader(ctx, shadows ? &*shadows : nullptr);
-    t0 = Clock::now();
     shade_pass(ctx, shader, buf, res.image);
-    st.shade_ms = ms_since(t0);
+    st.shade_ms = lap();
+    antialias_pass(ctx, solver, shader, buf, res.image, st);
+    st.antialias_ms = lap();
+    edges_pass(ctx, buf, res.image);
+    st.edges_ms = lap();
+
     if (shadows) {
+        st.shadow_rays = shadows->rays();  // the pixel centres' and the anti-aliasing samples'
         st.shadowed_pixels = static_cast<uint64_t>(std::count(res.image.shadow.begin(), res.image.shadow.end(), 1));
     }
-    t0 = Clock::now();
-    antialias_pass(ctx, solver, shader, buf, res.image, st);
-    st.antialias_ms = ms_since(t0);
-    t0 = Clock::now();
-    edges_pass(ctx, buf, res.image);
-    st.edges_ms = ms_since(t0);
-    if (shadows) st.shadow_rays = shadows->rays();  // the pixel centres' and the anti-aliasing samples'
-
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.map_triangles = prepared.map_mesh().triangles();
-    st.total_ms = ms_since(t_total);
     throw_if_canceled(options);
     progress.finish();
+    st.statistics_ms = lap();
+    st.total_ms = std::chrono::duration<double, std::milli>(last - t_total).count();
     return res;
 }
 

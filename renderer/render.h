@@ -79,7 +79,10 @@ struct RenderStats {
     size_t faces = 0, patches = 0, map_triangles = 0;
     size_t pixels_hit = 0;
     double tolerance = 0;                       // (12) stop tolerance used, model units
-    double mean_iterations = 0;                 // over every primary (map-started) solve
+    // Primary (map-started) solves, one per pixel the map covers: the sum of
+    // iteration_histogram, and of the outcome counts below.
+    uint64_t solves = 0;
+    double mean_iterations = 0;                 // over every primary solve
     std::vector<uint64_t> iteration_histogram;  // [k] = primary solves that took k iterations
     int iteration_limit = 0;                    // the primary solves' cap (NewtonParams::max_iterations)
     // Outcome of each pixel's primary solve (a map pixel): converged (hit inside
@@ -110,8 +113,13 @@ struct RenderStats {
     bool shadows = false;
     int shadow_map_size = 0;
     uint64_t shadow_rays = 0, shadowed_pixels = 0;
+    // Stage times of the frame, end to end on one clock (each includes the small
+    // set-up before its pass), so that with prepare_ms they sum to total_ms.
     double shadow_map_ms = 0;  // drawing the light's preliminary map (the solves are in shade_ms, antialias_ms)
-    double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, antialias_ms = 0, edges_ms = 0, total_ms = 0;
+    double preliminary_map_ms = 0, newton_ms = 0, shade_ms = 0, antialias_ms = 0, edges_ms = 0;
+    double setup_ms = 0;       // the frame's own set-up: its thread arena, per-pixel buffers
+    double statistics_ms = 0;  // counting these statistics over the frame's buffers
+    double total_ms = 0;
     // prepare() of the Scene when render() was given one (then included in
     // total_ms); 0 when it was given a PreparedScene.
     double prepare_ms = 0;

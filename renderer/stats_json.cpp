@@ -4,8 +4,25 @@
 
 namespace nurbsrt {
 
-nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& import, double encode_ms,
-                                 double total_ms) {
+void add_frame_stages(const RenderStats& s, StageClock& clock) {
+    clock.add("prepare", s.prepare_ms);
+    clock.add("frame_setup", s.setup_ms);
+    clock.add("preliminary_map", s.preliminary_map_ms);
+    clock.add("newton", s.newton_ms);
+    clock.add("shadow_map", s.shadow_map_ms);
+    clock.add("shade", s.shade_ms);
+    clock.add("antialias", s.antialias_ms);
+    clock.add("edges", s.edges_ms);
+    clock.add("statistics", s.statistics_ms);
+}
+
+void add_import_stages(const ImportTimings& import, StageClock& clock) {
+    clock.add("read", import.read_ms);
+    clock.add("nurbs_convert", import.nurbs_convert_ms);
+    clock.add("mesh", import.mesh_ms);
+}
+
+nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& timings) {
     using nlohmann::json;
     json histogram = json::object();
     for (size_t k = 0; k < s.iteration_histogram.size(); ++k)
@@ -21,6 +38,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
         {"pixels_hit", s.pixels_hit},
         {"newton",
          {{"tolerance", s.tolerance},
+          {"solves", s.solves},
           {"mean_iterations", s.mean_iterations},
           {"iteration_histogram", histogram},
           {"converged", s.converged},
@@ -46,19 +64,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const ImportTimings& impo
           {"map_size", s.shadow_map_size},
           {"rays", s.shadow_rays},
           {"shadowed_pixels", s.shadowed_pixels}}},
-        {"timings_ms",
-         {{"read", import.read_ms},
-          {"nurbs_convert", import.nurbs_convert_ms},
-          {"mesh", import.mesh_ms},
-          {"prepare", s.prepare_ms},
-          {"preliminary_map", s.preliminary_map_ms},
-          {"newton", s.newton_ms},
-          {"shadow_map", s.shadow_map_ms},
-          {"shade", s.shade_ms},
-          {"antialias", s.antialias_ms},
-          {"edges", s.edges_ms},
-          {"encode", encode_ms},
-          {"total", total_ms}}},
+        {"timings_ms", timings},
     };
 }
 

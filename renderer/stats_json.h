@@ -1,5 +1,6 @@
 // The statistics and timing object of a render (DESIGN.md, "Statistics and
-// timing"): the renderer's counters plus the import stages and the encode time.
+// timing"): the renderer's counters plus the stage timings of whoever ran the
+// frame (import, encoding, a service's request handling).
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
@@ -7,14 +8,23 @@
 #include "renderer/camera.h"
 #include "renderer/render.h"
 #include "renderer/scene.h"
+#include "renderer/stage_clock.h"
 
 namespace nurbsrt {
 
-// `import` holds the read / nurbs_convert / mesh stage times (zero when the
-// scene came from a cache); `encode_ms` the image writing; `total_ms` the
-// wall-clock time of the whole request as the caller measured it.
-nlohmann::json render_stats_json(const RenderStats& stats, const ImportTimings& import, double encode_ms,
-                                 double total_ms);
+// The frame's stages as render() measured them (RenderStats), recorded in
+// `clock` as nested inside its running stage (the call of render()), under
+// their timings_ms names: prepare (when render() prepared the scene),
+// frame_setup, preliminary_map, newton, shadow_map, shade, antialias, edges,
+// statistics.
+void add_frame_stages(const RenderStats& stats, StageClock& clock);
+
+// The import's stages (read, nurbs_convert, mesh) measured where it ran,
+// recorded the same way.
+void add_import_stages(const ImportTimings& import, StageClock& clock);
+
+// The statistics of a frame with `timings` as timings_ms.
+nlohmann::json render_stats_json(const RenderStats& stats, const nlohmann::json& timings);
 
 // The camera a frame was rendered with: eye, target, up, projection, and the
 // one size that applies to it (fov_deg for perspective, ortho_height for orthographic).

@@ -108,6 +108,7 @@ struct Connection {
     size_t pos = 0, len = 0;
     ReadFailure failure = ReadFailure::none;
     bool close_requested = false;
+    Clock::time_point last_read{};  // when the parser last got bytes: a handler's request is in by then
     bool buffered() const { return pos < len; }
 };
 
@@ -187,6 +188,7 @@ public:
         const size_t n = std::min(size, c_.len - c_.pos);
         std::memcpy(ptr, c_.buffer.data() + c_.pos, n);
         c_.pos += n;
+        c_.last_read = Clock::now();
         account(ptr, n);
         return c_.failure == ReadFailure::none ? static_cast<ssize_t>(n) : -1;
     }
@@ -307,6 +309,10 @@ ReadFailure GuardedServer::current_read_failure() { return t_connection ? t_conn
 
 void GuardedServer::close_after_response() {
     if (t_connection) t_connection->close_requested = true;
+}
+
+std::chrono::steady_clock::time_point GuardedServer::request_received_at() {
+    return t_connection && t_connection->last_read != Clock::time_point{} ? t_connection->last_read : Clock::now();
 }
 
 std::function<bool()> GuardedServer::client_gone_check() {

@@ -24,6 +24,7 @@
 
 #include <httplib.h>
 
+#include <chrono>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -66,6 +67,12 @@ public:
     // the client of the current request has closed or reset its connection (so
     // its render or conversion can stop). Valid while the handler runs.
     static std::function<bool()> client_gone_check();
+    // On a handler's thread: when the last bytes of the current request were
+    // handed to cpp-httplib's parser, i.e. when the request was received (the
+    // parsing of the last of its body, the routing and the handler come after);
+    // now, off a connection's thread. Where a request's stage timings start:
+    // receiving the body is the client's pace, not the service's work.
+    static std::chrono::steady_clock::time_point request_received_at();
 
 private:
     bool process_and_close_socket(socket_t sock) override;

@@ -14,15 +14,13 @@
 #include "renderer/frame_cost.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
+#include "server/stage_timings.h"
 #include "server/work.h"
 
 namespace nurbsrt::server {
 namespace {
 
 using clock_type = std::chrono::steady_clock;
-double ms_since(clock_type::time_point t0) {
-    return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count();
-}
 
 AdmissionWait admission_wait(const RenderControl& control) {
     AdmissionWait w;
@@ -139,27 +137,42 @@ std::vector<AovBuffer> aov_buffers(const RenderImage& image, unsigned bits) {
 }  // namespace
 
 std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& bytes,
-                                               const RenderControl& control, bool& cache_hit, double& queue_ms) {
+                                                    const RenderControl& control, bool& cache_hit,
+                                                    StageClock& stages) {
     const ImportOptions options;
     SceneCache::Source source = SceneCache::Source::loaded;
+    const std::string key = scene_cache_key(bytes, options);  // a hash of every byte: a stage of its own
+    stages.mark("cache");
     auto scene = ctx.cache.get_or_load(
-        scene_cache_key(bytes, options),
+        key,
         [&] {
-            const auto tq = clock_type::now();
+            stages.mark("cache");  // the lookup that missed
             const auto slot = admit(ctx, ctx.gate, 0, admission_wait(control));
-            queue_ms += ms_since(tq);
+            stages.mark("queue");
             const TempFile upload = ctx.scratch.write("upload", ".cad", bytes);
+            stages.mark("isolation");  // handing the bytes to the child
             std::shared_ptr<const Scene> scene;
+            IsolationTimings isolated;
             try {
-                scene = std::make_shared<const Scene>(import_isolated(upload.path(), options, isolation_limits(ctx)));
+                scene = std::make_shared<const Scene>(
+                    import_isolated(upload.path(), options, isolation_limits(ctx), &isolated));
             } catch (const Error& e) {
                 ctx.metrics.count_import_failure(error_code_name(e.code()));
                 throw;
             }
-            return std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx.config.render_threads));
+            stages.add("prescan", isolated.prescan_ms);
+            add_import_stages(scene->timings, stages);
+            stages.add("transfer", isolated.transfer_ms);
+            stages.add("isolation", isolated.isolation_ms);
+            stages.mark("isolation");
+            auto prepared = std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx.config.render_threads));
+            stages.mark("prepare");
+            return prepared;
         },
         source);
-    // A request that waited for another's import of the same bytes paid no import.
+    // The lookup that hit, or the insert after an import, or the wait for a
+    // simultaneous request's import of the same bytes (which pays no import).
+    stages.mark("cache");
     cache_hit = source != SceneCache::Source::loaded;
     ctx.metrics.count_cache(cache_hit);
     return scene;
@@ -167,10 +180,13 @@ std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const st
 
 RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const RenderRequest& r,
                             const RenderControl& control) {
-    const auto t0 = control.start.value_or(clock_type::now());
     RenderedImage out;
-    double queue_ms = 0;
-    const std::shared_ptr<const PreparedScene> prepared = imported_scene(ctx, bytes, control, out.cache_hit, queue_ms);
+    out.timings = StageClock(control.start.value_or(clock_type::now()));
+    StageClock& stages = out.timings;
+    // Before this call since control.start: the caller's reading of the request
+    // (its parts, options and checks) or of a job's input file.
+    stages.mark("upload");
+    const std::shared_ptr<const PreparedScene> prepared = imported_scene(ctx, bytes, control, out.cache_hit, stages);
     const Scene& scene = prepared->scene();
     if (scene.faces.size() > ctx.config.max_faces)
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
@@ -181,9 +197,9 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const RenderPriority priority = priority_for(cost);
     AdmissionWait wait = admission_wait(control);
     if (priority == RenderPriority::high) wait.order = AdmissionGate::Order::may_overtake;
-    const auto tq = clock_type::now();
+    stages.mark("frame_setup");
     std::shared_ptr<AdmissionGate::Ticket> ticket = admit(ctx, ctx.render_gate, cost.memory_bytes, wait);
-    queue_ms += ms_since(tq);
+    stages.mark("queue");
 
     RenderOptions options;
     options.method = r.method;
@@ -197,21 +213,19 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     apply_look(r.look, r.format.name, options);
     const RenderResult result =
         render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop);
+    add_frame_stages(result.stats, stages);
+    stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
 
-    const auto te = clock_type::now();
     {
         const TempFile file = ctx.scratch.create("render", r.format.extension.c_str());
         write_image(result.image, file.path());
         out.bytes = read_file_bytes(file.path());
     }
     out.aovs = aov_buffers(result.image, r.aovs);
-    const double encode_ms = ms_since(te);
     ticket.reset();
+    stages.mark("encode");
 
-    const ImportTimings import_ms = out.cache_hit ? ImportTimings{} : scene.timings;
-    nlohmann::json stats = render_stats_json(result.stats, import_ms, encode_ms, ms_since(t0));
-    stats["timings_ms"]["prepare"] = out.cache_hit ? 0.0 : prepared->prepare_ms();  // paid by this request
-    stats["timings_ms"]["queue"] = queue_ms;
+    nlohmann::json stats = render_stats_json(result.stats, nlohmann::json::object());
     stats["estimate"] = {{"memory_mb", double(cost.memory_bytes) / (1 << 20)},
                          {"core_seconds", cost.core_seconds},
                          {"priority", priority_name(options.priority)}};
@@ -219,9 +233,10 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     stats["map_precision"] = map_precision_option(r.map_precision);
     stats["warnings"] = scene.warnings;
     stats["cache"] = out.cache_hit ? "hit" : "miss";
-    for (const char* stage :
-         {"queue", "read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"})
-        ctx.metrics.observe_stage(stage, stats["timings_ms"].value(stage, 0.0) / 1000.0);
+    stages.mark("statistics");
+    stats["timings_ms"] = stage_timings_json(stages, kRenderStages);
+    for (const StageClock::Stage& s : stages.stages()) ctx.metrics.observe_stage(s.name, s.ms / 1000.0);
+    ctx.metrics.observe_stage("total", stages.total_ms() / 1000.0);
     out.stats_json = stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     return out;
 }

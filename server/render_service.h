@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "renderer/stage_clock.h"
 #include "server/context.h"
 #include "server/render_options.h"
 
@@ -30,6 +31,10 @@ struct RenderedImage {
     std::vector<AovBuffer> aovs;  // those of r.aovs, in kAllAovs order
     std::string stats_json;  // the Statistics object's JSON text (with camera, cache, warnings)
     bool cache_hit = false;
+    // The stages from RenderControl::start to the statistics, as in stats_json's
+    // timings_ms; a caller that builds an answer from this marks its own stage
+    // ("response") on it and so keeps the stages summing to the total.
+    StageClock timings;
 };
 
 struct RenderControl {
@@ -41,7 +46,8 @@ struct RenderControl {
     std::function<bool()> should_stop;
     // Fraction done in (0, 1], from the rendering threads.
     std::function<void(double)> progress;
-    // When the request started (for the `total` timing); default: the call.
+    // When the request started (the `total` timing and its first stage, `upload`,
+    // run from here); default: the call.
     std::optional<std::chrono::steady_clock::time_point> start;
     // Accepted batch work: waits for admission as long as it takes (see AdmissionWait).
     bool patient = false;
@@ -52,10 +58,14 @@ struct RenderControl {
 // import of the same bytes, or imported in a child process (holding an import
 // slot, importer/isolated.h) and prepared here, once for every later render of
 // the same bytes. Throws the import's Error (unreadable_file, import_crashed,
-// ...). `cache_hit`: no import was paid; `queue_ms` gets the wait for the slot.
+// ...). `cache_hit`: no import was paid. `stages` gets this call's stages
+// marked end to end: cache (the key's hash of the bytes, the lookup, the insert,
+// or the wait for another request's import), and on a miss queue (the wait for
+// the slot), prescan, isolation, read, nurbs_convert, mesh, transfer, prepare.
 // Also what POST /v1/files imports, so a stored file's first render is a hit.
 std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& cad_bytes,
-                                                    const RenderControl& control, bool& cache_hit, double& queue_ms);
+                                                    const RenderControl& control, bool& cache_hit,
+                                                    StageClock& stages);
 
 // Renders `cad_bytes` (STEP/IGES, already checked by content) with `r`.
 // Admission happens here, in two steps: an import slot (ctx.gate) when the
@@ -64,8 +74,9 @@ std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const st
 // budget; the render runs at a priority from its estimated work. Each ticket
 // is held until its work really stops. Throws nurbsrt::Error (import errors,
 // limit_exceeded for too many faces or too costly a frame, overloaded,
-// render_timeout, canceled). Stage times go to the metrics; the time spent
-// waiting for admission is the `queue` timing.
+// render_timeout, canceled). The stage times (timings_ms: marked end to end on
+// one clock from control.start, so they sum to the total; the time spent
+// waiting for admission is `queue`) also go to the metrics.
 RenderedImage render_upload(ServerContext& ctx, const std::string& cad_bytes, const RenderRequest& r,
                             const RenderControl& control = {});
 

@@ -5,8 +5,6 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
-
 #include "importer/importer.h"
 #include "importer/isolated.h"
 #include "renderer/error.h"
@@ -16,6 +14,7 @@
 #include "server/http_util.h"
 #include "server/render_options.h"
 #include "server/routes.h"
+#include "server/stage_timings.h"
 #include "server/work.h"
 
 namespace nurbsrt::server {
@@ -29,7 +28,9 @@ const char* download_extension(ConversionFormat f) {
 }
 
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
-    const auto t0 = std::chrono::steady_clock::now();
+    // Stages marked end to end from the request's arrival (see
+    // kConversionStages): they sum to the total.
+    StageClock stages(GuardedServer::request_received_at());
     Upload upload = read_upload(req, {"format"});
     const ConversionFormat format = parse_conversion_format(upload.options_json);
     StoredContent stored;
@@ -38,49 +39,54 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
         throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
+    stages.mark("upload");
 
     auto ticket = admit(ctx);
+    stages.mark("queue");
     const TempFile in = ctx.scratch.write("upload", ".cad", bytes);
     // The worker picks the writer by this extension.
     const TempFile out = ctx.scratch.create("converted", conversion_format_extension(format));
+    stages.mark("isolation");  // handing the bytes to the child
     ConvertReport report;
+    IsolationTimings isolated;
     try {
         IsolationLimits limits = isolation_limits(ctx);
         limits.should_stop = GuardedServer::client_gone_check();  // a gone client's conversion is killed
-        report = convert_isolated(in.path(), out.path(), limits);
+        report = convert_isolated(in.path(), out.path(), limits, &isolated);
     } catch (const Error& e) {
         ctx.metrics.count_import_failure(error_code_name(e.code()));
         throw;
     }
+    add_conversion_stages(report, isolated, stages);
+    stages.mark("isolation");
     const std::string data = read_file_bytes(out.path());
     ticket.reset();
-    const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stages.mark("transfer");  // the converted file into this process
 
     const std::string content_type = conversion_format_content_type(format);
-    char timing[160];
-    std::snprintf(timing, sizeof timing, "read;dur=%.3f, mesh;dur=%.3f, write;dur=%.3f, total;dur=%.3f",
-                  report.read_ms, report.mesh_ms, report.write_ms, total_ms);
-    res.set_header("Server-Timing", timing);
     if (wants_json(req)) {
-        const nlohmann::json body = {{"request_id", request_id(res)},
-                                     {"input_format", format_name(report.in_format)},
-                                     {"output_format", conversion_format_name(report.output)},
-                                     {"faces", report.faces},
-                                     {"triangles", report.triangles},
-                                     {"unmeshed_faces", report.unmeshed_faces},
-                                     {"warnings", report.warnings},
-                                     {"content_type", content_type},
-                                     {"data_base64", base64_encode(data)},
-                                     {"timings_ms", {{"read", report.read_ms},
-                                                     {"mesh", report.mesh_ms},
-                                                     {"write", report.write_ms},
-                                                     {"total", total_ms}}}};
+        nlohmann::json body = {{"request_id", request_id(res)},
+                               {"input_format", format_name(report.in_format)},
+                               {"output_format", conversion_format_name(report.output)},
+                               {"faces", report.faces},
+                               {"triangles", report.triangles},
+                               {"unmeshed_faces", report.unmeshed_faces},
+                               {"warnings", report.warnings},
+                               {"content_type", content_type},
+                               {"data_base64", base64_encode(data)}};
+        // The last stage, this answer, ends before its serialization: the text
+        // cannot hold the time it takes to write itself.
+        stages.mark("response");
+        body["timings_ms"] = stage_timings_json(stages, kConversionStages);
+        res.set_header("Server-Timing", server_timing(stages, kConversionStages));
         res.set_content(body.dump(), kBulkJsonContentType);
     } else {
         res.set_header("Content-Disposition", "attachment; filename=\"" +
                                                   download_name(upload.filename, download_extension(format)) +
                                                   "\"");
         res.set_content(data, content_type.c_str());
+        stages.mark("response");
+        res.set_header("Server-Timing", server_timing(stages, kConversionStages));
     }
 }
 

@@ -178,8 +178,8 @@ void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Res
     RenderControl control;
     control.should_stop = GuardedServer::client_gone_check();  // a gone client's import stops waiting
     bool cache_hit = false;
-    double queue_ms = 0;
-    const auto prepared = imported_scene(ctx, bytes, control, cache_hit, queue_ms);
+    StageClock stages;  // not reported: a stored file's answer carries no timings
+    const auto prepared = imported_scene(ctx, bytes, control, cache_hit, stages);
     file.summary_json = import_summary(prepared->scene()).dump(-1, ' ', false, json::error_handler_t::replace);
     file.created_ms = now_ms();
     switch (ctx.files.put(file, bytes)) {

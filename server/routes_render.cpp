@@ -6,7 +6,6 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
-#include <cstdio>
 
 #include "importer/importer.h"
 #include "renderer/error.h"
@@ -18,6 +17,7 @@
 #include "server/render_options.h"
 #include "server/render_service.h"
 #include "server/routes.h"
+#include "server/stage_timings.h"
 #include "server/work.h"
 
 namespace nurbsrt::server {
@@ -32,7 +32,8 @@ nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
 }
 
 void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
-    const auto t0 = std::chrono::steady_clock::now();
+    // The stages (timings_ms, Server-Timing) run from the request's arrival.
+    const auto t0 = GuardedServer::request_received_at();
     Upload upload = read_upload(req);
     const RenderRequest r = parse_render_options(upload.options_json);
     check_render_limits(ctx.config, r);
@@ -64,35 +65,33 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     RenderControl control;
     control.start = t0;
     control.should_stop = GuardedServer::client_gone_check();  // a gone client's render stops
-    const RenderedImage rendered = render_upload(ctx, bytes, r, control);
-    const std::string& image = rendered.bytes;
-    const bool cache_hit = rendered.cache_hit;
-    const nlohmann::json stats = nlohmann::json::parse(rendered.stats_json);
-
-    std::string timing;
-    for (const char* stage :
-         {"queue", "read", "nurbs_convert", "mesh", "prepare", "preliminary_map", "newton", "shade", "encode", "total"}) {
-        const double ms = stats["timings_ms"].value(stage, 0.0);
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "%s%s;dur=%.3f", timing.empty() ? "" : ", ", stage, ms);
-        timing += buf;
+    RenderedImage rendered = render_upload(ctx, bytes, r, control);
+    StageClock& stages = rendered.timings;
+    const auto set_timing_header = [&] {
+        res.set_header("Server-Timing", server_timing(stages, kRenderStages) + ", cache;desc=" +
+                                            (rendered.cache_hit ? "hit" : "miss"));
+    };
+    if (!wants_json(req)) {
+        res.set_content(rendered.bytes, r.format.content_type.c_str());
+        stages.mark("response");
+        set_timing_header();
+        return;
     }
-    timing += std::string(", cache;desc=") + (cache_hit ? "hit" : "miss");
-    res.set_header("Server-Timing", timing);
-
-    if (wants_json(req)) {
-        nlohmann::json body = {{"request_id", request_id(res)},
-                               {"format", r.format.name},
-                               {"content_type", r.format.content_type},
-                               {"width", r.width},
-                               {"height", r.height},
-                               {"image_base64", base64_encode(image)},
-                               {"statistics", stats}};
-        if (!rendered.aovs.empty()) body["aovs"] = aovs_json(rendered.aovs);
-        res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), kBulkJsonContentType);
-    } else {
-        res.set_content(image, r.format.content_type.c_str());
-    }
+    nlohmann::json stats = nlohmann::json::parse(rendered.stats_json);
+    nlohmann::json body = {{"request_id", request_id(res)},
+                           {"format", r.format.name},
+                           {"content_type", r.format.content_type},
+                           {"width", r.width},
+                           {"height", r.height},
+                           {"image_base64", base64_encode(rendered.bytes)}};
+    if (!rendered.aovs.empty()) body["aovs"] = aovs_json(rendered.aovs);
+    // The last stage, this answer, ends before its serialization: the text
+    // cannot hold the time it takes to write itself.
+    stages.mark("response");
+    stats["timings_ms"] = stage_timings_json(stages, kRenderStages);
+    body["statistics"] = std::move(stats);
+    set_timing_header();
+    res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), kBulkJsonContentType);
 }
 
 }  // namespace

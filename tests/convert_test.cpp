@@ -32,6 +32,7 @@
 #include <XCAFApp_Application.hxx>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -377,6 +378,30 @@ TEST(ConvertIsolated, ReportsCrossTheProcessBoundary) {
     const nurbsrt::ConvertReport igs = nurbsrt::convert_isolated(in, out_path("iso", ".igs"), limits);
     EXPECT_EQ(igs.output, ConversionFormat::iges);
     EXPECT_EQ(igs.out_format, nurbsrt::CadFormat::iges);
+    EXPECT_GT(igs.verify_ms, 0);  // the read-back check, a stage of its own
+    EXPECT_EQ(stl.verify_ms, 0);
+}
+
+// The child's stages and the parent's share (IsolationTimings) are the whole
+// call: what the service's conversion timings add up from.
+TEST(ConvertIsolated, StagesAndIsolationAreTheWholeCall) {
+    nurbsrt::IsolationLimits limits;
+    limits.time_limit_s = 120;
+    limits.worker_executable = NURBSRT_BINARY;
+    const std::string in = nurbsrt::test::box_with_holes();
+    for (const char* ext : {".stl", ".step"}) {
+        nurbsrt::IsolationTimings t;
+        const auto t0 = std::chrono::steady_clock::now();
+        const nurbsrt::ConvertReport r = nurbsrt::convert_isolated(in, out_path("iso-timed", ext), limits, &t);
+        const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        const double sum =
+            t.prescan_ms + t.isolation_ms + t.transfer_ms + r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms;
+        EXPECT_GT(t.isolation_ms, 0) << ext;  // starting a process is never free
+        EXPECT_GE(t.prescan_ms, 0) << ext;
+        EXPECT_GE(t.transfer_ms, 0) << ext;
+        EXPECT_LE(sum, wall) << ext;
+        EXPECT_GE(sum, 0.98 * wall) << ext;
+    }
 }
 
 }  // namespace

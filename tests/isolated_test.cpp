@@ -100,6 +100,22 @@ TEST(IsolatedImportOptions, WorkerOptionsRoundTrip) {
     EXPECT_THROW(nurbsrt::import_options_from_args({"--mesh-angle=abc"}), nurbsrt::Error);
 }
 
+// The child's stages (Scene::timings) and the parent's share (IsolationTimings)
+// are the whole call: what the service's render timings add up from.
+TEST_P(IsolatedImport, StagesAndIsolationAreTheWholeCall) {
+    nurbsrt::IsolationTimings t;
+    const auto t0 = std::chrono::steady_clock::now();
+    const nurbsrt::Scene s = nurbsrt::import_isolated(kScrew, {}, limits(120), &t);
+    const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const nurbsrt::ImportTimings& c = s.timings;
+    const double sum = t.prescan_ms + t.isolation_ms + t.transfer_ms + c.read_ms + c.nurbs_convert_ms + c.mesh_ms;
+    EXPECT_GT(t.isolation_ms, 0);  // starting a process is never free
+    EXPECT_GT(t.transfer_ms, 0);
+    EXPECT_GE(t.prescan_ms, 0);
+    EXPECT_LE(sum, wall);
+    EXPECT_GE(sum, 0.98 * wall);
+}
+
 INSTANTIATE_TEST_SUITE_P(Workers, IsolatedImport, ::testing::Values(NURBSRT_WORKER_BINARY, NURBSRT_BINARY),
                          [](const ::testing::TestParamInfo<const char*>& info) {
                              return std::string(info.index == 0 ? "nurbsrt_worker" : "nurbsrt_subcommand");

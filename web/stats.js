@@ -2,20 +2,32 @@
 // image options' stages, anti-aliasing, feature lines and the shadow map, when
 // they ran) and the iteration histograms of the method comparison.
 
+// In the order they run; the service marks them end to end, so they sum to the total.
 const STAGES = [
+  ['upload', 'request', '#c9ced6'],
+  ['cache', 'scene cache', '#a7b3c4'],
   ['queue', 'queue', '#b0b7c3'],
+  ['prescan', 'pre-scan', '#9fb4d3'],
+  ['isolation', 'import process', '#8fa6c9'],
   ['read', 'read', '#6c8ebf'],
   ['nurbs_convert', 'NURBS conversion', '#4a6fa5'],
   ['mesh', 'meshing', '#82b366'],
+  ['transfer', 'scene transfer', '#a3c494'],
   ['prepare', 'prepare', '#5a8f47'],
+  ['frame_setup', 'frame set-up', '#e6d38f'],
   ['preliminary_map', 'preliminary map', '#d6b656'],
   ['newton', 'Newton', '#d0542e'],
   ['shadow_map', 'shadow map', '#8c6d3f'],
   ['shade', 'shading', '#9673a6'],
   ['antialias', 'anti-aliasing', '#c27ba0'],
   ['edges', 'feature lines', '#3d3d3d'],
+  ['statistics', 'statistics', '#b5a1c2'],
   ['encode', 'encoding', '#7aa6a6'],
+  ['response', 'answer', '#a9c9c9'],
 ];
+
+// Below this the rest is the rounding of the stages' sum, not time.
+const OTHER_MIN_MS = 0.05;
 
 const fmt = (ms) => (ms >= 100 ? ms.toFixed(0) : ms >= 10 ? ms.toFixed(1) : ms.toFixed(2));
 
@@ -31,8 +43,9 @@ export function showStages(bar, list, statistics) {
   const t = statistics.timings_ms || {};
   const total = t.total || 0;
   const parts = STAGES.map(([key, label, colour]) => ({ key, label, colour, ms: t[key] || 0 }));
-  const other = Math.max(0, total - parts.reduce((s, p) => s + p.ms, 0));
-  parts.push({ key: 'other', label: 'other (HTTP, set-up)', colour: '#e3e6ea', ms: other });
+  // Stages this page does not know (a newer service): shown as one rest, not lost.
+  const other = total - parts.reduce((s, p) => s + p.ms, 0);
+  if (other >= OTHER_MIN_MS) parts.push({ key: 'other', label: 'other stages', colour: '#e3e6ea', ms: other });
   bar.replaceChildren();
   list.replaceChildren();
   for (const p of parts) {
