@@ -25,6 +25,7 @@
 #include "server/render_service.h"
 #include "server/request_log.h"
 #include "server/scratch.h"
+#include "server/stage_timings.h"
 #include "server/work.h"
 
 namespace nurbsrt::server {
@@ -425,25 +426,31 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
         result = nlohmann::json::parse(image.stats_json);
     } else {
         ConvertReport report;
+        StageClock stages(t0);
+        IsolationTimings isolated;
         try {
             IsolationLimits limits = isolation_limits(ctx_);
             limits.should_stop = [cancel] { return cancel->load(); };  // a deleted job's child is killed
-            report = convert_isolated(input, partial, limits);
+            report = convert_isolated(input, partial, limits, &isolated);
         } catch (const Error& e) {
             ctx_.metrics.count_import_failure(error_code_name(e.code()));
             std::error_code ec;
             fs::remove(partial, ec);
             throw;
         }
+        add_conversion_stages(report, isolated, stages);
+        stages.mark("isolation");
         ticket.reset();
-        const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         std::string out_format = artifact_format(out.artifact);  // STEP, IGES, STL, ... as in POST /v1/conversions
         for (char& ch : out_format) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
         result = {{"input_format", format_name(report.in_format)},
                   {"output_format", out_format},
                   {"faces", report.faces},
                   {"warnings", report.warnings},
-                  {"timings_ms", {{"read", report.read_ms}, {"write", report.write_ms}, {"total", total}}}};
+                  {"timings_ms", nullptr}};
+        // The artifact is already in place (partial): no transfer; this result is the answer.
+        stages.mark("response");
+        result["timings_ms"] = stage_timings_json(stages, kConversionStages);
     }
     std::error_code ec;
     // A run whose lease was lost meanwhile leaves the artifact to the run that took over.

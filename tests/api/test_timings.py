@@ -135,8 +135,11 @@ def test_conversion_stages_sum_to_total(url):
 
 def test_job_render_statistics_add_up(url):
     """A job's render runs the service's render code: its statistics add up the
-    same way (ending with the statistics: a job has no HTTP answer to build)."""
-    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 96, "height": 72}}]}
+    same way (ending with the statistics: a job has no HTTP answer to build);
+    its conversions' reports too (STEP with its read-back check, and STL)."""
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 96, "height": 72}},
+                        {"file": 0, "type": "conversion", "format": "step"},
+                        {"file": 0, "type": "conversion", "format": "stl"}]}
     parts = [("file", ("screw.step", unique_screw(), "application/octet-stream")),
              ("job", (None, json.dumps(spec), "application/json"))]
     r = requests.post(url + "/v1/jobs", files=parts, timeout=TIMEOUT)
@@ -155,3 +158,8 @@ def test_job_render_statistics_add_up(url):
     check_adds_up(stats["timings_ms"], RENDER_STAGES, "job render")
     assert stats["timings_ms"]["response"] == 0
     check_newton(stats)
+    for out in job["outputs"][1:]:
+        t = out["report"]["timings_ms"]
+        check_adds_up(t, CONVERSION_STAGES, f"job conversion to {out['format']}")
+        assert t["isolation"] > 0 and t["read"] > 0 and t["write"] > 0, t
+        assert t["upload"] == 0 and t["queue"] == 0, t  # the input is on disk; the slot was granted before
