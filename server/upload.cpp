@@ -25,6 +25,15 @@ bool is_utf8(const std::string& s) {
     }
 }
 
+// A stored file's id as sent: never empty (an empty id would read as "no
+// stored file" and leave the route without bytes), at most a line long.
+std::string checked_file_id(const std::string& id) {
+    if (id.empty())
+        throw Error(ErrorCode::invalid_argument,
+                    "'file_id' is empty: name a stored file by the id POST /v1/files answered");
+    return id;
+}
+
 // The parts of a multipart upload: `file` or `file_id`, `options`, and the
 // plain form fields named in `form_options`.
 void read_multipart(const httplib::Request& req, std::initializer_list<const char*> form_options,
@@ -46,7 +55,7 @@ void read_multipart(const httplib::Request& req, std::initializer_list<const cha
         up.bytes = &file->second.content;
         up.filename = file->second.filename;
     } else {
-        up.file_id = file_id->second.content;
+        up.file_id = checked_file_id(file_id->second.content);
     }
     up.multipart = true;
     if (const auto part = req.files.find("options"); part != req.files.end()) {
@@ -83,7 +92,7 @@ void read_json_body(const std::string& body, nlohmann::json& options, Upload& up
         throw Error(ErrorCode::invalid_argument,
                     "a JSON body names a stored file: {\"file_id\": \"...\", <options>} (send a CAD file raw or "
                     "as the 'file' part of multipart/form-data)");
-    up.file_id = j["file_id"].get<std::string>();
+    up.file_id = checked_file_id(j["file_id"].get<std::string>());
     j.erase("file_id");
     for (const auto& [k, v] : j.items())
         if (options.contains(k))
@@ -201,7 +210,7 @@ JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {
             throw Error(ErrorCode::limit_exceeded, "more than " + std::to_string(max_job_files) + " files in one job");
         up.inputs.push_back({static_cast<int>(up.inputs.size()), "", "", 0});
         up.bytes.push_back(nullptr);
-        up.file_ids.push_back(it->second.content);
+        up.file_ids.push_back(checked_file_id(it->second.content));
     }
     if (up.inputs.empty())
         throw Error(ErrorCode::invalid_argument, "a job needs at least one 'file' part or 'file_id' field");

@@ -293,6 +293,23 @@ def test_file_id_request_errors(url):
     check_problem(post_raw(url, "/v1/files", SCREW.read_bytes(), params={"colour": "red"}), 400, "invalid_argument")
 
 
+def test_empty_file_id_is_400_everywhere_and_the_service_stays_up(url):
+    """An empty id once read as "no stored file" and left the route without bytes: the process crashed."""
+    job = json.dumps({"outputs": [{"file": 0, "type": "conversion", "format": "stl"}]})
+    requests_to_send = [
+        ("/v1/renders", {"json": {"file_id": ""}}),
+        ("/v1/conversions", {"json": {"file_id": "", "format": "stl"}}),
+        ("/v1/renders", {"files": [("file_id", (None, ""))]}),
+        ("/v1/conversions", {"files": [("file_id", (None, "")), ("format", (None, "stl"))]}),
+        ("/v1/files", {"files": [("file_id", (None, ""))]}),
+        ("/v1/jobs", {"files": [("file_id", (None, "")), ("job", (None, job, "application/json"))]}),
+    ]
+    for path, kwargs in requests_to_send:
+        r = requests.post(url + path, timeout=TIMEOUT, **kwargs)
+        assert "'file_id' is empty" in check_problem(r, 400, "invalid_argument")["detail"], (path, r.text[:300])
+    assert requests.get(url + "/healthz", timeout=TIMEOUT).status_code == 200
+
+
 def test_iges_is_sniffed_too(url):
     data = fresh(url, BEARING.read_bytes())
     f = stored(post_raw(url, "/v1/files", data, params={"filename": "bearing.step"}))
