@@ -6,6 +6,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/render.h"
+#include "renderer/shadow_rays.h"
 
 namespace nurbsrt {
 namespace {
@@ -38,10 +39,21 @@ constexpr double kSecondsPerPixel = 0.4e-6;
 constexpr double kSecondsPerBasisProduct = 0.0134e-6;
 constexpr double kSecondsPerTriangle = 0.2e-6;
 constexpr double kBicubicEvalCost = 16.0;
+// The extra work of anti-aliasing 4 sub-pixel rays per edge pixel, and of the
+// key light's shadows, as shares of the plain frame's: upper ends of `nurbsrt
+// bench --only look` (512 x 512, one thread, three real models: anti-aliasing
+// 4 with feature lines took 0.37-0.99 of the plain frame more, shadows
+// 0.29-0.57 more). Anti-aliasing scales with its ray count; the samples are
+// shaded with shadows too, so the two multiply.
+constexpr double kAntialiasWorkAt4 = 1.0;
+constexpr double kShadowWork = 0.6;
+// Anti-aliasing's edge flag, and the shadow AOV, per pixel.
+constexpr size_t kAntialiasBytesPerPixel = sizeof(uint8_t);
+constexpr size_t kShadowBytesPerPixel = sizeof(uint8_t);
 
 }  // namespace
 
-FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int height) {
+FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int height, FrameCostOptions options) {
     const Scene& scene = prepared.scene();
     const MapMesh& map = prepared.map_mesh();
     const double pixels = double(width) * double(height);
@@ -67,9 +79,23 @@ FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int heig
     // Every term above is already a worst case (all candidate lists full), so no slack factor:
     // measured peaks were 0.4-0.65 of this at 1024x768 and more.
     const double bytes = pixels * per_pixel + projected_bytes + double(map.xyz.size()) * kBytesPerMapVertex;
-    c.memory_bytes = kFixedBytes + static_cast<size_t>(bytes);
-    c.core_seconds = pixels * (kSecondsPerPixel + kSecondsPerBasisProduct * eval_cost) +
-                     double(map.triangles()) * kSecondsPerTriangle;
+    double extra_bytes = 0;
+    double work_factor = 1;
+    if (options.antialias > 0) {
+        extra_bytes += pixels * kAntialiasBytesPerPixel;
+        work_factor *= 1 + kAntialiasWorkAt4 * options.antialias / 4.0;
+    }
+    if (options.shadows) {
+        // The light's own map (as the view's: map, framebuffer, clip positions,
+        // the surfaces projected for it) and the shadow AOV.
+        const double light = double(light_map_size(width, height));
+        extra_bytes += light * light * (kMapBytesPerPixel + kFramebufferBytesPerPixel) + projected_bytes +
+                       double(map.xyz.size()) * kBytesPerMapVertex + pixels * kShadowBytesPerPixel;
+        work_factor *= 1 + kShadowWork;
+    }
+    c.memory_bytes = kFixedBytes + static_cast<size_t>(bytes + extra_bytes);
+    c.core_seconds = work_factor * (pixels * (kSecondsPerPixel + kSecondsPerBasisProduct * eval_cost) +
+                                    double(map.triangles()) * kSecondsPerTriangle);
     return c;
 }
 

@@ -15,7 +15,8 @@
 // sum of a per-pixel solve cost that grows with the evaluation cost of the
 // faces ((p+1)(q+1) basis products per point, Piegl & Tiller A3.5), weighted by
 // each face's share of the map mesh as a proxy for its share of the pixels, and
-// a per-triangle cost of the map.
+// a per-triangle cost of the map. Anti-aliasing and shadows scale that work by
+// factors measured on real models (frame_cost.cpp) and add their buffers.
 #pragma once
 
 #include <cstddef>
@@ -29,6 +30,12 @@ struct FrameCost {
     double core_seconds = 0;
 };
 
-FrameCost estimate_frame_cost(const PreparedScene& scene, int width, int height);
+// The passes that change a frame's cost (RenderOptions::antialias, ::shadows).
+struct FrameCostOptions {
+    int antialias = 0;
+    bool shadows = false;
+};
+
+FrameCost estimate_frame_cost(const PreparedScene& scene, int width, int height, FrameCostOptions options = {});
 
 }  // namespace nurbsrt

@@ -66,9 +66,11 @@ CameraSpec KeyLightShadows::light_view(const Scene& scene, Vec3 key, int size) {
     return s;
 }
 
+int light_map_size(int width, int height) { return std::clamp(std::max(width, height), kMinLightMap, kMaxLightMap); }
+
 KeyLightShadows::KeyLightShadows(const FrameContext& view, const Solver& view_solver, Vec3 key)
     : key_(key),
-      size_(std::clamp(std::max(view.width, view.height), kMinLightMap, kMaxLightMap)),
+      size_(light_map_size(view.width, view.height)),
       camera_(light_view(view.scene, key, size_)),
       map_(render_preliminary_map(view.prepared, camera_, MapPrecision::float32)),
       progress_(no_progress_, 1),

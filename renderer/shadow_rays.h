@@ -26,6 +26,9 @@
 
 namespace nurbsrt {
 
+// The light map's size (square) for a view of width x height.
+int light_map_size(int width, int height);
+
 class KeyLightShadows {
 public:
     // Renders the light's map: a square orthographic view along the key light

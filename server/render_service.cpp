@@ -192,7 +192,9 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
     const Camera camera(camera_spec_for(r, scene));
-    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height);
+    RenderOptions look;  // the passes that change the frame's cost
+    apply_look(r.look, r.format.name, look);
+    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {look.antialias, look.shadows});
     check_frame_cost(ctx.config, cost);
     const RenderPriority priority = priority_for(cost);
     AdmissionWait wait = admission_wait(control);
