@@ -15,7 +15,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static const server::ServerConfig config;
     const std::string text = fuzz::as_string(data, size);
     fuzz::expect_only_errors([&] {
-        const std::vector<server::JobOutput> outputs = server::parse_job_spec(text, inputs, config);
+        const std::vector<server::JobOutput> outputs = server::parse_job_spec(text, inputs, config).outputs;
         for (const server::JobOutput& o : outputs)
             if (!server::valid_artifact_name(o.artifact)) __builtin_trap();  // a name the service would not serve
     });

@@ -52,31 +52,31 @@ json job_json(const JobRecord& j) {
     for (const JobOutput& o : j.outputs) {
         json out = {{"index", o.index},
                     {"file", o.file},
-                    {"type", o.kind},
+                    {"type", output_kind_name(o.kind)},
                     {"format", artifact_format(o.artifact)},
-                    {"state", o.state},
-                    {"progress", o.state == "succeeded" ? 1.0 : o.progress},
+                    {"state", job_state_name(o.state)},
+                    {"progress", o.state == JobState::succeeded ? 1.0 : o.progress},
                     {"started_at", timestamp(o.started_ms)},
                     {"finished_at", timestamp(o.finished_ms)},
                     {"duration_ms", span(o.started_ms, o.finished_ms)}};
         const json options = parse_or_null(o.options_json);
-        if (o.kind == "render") out["options"] = options.is_object() ? options : json::object();
+        if (o.kind == OutputKind::render) out["options"] = options.is_object() ? options : json::object();
         if (!o.error_code.empty()) out["error"] = {{"code", o.error_code}, {"message", o.error_message}};
-        if (o.state == "succeeded") {
+        if (o.state == JobState::succeeded) {
             out["artifact"] = {{"name", o.artifact},
                                {"url", job_url(j.id) + "/artifacts/" + o.artifact},
                                {"content_type", o.content_type},
                                {"bytes", o.artifact_bytes}};
             const json result = parse_or_null(o.result_json);
-            if (result.is_object()) out[o.kind == "render" ? "statistics" : "report"] = result;
+            if (result.is_object()) out[o.kind == OutputKind::render ? "statistics" : "report"] = result;
         }
-        progress += o.state == "succeeded" || o.state == "failed" ? 1.0 : o.progress;
+        progress += o.state == JobState::succeeded || o.state == JobState::failed ? 1.0 : o.progress;
         outputs.push_back(std::move(out));
     }
     json body = {
         {"id", j.id},
         {"url", job_url(j.id)},
-        {"state", j.state},
+        {"state", job_state_name(j.state)},
         {"progress", j.outputs.empty() ? 0.0 : progress / static_cast<double>(j.outputs.size())},
         {"attempts", j.attempts},
         {"created_at", timestamp(j.created_ms)},

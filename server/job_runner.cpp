@@ -144,7 +144,7 @@ void JobService::stop() {
 void JobService::submit(JobRecord& job, const std::vector<const std::string*>& input_bytes) {
     // One submission at a time, so the queue bound holds exactly.
     std::lock_guard<std::mutex> submit_lock(submit_m_);
-    if (store_->count_by_state()["queued"] >= ctx_.config.max_queued_jobs)
+    if (store_->count_by_state()[JobState::queued] >= ctx_.config.max_queued_jobs)
         throw Error(ErrorCode::overloaded,
                     std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
     job.id = new_request_id();
@@ -358,14 +358,14 @@ void JobService::end_claim(const JobClaim& claim) {
         bool left = false;
         for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{})
             for (const int index : claim.run)
-                left = left || (o.index == index && (o.state == "queued" || o.state == "running"));
+                left = left || (o.index == index && !is_finished(o.state));
         if (left) {
             store_->requeue(claim);
             log_event("job_requeued", nlohmann::json{{"job_id", claim.id}}.dump());
             return;
         }
     }
-    const std::optional<std::string> state = store_->finish(claim.id, now_ms());
+    const std::optional<JobState> state = store_->finish(claim.id, now_ms());
     if (!state) {  // deleted while running
         store_->remove(claim.id);
         remove_files(claim.id);
@@ -373,9 +373,9 @@ void JobService::end_claim(const JobClaim& claim) {
         log_event("job_canceled", nlohmann::json{{"job_id", claim.id}}.dump());
         return;
     }
-    if (*state == "running") return;  // other outputs are still at work (shared store)
-    ctx_.metrics.count_job_finished(*state);
-    log_event("job_finished", nlohmann::json{{"job_id", claim.id}, {"state", *state}}.dump());
+    if (*state == JobState::running) return;  // other outputs are still at work (shared store)
+    ctx_.metrics.count_job_finished(job_state_name(*state));
+    log_event("job_finished", nlohmann::json{{"job_id", claim.id}, {"state", job_state_name(*state)}}.dump());
     webhooks_->notify();  // its callback (if any) became due with the finish
 }
 
@@ -387,7 +387,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
     // a conversion takes an import/conversion slot here.
     const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
     std::shared_ptr<AdmissionGate::Ticket> ticket;
-    if (out.kind != "render") ticket = admit(ctx_, ctx_.gate, 0, patient);
+    if (out.kind != OutputKind::render) ticket = admit(ctx_, ctx_.gate, 0, patient);
     if (!store_->output_running(job.id, out.index, now_ms(), job.lease))
         throw Error(ErrorCode::canceled, "the job was deleted");
     const auto t0 = std::chrono::steady_clock::now();
@@ -401,7 +401,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
     const std::string partial =
         dir + "/partial-" + (job.lease.empty() ? std::string() : job.lease.substr(0, 12) + "-") + out.artifact;
     nlohmann::json result;
-    if (out.kind == "render") {
+    if (out.kind == OutputKind::render) {
         const RenderRequest r = parse_render_options(out.options_json);
         RenderControl control;
         control.cancel = cancel;

@@ -74,9 +74,11 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
         JobOutput out;
         out.index = static_cast<int>(i);
         out.file = resolve_file(o["file"], inputs, where);
-        out.kind = o["type"].get<std::string>();
+        const std::optional<OutputKind> kind = parse_output_kind(o["type"].get<std::string>());
+        if (!kind) bad(where + ": 'type' must be render or conversion");
+        out.kind = *kind;
         std::string extension;
-        if (out.kind == "render") {
+        if (out.kind == OutputKind::render) {
             for (const auto& [key, v] : o.items())
                 if (key != "file" && key != "type" && key != "options")
                     bad(where + ": unknown field '" + key.substr(0, 64) + "' of a render");
@@ -95,7 +97,7 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             }
             extension = r.format.extension;
             out.content_type = r.format.content_type;
-        } else if (out.kind == "conversion") {
+        } else {
             for (const auto& [key, v] : o.items())
                 if (key != "file" && key != "type" && key != "format")
                     bad(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
@@ -106,10 +108,8 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             out.options_json = json{{"format", conversion_format_short_name(f)}}.dump();
             extension = conversion_format_extension(f);
             out.content_type = conversion_format_content_type(f);
-        } else {
-            bad(where + ": 'type' must be render or conversion");
         }
-        out.artifact = artifact_name(out.file, out.kind, out.index, extension);
+        out.artifact = artifact_name(out.file, output_kind_name(out.kind), out.index, extension);
         used[static_cast<size_t>(out.file)] = true;
         outputs.push_back(std::move(out));
     }

@@ -84,7 +84,7 @@ JobRecord read_job(const PgResult& r, int row) {
     JobRecord j;
     j.seq = r.i64(row, 0);
     j.id = r.text(row, 1);
-    j.state = r.text(row, 2);
+    j.state = stored_job_state(r.text(row, 2));
     j.created_ms = r.i64(row, 3);
     j.started_ms = r.i64(row, 4);
     j.finished_ms = r.i64(row, 5);
@@ -150,7 +150,7 @@ void PgJobStore::create(JobRecord& job) {
         "RETURNING seq",
         {job.id, std::to_string(job.created_ms), job.callback_url, callback_state_name(job.callback.state)});
     job.seq = r.i64(0, 0);
-    job.state = "queued";
+    job.state = JobState::queued;
     for (const JobInput& in : job.inputs)
         conn_->exec("INSERT INTO job_inputs(job_id, idx, filename, format, bytes) VALUES ($1, $2, $3, $4, $5)",
                     {job.id, std::to_string(in.index), in.filename, in.format, std::to_string(in.bytes)});
@@ -158,7 +158,7 @@ void PgJobStore::create(JobRecord& job) {
         conn_->exec(
             "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
             "VALUES ($1, $2, $3, $4, $5, $6, $7, 'queued')",
-            {job.id, std::to_string(o.index), std::to_string(o.file), o.kind, o.options_json, o.artifact,
+            {job.id, std::to_string(o.index), std::to_string(o.file), output_kind_name(o.kind), o.options_json, o.artifact,
              o.content_type});
     t.commit();
 }
@@ -176,11 +176,11 @@ void PgJobStore::load_children(JobRecord& j) {
         JobOutput o;
         o.index = static_cast<int>(r.i64(i, 0));
         o.file = static_cast<int>(r.i64(i, 1));
-        o.kind = r.text(i, 2);
+        o.kind = stored_output_kind(r.text(i, 2));
         o.options_json = r.text(i, 3);
         o.artifact = r.text(i, 4);
         o.content_type = r.text(i, 5);
-        o.state = r.text(i, 6);
+        o.state = stored_job_state(r.text(i, 6));
         o.progress = r.real(i, 7);
         o.error_code = r.text(i, 8);
         o.error_message = r.text(i, 9);
@@ -215,7 +215,7 @@ bool PgJobStore::exists(const std::string& id) {
     return conn_->exec("SELECT 1 FROM jobs WHERE id = $1", {id}).rows() > 0;
 }
 
-JobPage PgJobStore::list(const std::optional<std::string>& state, bool newest_first, int limit,
+JobPage PgJobStore::list(const std::optional<JobState>& state, bool newest_first, int limit,
                          std::optional<int64_t> after_seq) {
     std::lock_guard<std::mutex> lock(m_);
     const std::string sql =
@@ -225,7 +225,7 @@ JobPage PgJobStore::list(const std::optional<std::string>& state, bool newest_fi
     PgConn::Transaction t(*conn_);
     conn_->exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
     // One more than asked tells whether a next page exists.
-    const PgResult r = conn_->exec(sql.c_str(), {state.value_or(""),
+    const PgResult r = conn_->exec(sql.c_str(), {state ? job_state_name(*state) : "",
                                                  std::to_string(after_seq.value_or(newest_first ? INT64_MAX : 0)),
                                                  std::to_string(static_cast<int64_t>(limit) + 1)});
     JobPage page;
@@ -239,12 +239,12 @@ JobPage PgJobStore::list(const std::optional<std::string>& state, bool newest_fi
     return page;
 }
 
-std::map<std::string, int64_t> PgJobStore::count_by_state() {
+std::map<JobState, int64_t> PgJobStore::count_by_state() {
     std::lock_guard<std::mutex> lock(m_);
-    std::map<std::string, int64_t> counts;
-    for (const char* s : kJobStates) counts[s] = 0;
+    std::map<JobState, int64_t> counts;
+    for (JobState s : kJobStates) counts[s] = 0;
     const PgResult r = conn_->exec("SELECT state, COUNT(*) FROM jobs GROUP BY state");
-    for (int i = 0; i < r.rows(); ++i) counts[r.text(i, 0)] = r.i64(i, 1);
+    for (int i = 0; i < r.rows(); ++i) counts[stored_job_state(r.text(i, 0))] = r.i64(i, 1);
     return counts;
 }
 
@@ -258,9 +258,9 @@ JobStore::DeleteOutcome PgJobStore::delete_job(const std::string& id, int64_t no
     lock_outputs(id);
     const PgResult r = conn_->exec("SELECT state FROM jobs WHERE id = $1 FOR UPDATE", {id});
     if (r.rows() == 0) return DeleteOutcome::not_found;
-    const std::string state = r.text(0, 0);
-    if (state == "canceled") return DeleteOutcome::canceling;
-    if (state == "running") {
+    const JobState state = stored_job_state(r.text(0, 0));
+    if (state == JobState::canceled) return DeleteOutcome::canceling;
+    if (state == JobState::running) {
         // The runners see it at their next heartbeat (renew() fails), on whichever instance they are.
         conn_->exec(
             "UPDATE jobs SET state = 'canceled', finished_ms = $1, error_code = 'canceled', "
@@ -290,7 +290,7 @@ bool PgJobStore::remove(const std::string& id) {
 bool PgJobStore::running(const std::string& id) {
     std::lock_guard<std::mutex> lock(m_);
     const PgResult r = conn_->exec("SELECT state FROM jobs WHERE id = $1", {id});
-    return r.rows() > 0 && r.text(0, 0) == "running";
+    return r.rows() > 0 && stored_job_state(r.text(0, 0)) == JobState::running;
 }
 
 std::vector<std::string> PgJobStore::finished_before(int64_t before_ms) {

@@ -27,9 +27,9 @@ public:
     void create(JobRecord& job) override;
     std::optional<JobRecord> get(const std::string& id) override;
     bool exists(const std::string& id) override;
-    JobPage list(const std::optional<std::string>& state, bool newest_first, int limit,
+    JobPage list(const std::optional<JobState>& state, bool newest_first, int limit,
                  std::optional<int64_t> after_seq) override;
-    std::map<std::string, int64_t> count_by_state() override;
+    std::map<JobState, int64_t> count_by_state() override;
     std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 2) override;
     bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;
     bool output_progress(const std::string& id, int output, double progress, const std::string& lease = {}) override;
@@ -37,7 +37,7 @@ public:
                           int64_t now_ms, const std::string& lease = {}) override;
     bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
                        int64_t now_ms, const std::string& lease = {}) override;
-    std::optional<std::string> finish(const std::string& id, int64_t now_ms) override;
+    std::optional<JobState> finish(const std::string& id, int64_t now_ms) override;
     void requeue(const JobClaim& claim) override;
     DeleteOutcome delete_job(const std::string& id, int64_t now_ms) override;
     bool remove(const std::string& id) override;
@@ -59,7 +59,7 @@ private:
     void load_children(JobRecord& j);
     // The job's final state when every output is finished (inside a transaction
     // holding the job row); "running" while outputs remain; nullopt when gone.
-    std::optional<std::string> finish_locked(const std::string& id, int64_t now_ms);
+    std::optional<JobState> finish_locked(const std::string& id, int64_t now_ms);
     // Fails an output whose lease expired `max_attempts` times (in a transaction).
     void fail_interrupted(const std::string& id, int output, int max_attempts, int64_t now_ms);
     std::optional<JobClaim> claim_output(const std::string& id, int output, int attempts, int64_t now_ms);

@@ -17,35 +17,37 @@ std::string str(int64_t v) { return std::to_string(v); }
 
 }  // namespace
 
-std::optional<std::string> PgJobStore::finish_locked(const std::string& id, int64_t now_ms) {
+std::optional<JobState> PgJobStore::finish_locked(const std::string& id, int64_t now_ms) {
     const PgResult job = conn_->exec("SELECT state FROM jobs WHERE id = $1 FOR UPDATE", {id});
-    if (job.rows() == 0 || job.text(0, 0) == "canceled") return std::nullopt;
-    if (job.text(0, 0) != "running") return "running";  // another instance finished it (or it was requeued)
+    if (job.rows() == 0) return std::nullopt;
+    const JobState now = stored_job_state(job.text(0, 0));
+    if (now == JobState::canceled) return std::nullopt;
+    if (now != JobState::running) return JobState::running;  // another instance finished it (or it was requeued)
     const PgResult r =
         conn_->exec("SELECT state, error_code, error_message FROM job_outputs WHERE job_id = $1 ORDER BY idx", {id});
     int64_t total = 0, failed = 0;
     std::string first_code, first_message;
     for (int i = 0; i < r.rows(); ++i) {
-        const std::string s = r.text(i, 0);
-        if (s == "queued" || s == "running") return "running";
+        const JobState s = stored_job_state(r.text(i, 0));
+        if (!is_finished(s)) return JobState::running;
         ++total;
-        if (s != "succeeded" && ++failed == 1) {
+        if (s != JobState::succeeded && ++failed == 1) {
             first_code = r.text(i, 1).empty() ? "internal" : r.text(i, 1);
             first_message = r.text(i, 2);
         }
     }
-    const std::string state = failed ? "failed" : "succeeded";
+    const JobState state = failed ? JobState::failed : JobState::succeeded;
     const std::string message =
         failed ? str(failed) + " of " + str(total) + " outputs failed; first: " + first_message : std::string();
     // The callback becomes due in the same transaction (server/webhooks.h).
     conn_->exec("UPDATE jobs SET state = $1, finished_ms = $2, error_code = $3, error_message = $4, "
                 "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = $2 "
                 "WHERE id = $5",
-                {state, str(now_ms), failed ? first_code : std::string(), message, id});
+                {job_state_name(state), str(now_ms), failed ? first_code : std::string(), message, id});
     return state;
 }
 
-std::optional<std::string> PgJobStore::finish(const std::string& id, int64_t now_ms) {
+std::optional<JobState> PgJobStore::finish(const std::string& id, int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     PgConn::Transaction t(*conn_);
     auto state = finish_locked(id, now_ms);

@@ -8,26 +8,6 @@ using sqlite_store::kSchema;
 using sqlite_store::kSchemaV2;
 using sqlite_store::kSchemaVersion;
 
-bool is_finished_state(const std::string& s) { return s == "succeeded" || s == "failed" || s == "canceled"; }
-
-const char* callback_state_name(CallbackState s) {
-    switch (s) {
-        case CallbackState::none: return "";
-        case CallbackState::waiting: return "waiting";
-        case CallbackState::pending: return "pending";
-        case CallbackState::delivered: return "delivered";
-        case CallbackState::failed: return "failed";
-    }
-    return "";
-}
-
-CallbackState parse_callback_state(const std::string& s) {
-    for (CallbackState c : {CallbackState::waiting, CallbackState::pending, CallbackState::delivered,
-                            CallbackState::failed})
-        if (s == callback_state_name(c)) return c;
-    return CallbackState::none;
-}
-
 SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_unique<Impl>()) {
     impl_->path = db_path;
     const int rc = sqlite3_open_v2(db_path.c_str(), &impl_->db,
@@ -87,7 +67,7 @@ void SqliteJobStore::create(JobRecord& job) {
         s.bind(4, std::string(callback_state_name(job.callback.state))).run();
     }
     job.seq = sqlite3_last_insert_rowid(impl_->db);
-    job.state = "queued";
+    job.state = JobState::queued;
     for (const JobInput& in : job.inputs) {
         Impl::Stmt s(*impl_, "INSERT INTO job_inputs(job_id, idx, filename, format, bytes) VALUES (?, ?, ?, ?, ?)");
         s.bind(1, job.id).bind(2, in.index).bind(3, in.filename).bind(4, in.format).bind(5, in.bytes).run();
@@ -96,7 +76,7 @@ void SqliteJobStore::create(JobRecord& job) {
         Impl::Stmt s(*impl_,
                      "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
                      "VALUES (?, ?, ?, ?, ?, ?, ?, 'queued')");
-        s.bind(1, job.id).bind(2, o.index).bind(3, o.file).bind(4, o.kind).bind(5, o.options_json);
+        s.bind(1, job.id).bind(2, o.index).bind(3, o.file).bind(4, std::string(output_kind_name(o.kind))).bind(5, o.options_json);
         s.bind(6, o.artifact).bind(7, o.content_type).run();
     }
     t.commit();
@@ -114,7 +94,7 @@ bool SqliteJobStore::exists(const std::string& id) {
     return s.step();
 }
 
-JobPage SqliteJobStore::list(const std::optional<std::string>& state, bool newest_first, int limit,
+JobPage SqliteJobStore::list(const std::optional<JobState>& state, bool newest_first, int limit,
                        std::optional<int64_t> after_seq) {
     std::lock_guard<std::mutex> lock(m_);
     // One more than asked tells whether a next page exists.
@@ -126,7 +106,7 @@ JobPage SqliteJobStore::list(const std::optional<std::string>& state, bool newes
     JobPage page;
     {
         Impl::Stmt s(*impl_, sql);
-        s.bind(1, state.value_or(""));
+        s.bind(1, std::string(state ? job_state_name(*state) : ""));
         s.bind(2, after_seq.value_or(newest_first ? INT64_MAX : 0));
         s.bind(3, static_cast<int64_t>(limit) + 1);
         while (s.step()) page.jobs.push_back(impl_->read_job(s));
@@ -139,12 +119,12 @@ JobPage SqliteJobStore::list(const std::optional<std::string>& state, bool newes
     return page;
 }
 
-std::map<std::string, int64_t> SqliteJobStore::count_by_state() {
+std::map<JobState, int64_t> SqliteJobStore::count_by_state() {
     std::lock_guard<std::mutex> lock(m_);
-    std::map<std::string, int64_t> counts;
-    for (const char* s : kJobStates) counts[s] = 0;
+    std::map<JobState, int64_t> counts;
+    for (JobState s : kJobStates) counts[s] = 0;
     Impl::Stmt s(*impl_, "SELECT state, COUNT(*) FROM jobs GROUP BY state");
-    while (s.step()) counts[s.text(0)] = s.i64(1);
+    while (s.step()) counts[stored_job_state(s.text(0))] = s.i64(1);
     return counts;
 }
 
@@ -168,7 +148,7 @@ std::optional<JobClaim> SqliteJobStore::claim_next(int64_t now_ms, int) {
         claim.emplace();
         static_cast<JobRecord&>(*claim) = std::move(*job);
         for (const JobOutput& o : claim->outputs)
-            if (o.state == "queued") claim->run.push_back(o.index);
+            if (o.state == JobState::queued) claim->run.push_back(o.index);
     }
     t.commit();
     return claim;
@@ -219,7 +199,7 @@ bool SqliteJobStore::output_failed(const std::string& id, int output, const std:
     return ok;
 }
 
-std::optional<std::string> SqliteJobStore::finish(const std::string& id, int64_t now_ms) {
+std::optional<JobState> SqliteJobStore::finish(const std::string& id, int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     if (!impl_->job_running(id)) return std::nullopt;
@@ -230,7 +210,7 @@ std::optional<std::string> SqliteJobStore::finish(const std::string& id, int64_t
         s.bind(1, id);
         while (s.step()) {
             ++total;
-            if (s.text(0) != "succeeded") {
+            if (stored_job_state(s.text(0)) != JobState::succeeded) {
                 if (++failed == 1) {
                     first_code = s.text(1).empty() ? "internal" : s.text(1);
                     first_message = s.text(2);
@@ -238,14 +218,14 @@ std::optional<std::string> SqliteJobStore::finish(const std::string& id, int64_t
             }
         }
     }
-    const std::string state = failed ? "failed" : "succeeded";
+    const JobState state = failed ? JobState::failed : JobState::succeeded;
     std::string message;
     if (failed)
         message = std::to_string(failed) + " of " + std::to_string(total) + " outputs failed; first: " + first_message;
     Impl::Stmt s(*impl_,
                  "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ?, "
                  NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?");
-    s.bind(1, state).bind(2, now_ms).bind(3, failed ? first_code : std::string()).bind(4, message).bind(5, now_ms);
+    s.bind(1, std::string(job_state_name(state))).bind(2, now_ms).bind(3, failed ? first_code : std::string()).bind(4, message).bind(5, now_ms);
     s.bind(6, id).run();
     t.commit();
     return state;

@@ -21,9 +21,9 @@ public:
     void create(JobRecord& job) override;
     std::optional<JobRecord> get(const std::string& id) override;
     bool exists(const std::string& id) override;
-    JobPage list(const std::optional<std::string>& state, bool newest_first, int limit,
+    JobPage list(const std::optional<JobState>& state, bool newest_first, int limit,
                  std::optional<int64_t> after_seq) override;
-    std::map<std::string, int64_t> count_by_state() override;
+    std::map<JobState, int64_t> count_by_state() override;
     // The oldest queued job with all its queued outputs (attempts + 1).
     std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 2) override;
     bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;
@@ -32,7 +32,7 @@ public:
                           int64_t now_ms, const std::string& lease = {}) override;
     bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
                        int64_t now_ms, const std::string& lease = {}) override;
-    std::optional<std::string> finish(const std::string& id, int64_t now_ms) override;
+    std::optional<JobState> finish(const std::string& id, int64_t now_ms) override;
     void requeue(const JobClaim& claim) override;
     void requeue(const std::string& id);
     DeleteOutcome delete_job(const std::string& id, int64_t now_ms) override;

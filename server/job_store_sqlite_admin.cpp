@@ -12,15 +12,15 @@ void SqliteJobStore::Impl::remove_rows(const std::string& id) {
 JobStore::DeleteOutcome SqliteJobStore::delete_job(const std::string& id, int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
-    std::string state;
+    std::optional<JobState> state;
     {
         Impl::Stmt s(*impl_, "SELECT state FROM jobs WHERE id = ?");
         s.bind(1, id);
         if (!s.step()) return DeleteOutcome::not_found;
-        state = s.text(0);
+        state = stored_job_state(s.text(0));
     }
-    if (state == "canceled") return DeleteOutcome::canceling;
-    if (state == "running") {
+    if (state == JobState::canceled) return DeleteOutcome::canceling;
+    if (state == JobState::running) {
         Impl::Stmt(*impl_,
                    "UPDATE jobs SET state = 'canceled', finished_ms = ?, error_code = 'canceled', "
                    "error_message = 'deleted while running; removed once its current step stops' "

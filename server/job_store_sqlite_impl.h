@@ -183,7 +183,7 @@ struct SqliteJobStore::Impl {
         JobRecord j;
         j.seq = s.i64(0);
         j.id = s.text(1);
-        j.state = s.text(2);
+        j.state = stored_job_state(s.text(2));
         j.created_ms = s.i64(3);
         j.started_ms = s.i64(4);
         j.finished_ms = s.i64(5);
@@ -214,11 +214,11 @@ struct SqliteJobStore::Impl {
             JobOutput o;
             o.index = static_cast<int>(s.i64(0));
             o.file = static_cast<int>(s.i64(1));
-            o.kind = s.text(2);
+            o.kind = stored_output_kind(s.text(2));
             o.options_json = s.text(3);
             o.artifact = s.text(4);
             o.content_type = s.text(5);
-            o.state = s.text(6);
+            o.state = stored_job_state(s.text(6));
             o.progress = s.real(7);
             o.error_code = s.text(8);
             o.error_message = s.text(9);
@@ -246,7 +246,7 @@ struct SqliteJobStore::Impl {
     bool job_running(const std::string& id) {
         Stmt s(*this, "SELECT state FROM jobs WHERE id = ?");
         s.bind(1, id);
-        return s.step() && s.text(0) == "running";
+        return s.step() && stored_job_state(s.text(0)) == JobState::running;
     }
 };
 

@@ -18,6 +18,9 @@ using nurbsrt::server::CallbackAttempt;
 using nurbsrt::server::CallbackState;
 using nurbsrt::server::JobClaim;
 using nurbsrt::server::JobOutput;
+using nurbsrt::server::JobState;
+using nurbsrt::server::OutputKind;
+using nurbsrt::server::output_kind_name;
 using nurbsrt::server::JobRecord;
 using nurbsrt::server::JobStore;
 using nurbsrt::server::PgJobStore;
@@ -37,7 +40,7 @@ JobRecord make_job(const std::string& id, int outputs) {
     for (int i = 0; i < outputs; ++i) {
         JobOutput o;
         o.index = i;
-        o.kind = "conversion";
+        o.kind = OutputKind::conversion;
         o.options_json = R"({"format":"iges"})";
         o.artifact = "0-conversion-" + std::to_string(i) + ".igs";
         o.content_type = "model/iges";
@@ -66,17 +69,17 @@ TEST_F(PgJobStoreTest, ClaimsSkipEachOtherAndTheLastFinishes) {
     EXPECT_EQ(cb->run, std::vector<int>{1});
     EXPECT_NE(ca->lease, cb->lease);
     EXPECT_FALSE(a_->claim_next(2000));  // nothing left
-    EXPECT_EQ(a_->get(j.id)->state, "running");
+    EXPECT_EQ(a_->get(j.id)->state, JobState::running);
     ASSERT_TRUE(a_->output_running(j.id, 0, 2100, ca->lease));
     EXPECT_FALSE(a_->output_succeeded(j.id, 0, 5, "", 2200, cb->lease));  // not its lease
     ASSERT_TRUE(a_->output_succeeded(j.id, 0, 5, "", 2200, ca->lease));
-    EXPECT_EQ(a_->finish(j.id, 2300), std::optional<std::string>("running"));  // output 1 still runs on b
+    EXPECT_EQ(a_->finish(j.id, 2300), std::optional<JobState>(JobState::running));  // output 1 still runs on b
     ASSERT_TRUE(b_->output_running(j.id, 1, 2400, cb->lease));
     ASSERT_TRUE(b_->output_failed(j.id, 1, "unreadable_file", "bad", 2500, cb->lease));
-    EXPECT_EQ(b_->finish(j.id, 2600), std::optional<std::string>("failed"));
+    EXPECT_EQ(b_->finish(j.id, 2600), std::optional<JobState>(JobState::failed));
     const auto done = a_->get(j.id);
     EXPECT_EQ(done->error_code, "unreadable_file");
-    EXPECT_EQ(done->outputs[0].state, "succeeded");
+    EXPECT_EQ(done->outputs[0].state, JobState::succeeded);
 }
 
 TEST_F(PgJobStoreTest, ExpiredLeaseIsTakenOverAndTheStaleRunIsFenced) {
@@ -96,7 +99,7 @@ TEST_F(PgJobStoreTest, ExpiredLeaseIsTakenOverAndTheStaleRunIsFenced) {
     EXPECT_FALSE(a_->output_succeeded(j.id, 0, 1, "", 3100, ca->lease));  // fenced
     EXPECT_TRUE(b_->output_succeeded(j.id, 0, 1, "", 3200, cb->lease));
     EXPECT_FALSE(b_->output_succeeded(j.id, 0, 1, "", 3300, cb->lease));  // once only
-    EXPECT_EQ(b_->finish(j.id, 3400), std::optional<std::string>("succeeded"));
+    EXPECT_EQ(b_->finish(j.id, 3400), std::optional<JobState>(JobState::succeeded));
     EXPECT_EQ(a_->get(j.id)->attempts, 2);
 }
 
@@ -118,7 +121,7 @@ TEST_F(PgJobStoreTest, CancelStopsTheHeartbeatAndTwiceExpiredFails) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1200));
     EXPECT_FALSE(a_->claim_next(3000, 2));  // expired twice: failed, not claimed
     const auto done = a_->get(k.id);
-    EXPECT_EQ(done->state, "failed");
+    EXPECT_EQ(done->state, JobState::failed);
     EXPECT_EQ(done->error_code, "interrupted");
     EXPECT_EQ(done->outputs[0].error_code, "interrupted");
 }
@@ -129,7 +132,7 @@ TEST_F(PgJobStoreTest, GracefulStopRequeuesWithoutCountingTheRun) {
     auto ca = a_->claim_next(1000);
     ASSERT_TRUE(ca);
     a_->requeue(*ca);
-    EXPECT_EQ(a_->get(j.id)->state, "queued");
+    EXPECT_EQ(a_->get(j.id)->state, JobState::queued);
     EXPECT_EQ(a_->get(j.id)->attempts, 0);
     auto cb = b_->claim_next(2000);  // at once: no lease to wait for
     ASSERT_TRUE(cb);
@@ -145,7 +148,7 @@ TEST_F(PgJobStoreTest, ACallbackIsDueOnceTheLastOutputEndsAndOneInstanceTakesIt)
     ASSERT_TRUE(c);
     ASSERT_TRUE(a_->output_running(j.id, 0, 1100, c->lease));
     ASSERT_TRUE(a_->output_succeeded(j.id, 0, 5, "{}", 1200, c->lease));
-    EXPECT_EQ(a_->finish(j.id, 1300), std::optional<std::string>("succeeded"));
+    EXPECT_EQ(a_->finish(j.id, 1300), std::optional<JobState>(JobState::succeeded));
     auto due = b_->claim_callback(1300, 60'000);
     ASSERT_TRUE(due);
     EXPECT_EQ(due->callback.state, CallbackState::pending);

@@ -18,6 +18,9 @@ namespace fs = std::filesystem;
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
 using nurbsrt::server::JobOutput;
+using nurbsrt::server::JobState;
+using nurbsrt::server::OutputKind;
+using nurbsrt::server::output_kind_name;
 using nurbsrt::server::JobRecord;
 using nurbsrt::server::JobStore;
 using nurbsrt::server::SqliteJobStore;
@@ -51,9 +54,9 @@ protected:
             JobOutput o;
             o.index = i;
             o.file = 0;
-            o.kind = i % 2 ? "conversion" : "render";
+            o.kind = i % 2 ? OutputKind::conversion : OutputKind::render;
             o.options_json = i % 2 ? R"({"format":"iges"})" : R"({"width":32})";
-            o.artifact = "0-" + o.kind + "-" + std::to_string(i) + (i % 2 ? ".igs" : ".png");
+            o.artifact = std::string("0-") + output_kind_name(o.kind) + "-" + std::to_string(i) + (i % 2 ? ".igs" : ".png");
             o.content_type = i % 2 ? "model/iges" : "image/png";
             j.outputs.push_back(o);
         }
@@ -72,7 +75,7 @@ TEST_F(JobStoreTest, CreateGetAndListWithPaging) {
     }
     const auto j3 = store.get(make_job(3).id);
     ASSERT_TRUE(j3);
-    EXPECT_EQ(j3->state, "queued");
+    EXPECT_EQ(j3->state, JobState::queued);
     EXPECT_EQ(j3->created_ms, 3000);
     ASSERT_EQ(j3->inputs.size(), 1u);
     EXPECT_EQ(j3->inputs[0].filename, "part.step");
@@ -104,12 +107,12 @@ TEST_F(JobStoreTest, CreateGetAndListWithPaging) {
 
     // State filter.
     ASSERT_TRUE(store.claim_next(10000));
-    const auto running = store.list(std::string("running"), true, 10, std::nullopt);
+    const auto running = store.list(JobState::running, true, 10, std::nullopt);
     ASSERT_EQ(running.jobs.size(), 1u);
     EXPECT_EQ(running.jobs[0].id, make_job(1).id);
-    EXPECT_EQ(store.count_by_state()["queued"], 4);
-    EXPECT_EQ(store.count_by_state()["running"], 1);
-    EXPECT_EQ(store.count_by_state()["failed"], 0);
+    EXPECT_EQ(store.count_by_state()[JobState::queued], 4);
+    EXPECT_EQ(store.count_by_state()[JobState::running], 1);
+    EXPECT_EQ(store.count_by_state()[JobState::failed], 0);
 }
 
 TEST_F(JobStoreTest, StateTransitions) {
@@ -122,7 +125,7 @@ TEST_F(JobStoreTest, StateTransitions) {
     auto claimed = store.claim_next(5000);
     ASSERT_TRUE(claimed);
     EXPECT_EQ(claimed->id, a.id);
-    EXPECT_EQ(claimed->state, "running");
+    EXPECT_EQ(claimed->state, JobState::running);
     EXPECT_EQ(claimed->attempts, 1);
     EXPECT_EQ(claimed->started_ms, 5000);
 
@@ -132,13 +135,13 @@ TEST_F(JobStoreTest, StateTransitions) {
     EXPECT_TRUE(store.output_succeeded(a.id, 0, 777, R"({"faces":3})", 5200));
     EXPECT_TRUE(store.output_running(a.id, 1, 5300));
     EXPECT_TRUE(store.output_failed(a.id, 1, "unreadable_file", "bad file", 5400));
-    EXPECT_EQ(store.finish(a.id, 5500), std::optional<std::string>("failed"));
+    EXPECT_EQ(store.finish(a.id, 5500), std::optional<JobState>(JobState::failed));
     const auto done = store.get(a.id);
-    EXPECT_EQ(done->state, "failed");
+    EXPECT_EQ(done->state, JobState::failed);
     EXPECT_EQ(done->finished_ms, 5500);
     EXPECT_EQ(done->error_code, "unreadable_file");
     EXPECT_NE(done->error_message.find("1 of 2 outputs failed"), std::string::npos);
-    EXPECT_EQ(done->outputs[0].state, "succeeded");
+    EXPECT_EQ(done->outputs[0].state, JobState::succeeded);
     EXPECT_EQ(done->outputs[0].artifact_bytes, 777);
     EXPECT_EQ(done->outputs[0].result_json, R"({"faces":3})");
     EXPECT_EQ(done->outputs[1].error_message, "bad file");
@@ -153,7 +156,7 @@ TEST_F(JobStoreTest, StateTransitions) {
         store.output_running(b.id, i, 7000);
         store.output_succeeded(b.id, i, 10, "", 7100);
     }
-    EXPECT_EQ(store.finish(b.id, 7200), std::optional<std::string>("succeeded"));
+    EXPECT_EQ(store.finish(b.id, 7200), std::optional<JobState>(JobState::succeeded));
     EXPECT_TRUE(store.get(b.id)->error_code.empty());
     EXPECT_FALSE(store.claim_next(8000));  // nothing queued
 
@@ -162,7 +165,7 @@ TEST_F(JobStoreTest, StateTransitions) {
     store.create(c);
     ASSERT_TRUE(store.claim_next(9000));
     EXPECT_EQ(store.delete_job(c.id, 9100), JobStore::DeleteOutcome::canceling);
-    EXPECT_EQ(store.get(c.id)->state, "canceled");
+    EXPECT_EQ(store.get(c.id)->state, JobState::canceled);
     EXPECT_FALSE(store.running(c.id));
     EXPECT_FALSE(store.finish(c.id, 9200));  // the runner sees it is no longer running
     EXPECT_EQ(store.delete_job(c.id, 9300), JobStore::DeleteOutcome::canceling);
@@ -192,11 +195,11 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         EXPECT_EQ(r.requeued, (std::vector<std::string>{j1.id, j2.id}));
         EXPECT_TRUE(r.failed.empty());
         const auto a = store.get(j1.id);
-        EXPECT_EQ(a->state, "queued");
+        EXPECT_EQ(a->state, JobState::queued);
         EXPECT_EQ(a->attempts, 1);
-        EXPECT_EQ(a->outputs[0].state, "succeeded");  // kept
-        EXPECT_EQ(a->outputs[1].state, "queued");     // will run again
-        EXPECT_EQ(store.get(j3.id)->state, "queued");
+        EXPECT_EQ(a->outputs[0].state, JobState::succeeded);  // kept
+        EXPECT_EQ(a->outputs[1].state, JobState::queued);     // will run again
+        EXPECT_EQ(store.get(j3.id)->state, JobState::queued);
         // Second run of j1 (and j2) is interrupted as well.
         EXPECT_EQ(store.claim_next(2100)->id, j1.id);
         EXPECT_EQ(store.claim_next(2100)->id, j2.id);
@@ -208,18 +211,18 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         const auto r = store.recover(2, 3000);
         EXPECT_EQ(r.failed, (std::vector<std::string>{j1.id, j2.id}));
         const auto a = store.get(j1.id);
-        EXPECT_EQ(a->state, "failed");
+        EXPECT_EQ(a->state, JobState::failed);
         EXPECT_EQ(a->error_code, "interrupted");
         EXPECT_NE(a->error_message.find("interrupted by a service restart"), std::string::npos);
         EXPECT_EQ(a->finished_ms, 3000);
-        EXPECT_EQ(a->outputs[0].state, "succeeded");
-        EXPECT_EQ(a->outputs[1].state, "failed");
+        EXPECT_EQ(a->outputs[0].state, JobState::succeeded);
+        EXPECT_EQ(a->outputs[1].state, JobState::failed);
         EXPECT_EQ(a->outputs[1].error_code, "interrupted");
-        EXPECT_EQ(store.get(j3.id)->state, "queued");  // never started: untouched
+        EXPECT_EQ(store.get(j3.id)->state, JobState::queued);  // never started: untouched
         // A graceful stop puts a running job back without counting the run.
         EXPECT_EQ(store.claim_next(3100)->attempts, 1);
         store.requeue(j3.id);
-        EXPECT_EQ(store.get(j3.id)->state, "queued");
+        EXPECT_EQ(store.get(j3.id)->state, JobState::queued);
         EXPECT_EQ(store.get(j3.id)->attempts, 0);
         // A job deleted while running whose removal a crash cut short is removed at start.
         store.claim_next(3200);
@@ -327,7 +330,7 @@ TEST_F(JobStoreTest, CallbacksBecomeDueWhenTheJobEndsAndAreClaimedOnce) {
     ASSERT_TRUE(due);
     EXPECT_EQ(due->id, with.id);
     EXPECT_EQ(due->callback_url, with.callback_url);
-    EXPECT_EQ(due->state, "succeeded");
+    EXPECT_EQ(due->state, JobState::succeeded);
     EXPECT_FALSE(store.claim_callback(7500, 1000));  // held while the attempt is in flight
     // A failed attempt: due again at next_ms, not before.
     CallbackAttempt retry{CallbackState::pending, 9000, 503, "answered HTTP 503", 7600};
@@ -364,7 +367,7 @@ TEST_F(JobStoreTest, AJobFailedByRecoveryHasItsCallbackDue) {
     SqliteJobStore store(db_);
     const auto due = store.claim_callback(2000, 1000);
     ASSERT_TRUE(due);
-    EXPECT_EQ(due->state, "failed");
+    EXPECT_EQ(due->state, JobState::failed);
     EXPECT_EQ(due->error_code, "interrupted");
 }
 
@@ -391,7 +394,7 @@ TEST_F(JobStoreTest, AVersion1DatabaseIsMigrated) {
     SqliteJobStore store(db_);
     const auto old = store.get(std::string(32, 'e'));
     ASSERT_TRUE(old);
-    EXPECT_EQ(old->state, "succeeded");
+    EXPECT_EQ(old->state, JobState::succeeded);
     EXPECT_EQ(old->callback.state, CallbackState::none);
     JobRecord j = make_job(4, 1);
     j.callback_url = "https://hooks.example.com/done";
