@@ -28,7 +28,7 @@ inline constexpr const char* kCorsAllowedHeaders =
 // Response headers a page may read besides the CORS-safelisted ones
 // (Cache-Control, Content-Type, Content-Length, ...).
 inline constexpr const char* kCorsExposedHeaders =
-    "X-Request-Id, Retry-After, Location, ETag, Content-Disposition, Server-Timing, Allow";
+    "X-Request-Id, Retry-After, Location, ETag, Content-Disposition, Server-Timing, Allow, X-Nurbsrt-Warnings";
 
 // Checks and normalizes one configured origin: "scheme://host[:port]" with
 // scheme http or https, as browsers serialize an origin (RFC 6454 §6.1):

@@ -168,6 +168,15 @@ def test_step_and_iges_outputs_report_what_they_lose(url):
     warnings = convert_json(url, ASSEMBLY, "iges")["warnings"]
     assert any(w.startswith("IGES has no assembly structure") for w in warnings), warnings
     assert not any("colour" in w for w in warnings), warnings
+    # The file download says so too, in a header.
+    r = requests.post(url + "/v1/conversions", data=ASSEMBLY.read_bytes(), params={"format": "iges"},
+                      headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    count, _, listed = r.headers["X-Nurbsrt-Warnings"].partition("; ")
+    assert int(count) == len(warnings) and json.loads(listed) == warnings
+    r = requests.post(url + "/v1/conversions", data=ASSEMBLY.read_bytes(), params={"format": "step"},
+                      headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+    assert r.status_code == 200 and "X-Nurbsrt-Warnings" not in r.headers
     # Mesh outputs have nothing of the kind to report.
     assert convert_json(url, SCREW, "stl")["warnings"] == []
 
