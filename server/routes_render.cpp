@@ -68,8 +68,8 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     RenderedImage rendered = render_upload(ctx, bytes, r, control);
     StageClock& stages = rendered.timings;
     const auto set_timing_header = [&] {
-        res.set_header("Server-Timing", server_timing(stages, kRenderStages) + ", cache;desc=" +
-                                            (rendered.cache_hit ? "hit" : "miss"));
+        res.set_header("Server-Timing",
+                       server_timing(stages, kRenderStages, {{"cache", rendered.cache_hit ? "hit" : "miss"}}));
     };
     if (!wants_json(req)) {
         res.set_content(rendered.bytes, r.format.content_type.c_str());

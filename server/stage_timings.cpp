@@ -36,12 +36,14 @@ nlohmann::json stage_timings_json(const StageClock& clock, std::span<const char*
     return t;
 }
 
-std::string server_timing(const StageClock& clock, std::span<const char* const> stages) {
+std::string server_timing(const StageClock& clock, std::span<const char* const> stages,
+                          const std::map<std::string, std::string>& descriptions) {
     std::string out;
-    auto add = [&out](const std::string& name, double ms) {
+    auto add = [&](const std::string& name, double ms) {
         char buf[96];
         std::snprintf(buf, sizeof buf, "%s%s;dur=%.3f", out.empty() ? "" : ", ", name.c_str(), ms);
         out += buf;
+        if (const auto d = descriptions.find(name); d != descriptions.end()) out += ";desc=" + d->second;
     };
     for (const char* stage : stages) add(stage, clock.ms(stage));
     for (const StageClock::Stage& s : clock.stages())

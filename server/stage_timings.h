@@ -6,6 +6,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <map>
 #include <span>
 #include <string>
 
@@ -39,7 +40,10 @@ void add_conversion_stages(const ConvertReport& report, const IsolationTimings& 
 // {stage: ms} for every stage of `stages` and of `clock`, and total.
 nlohmann::json stage_timings_json(const StageClock& clock, std::span<const char* const> stages);
 
-// The Server-Timing header value: "upload;dur=0.120, ..., total;dur=12.345".
-std::string server_timing(const StageClock& clock, std::span<const char* const> stages);
+// The Server-Timing header value: "upload;dur=0.120, ..., total;dur=12.345";
+// a stage named in `descriptions` carries its desc too ("cache;dur=0.8;desc=hit":
+// one metric, not two of the same name).
+std::string server_timing(const StageClock& clock, std::span<const char* const> stages,
+                          const std::map<std::string, std::string>& descriptions = {});
 
 }  // namespace nurbsrt::server

@@ -113,6 +113,25 @@ def own_server():
         s.stop()
 
 
+def server_timing_metrics(resp):
+    """The Server-Timing header as {name: {"dur": ms, "desc": text}} (either may be absent). A metric named
+    twice fails."""
+    out = {}
+    for item in resp.headers["Server-Timing"].split(","):
+        parts = [p.strip() for p in item.split(";")]
+        assert parts[0] not in out, f"metric {parts[0]} twice in Server-Timing"
+        out[parts[0]] = {}
+        for p in parts[1:]:
+            key, _, value = p.partition("=")
+            out[parts[0]][key] = float(value) if key == "dur" else value
+    return out
+
+
+def server_timing(resp):
+    """The Server-Timing header's durations, {name: ms}."""
+    return {name: m["dur"] for name, m in server_timing_metrics(resp).items() if "dur" in m}
+
+
 def post_raw(url, path, data, params=None, headers=None):
     h = {"Content-Type": "application/octet-stream"}
     h.update(headers or {})

@@ -7,7 +7,7 @@ import time
 
 import requests
 
-from conftest import BEARING, SCREW, TIMEOUT, validate
+from conftest import BEARING, SCREW, TIMEOUT, server_timing, validate
 
 JSON = {"Accept": "application/json"}
 TOLERANCE = 0.02  # the stages sum to total within 2 %
@@ -16,17 +16,6 @@ RENDER_STAGES = ["upload", "cache", "queue", "prescan", "isolation", "read", "nu
                  "statistics", "encode", "response"]
 CONVERSION_STAGES = ["upload", "queue", "prescan", "isolation", "read", "mesh", "write", "verify", "transfer",
                      "response"]
-
-
-def server_timing(resp):
-    out = {}
-    for item in resp.headers["Server-Timing"].split(","):
-        parts = [p.strip() for p in item.split(";")]
-        for p in parts[1:]:
-            if p.startswith("dur="):
-                assert parts[0] not in out, f"stage {parts[0]} twice in Server-Timing"
-                out[parts[0]] = float(p[4:])
-    return out
 
 
 def check_adds_up(timings, stages, what):
