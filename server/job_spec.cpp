@@ -7,7 +7,7 @@
 #include "importer/importer.h"
 #include "renderer/error.h"
 #include "server/render_options.h"
-#include "server/webhooks.h"
+#include "server/callback_url.h"
 
 namespace nurbsrt::server {
 namespace {

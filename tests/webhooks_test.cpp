@@ -1,4 +1,4 @@
-// Webhooks (server/webhooks.h): which callback URLs a job may name, which
+// Webhooks (server/webhooks.h, server/callback_url.h): which callback URLs a job may name, which
 // addresses a callback may reach, the signature (RFC 4231 vectors) and the
 // back-off. Delivery itself is tested end to end in tests/api/test_webhooks.py.
 #include <gtest/gtest.h>
@@ -8,6 +8,7 @@
 
 #include "renderer/error.h"
 #include "server/sha256.h"
+#include "server/callback_url.h"
 #include "server/webhooks.h"
 #include "tests/support/error_code_of.h"
 
@@ -79,6 +80,10 @@ TEST(Webhooks, BadCallbackUrlsAreRefusedWithTheReason) {
         EXPECT_NE(refusal(url).find("loopback, private or link-local"), std::string::npos) << url;
         EXPECT_EQ(refusal(url, true), "") << url;
     }
+    EXPECT_NE(refusal("https://example.com:/x").find("empty port"), std::string::npos);
+    EXPECT_NE(refusal("https://[2001:db8::1/x").find("host"), std::string::npos);
+    EXPECT_NE(refusal("https://exa_mple.com/").find("host"), std::string::npos);
+    EXPECT_EQ(refusal("https://" + std::string(2000, 'a') + ".com/"), "");  // long, but a name
     EXPECT_EQ(refusal("https://8.8.8.8/"), "");
 }
 
