@@ -37,11 +37,6 @@ namespace {
 // where an escaping exception would end the process.
 constexpr auto kReplaceBadUtf8 = nlohmann::json::error_handler_t::replace;
 
-int64_t now_ms() {
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-}
-
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
 
 // An error message for the client: the service's own paths (the job and
@@ -80,7 +75,7 @@ JobService::JobService(ServerContext& ctx)
         sweep();
         return;  // every other instance's files are in flight in the shared directory
     }
-    const RecoveryReport r = store_->recover(kMaxJobAttempts, now_ms());
+    const RecoveryReport r = store_->recover(kMaxJobAttempts, unix_now_ms());
     for (const std::string& id : r.removed) remove_files(id);
     if (!r.requeued.empty() || !r.failed.empty() || !r.removed.empty())
         log_event("jobs_recovered",
@@ -148,7 +143,7 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
         throw Error(ErrorCode::overloaded,
                     std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
     job.id = new_request_id();
-    job.created_ms = now_ms();
+    job.created_ms = unix_now_ms();
     const std::string dir = job_dir(job.id);
     try {
         fs::create_directory(dir);
@@ -170,7 +165,7 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
 }
 
 JobStore::DeleteOutcome JobService::remove(const std::string& id) {
-    const JobStore::DeleteOutcome outcome = store_->delete_job(id, now_ms());
+    const JobStore::DeleteOutcome outcome = store_->delete_job(id, unix_now_ms());
     if (outcome == JobStore::DeleteOutcome::removed) {
         remove_files(id);
     } else if (outcome == JobStore::DeleteOutcome::canceling) {
@@ -187,14 +182,14 @@ JobStore::DeleteOutcome JobService::remove(const std::string& id) {
 int JobService::sweep() {
     const auto retention_ms = static_cast<int64_t>(ctx_.config.job_retention_s * 1000);
     int removed = 0;
-    for (const std::string& id : store_->finished_before(now_ms() - retention_ms))
+    for (const std::string& id : store_->finished_before(unix_now_ms() - retention_ms))
         if (store_->remove(id)) {
             remove_files(id);
             ++removed;
         }
     if (removed) log_event("jobs_expired", nlohmann::json{{"removed", removed}}.dump());
     // Stored files expire with the same retention, counted from their upload (pinned ones never).
-    if (const int files = ctx_.files.expire(now_ms() - retention_ms))
+    if (const int files = ctx_.files.expire(unix_now_ms() - retention_ms))
         log_event("files_expired", nlohmann::json{{"removed", files}}.dump());
     if (store_->shared()) sweep_shared_leftovers();
     return removed;
@@ -264,7 +259,7 @@ void JobService::run_loop() {
             seen = submissions_;
         }
         try {
-            claim = store_->claim_next(now_ms(), kMaxJobAttempts);
+            claim = store_->claim_next(unix_now_ms(), kMaxJobAttempts);
             if (claim) run_claim(*claim);
         } catch (const std::exception& e) {
             failed = true;
@@ -337,10 +332,10 @@ void JobService::run_claim(JobClaim& claim) {
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) break;
             store_->output_failed(claim.id, out.index, error_code_name(e.code()),
-                                  without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), now_ms(),
+                                  without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
                                   claim.lease);
         } catch (const std::exception& e) {
-            store_->output_failed(claim.id, out.index, "internal", e.what(), now_ms(), claim.lease);
+            store_->output_failed(claim.id, out.index, "internal", e.what(), unix_now_ms(), claim.lease);
         }
     }
     end_claim(claim);
@@ -365,7 +360,7 @@ void JobService::end_claim(const JobClaim& claim) {
             return;
         }
     }
-    const std::optional<JobState> state = store_->finish(claim.id, now_ms());
+    const std::optional<JobState> state = store_->finish(claim.id, unix_now_ms());
     if (!state) {  // deleted while running
         store_->remove(claim.id);
         remove_files(claim.id);
@@ -388,7 +383,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
     const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
     std::shared_ptr<AdmissionGate::Ticket> ticket;
     if (out.kind != OutputKind::render) ticket = admit(ctx_, ctx_.gate, 0, patient);
-    if (!store_->output_running(job.id, out.index, now_ms(), job.lease))
+    if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease))
         throw Error(ErrorCode::canceled, "the job was deleted");
     const auto t0 = std::chrono::steady_clock::now();
     const std::string dir = job_dir(job.id);
@@ -464,7 +459,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
     sync_dir(dir);
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
     if (!store_->output_succeeded(job.id, out.index, size,
-                                  result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), now_ms(),
+                                  result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), unix_now_ms(),
                                   job.lease) &&
         !job.lease.empty())
         log_event("job_output_fenced", nlohmann::json{{"job_id", job.id}, {"output", out.index}}.dump());

@@ -1,8 +1,15 @@
 #include "server/job_store.h"
 
+#include <chrono>
+
 #include "renderer/error.h"
 
 namespace nurbsrt::server {
+
+int64_t unix_now_ms() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
 
 const char* job_state_name(JobState s) {
     switch (s) {

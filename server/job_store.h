@@ -23,6 +23,9 @@ namespace nurbsrt::server {
 enum class JobState { queued, running, succeeded, failed, canceled };
 inline constexpr JobState kJobStates[] = {JobState::queued, JobState::running, JobState::succeeded, JobState::failed,
                                           JobState::canceled};
+// Now as Unix milliseconds: the clock of every *_ms time of a job.
+int64_t unix_now_ms();
+
 const char* job_state_name(JobState s);
 std::optional<JobState> parse_job_state(std::string_view name);
 bool is_finished(JobState s);

@@ -192,27 +192,25 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
     const Camera camera(camera_spec_for(r, scene));
-    RenderOptions look;  // the passes that change the frame's cost
-    apply_look(r.look, r.format.name, look);
-    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {look.antialias, look.shadows});
+    RenderOptions options;
+    options.method = r.method;
+    options.map_precision = r.map_precision;
+    options.threads = ctx.config.render_threads;
+    options.progress = control.progress;
+    const Background bg = r.background.value_or(default_background(r.format.name));
+    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
+    options.background_alpha = static_cast<float>(bg.alpha);
+    apply_look(r.look, r.format.name, options);
+    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows});
     check_frame_cost(ctx.config, cost);
     const RenderPriority priority = priority_for(cost);
+    options.priority = priority;
     AdmissionWait wait = admission_wait(control);
     if (priority == RenderPriority::high) wait.order = AdmissionGate::Order::may_overtake;
     stages.mark("frame_setup");
     std::shared_ptr<AdmissionGate::Ticket> ticket = admit(ctx, ctx.render_gate, cost.memory_bytes, wait);
     stages.mark("queue");
 
-    RenderOptions options;
-    options.method = r.method;
-    options.map_precision = r.map_precision;
-    options.threads = ctx.config.render_threads;
-    options.priority = priority;
-    options.progress = control.progress;
-    const Background bg = r.background.value_or(default_background(r.format.name));
-    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
-    options.background_alpha = static_cast<float>(bg.alpha);
-    apply_look(r.look, r.format.name, options);
     const RenderResult result =
         render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop);
     add_frame_stages(result.stats, stages);

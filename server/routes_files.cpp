@@ -8,7 +8,6 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <map>
 #include <tuple>
 
@@ -19,6 +18,7 @@
 #include "server/file_store.h"
 #include "server/http_server.h"
 #include "server/http_util.h"
+#include "server/job_store.h"
 #include "server/render_service.h"
 #include "server/routes.h"
 
@@ -32,11 +32,6 @@ using nlohmann::json;
 constexpr size_t kMaxSummaryColors = 64;
 
 std::string file_url(const std::string& id) { return "/v1/files/" + id; }
-
-int64_t now_ms() {
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-}
 
 // What the import found: faces, bodies, units, bounding box (mm), the
 // colours with how many faces each has (a face's own colour, else its
@@ -181,7 +176,7 @@ void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Res
     StageClock stages;  // not reported: a stored file's answer carries no timings
     const auto prepared = imported_scene(ctx, bytes, control, cache_hit, stages);
     file.summary_json = import_summary(prepared->scene()).dump(-1, ' ', false, json::error_handler_t::replace);
-    file.created_ms = now_ms();
+    file.created_ms = unix_now_ms();
     switch (ctx.files.put(file, bytes)) {
         case FileStore::PutOutcome::over_quota: return send_over_quota(ctx, res, bytes.size());
         case FileStore::PutOutcome::created:

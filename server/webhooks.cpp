@@ -32,11 +32,6 @@ constexpr double kMaxBackoffS = 3600;
 constexpr int kSenderThreads = 2;
 const char* const kCaBundle = "/etc/ssl/certs/ca-certificates.crt";
 
-int64_t unix_ms() {
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-}
-
 struct Outcome {
     bool delivered = false;
     bool permanent = false;  // no retry can help (the URL or what it resolves to is refused)
@@ -163,7 +158,7 @@ void WebhookSender::loop() {
         }
         std::optional<JobRecord> job;
         try {
-            job = store_.claim_callback(unix_ms(), hold_ms);
+            job = store_.claim_callback(unix_now_ms(), hold_ms);
         } catch (const std::exception& e) {
             log_event("webhook_store_error", nlohmann::json{{"error", e.what()}}.dump());
         }
@@ -172,7 +167,7 @@ void WebhookSender::loop() {
             continue;
         }
         std::unique_lock<std::mutex> lock(m_);
-        const int64_t now = unix_ms();
+        const int64_t now = unix_now_ms();
         if (next_due_ms_ <= now) next_due_ms_ = INT64_MAX;  // come due: the claim above took it (or another sender)
         const auto wait = std::min<int64_t>(std::chrono::milliseconds(kPollInterval).count(),
                                             std::max<int64_t>(next_due_ms_ - now, 1));
@@ -191,7 +186,7 @@ void WebhookSender::attempt(const JobRecord& job) {
     }
     static thread_local std::mt19937_64 rng{std::random_device{}()};
     CallbackAttempt a;
-    a.now_ms = unix_ms();
+    a.now_ms = unix_now_ms();
     a.status = out.status;
     a.error = out.error;
     if (out.delivered) {
