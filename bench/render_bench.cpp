@@ -26,6 +26,7 @@
 #include <string>
 
 #include "importer/importer.h"
+#include "renderer/heap_tuning.h"
 #include "renderer/render.h"
 #include "renderer/scene_ops.h"
 
@@ -125,4 +126,13 @@ const int kRegistered = [] {
 
 }  // namespace
 
-BENCHMARK_MAIN();
+// BENCHMARK_MAIN with the heap settings of the nurbsrt binary, so both measure
+// frames alike.
+int main(int argc, char** argv) {
+    nurbsrt::tune_heap_for_frames();
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

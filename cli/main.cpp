@@ -6,8 +6,10 @@
 
 #include "cli/commands.h"
 #include "renderer/error.h"
+#include "renderer/heap_tuning.h"
 
 int main(int argc, char** argv) {
+    nurbsrt::tune_heap_for_frames();
     CLI::App app{
         "nurbsrt renders STEP and IGES files by ray tracing their exact trimmed NURBS\n"
         "surfaces, and converts between CAD formats.\n"

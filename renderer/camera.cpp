@@ -31,13 +31,6 @@ Camera::Camera(const CameraSpec& spec) : spec_(spec) {
     }
 }
 
-Ray Camera::ray(ScreenPoint s) const {
-    if (perspective())  // dir = normalize(f + tan(fov/2) (sx r + sy u))
-        return {spec_.eye, normalize(f_ + tan_half_ * (s.sx * r_ + s.sy * u_))};
-    // origin = eye + (height/2) (sx r + sy u); dir = f
-    return {spec_.eye + 0.5 * spec_.ortho_height * (s.sx * r_ + s.sy * u_), f_};
-}
-
 Vec4 Camera::project_h(Vec4 pw) const {
     const Vec3 d{pw.x - pw.w * spec_.eye.x, pw.y - pw.w * spec_.eye.y, pw.z - pw.w * spec_.eye.z};
     if (perspective()) {

@@ -62,7 +62,13 @@ public:
     // sx, sy of the centre of pixel (i, j): the contract's 0.5 offsets.
     ScreenPoint pixel_screen(int i, int j) const { return screen(i + 0.5, j + 0.5); }
 
-    Ray ray(ScreenPoint s) const;
+    // Inline: the shading pass and Martin's solves ask for one per pixel and solve.
+    Ray ray(ScreenPoint s) const {
+        if (perspective())  // dir = normalize(f + tan(fov/2) (sx r + sy u))
+            return {spec_.eye, normalize(f_ + tan_half_ * (s.sx * r_ + s.sy * u_))};
+        // origin = eye + (height/2) (sx r + sy u); dir = f
+        return {spec_.eye + 0.5 * spec_.ortho_height * (s.sx * r_ + s.sy * u_), f_};
+    }
     Ray pixel_ray(int i, int j) const { return ray(pixel_screen(i, j)); }
 
     // The paper's projection to R^2 as a linear map on a homogeneous point

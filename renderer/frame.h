@@ -96,59 +96,6 @@ struct FrameContext {
     size_t pixels() const { return static_cast<size_t>(width) * height; }
 };
 
-// Starts (u, v) for a face that no pixel near this one shows: the point of the
-// face's mesh nearest to the pixel on screen, its (u, v) interpolated in that
-// triangle (Newton then starts within the mesh's deflection of the root). A
-// face narrower than a pixel (a fillet or a blend seen edge-on) has mesh vertices
-// many pixels apart along its length; the nearest vertex would start Newton that
-// far away, across a thin trimmed strip, and miss. Each face's vertices are
-// projected once per face and frame on first use, not once per pixel: the scan is
-// O(triangles) and a face of the ducks has ~8000 (`nurbsrt bench`). Same
-// arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
-// vertex behind the eye. Thread-safe.
-class MeshScreenPoints {
-public:
-    explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
-    // Starts of face id for screen point sp, written to out: the (u, v) of the
-    // face's mesh point nearest to sp (among triangles that contain sp, the
-    // nearest to the eye), then of its nearest mesh vertex if that differs (near
-    // a trim loop, a start interpolated across a triangle can lie where Newton
-    // runs off the trimmed face, and the vertex, on the face, does not). Only
-    // points in front of the eye count; returns how many starts (0 to 2).
-    int nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2 = nullptr) const;
-
-    // A face that no pixel near sp shows, with its nearest_starts.
-    struct FarFace {
-        uint32_t id = 0;
-        int nstarts = 0;
-        Vec2 starts[2];
-        double d2 = 0;  // squared screen distance of its mesh from sp
-    };
-    // The faces adjacent (PreparedFace::adjacent) to near[0..nn) that are not
-    // among them, the max_out nearest to sp on screen first (a thin face between
-    // the near faces lies at the pixel; a face with many neighbours, a hub or a
-    // base plate, would otherwise fill the list with faces far away). Returns the
-    // number written to out.
-    // Faces whose mesh lies farther than sqrt(max_d2) from sp (screen units) are
-    // left out, most of them by their screen box alone, without a scan.
-    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
-                           double max_d2 = HUGE_VAL) const;
-
-private:
-    struct Projected {
-        Vec2 s;        // screen position (NaN behind the eye)
-        double depth;  // along the view direction
-    };
-    struct Entry {
-        std::once_flag once;
-        std::vector<Projected> pts;
-        Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye
-    };
-    const Entry& projected(uint32_t id) const;
-    const FrameContext& c_;
-    const std::unique_ptr<Entry[]> faces_;
-};
-
 // Calls fn(ni, nj) for every pixel of the (2 radius + 1)^2 square around (i, j)
 // inside the width x height frame, the pixel itself included, rows top to bottom, each left to
 // right (the order decides which start is tried first, so it is fixed). A fn that

@@ -10,7 +10,9 @@
 // otherwise shows the face behind). Reads only the hits so far, so the result
 // stays independent of the thread count.
 #include <algorithm>
+#include <cmath>
 
+#include "renderer/mesh_screen_points.h"
 #include "renderer/passes.h"
 
 namespace nurbsrt {
@@ -58,6 +60,16 @@ public:
         const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
         spike_ = kSpikeRelative * diag;
         nearer_ = kNearerRelative * diag;
+    }
+    // Whether find(i, j) can find anything: the pixel is a spike against one of
+    // its pairs, the first test of find, on `depth` (the hits' t, +inf where no
+    // hit), which the first pass reads instead of three hits per pair.
+    bool maybe_spike(const std::vector<double>& depth, int i, int j) const {
+        const size_t k = c_.map.index(i, j);
+        if (!(depth[k] < HUGE_VAL)) return false;
+        const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
+        return (row && depth[k] > 0.5 * (depth[k - 1] + depth[k + 1]) + spike_) ||
+               (column && depth[k] > 0.5 * (depth[k - c_.width] + depth[k + c_.width]) + spike_);
     }
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const {
@@ -207,10 +219,12 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, FrameBuf
     // needed for a handful of pixels. Later passes examine only the 4-neighbours of
     // the pixels the last pass changed.
     std::vector<std::vector<Update>> row_updates(c.height);
+    std::vector<double> depth(c.pixels());
+    for (size_t k = 0; k < depth.size(); ++k) depth[k] = b.hits[k].face ? b.hits[k].t : HUGE_VAL;
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
             PixelHit h;
-            if (nearer.find(i, j, h)) row_updates[j].push_back({c.map.index(i, j), h});
+            if (nearer.maybe_spike(depth, i, j) && nearer.find(i, j, h)) row_updates[j].push_back({c.map.index(i, j), h});
         }
     });
     std::vector<Update> updates;

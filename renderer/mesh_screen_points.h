@@ -1,0 +1,83 @@
+// Starts (u, v) for a face that no pixel near a rescued one shows, from the
+// face's map mesh projected on screen (the rescue and nearer-sheet passes).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "renderer/frame.h"
+
+namespace nurbsrt {
+
+// The point of the face's mesh nearest to the pixel on screen, its (u, v)
+// interpolated in that triangle (Newton then starts within the mesh's deflection
+// of the root). A face narrower than a pixel (a fillet or a blend seen edge-on)
+// has mesh vertices many pixels apart along its length; the nearest vertex would
+// start Newton that far away, across a thin trimmed strip, and miss.
+// Each face's vertices are projected once per face and frame on first use, not
+// once per pixel, and bucketed in a screen grid, so that a query visits the
+// triangles near the pixel instead of all of them (a face of the ducks has ~3000
+// triangles, and the rescue asks for hundreds of pixels per frame). Same
+// arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
+// vertex behind the eye. Thread-safe.
+class MeshScreenPoints {
+public:
+    explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
+    // Starts of face id for screen point sp, written to out: the (u, v) of the
+    // face's mesh point nearest to sp (among triangles that contain sp, the
+    // nearest to the eye), then of its nearest mesh vertex if that differs (near
+    // a trim loop, a start interpolated across a triangle can lie where Newton
+    // runs off the trimmed face, and the vertex, on the face, does not). Only
+    // points in front of the eye count; returns how many starts (0 to 2). Exact
+    // ties (equal distance and depth) go to the lowest triangle or vertex index,
+    // so the answer does not depend on the grid.
+    int nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2 = nullptr) const;
+
+    // A face that no pixel near sp shows, with its nearest_starts.
+    struct FarFace {
+        uint32_t id = 0;
+        int nstarts = 0;
+        Vec2 starts[2];
+        double d2 = 0;  // squared screen distance of its mesh from sp
+    };
+    // The faces adjacent (PreparedFace::adjacent) to near[0..nn) that are not
+    // among them, the max_out nearest to sp on screen first (a thin face between
+    // the near faces lies at the pixel; a face with many neighbours, a hub or a
+    // base plate, would otherwise fill the list with faces far away). Returns the
+    // number written to out.
+    // Faces whose mesh lies farther than sqrt(max_d2) from sp (screen units) are
+    // left out, most of them by their screen box alone, without a scan.
+    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
+                           double max_d2 = HUGE_VAL) const;
+
+private:
+    struct Projected {
+        Vec2 s;        // screen position (NaN behind the eye)
+        double depth;  // along the view direction
+    };
+    // A uniform grid over the screen box of a face's projected mesh: per cell the
+    // triangles whose screen box overlaps it and the vertices inside it, as
+    // index ranges into one array each (compressed rows), ascending.
+    struct Grid {
+        int nx = 0, ny = 0;
+        double x0 = 0, y0 = 0, cw = 1, ch = 1;
+        std::vector<uint32_t> tri_begin, tris, vtx_begin, vtxs;
+        int cell_x(double x) const;
+        int cell_y(double y) const;
+    };
+    struct Entry {
+        std::once_flag once;
+        std::vector<Projected> pts;
+        Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye
+        Grid grid;
+    };
+    const Entry& projected(uint32_t id) const;
+    void build_grid(uint32_t id, Entry& e) const;
+    const FrameContext& c_;
+    const std::unique_ptr<Entry[]> faces_;
+};
+
+}  // namespace nurbsrt
