@@ -12,7 +12,8 @@ namespace nurbsrt {
 // the settings of this function). Keeps blocks up to 32 MiB (glibc's upper limit
 // for the threshold; a 512x512 frame's largest buffer has 10 MB, and frames from
 // about 900x900 on go back to mmap for their largest) in the heap, and the heap
-// from shrinking while its free top is under 256 MiB, which later frames reuse. Returns false where the C library refused (not glibc).
+// from shrinking while its free top is under 256 MiB, which later frames reuse.
+// Returns false where the C library refused (not glibc).
 bool tune_heap_for_frames();
 
 }  // namespace nurbsrt

@@ -111,9 +111,15 @@ const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
             e.lo = {std::min(e.lo.x, s.x), std::min(e.lo.y, s.y)};
             e.hi = {std::max(e.hi.x, s.x), std::max(e.hi.y, s.y)};
         }
-        build_grid(id, e);
     });
     return e;
+}
+
+const MeshScreenPoints::Entry& MeshScreenPoints::gridded(uint32_t id) const {
+    const Entry& projected_entry = projected(id);
+    Entry& e = faces_[id - 1];
+    std::call_once(e.grid_once, [&] { build_grid(id, e); });
+    return projected_entry;
 }
 
 void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
@@ -172,7 +178,7 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
 }
 
 int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2) const {
-    const Entry& e = projected(id);
+    const Entry& e = gridded(id);
     const std::vector<Projected>& pts = e.pts;
     const Grid& g = e.grid;
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;

@@ -18,7 +18,7 @@ namespace nurbsrt {
 // has mesh vertices many pixels apart along its length; the nearest vertex would
 // start Newton that far away, across a thin trimmed strip, and miss.
 // Each face's vertices are projected once per face and frame on first use, not
-// once per pixel, and bucketed in a screen grid, so that a query visits the
+// once per pixel, and bucketed in a screen grid when first searched, so that a query visits the
 // triangles near the pixel instead of all of them (a face of the ducks has ~3000
 // triangles, and the rescue asks for hundreds of pixels per frame). Same
 // arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
@@ -68,13 +68,17 @@ private:
         int cell_x(double x) const;
         int cell_y(double y) const;
     };
+    // Built on first use, in two steps: the projection (and screen box) for any
+    // face asked about, the grid only for faces searched (adjacent_far_faces
+    // rejects most candidates by their box alone).
     struct Entry {
-        std::once_flag once;
+        std::once_flag once, grid_once;
         std::vector<Projected> pts;
         Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye
         Grid grid;
     };
     const Entry& projected(uint32_t id) const;
+    const Entry& gridded(uint32_t id) const;
     void build_grid(uint32_t id, Entry& e) const;
     const FrameContext& c_;
     const std::unique_ptr<Entry[]> faces_;

@@ -55,8 +55,9 @@ struct Update {
 
 class NearerSheet {
 public:
-    NearerSheet(const FrameContext& c, const Solver& solver, const std::vector<PixelHit>& hits)
-        : c_(c), solver_(solver), hits_(hits), screen_points_(c) {
+    NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                const std::vector<PixelHit>& hits)
+        : c_(c), solver_(solver), hits_(hits), screen_points_(screen_points) {
         const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
         spike_ = kSpikeRelative * diag;
         nearer_ = kNearerRelative * diag;
@@ -205,14 +206,15 @@ private:
     const FrameContext& c_;
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;
-    const MeshScreenPoints screen_points_;
+    const MeshScreenPoints& screen_points_;
     double spike_ = 0, nearer_ = 0;
 };
 
 }  // namespace
 
-uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b) {
-    const NearerSheet nearer(c, solver, b.hits);
+uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                           FrameBuffers& b) {
+    const NearerSheet nearer(c, solver, screen_points, b.hits);
     const int W = c.width;
     // The first pass examines every pixel; replacements are collected per row
     // (almost always none) and applied between passes, so no frame-sized buffer is

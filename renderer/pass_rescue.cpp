@@ -349,8 +349,8 @@ std::vector<uint8_t> rescue_candidates(const FrameContext& c, const std::vector<
 
 }  // namespace
 
-void rescue_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b) {
-    const MeshScreenPoints screen_points(c);
+void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                 FrameBuffers& b) {
     const std::vector<uint8_t> todo = rescue_candidates(c, b.first);
     parallel_rows(c, true, [&](int j) {
         for (int i = 0; i < c.width; ++i) {

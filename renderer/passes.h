@@ -26,11 +26,17 @@ namespace nurbsrt {
 // Fills b.first and b.outcome.
 void primary_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
 
-// Fills b.hits and b.rescued where the primary solve found no hit.
-void rescue_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
+class MeshScreenPoints;
+
+// Fills b.hits and b.rescued where the primary solve found no hit. screen_points:
+// the frame's projected map meshes (mesh_screen_points.h), shared with the
+// nearer-sheet pass, which asks for many of the same faces.
+void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                 FrameBuffers& b);
 
 // Replaces hits on a farther sheet by nearer ones in b.hits; returns how many.
-uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
+uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                           FrameBuffers& b);
 
 // The lights of a frame (lighting.h) and the colour of one hit under them (pass_shade.cpp).
 class Shader {

@@ -15,6 +15,7 @@
 
 #include "renderer/error.h"
 #include "renderer/frame.h"
+#include "renderer/mesh_screen_points.h"
 #include "renderer/nurbs.h"
 #include "renderer/passes.h"
 #include "renderer/pixel_solver.h"
@@ -115,8 +116,9 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
 
     buf.hits = buf.first;
     if (options.rescue) {
-        rescue_pass(ctx, solver, buf);
-        st.rescue_nearer += nearer_sheet_pass(ctx, solver, buf);
+        const MeshScreenPoints screen_points(ctx);
+        rescue_pass(ctx, solver, screen_points, buf);
+        st.rescue_nearer += nearer_sheet_pass(ctx, solver, screen_points, buf);
     } else {
         progress.add(H);
     }

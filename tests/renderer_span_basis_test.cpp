@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <vector>
@@ -42,8 +43,10 @@ struct Case {
 
 TEST(SpanBasis, SameSpanAndBasisAsA22) {
     const Case cases[] = {{2, 1, 0, 1}, {4, 2, 0, 1}, {9, 3, 0, 1}, {12, 3, 1000, 0.01}, {7, 4, -5, 2},
-                          {11, 5, 0, 1}, {10, 7, 0, 1}, {30, 3, 0, 1e-3}};
+                          {11, 5, 0, 1}, {10, 7, 0, 1}, {30, 3, 0, 1e-3}, {9, 8, 0, 1},
+                          {20, 8, -3, 0.5}, {24, 8, 100, 0.1}};
     std::mt19937 rng(7);
+    double worst_N[kMaxTableDegree + 1] = {}, worst_dN[kMaxTableDegree + 1] = {};
     for (const Case& c : cases) {
         SCOPED_TRACE("n=" + std::to_string(c.n) + " p=" + std::to_string(c.p));
         const std::vector<double> U = knots_for(c.n, c.p, c.origin, c.scale);
@@ -55,7 +58,7 @@ TEST(SpanBasis, SameSpanAndBasisAsA22) {
         std::uniform_real_distribution<double> d(lo, hi);
         for (int k = 0; k < 400; ++k) ts.push_back(d(rng));
         for (const double t : ts) {
-            double N[8], dN[8], Nr[8], dNr[8];
+            double N[kMaxTableDegree + 1], dN[kMaxTableDegree + 1], Nr[kMaxTableDegree + 1], dNr[kMaxTableDegree + 1];
             int s = -1;
             spans.basis(t, s, N, dN);
             const double tc = std::isnan(t) ? lo : std::clamp(t, lo, hi);
@@ -64,14 +67,21 @@ TEST(SpanBasis, SameSpanAndBasisAsA22) {
             ASSERT_EQ(s, sr) << "t=" << t;
             double dmax = 0;
             for (int r = 0; r <= c.p; ++r) dmax = std::max(dmax, std::abs(dNr[r]));
+            for (int r = 0; r <= c.p; ++r) worst_N[c.p] = std::max(worst_N[c.p], std::abs(N[r] - Nr[r]));
+            for (int r = 0; r <= c.p; ++r) worst_dN[c.p] = std::max(worst_dN[c.p], std::abs(dN[r] - dNr[r]) / dmax);
             for (int r = 0; r <= c.p; ++r) {
                 // Basis values are in [0, 1] and sum to 1: absolute error. Derivatives
-                // scale with p / h: relative to the largest of them.
-                EXPECT_NEAR(N[r], Nr[r], 1e-13) << "t=" << t << " r=" << r;
-                EXPECT_NEAR(dN[r], dNr[r], 1e-12 * dmax) << "t=" << t << " r=" << r;
+                // scale with p / h: relative to the largest of them. The power basis's
+                // conditioning grows with the degree (measured, printed below: ~1e-14
+                // up to degree 7, ~1e-13 at 8), hence the looser bound from degree 8.
+                const double tol = c.p <= 7 ? 1e-13 : 1e-12;
+                EXPECT_NEAR(N[r], Nr[r], tol) << "t=" << t << " r=" << r;
+                EXPECT_NEAR(dN[r], dNr[r], 10 * tol * dmax) << "t=" << t << " r=" << r;
             }
         }
     }
+    for (int p = 1; p <= kMaxTableDegree; ++p)
+        std::printf("degree %2d: max |N - N_A2.2| %.1e, max |dN - dN_A2.2| / max |dN| %.1e\n", p, worst_N[p], worst_dN[p]);
 }
 
 TEST(SpanBasis, SurfaceEvaluationMatches) {
