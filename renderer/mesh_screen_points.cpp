@@ -15,6 +15,11 @@ constexpr double kTrianglesPerCell = 4.0;
 // Cells per axis at the most: bounds a grid's memory where a face has very many
 // triangles or a very long screen box (a face crossing the eye plane).
 constexpr int kMaxCellsPerAxis = 128;
+// A face's first queries scan all its triangles; from this query on, the grid
+// (built once, O(triangles) with a larger constant than one scan) answers. A
+// face asked about once or twice (most candidates of the nearer-sheet pass)
+// never pays for a grid; one along a long silhouette does after a few pixels.
+constexpr uint32_t kQueriesBeforeGrid = 4;
 // Slack on cell bounds, relative to the cell size: a point's cell comes from a
 // rounded division, so the cell's recomputed box may miss it by an ulp; the
 // slack keeps such a cell in the search (visiting one more cell costs nothing).
@@ -53,6 +58,14 @@ double box_distance2(Vec2 p, double x0, double x1, double y0, double y1) {
 }
 
 }  // namespace
+
+// A triangle counts when its three vertices exist and lie in front of the eye.
+bool MeshScreenPoints::usable_triangle(const FaceMesh& mesh, const std::vector<Projected>& pts, size_t t) {
+    const uint32_t* idx = &mesh.triangles[3 * t];
+    for (int q = 0; q < 3; ++q)
+        if (idx[q] >= pts.size() || std::isnan(pts[idx[q]].s.x)) return false;
+    return true;
+}
 
 int MeshScreenPoints::Grid::cell_x(double x) const {
     return std::clamp(static_cast<int>(std::floor((x - x0) / cw)), 0, nx - 1);
@@ -115,11 +128,12 @@ const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
     return e;
 }
 
-const MeshScreenPoints::Entry& MeshScreenPoints::gridded(uint32_t id) const {
-    const Entry& projected_entry = projected(id);
+const MeshScreenPoints::Grid* MeshScreenPoints::grid(uint32_t id) const {
+    projected(id);
     Entry& e = faces_[id - 1];
+    if (e.queries.fetch_add(1, std::memory_order_relaxed) + 1 < kQueriesBeforeGrid) return nullptr;
     std::call_once(e.grid_once, [&] { build_grid(id, e); });
-    return projected_entry;
+    return &e.grid;
 }
 
 void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
@@ -127,18 +141,23 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
     const std::vector<Projected>& pts = e.pts;
     const size_t ntri = mesh.triangles.size() / 3;
-    // A triangle counts when its three vertices exist and lie in front of the eye.
-    auto usable = [&](size_t t) {
-        const uint32_t* idx = &mesh.triangles[3 * t];
-        for (int q = 0; q < 3; ++q)
-            if (idx[q] >= pts.size() || std::isnan(pts[idx[q]].s.x)) return false;
-        return true;
+    // Each usable triangle's screen box, once: sizes the grid, then gives the cells.
+    struct Box {
+        uint32_t t;
+        double x0, x1, y0, y1;
     };
-    size_t nusable = 0;
-    for (size_t t = 0; t < ntri; ++t) nusable += usable(t);
+    std::vector<Box> boxes;
+    boxes.reserve(ntri);
+    for (size_t t = 0; t < ntri; ++t) {
+        if (!usable_triangle(mesh, pts, t)) continue;
+        const uint32_t* idx = &mesh.triangles[3 * t];
+        const Vec2 a = pts[idx[0]].s, b = pts[idx[1]].s, c = pts[idx[2]].s;
+        boxes.push_back({static_cast<uint32_t>(t), std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}),
+                         std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y})});
+    }
     Grid& g = e.grid;
     const double w = e.hi.x - e.lo.x, h = e.hi.y - e.lo.y;
-    const double cells = std::max(1.0, static_cast<double>(nusable) / kTrianglesPerCell);
+    const double cells = std::max(1.0, static_cast<double>(boxes.size()) / kTrianglesPerCell);
     const double side = w > 0 && h > 0 ? std::sqrt(w * h / cells) : std::max(w, h) / cells;
     auto axis_cells = [&](double extent) {
         return side > 0 ? std::clamp(static_cast<int>(std::ceil(extent / side)), 1, kMaxCellsPerAxis) : 1;
@@ -156,35 +175,32 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
     // Compressed rows in two passes (count, then fill), entries ascending per cell.
     auto fill = [&](std::vector<uint32_t>& begin, std::vector<uint32_t>& items, size_t count, auto&& cells_of) {
         begin.assign(ncells + 1, 0);
-        for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell) { ++begin[cell + 1]; });
+        for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t) { ++begin[cell + 1]; });
         for (size_t cell = 0; cell < ncells; ++cell) begin[cell + 1] += begin[cell];
         items.resize(begin[ncells]);
         std::vector<uint32_t> next(begin.begin(), begin.end() - 1);
-        for (size_t q = 0; q < count; ++q)
-            cells_of(q, [&](size_t cell) { items[next[cell]++] = static_cast<uint32_t>(q); });
+        for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t item) { items[next[cell]++] = item; });
     };
-    fill(g.tri_begin, g.tris, ntri, [&](size_t t, auto&& add) {
-        if (!usable(t)) return;
-        const uint32_t* idx = &mesh.triangles[3 * t];
-        const Vec2 a = pts[idx[0]].s, b = pts[idx[1]].s, c = pts[idx[2]].s;
-        const int x0 = g.cell_x(std::min({a.x, b.x, c.x})), x1 = g.cell_x(std::max({a.x, b.x, c.x}));
-        const int y0 = g.cell_y(std::min({a.y, b.y, c.y})), y1 = g.cell_y(std::max({a.y, b.y, c.y}));
+    fill(g.tri_begin, g.tris, boxes.size(), [&](size_t q, auto&& add) {
+        const Box& b = boxes[q];
+        const int x0 = g.cell_x(b.x0), x1 = g.cell_x(b.x1), y0 = g.cell_y(b.y0), y1 = g.cell_y(b.y1);
         for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) add(static_cast<size_t>(y) * g.nx + x);
+            for (int x = x0; x <= x1; ++x) add(static_cast<size_t>(y) * g.nx + x, b.t);
     });
     fill(g.vtx_begin, g.vtxs, pts.size(), [&](size_t m, auto&& add) {
-        if (!std::isnan(pts[m].s.x)) add(static_cast<size_t>(g.cell_y(pts[m].s.y)) * g.nx + g.cell_x(pts[m].s.x));
+        if (!std::isnan(pts[m].s.x))
+            add(static_cast<size_t>(g.cell_y(pts[m].s.y)) * g.nx + g.cell_x(pts[m].s.x), static_cast<uint32_t>(m));
     });
 }
 
 int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2) const {
-    const Entry& e = gridded(id);
+    const Entry& e = projected(id);
     const std::vector<Projected>& pts = e.pts;
-    const Grid& g = e.grid;
+    const Grid* g = grid(id);
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
     const Vec2 p{sp.sx, sp.sy};
     NearestPoint best, vertex;
-    if (g.nx == 0) {
+    if (!(e.lo.x <= e.hi.x)) {  // no point in front of the eye
         if (screen_d2) *screen_d2 = HUGE_VAL;
         return 0;
     }
@@ -218,16 +234,24 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
                        3 * uint64_t(t) + k);
         }
     };
-    for_near_cells(g, p, [&] { return best.d2; }, [&](size_t cell) {
-        for (uint32_t q = g.tri_begin[cell]; q < g.tri_begin[cell + 1]; ++q) test_triangle(g.tris[q]);
-    });
-    for_near_cells(g, p, [&] { return vertex.d2; }, [&](size_t cell) {
-        for (uint32_t q = g.vtx_begin[cell]; q < g.vtx_begin[cell + 1]; ++q) {
-            const uint32_t m = g.vtxs[q];
-            const double dx = pts[m].s.x - p.x, dy = pts[m].s.y - p.y;
-            vertex.offer(dx * dx + dy * dy, pts[m].depth, mesh.uv[m], m);
-        }
-    });
+    auto test_vertex = [&](uint32_t m) {
+        const double dx = pts[m].s.x - p.x, dy = pts[m].s.y - p.y;
+        vertex.offer(dx * dx + dy * dy, pts[m].depth, mesh.uv[m], m);
+    };
+    if (g) {
+        for_near_cells(*g, p, [&] { return best.d2; }, [&](size_t cell) {
+            for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) test_triangle(g->tris[q]);
+        });
+        for_near_cells(*g, p, [&] { return vertex.d2; }, [&](size_t cell) {
+            for (uint32_t q = g->vtx_begin[cell]; q < g->vtx_begin[cell + 1]; ++q) test_vertex(g->vtxs[q]);
+        });
+    } else {
+        const size_t ntri = mesh.triangles.size() / 3;
+        for (size_t t = 0; t < ntri; ++t)
+            if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
+        for (size_t m = 0; m < pts.size(); ++m)
+            if (!std::isnan(pts[m].s.x)) test_vertex(static_cast<uint32_t>(m));
+    }
     int n = 0;
     for (const NearestPoint* q : {&best, &vertex})
         if (q->found && (n == 0 || out[0].x != q->uv.x || out[0].y != q->uv.y)) out[n++] = q->uv;

@@ -2,6 +2,7 @@
 // face's map mesh projected on screen (the rescue and nearer-sheet passes).
 #pragma once
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -69,16 +70,20 @@ private:
         int cell_y(double y) const;
     };
     // Built on first use, in two steps: the projection (and screen box) for any
-    // face asked about, the grid only for faces searched (adjacent_far_faces
-    // rejects most candidates by their box alone).
+    // face asked about, the grid only for faces searched a few times (a scan of
+    // the triangles answers the first queries; adjacent_far_faces rejects most
+    // candidates by their box alone).
     struct Entry {
         std::once_flag once, grid_once;
+        std::atomic<uint32_t> queries{0};
         std::vector<Projected> pts;
         Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye
         Grid grid;
     };
     const Entry& projected(uint32_t id) const;
-    const Entry& gridded(uint32_t id) const;
+    // The face's grid, or null while a scan is cheaper (its first queries).
+    const Grid* grid(uint32_t id) const;
+    static bool usable_triangle(const FaceMesh& mesh, const std::vector<Projected>& pts, size_t t);
     void build_grid(uint32_t id, Entry& e) const;
     const FrameContext& c_;
     const std::unique_ptr<Entry[]> faces_;
