@@ -49,20 +49,9 @@ uint32_t hash32(uint32_t x) {
 
 class EdgeSampler {
 public:
-    EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
-                const RenderImage& img)
-        : c_(c), solver_(solver), hits_(b.hits), img_(img), shader_(shader) {}
+    EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b)
+        : c_(c), solver_(solver), hits_(b.hits), shader_(shader) {}
 
-    // Whether pixel (i, j) differs from one of its 8 neighbours in what it shows.
-    bool is_edge(int i, int j) const {
-        const size_t k = c_.map.index(i, j);
-        bool edge = false;
-        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
-            edge = pixels_differ(c_, hits_, img_, k, c_.map.index(ni, nj));
-            return !edge;
-        });
-        return edge;
-    }
 
     // The mean premultiplied colour of pixel (i, j)'s centre sample (`centre`,
     // straight alpha) and its n stratified sub-pixel samples, back in straight
@@ -156,7 +145,6 @@ private:
     const FrameContext& c_;
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;
-    const RenderImage& img_;
     const Shader& shader_;
     // Scratch of the pixel being resolved; one EdgeSampler per thread.
     mutable Start starts_[kNeighbours];
@@ -164,10 +152,22 @@ private:
     mutable bool own_hit_ = false;
 };
 
+// Whether pixel (i, j) differs from one of its 8 neighbours in what it shows:
+// its own forward bits, or the bit of a neighbour before it pointing at it.
+bool is_edge(const FrameContext& c, const std::vector<uint8_t>& diff, int i, int j) {
+    const size_t k = c.map.index(i, j);
+    const int W = c.width;
+    if (diff[k]) return true;
+    if (i > 0 && (diff[k - 1] & kDiffRight)) return true;
+    if (j == 0) return false;
+    return (diff[k - W] & kDiffDown) || (i > 0 && (diff[k - W - 1] & kDiffDownRight)) ||
+           (i + 1 < W && (diff[k - W + 1] & kDiffDownLeft));
+}
+
 }  // namespace
 
 void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
-                    RenderImage& img, RenderStats& st) {
+                    const std::vector<uint8_t>& diff, RenderImage& img, RenderStats& st) {
     const int n = c.options.antialias;
     st.antialias = std::max(n, 0);
     if (n <= 0) return;
@@ -175,12 +175,11 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& s
     // colour changes, so the result does not depend on the order of the rows.
     std::vector<uint8_t> edge(c.pixels(), 0);
     parallel_rows(c, false, [&](int j) {
-        const EdgeSampler sampler(c, solver, shader, b, img);
-        for (int i = 0; i < c.width; ++i) edge[c.map.index(i, j)] = sampler.is_edge(i, j);
+        for (int i = 0; i < c.width; ++i) edge[c.map.index(i, j)] = is_edge(c, diff, i, j);
     });
     std::atomic<uint64_t> pixels{0}, rays{0};
     parallel_rows(c, true, [&](int j) {
-        const EdgeSampler sampler(c, solver, shader, b, img);
+        const EdgeSampler sampler(c, solver, shader, b);
         uint64_t p = 0, r = 0;
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);

@@ -39,21 +39,32 @@ bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, con
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < kCreaseCos;
 }
 
-void edges_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) {
+std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img) {
+    const int W = c.width, H = c.height;
+    std::vector<uint8_t> diff(c.pixels(), 0);
+    parallel_rows(c, false, [&](int j) {
+        for (int i = 0; i < W; ++i) {
+            const size_t k = c.map.index(i, j);
+            uint8_t bits = 0;
+            if (i + 1 < W && pixels_differ(c, b.hits, img, k, k + 1)) bits |= kDiffRight;
+            if (j + 1 < H) {
+                if (pixels_differ(c, b.hits, img, k, k + W)) bits |= kDiffDown;
+                if (i + 1 < W && pixels_differ(c, b.hits, img, k, k + W + 1)) bits |= kDiffDownRight;
+                if (i > 0 && pixels_differ(c, b.hits, img, k, k + W - 1)) bits |= kDiffDownLeft;
+            }
+            diff[k] = bits;
+        }
+    });
+    throw_if_canceled(c.options);
+    return diff;
+}
+
+void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderImage& img) {
     const RenderOptions& o = c.options;
     if (!o.edges || !(o.edge_width > 0)) return;
     const int W = c.width, H = c.height;
     // Boundary points: the midpoints of the right and lower sides of pixels whose
     // neighbour there differs, in pixel coordinates (pixel (i, j) spans [i, i+1) x [j, j+1)).
-    std::vector<uint8_t> right(c.pixels(), 0), down(c.pixels(), 0);
-    parallel_rows(c, false, [&](int j) {
-        for (int i = 0; i < W; ++i) {
-            const size_t k = c.map.index(i, j);
-            if (i + 1 < W) right[k] = pixels_differ(c, b.hits, img, k, k + 1);
-            if (j + 1 < H) down[k] = pixels_differ(c, b.hits, img, k, k + W);
-        }
-    });
-    throw_if_canceled(o);
     // A pixel's coverage by the line: 1 within half the width of a boundary
     // point, falling to 0 over one more pixel (a box filter's footprint). The
     // boundary points of each row are listed first: a pixel then looks only at
@@ -66,8 +77,8 @@ void edges_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img) 
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t k = c.map.index(i, j);
-            if (right[k]) row_right[j].push_back(i);
-            if (down[k]) row_down[j].push_back(i);
+            if (diff[k] & kDiffRight) row_right[j].push_back(i);
+            if (diff[k] & kDiffDown) row_down[j].push_back(i);
         }
     });
     std::vector<float> coverage(c.pixels(), 0.0f);

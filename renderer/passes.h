@@ -63,16 +63,23 @@ void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers&
 bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
                    size_t n);
 
+// pixels_differ of each pixel and its four forward neighbours, once per frame
+// for both the anti-aliasing and the feature lines (it is symmetric, so the
+// other four directions are the neighbours' bits): per pixel, the bits below.
+enum NeighbourDiff : uint8_t { kDiffRight = 1, kDiffDown = 2, kDiffDownRight = 4, kDiffDownLeft = 8 };
+std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img);
+
 // Anti-aliasing: pixels on silhouettes, face borders, depth steps and creases get
 // c.options.antialias extra sub-pixel rays, each solved exactly, and their colour
 // becomes the mean of all their samples; img's AOVs stay the pixel-centre sample.
 // Adds the pixels and rays to st.
+// diff: neighbour_differences of the frame.
 void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
-                    RenderImage& img, RenderStats& st);
+                    const std::vector<uint8_t>& diff, RenderImage& img, RenderStats& st);
 
 // Feature lines (c.options.edges): silhouettes, face borders and creases drawn
 // over img's colour, c.options.edge_width pixels wide, anti-aliased.
-void edges_pass(const FrameContext& c, const FrameBuffers& b, RenderImage& img);
+void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderImage& img);
 
 // Hits, primary outcomes, iterations, rescue kinds and holes into st.
 void frame_statistics(const FrameContext& c, const FrameBuffers& b, const RenderImage& img, int max_iterations,

@@ -137,9 +137,14 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     const Shader shader(ctx, shadows ? &*shadows : nullptr);
     shade_pass(ctx, shader, buf, res.image);
     st.shade_ms = lap();
-    antialias_pass(ctx, solver, shader, buf, res.image, st);
+    // Which neighbours differ: from the hits and normals, which the two passes
+    // below leave as they are (anti-aliasing changes colours only).
+    std::vector<uint8_t> diff;
+    if (options.antialias > 0 || (options.edges && options.edge_width > 0))
+        diff = neighbour_differences(ctx, buf, res.image);
+    antialias_pass(ctx, solver, shader, buf, diff, res.image, st);
     st.antialias_ms = lap();
-    edges_pass(ctx, buf, res.image);
+    edges_pass(ctx, diff, res.image);
     st.edges_ms = lap();
 
     if (shadows) {
