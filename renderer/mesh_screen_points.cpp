@@ -129,8 +129,7 @@ const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
 }
 
 const MeshScreenPoints::Grid* MeshScreenPoints::grid(uint32_t id) const {
-    projected(id);
-    Entry& e = faces_[id - 1];
+    Entry& e = faces_[id - 1];  // projected(id) has run: nearest_starts asks for it first
     if (e.queries.fetch_add(1, std::memory_order_relaxed) + 1 < kQueriesBeforeGrid) return nullptr;
     std::call_once(e.grid_once, [&] { build_grid(id, e); });
     return &e.grid;
@@ -273,9 +272,8 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
                 std::any_of(all.begin(), all.end(), [&](const FarFace& f) { return f.id == id; }))
                 continue;
             const Entry& e = projected(id);
-            const double bx = std::max({e.lo.x - sp.sx, 0.0, sp.sx - e.hi.x});
-            const double by = std::max({e.lo.y - sp.sy, 0.0, sp.sy - e.hi.y});
-            if (!(bx * bx + by * by <= max_d2)) continue;  // also a face wholly behind the eye (empty box)
+            // Also drops a face wholly behind the eye (empty box: infinite distance).
+            if (!(box_distance2({sp.sx, sp.sy}, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2)) continue;
             FarFace f;
             f.id = id;
             f.nstarts = nearest_starts(id, sp, f.starts, &f.d2);

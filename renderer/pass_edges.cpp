@@ -41,6 +41,7 @@ bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, con
 
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img) {
     const int W = c.width, H = c.height;
+    const bool diagonals = c.options.antialias > 0;  // only anti-aliasing reads them
     std::vector<uint8_t> diff(c.pixels(), 0);
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
@@ -49,8 +50,8 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
             if (i + 1 < W && pixels_differ(c, b.hits, img, k, k + 1)) bits |= kDiffRight;
             if (j + 1 < H) {
                 if (pixels_differ(c, b.hits, img, k, k + W)) bits |= kDiffDown;
-                if (i + 1 < W && pixels_differ(c, b.hits, img, k, k + W + 1)) bits |= kDiffDownRight;
-                if (i > 0 && pixels_differ(c, b.hits, img, k, k + W - 1)) bits |= kDiffDownLeft;
+                if (diagonals && i + 1 < W && pixels_differ(c, b.hits, img, k, k + W + 1)) bits |= kDiffDownRight;
+                if (diagonals && i > 0 && pixels_differ(c, b.hits, img, k, k + W - 1)) bits |= kDiffDownLeft;
             }
             diff[k] = bits;
         }

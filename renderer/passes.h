@@ -65,7 +65,9 @@ bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, con
 
 // pixels_differ of each pixel and its four forward neighbours, once per frame
 // for both the anti-aliasing and the feature lines (it is symmetric, so the
-// other four directions are the neighbours' bits): per pixel, the bits below.
+// other four directions are the neighbours' bits): per pixel, the bits below;
+// the diagonal ones only when anti-aliasing is on (the feature lines use the
+// right and lower neighbours).
 enum NeighbourDiff : uint8_t { kDiffRight = 1, kDiffDown = 2, kDiffDownRight = 4, kDiffDownLeft = 8 };
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img);
 
