@@ -14,13 +14,7 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::corrupt_scene: return "corrupt_scene";
         case ErrorCode::invalid_argument: return "invalid_argument";
         case ErrorCode::limit_exceeded: return "limit_exceeded";
-        case ErrorCode::not_found: return "not_found";
-        case ErrorCode::overloaded: return "overloaded";
-        case ErrorCode::render_timeout: return "render_timeout";
         case ErrorCode::canceled: return "canceled";
-        case ErrorCode::unauthorized: return "unauthorized";
-        case ErrorCode::request_timeout: return "request_timeout";
-        case ErrorCode::interrupted: return "interrupted";
         case ErrorCode::internal: return "internal";
     }
     return "internal";  // out-of-range value cast to ErrorCode

@@ -1,6 +1,8 @@
-// The project's one error type. Every failure that can reach a user (CLI message,
-// HTTP problem+json body, job error) is an nurbsrt::Error with a stable code, so
-// callers map codes to exit statuses / HTTP statuses in one place each.
+// The library's error type. Every failure of reading, converting or rendering a
+// model that can reach a user (CLI message, HTTP problem+json body, job error) is
+// an nurbsrt::Error with a stable code, so callers map codes to exit statuses /
+// HTTP statuses in one place each. The service's own conditions (no such route,
+// a full queue, a missing API key) are server/service_error.h's, not these.
 #pragma once
 
 #include <stdexcept>
@@ -19,14 +21,7 @@ enum class ErrorCode {
     corrupt_scene,       // serialized scene is truncated, has a bad header or checksum
     invalid_argument,    // a parameter out of range (camera, size, options)
     limit_exceeded,      // a configured limit (pixels, faces, bytes) was exceeded
-    // Service-level conditions (server/): every HTTP problem carries an ErrorCode name.
-    not_found,           // no such route or resource
-    overloaded,          // the work queue is full; retry later
-    render_timeout,      // a render exceeded its time limit
     canceled,            // the work was canceled (RenderOptions::cancel, a deleted job)
-    unauthorized,        // an API key is configured and the request has none or a wrong one
-    request_timeout,     // the request's headers or body did not arrive in time (server/http_server.h)
-    interrupted,         // a job's run was cut short by service restarts too often (server/job_runner.h)
     internal,            // a bug: should never reach a user
 };
 

@@ -12,6 +12,7 @@
 #include "renderer/error.h"
 #include "server/durable_file.h"
 #include "server/request_log.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 namespace fs = std::filesystem;
@@ -142,7 +143,7 @@ std::optional<StoredFile> FileStore::get(const std::string& id) const {
 
 StoredContent FileStore::open(const std::string& id) const {
     const auto missing = [&] {
-        return Error(ErrorCode::not_found, "no stored file '" + id.substr(0, 80) + "' (POST /v1/files stores one)");
+        return ServiceError(ServiceCode::not_found, "no stored file '" + id.substr(0, 80) + "' (POST /v1/files stores one)");
     };
     std::optional<StoredFile> f = get(id);
     if (!f) throw missing();

@@ -152,7 +152,7 @@ bool send_all(socket_t sock, const char* data, size_t size) {
 
 // A complete answer written without cpp-httplib, for a connection that is
 // refused or whose request never got as far as routing.
-void send_canned_problem(socket_t sock, int status, const char* reason, ErrorCode code, const std::string& detail,
+void send_canned_problem(socket_t sock, int status, const char* reason, ProblemCode code, const std::string& detail,
                          int retry_after_s) {
     const std::string id = new_request_id();
     const Problem p = make_problem(code, detail, id, status);
@@ -349,7 +349,7 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
     }
     if (!admitted) {
         log_event("connection_refused", "{\"remote\":\"" + client + "\",\"reason\":\"connection cap\"}");
-        send_canned_problem(sock, 503, "Service Unavailable", ErrorCode::overloaded,
+        send_canned_problem(sock, 503, "Service Unavailable", ServiceCode::overloaded,
                             "too many open connections (from this address or in all); retry later",
                             limits_.retry_after_s);
         close_lingering(sock);
@@ -395,7 +395,7 @@ bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip
                                                                                         : "headers too large") +
                                              "\"}");
             if (c.failure == ReadFailure::header_timeout)
-                send_canned_problem(sock, 408, "Request Timeout", ErrorCode::request_timeout,
+                send_canned_problem(sock, 408, "Request Timeout", ServiceCode::request_timeout,
                                     "the request headers did not arrive within the time limit", 0);
             else if (c.failure == ReadFailure::header_too_large)
                 send_canned_problem(sock, 431, "Request Header Fields Too Large", ErrorCode::limit_exceeded,

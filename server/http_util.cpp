@@ -46,19 +46,19 @@ RequestNote take_request_note() {
     return n;
 }
 
-void send_problem(httplib::Response& res, ErrorCode code, const std::string& detail, int retry_after_s) {
+void send_problem(httplib::Response& res, ProblemCode code, const std::string& detail, int retry_after_s) {
     const Problem p = make_problem(code, detail, request_id(res));
     res.status = p.status;
-    if (code == ErrorCode::overloaded && retry_after_s > 0) res.set_header("Retry-After", std::to_string(retry_after_s));
+    if (code == ServiceCode::overloaded && retry_after_s > 0) res.set_header("Retry-After", std::to_string(retry_after_s));
     res.set_content(p.body, kProblemContentType);
-    note_problem_code(error_code_name(code));
+    note_problem_code(code.name());
 }
 
-void send_problem_with_status(httplib::Response& res, int status, ErrorCode code, const std::string& detail) {
+void send_problem_with_status(httplib::Response& res, int status, ProblemCode code, const std::string& detail) {
     const Problem p = make_problem(code, detail, request_id(res), status);
     res.status = p.status;
     res.set_content(p.body, kProblemContentType);
-    note_problem_code(error_code_name(code));
+    note_problem_code(code.name());
 }
 
 bool wants_json(const httplib::Request& req) {

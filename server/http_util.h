@@ -10,6 +10,7 @@
 #include <string>
 
 #include "renderer/error.h"
+#include "server/service_error.h"
 #include "server/file_store.h"
 #include "server/upload.h"
 
@@ -33,10 +34,10 @@ RequestNote take_request_note();
 
 // Fills `res` with the problem+json body and status for `code` (plus
 // Retry-After for overloaded).
-void send_problem(httplib::Response& res, ErrorCode code, const std::string& detail, int retry_after_s = 0);
+void send_problem(httplib::Response& res, ProblemCode code, const std::string& detail, int retry_after_s = 0);
 // The same with an HTTP status other than the code's own (405, 414, 431, ...),
 // which the body's `status` repeats.
-void send_problem_with_status(httplib::Response& res, int status, ErrorCode code, const std::string& detail);
+void send_problem_with_status(httplib::Response& res, int status, ProblemCode code, const std::string& detail);
 
 // `message` without the service's own directories (the data dir, the scratch
 // dir): an error from a child process or the file system may name the private
@@ -53,8 +54,8 @@ struct PageQuery {
 };
 PageQuery parse_page_query(const httplib::Request& req, std::initializer_list<const char*> extra);
 
-// A route handler f(ctx, req, res) whose Error becomes the problem+json answer
-// of its code (the service's own paths cut out of the message). Ctx is
+// A route handler f(ctx, req, res) whose Error or ServiceError becomes the
+// problem+json answer of its code (the service's own paths cut out of the message). Ctx is
 // ServerContext (a template parameter so that this header needs only its
 // declaration).
 template <typename Ctx, typename F>
@@ -63,6 +64,8 @@ httplib::Server::Handler guarded(Ctx& ctx, F f) {
         try {
             f(ctx, req, res);
         } catch (const Error& e) {
+            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
+        } catch (const ServiceError& e) {
             send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
         }
     };

@@ -27,6 +27,7 @@
 #include "server/scratch.h"
 #include "server/stage_timings.h"
 #include "server/work.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 namespace fs = std::filesystem;
@@ -140,7 +141,7 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
     // One submission at a time, so the queue bound holds exactly.
     std::lock_guard<std::mutex> submit_lock(submit_m_);
     if (store_->count_by_state()[JobState::queued] >= ctx_.config.max_queued_jobs)
-        throw Error(ErrorCode::overloaded,
+        throw ServiceError(ServiceCode::overloaded,
                     std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
     job.id = new_request_id();
     job.created_ms = unix_now_ms();
@@ -332,6 +333,10 @@ void JobService::run_claim(JobClaim& claim) {
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) break;
             store_->output_failed(claim.id, out.index, error_code_name(e.code()),
+                                  without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
+                                  claim.lease);
+        } catch (const ServiceError& e) {  // the render's time limit
+            store_->output_failed(claim.id, out.index, service_code_name(e.code()),
                                   without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
                                   claim.lease);
         } catch (const std::exception& e) {

@@ -3,13 +3,11 @@
 #include <nlohmann/json.hpp>
 
 namespace nurbsrt::server {
+namespace {
 
-int http_status(ErrorCode code) {
+int library_status(ErrorCode code) {
     switch (code) {
         case ErrorCode::invalid_argument: return 400;
-        case ErrorCode::unauthorized: return 401;
-        case ErrorCode::not_found: return 404;
-        case ErrorCode::request_timeout: return 408;
         case ErrorCode::canceled: return 409;                // the resource's work was canceled
         // Pixels, faces, render memory, files or outputs of a job: the request is
         // well formed but asks for more than this service is configured to do,
@@ -21,10 +19,7 @@ int http_status(ErrorCode code) {
         case ErrorCode::no_faces:
         case ErrorCode::import_crashed:
         case ErrorCode::occt_failure: return 422;
-        case ErrorCode::overloaded: return 503;
-        case ErrorCode::import_timeout:
-        case ErrorCode::render_timeout: return 504;
-        case ErrorCode::interrupted:                         // job errors only; never a request's
+        case ErrorCode::import_timeout: return 504;
         case ErrorCode::io:
         case ErrorCode::corrupt_scene:
         case ErrorCode::internal: return 500;
@@ -32,12 +27,22 @@ int http_status(ErrorCode code) {
     return 500;
 }
 
-const char* problem_title(ErrorCode code) {
+int service_status(ServiceCode code) {
+    switch (code) {
+        case ServiceCode::unauthorized: return 401;
+        case ServiceCode::not_found: return 404;
+        case ServiceCode::method_not_allowed: return 405;
+        case ServiceCode::request_timeout: return 408;
+        case ServiceCode::overloaded: return 503;
+        case ServiceCode::render_timeout: return 504;
+        case ServiceCode::interrupted: return 500;           // job errors only; never a request's
+    }
+    return 500;
+}
+
+const char* library_title(ErrorCode code) {
     switch (code) {
         case ErrorCode::invalid_argument: return "Invalid request";
-        case ErrorCode::unauthorized: return "Unauthorized";
-        case ErrorCode::not_found: return "Not found";
-        case ErrorCode::request_timeout: return "Request timeout";
         case ErrorCode::canceled: return "Canceled";
         case ErrorCode::limit_exceeded: return "Limit exceeded";
         case ErrorCode::unsupported_format: return "Unsupported format";
@@ -45,24 +50,41 @@ const char* problem_title(ErrorCode code) {
         case ErrorCode::no_faces: return "No faces to render";
         case ErrorCode::import_crashed: return "Import crashed";
         case ErrorCode::occt_failure: return "CAD kernel failure";
-        case ErrorCode::overloaded: return "Service overloaded";
         case ErrorCode::import_timeout: return "Import timed out";
-        case ErrorCode::render_timeout: return "Render timed out";
         case ErrorCode::io: return "I/O error";
         case ErrorCode::corrupt_scene: return "Corrupt cached scene";
-        case ErrorCode::interrupted: return "Interrupted by a service restart";
         case ErrorCode::internal: return "Internal error";
     }
     return "Internal error";
 }
 
-namespace {
+const char* service_title(ServiceCode code) {
+    switch (code) {
+        case ServiceCode::unauthorized: return "Unauthorized";
+        case ServiceCode::not_found: return "Not found";
+        case ServiceCode::method_not_allowed: return "Method not allowed";
+        case ServiceCode::request_timeout: return "Request timeout";
+        case ServiceCode::overloaded: return "Service overloaded";
+        case ServiceCode::render_timeout: return "Render timed out";
+        case ServiceCode::interrupted: return "Interrupted by a service restart";
+    }
+    return "Internal error";
+}
+
+struct StatusOf {
+    int operator()(ErrorCode c) const { return library_status(c); }
+    int operator()(ServiceCode c) const { return service_status(c); }
+};
+
+struct TitleOf {
+    const char* operator()(ErrorCode c) const { return library_title(c); }
+    const char* operator()(ServiceCode c) const { return service_title(c); }
+};
 
 // The title of a status given instead of the code's own: the status's reason
 // phrase (RFC 9110 §15), which says more than the code's title there.
-const char* status_title(int status, ErrorCode code) {
+const char* status_title(int status, ProblemCode code) {
     switch (status) {
-        case 405: return "Method not allowed";
         case 413: return "Content too large";
         case 414: return "URI too long";
         case 431: return "Request header fields too large";
@@ -73,14 +95,18 @@ const char* status_title(int status, ErrorCode code) {
 
 }  // namespace
 
-Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id, int status) {
+int http_status(ProblemCode code) { return code.visit(StatusOf{}); }
+
+const char* problem_title(ProblemCode code) { return code.visit(TitleOf{}); }
+
+Problem make_problem(ProblemCode code, const std::string& detail, const std::string& request_id, int status) {
     if (status == 0) status = http_status(code);
     const nlohmann::json j = {
-        {"type", std::string("urn:nurbsrt:error:") + error_code_name(code)},
+        {"type", std::string("urn:nurbsrt:error:") + code.name()},
         {"title", status == http_status(code) ? problem_title(code) : status_title(status, code)},
         {"status", status},
         {"detail", detail},
-        {"code", error_code_name(code)},
+        {"code", code.name()},
         {"request_id", request_id},
     };
     // Invalid UTF-8 (from a file's content in an error message) is replaced, never thrown on.

@@ -1,18 +1,18 @@
 // Errors as application/problem+json (RFC 9457): type, title, status, detail,
-// plus `code` (the ErrorCode name) and `request_id`. The mapping from
-// ErrorCode to HTTP status lives here and nowhere else.
+// plus `code` (the ErrorCode or ServiceCode name) and `request_id`. The mapping
+// from those codes to HTTP statuses lives here and nowhere else.
 #pragma once
 
 #include <string>
 
-#include "renderer/error.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 
 inline constexpr const char* kProblemContentType = "application/problem+json";
 
-int http_status(ErrorCode code);
-const char* problem_title(ErrorCode code);
+int http_status(ProblemCode code);
+const char* problem_title(ProblemCode code);
 
 struct Problem {
     int status = 500;
@@ -20,8 +20,8 @@ struct Problem {
 };
 
 // `detail` is a human-readable explanation for this occurrence. `status`: the
-// HTTP status when it is not the code's own (431 for limit_exceeded, 405 for
-// not_found, ...); the body's `status` always equals the response's.
-Problem make_problem(ErrorCode code, const std::string& detail, const std::string& request_id, int status = 0);
+// HTTP status when it is not the code's own (431 or 413 for limit_exceeded,
+// ...); the body's `status` always equals the response's.
+Problem make_problem(ProblemCode code, const std::string& detail, const std::string& request_id, int status = 0);
 
 }  // namespace nurbsrt::server

@@ -16,6 +16,7 @@
 #include "renderer/stats_json.h"
 #include "server/stage_timings.h"
 #include "server/work.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -99,7 +100,7 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const PreparedSc
             cancel->store(true);
             char msg[128];
             std::snprintf(msg, sizeof msg, "the render did not finish within %g s", ctx.config.render_timeout_s);
-            throw Error(ErrorCode::render_timeout, msg);
+            throw ServiceError(ServiceCode::render_timeout, msg);
         }
     }
     return result.get();

@@ -115,13 +115,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
 }  // namespace
 
 void add_conversion_routes(httplib::Server& svr, ServerContext& ctx) {
-    svr.Post("/v1/conversions", [&ctx](const httplib::Request& req, httplib::Response& res) {
-        try {
-            handle_conversion(ctx, req, res);
-        } catch (const Error& e) {
-            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
-        }
-    });
+    svr.Post("/v1/conversions", guarded(ctx, handle_conversion));
 }
 
 }  // namespace nurbsrt::server

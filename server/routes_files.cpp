@@ -21,6 +21,7 @@
 #include "server/job_store.h"
 #include "server/render_service.h"
 #include "server/routes.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -78,8 +79,8 @@ void send_json(httplib::Response& res, const json& body, int status = 200) {
     res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
-Error no_such_file(const std::string& id) {
-    return Error(ErrorCode::not_found, "no stored file '" + id.substr(0, 80) + "'");
+ServiceError no_such_file(const std::string& id) {
+    return ServiceError(ServiceCode::not_found, "no stored file '" + id.substr(0, 80) + "'");
 }
 
 bool parse_bool(const json& v, const char* name) {

@@ -11,6 +11,7 @@
 #include "server/http_util.h"
 #include "server/routes.h"
 #include "server/web_assets.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -48,7 +49,7 @@ void add_page_routes(httplib::Server& svr, ServerContext&) {
     svr.Get("/", [](const httplib::Request&, httplib::Response& res) {
         const WebAsset* page = find_asset("index.html");
         if (!page) {
-            send_problem(res, ErrorCode::not_found, "this build has no web page");
+            send_problem(res, ServiceCode::not_found, "this build has no web page");
             return;
         }
         send_asset(*page, res);
@@ -56,7 +57,7 @@ void add_page_routes(httplib::Server& svr, ServerContext&) {
     svr.Get(R"(/web/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
         const WebAsset* a = find_asset(req.matches[1].str());
         if (!a) {
-            send_problem(res, ErrorCode::not_found, "no such file of the web page");
+            send_problem(res, ServiceCode::not_found, "no such file of the web page");
             return;
         }
         send_asset(*a, res);

@@ -97,13 +97,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
 }  // namespace
 
 void add_render_routes(httplib::Server& svr, ServerContext& ctx) {
-    svr.Post("/v1/renders", [&ctx](const httplib::Request& req, httplib::Response& res) {
-        try {
-            handle_render(ctx, req, res);
-        } catch (const Error& e) {
-            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
-        }
-    });
+    svr.Post("/v1/renders", guarded(ctx, handle_render));
 }
 
 }  // namespace nurbsrt::server

@@ -35,13 +35,14 @@
 namespace nurbsrt::server {
 namespace {
 
-ErrorCode code_for_status(int status) {
+ProblemCode code_for_status(int status) {
     switch (status) {
-        case 404: case 405: return ErrorCode::not_found;
-        case 408: return ErrorCode::request_timeout;
+        case 404: return ServiceCode::not_found;
+        case 405: return ServiceCode::method_not_allowed;
+        case 408: return ServiceCode::request_timeout;
         case 413: case 431: return ErrorCode::limit_exceeded;
         case 415: return ErrorCode::unsupported_format;
-        case 503: return ErrorCode::overloaded;
+        case 503: return ServiceCode::overloaded;
         default: return status < 500 ? ErrorCode::invalid_argument : ErrorCode::internal;
     }
 }
@@ -71,7 +72,7 @@ bool has_body(const httplib::Request& req) {
 // An answer a request gets from its headers alone, before its body is read.
 struct EarlyAnswer {
     int status;
-    ErrorCode code;
+    ProblemCode code;
     std::string detail;
     std::string allow = {};  // the Allow header of a 405
 };
@@ -82,9 +83,9 @@ struct EarlyAnswer {
 // closes, so an unrouted one would otherwise wait for the body timeout.
 std::optional<EarlyAnswer> check_route(const httplib::Request& req) {
     const std::string route = route_of(req.path);
-    if (route == "other") return EarlyAnswer{404, ErrorCode::not_found, "no such resource"};
+    if (route == "other") return EarlyAnswer{404, ServiceCode::not_found, "no such resource"};
     if (!allows_method(route, req.method))
-        return EarlyAnswer{405, ErrorCode::not_found,
+        return EarlyAnswer{405, ServiceCode::method_not_allowed,
                            "method " + req.method + " is not allowed on " + route + " (allowed: " +
                                allowed_methods(route) + ")",
                            allowed_methods(route)};
@@ -95,7 +96,7 @@ std::optional<EarlyAnswer> check_before_body(const httplib::Request& req, const 
                                              const ApiKeys& keys) {
     if (keys.enabled() && !ApiKeys::is_public_path(req.path) && !keys.accepts(req.get_header_value("Authorization")) &&
         !keys.accepts_key(req.get_header_value("X-Api-Key")))
-        return EarlyAnswer{401, ErrorCode::unauthorized,
+        return EarlyAnswer{401, ServiceCode::unauthorized,
                            req.has_header("Authorization") || req.has_header("X-Api-Key")
                                ? "the API key is not valid"
                                : "this service requires an API key: send 'Authorization: Bearer <key>' or "
@@ -177,7 +178,7 @@ void install_early_answers(GuardedServer& svr, const ServerConfig& config, const
         if (answer_options(req, res, *c)) return true;
         const std::optional<EarlyAnswer> a = check_before_body(req, *cfg, *k);
         if (!a) return false;
-        if (a->code == ErrorCode::unauthorized) res.set_header("WWW-Authenticate", "Bearer realm=\"nurbsrt\"");
+        if (a->code == ServiceCode::unauthorized) res.set_header("WWW-Authenticate", "Bearer realm=\"nurbsrt\"");
         if (!a->allow.empty()) res.set_header("Allow", a->allow);
         send_problem_with_status(res, a->status, a->code, a->detail);
         if (has_body(req)) {
@@ -222,12 +223,12 @@ void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
         }
         const ReadFailure failure = GuardedServer::current_read_failure();
         if (failure == ReadFailure::header_timeout) {
-            send_problem(res, ErrorCode::request_timeout,
+            send_problem(res, ServiceCode::request_timeout,
                          "the request headers did not arrive within " + format_seconds(config.header_timeout_s));
             return httplib::Server::HandlerResponse::Handled;
         }
         if (failure == ReadFailure::body_timeout) {
-            send_problem(res, ErrorCode::request_timeout,
+            send_problem(res, ServiceCode::request_timeout,
                          "the request body did not arrive in time (at least " +
                              std::to_string(static_cast<long long>(config.min_body_rate_bytes / 1024)) +
                              " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");

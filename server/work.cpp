@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "renderer/error.h"
+#include "server/service_error.h"
 
 namespace nurbsrt::server {
 
@@ -29,10 +30,10 @@ std::shared_ptr<AdmissionGate::Ticket> admit(ServerContext& ctx, AdmissionGate& 
                     std::this_thread::sleep_for(kRetryWhenFull);
                     continue;
                 }
-                throw Error(ErrorCode::overloaded, "all workers are busy and the queue is full; retry later");
+                throw ServiceError(ServiceCode::overloaded, "all workers are busy and the queue is full; retry later");
             case AdmissionGate::Refusal::queue_timeout:
                 if (wait.patient) continue;
-                throw Error(ErrorCode::overloaded, "no worker became free in time; retry later");
+                throw ServiceError(ServiceCode::overloaded, "no worker became free in time; retry later");
             case AdmissionGate::Refusal::none: break;
         }
         throw Error(ErrorCode::internal, "admission refused without a reason");

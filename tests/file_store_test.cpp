@@ -15,10 +15,13 @@
 
 #include "renderer/error.h"
 #include "server/file_store.h"
+#include "server/service_error.h"
 
 namespace fs = std::filesystem;
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
+using nurbsrt::server::ServiceCode;
+using nurbsrt::server::ServiceError;
 using nurbsrt::server::FileStore;
 using nurbsrt::server::sha256_hex;
 using nurbsrt::server::StoredFile;
@@ -103,8 +106,8 @@ TEST_F(FileStoreTest, OpenRemoveAndNotFound) {
     try {
         store.open(sha256_hex("none"));
         FAIL() << "expected not_found";
-    } catch (const Error& e) {
-        EXPECT_EQ(e.code(), ErrorCode::not_found);
+    } catch (const ServiceError& e) {
+        EXPECT_EQ(e.code(), ServiceCode::not_found);
         EXPECT_NE(std::string(e.what()).find(sha256_hex("none")), std::string::npos);  // names the id
     }
     StoredFile a = record("a", 1);

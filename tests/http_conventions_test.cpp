@@ -6,10 +6,17 @@
 #include <filesystem>
 #include <fstream>
 
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+
 #include "renderer/error.h"
+#include "server/context.h"
 #include "server/cors.h"
 #include "server/etag.h"
+#include "server/problem.h"
 #include "server/route_table.h"
+#include "server/service_error.h"
 
 using namespace nurbsrt::server;
 
@@ -100,4 +107,52 @@ TEST(Etag, IfNoneMatchUsesTheWeakComparison) {
     EXPECT_FALSE(if_none_match_matches("abc", tag)) << "unquoted is no entity tag";
     EXPECT_FALSE(if_none_match_matches("", tag));
     EXPECT_FALSE(if_none_match_matches("\"x\", W/\"y\"", tag));
+}
+
+// A problem's `code` is either a library ErrorCode or a ServiceCode: one name
+// space, documented as one enum (components.schemas.ErrorCode of the embedded
+// OpenAPI document). Every name is distinct and documented, and the document
+// names no code the service cannot send.
+TEST(ProblemCodes, OneDocumentedNameSpace) {
+    std::set<std::string> names;
+    size_t count = 0;
+    for (int c = 0; c <= static_cast<int>(nurbsrt::ErrorCode::internal); ++c, ++count)
+        names.insert(ProblemCode(static_cast<nurbsrt::ErrorCode>(c)).name());
+    for (int c = 0; c <= static_cast<int>(ServiceCode::interrupted); ++c, ++count)
+        names.insert(ProblemCode(static_cast<ServiceCode>(c)).name());
+    EXPECT_EQ(names.size(), count);
+    const nlohmann::json spec = nlohmann::json::parse(openapi_document());
+    std::set<std::string> documented;
+    for (const auto& n : spec.at("components").at("schemas").at("ErrorCode").at("enum"))
+        documented.insert(n.get<std::string>());
+    EXPECT_EQ(documented, names);
+}
+
+TEST(ProblemCodes, StatusesAndBodies) {
+    EXPECT_EQ(http_status(ServiceCode::not_found), 404);
+    EXPECT_EQ(http_status(ServiceCode::method_not_allowed), 405);
+    EXPECT_EQ(http_status(ServiceCode::unauthorized), 401);
+    EXPECT_EQ(http_status(ServiceCode::request_timeout), 408);
+    EXPECT_EQ(http_status(ServiceCode::overloaded), 503);
+    EXPECT_EQ(http_status(ServiceCode::render_timeout), 504);
+    EXPECT_EQ(http_status(nurbsrt::ErrorCode::invalid_argument), 400);
+    EXPECT_EQ(http_status(nurbsrt::ErrorCode::unreadable_file), 422);
+    EXPECT_EQ(http_status(nurbsrt::ErrorCode::internal), 500);
+    EXPECT_TRUE(ProblemCode(ServiceCode::not_found) == ServiceCode::not_found);
+    EXPECT_FALSE(ProblemCode(ServiceCode::not_found) == nurbsrt::ErrorCode::io);
+
+    const Problem p = make_problem(ServiceCode::method_not_allowed, "use POST", "req-1");
+    EXPECT_EQ(p.status, 405);
+    const nlohmann::json j = nlohmann::json::parse(p.body);
+    EXPECT_EQ(j.at("code"), "method_not_allowed");
+    EXPECT_EQ(j.at("type"), "urn:nurbsrt:error:method_not_allowed");
+    EXPECT_EQ(j.at("title"), "Method not allowed");
+    EXPECT_EQ(j.at("status"), 405);
+    // A status given instead of the code's own: the body says that status and its reason phrase.
+    const Problem big = make_problem(nurbsrt::ErrorCode::limit_exceeded, "too big", "req-2", 413);
+    const nlohmann::json b = nlohmann::json::parse(big.body);
+    EXPECT_EQ(big.status, 413);
+    EXPECT_EQ(b.at("status"), 413);
+    EXPECT_EQ(b.at("title"), "Content too large");
+    EXPECT_EQ(b.at("code"), "limit_exceeded");
 }

@@ -73,7 +73,7 @@ def test_wrong_methods_get_405_with_allow(url, path):
         if method in allowed:
             continue
         r = requests.request(method, url + path, timeout=TIMEOUT)
-        body = check_problem(r, 405, "not_found")
+        body = check_problem(r, 405, "method_not_allowed")
         assert r.headers["Allow"] == ALLOW[path], (method, path)
         assert method in body["detail"] and "allowed: " + ALLOW[path] in body["detail"], body
         assert body["title"] == "Method not allowed"

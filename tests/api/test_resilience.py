@@ -202,7 +202,7 @@ def test_other_methods_on_known_resources(url):
                                 ("POST", "/healthz", "GET, HEAD, OPTIONS"),
                                 ("PUT", "/v1/jobs/0123456789abcdef0123456789abcdef", "GET, HEAD, DELETE, OPTIONS")):
         r = requests.request(method, url + path, timeout=TIMEOUT)
-        check_problem(r, 405, "not_found")
+        check_problem(r, 405, "method_not_allowed")
         assert r.headers["Allow"] == allow
     check_problem(requests.put(url + "/v1/nothing", timeout=TIMEOUT), 404, "not_found")
 
