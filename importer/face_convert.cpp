@@ -1,12 +1,17 @@
-// One face to a clamped, non-periodic B-spline surface (convert_face), its
-// parameter box, and the Scene form of the surface.
+// One face to a clamped, non-periodic B-spline surface (convert_face): an
+// analytic surface alone with the map of the face's (u,v) (uv_map.h), a
+// B-spline surface as it is, anything else with its edges by
+// BRepBuilderAPI_NurbsConvert; its parameter box, and the Scene form of the surface.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <BRepBuilderAPI_Copy.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
+#include <Geom_ElementarySurface.hxx>
+#include <Geom_RectangularTrimmedSurface.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_Surface.hxx>
 #include <Precision.hxx>
@@ -58,6 +63,72 @@ void unperiodize(Geom_BSplineSurface& s, double fu0, double fu1, double fv0, dou
     if (s.IsVPeriodic()) s.SetVNotPeriodic();
 }
 
+
+// The last steps of every conversion: non-periodic over the face's box (in the
+// surface's parameters), clamped, and moved by the face's location.
+Handle(Geom_BSplineSurface) finish_surface(Handle(Geom_BSplineSurface) bs, double fu0, double fu1, double fv0,
+                                           double fv1, const TopLoc_Location& loc) {
+    unperiodize(*bs, fu0, fu1, fv0, fv1);
+    if (!clamped(bs->UKnotSequence(), bs->UDegree()) || !clamped(bs->VKnotSequence(), bs->VDegree())) {
+        double u0, u1, v0, v1;
+        bs->Bounds(u0, u1, v0, v1);
+        bs->Segment(u0, u1, v0, v1);  // inserts end knots to full multiplicity
+    }
+    if (!loc.IsIdentity()) bs = Handle(Geom_BSplineSurface)::DownCast(bs->Transformed(loc.Transformation()));
+    return bs;
+}
+
+// The face itself with copies of its edges (no geometry copied): every
+// converted face owns its edges, so faces can later be meshed in parallel
+// without two threads writing one edge.
+TopoDS_Face copied_face(const TopoDS_Face& face) {
+    BRepBuilderAPI_Copy copy(face, /*copyGeom=*/Standard_False, /*copyMesh=*/Standard_False);
+    if (!copy.IsDone() || copy.Shape().IsNull() || copy.Shape().ShapeType() != TopAbs_FACE)
+        throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_Copy failed");
+    return TopoDS::Face(copy.Shape());
+}
+
+// Surfaces whose conversion is exact and whose parameters stay separable (one
+// function per direction; see uv_map.h): the elementary ones, also trimmed.
+Handle(Geom_Surface) separable_surface(const Handle(Geom_Surface)& g) {
+    Handle(Geom_Surface) basis = g;
+    if (const auto rts = Handle(Geom_RectangularTrimmedSurface)::DownCast(g); !rts.IsNull())
+        basis = rts->BasisSurface();
+    return Handle(Geom_ElementarySurface)::DownCast(basis).IsNull() ? Handle(Geom_Surface)() : basis;
+}
+
+// The surface converted alone (GeomConvert, microseconds) with the map from
+// the face's (u,v) to the new ones, instead of BRepBuilderAPI_NurbsConvert,
+// which re-fits every pcurve of the face (most of an import's time on
+// mechanical parts). Empty when that map cannot be had; the caller then
+// converts the whole face.
+std::optional<ConvertedFace> convert_surface_alone(const TopoDS_Face& face, const Handle(Geom_Surface)& g,
+                                                   const TopLoc_Location& loc) {
+    const Handle(Geom_Surface) basis = separable_surface(g);
+    if (basis.IsNull()) return std::nullopt;
+    double fu0 = 0, fu1 = 0, fv0 = 0, fv1 = 0;
+    BRepTools::UVBounds(face, fu0, fu1, fv0, fv1);
+    if (!(fu1 > fu0) || !(fv1 > fv0) || Precision::IsInfinite(fu0) || Precision::IsInfinite(fu1) ||
+        Precision::IsInfinite(fv0) || Precision::IsInfinite(fv1))
+        return std::nullopt;
+    Handle(Geom_BSplineSurface) bs;
+    std::optional<UVMap> map;
+    try {
+        bs = GeomConvert::SurfaceToBSplineSurface(new Geom_RectangularTrimmedSurface(basis, fu0, fu1, fv0, fv1));
+        if (!bs.IsNull()) map = UVMap::between(basis, bs, fu0, fu1, fv0, fv1);
+    } catch (const Standard_Failure&) {
+        return std::nullopt;  // e.g. a box over more than one period: the whole face is converted instead
+    }
+    if (!map) return std::nullopt;
+    double su0, su1, sv0, sv1;
+    bs->Bounds(su0, su1, sv0, sv1);
+    ConvertedFace out;
+    out.face = copied_face(face);
+    out.surface = finish_surface(bs, su0, su1, sv0, sv1, loc);
+    out.map = std::move(*map);
+    return out;
+}
+
 }  // namespace
 
 double UVBox::diagonal() const { return std::hypot(u1 - u0, v1 - v0); }
@@ -66,27 +137,25 @@ ConvertedFace convert_face(const TopoDS_Face& face) {
     route_occt_messages();
     ConvertedFace out;
     try {
-        // Every converted face owns copies of its edges (copy = true), so faces
-        // can later be meshed in parallel without two threads writing one edge.
-        TopoDS_Shape s;
         TopLoc_Location face_loc;
-        if (Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(face, face_loc)).IsNull()) {
+        const Handle(Geom_Surface) original = BRep_Tool::Surface(face, face_loc);
+        if (original.IsNull()) throw Error(ErrorCode::occt_failure, "face has no surface");
+        if (Handle(Geom_BSplineSurface)::DownCast(original).IsNull()) {
+            if (std::optional<ConvertedFace> alone = convert_surface_alone(face, original, face_loc)) return *alone;
+            // Copies of the edges too (copy = true), as copied_face gives.
             BRepBuilderAPI_NurbsConvert nc(face, Standard_True);
             if (!nc.IsDone()) throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_NurbsConvert failed");
-            s = nc.Shape();
+            if (nc.Shape().IsNull() || nc.Shape().ShapeType() != TopAbs_FACE)
+                throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_NurbsConvert gave no face");
+            out.face = TopoDS::Face(nc.Shape());
         } else {
             // Already a B-spline surface: NurbsConvert would return the same
             // surface (checked pole for pole on trj8, trj3, linkrods, bearing,
             // ship_kcs) but re-approximates every edge curve, which costs
             // seconds on some faces (trj8_b1-ec-214 face 151: 8.6 s). A plain
             // copy keeps the exact pcurves and the same (u,v).
-            BRepBuilderAPI_Copy copy(face, /*copyGeom=*/Standard_False, /*copyMesh=*/Standard_False);
-            if (!copy.IsDone()) throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_Copy failed");
-            s = copy.Shape();
+            out.face = copied_face(face);
         }
-        if (s.IsNull() || s.ShapeType() != TopAbs_FACE)
-            throw Error(ErrorCode::occt_failure, "BRepBuilderAPI_NurbsConvert gave no face");
-        out.face = TopoDS::Face(s);
 
         TopLoc_Location loc;
         const Handle(Geom_Surface) g = BRep_Tool::Surface(out.face, loc);
@@ -101,16 +170,7 @@ ConvertedFace convert_face(const TopoDS_Face& face) {
 
         double fu0 = 0, fu1 = 0, fv0 = 0, fv1 = 0;
         BRepTools::UVBounds(out.face, fu0, fu1, fv0, fv1);
-        unperiodize(*bs, fu0, fu1, fv0, fv1);
-        if (!clamped(bs->UKnotSequence(), bs->UDegree()) ||
-            !clamped(bs->VKnotSequence(), bs->VDegree())) {
-            double u0, u1, v0, v1;
-            bs->Bounds(u0, u1, v0, v1);
-            bs->Segment(u0, u1, v0, v1);  // inserts end knots to full multiplicity
-        }
-        if (!loc.IsIdentity())
-            bs = Handle(Geom_BSplineSurface)::DownCast(bs->Transformed(loc.Transformation()));
-        out.surface = bs;
+        out.surface = finish_surface(bs, fu0, fu1, fv0, fv1, loc);
     } catch (const Standard_Failure& f) {
         throw Error(ErrorCode::occt_failure, "NURBS conversion: " + failure_text(f));
     }
@@ -122,6 +182,9 @@ UVBox face_uv_box(const ConvertedFace& cf) {
     cf.surface->Bounds(su0, su1, sv0, sv1);
     UVBox b;
     BRepTools::UVBounds(cf.face, b.u0, b.u1, b.v0, b.v1);
+    // Each direction's map is increasing: the box's corners map to the box.
+    const Vec2 lo = cf.map.to_surface({b.u0, b.v0}), hi = cf.map.to_surface({b.u1, b.v1});
+    b = {lo.x, hi.x, lo.y, hi.y};
     // pcurves may stray slightly outside the surface's range (STACK.md); the
     // Scene's box must lie inside the knot range.
     b.u0 = std::clamp(b.u0, su0, su1);

@@ -54,7 +54,7 @@ bool mesh_from_triangulation(const ConvertedFace& cf, FaceMesh& out) {
         const gp_Pnt2d uv = tri->UVNode(i);
         gp_Pnt p = tri->Node(i);
         if (moved) p.Transform(trsf);
-        m.uv.push_back({uv.X(), uv.Y()});
+        m.uv.push_back(cf.map.to_surface({uv.X(), uv.Y()}));
         m.xyz.push_back({p.X(), p.Y(), p.Z()});
     }
     m.triangles.reserve(3 * static_cast<size_t>(tri->NbTriangles()));

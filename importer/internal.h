@@ -33,15 +33,17 @@ inline double ms_since(std::chrono::steady_clock::time_point t0) {
 // The B-spline surface as Scene data: homogeneous poles u-major, flat clamped knots.
 NurbsSurface to_scene_surface(const Geom_BSplineSurface& s);
 
-// Parameter box of a converted face (BRepTools::UVBounds) clamped to the
-// surface's knot range; an empty or inverted box falls back to the full range.
+// Parameter box of a converted face (BRepTools::UVBounds, in the surface's
+// (u,v)) clamped to the surface's knot range; an empty or inverted box falls
+// back to the full range.
 struct UVBox {
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
     double diagonal() const;
 };
 UVBox face_uv_box(const ConvertedFace& cf);
 
-// Trim loops of a converted face sampled from its pcurves (see trim_loops.cpp).
+// Trim loops of a converted face sampled from its pcurves, in the surface's
+// (u,v) (see trim_loops.cpp).
 struct TrimResult {
     std::vector<TrimLoop> loops;
     double tolerance_uv = 0;
@@ -52,8 +54,9 @@ TrimResult sample_trim_loops(const ConvertedFace& cf, const UVBox& box, double r
 // Even-odd point-in-loops test in (u,v); no loops means inside everywhere.
 bool inside_loops(const std::vector<TrimLoop>& loops, Vec2 p);
 
-// Mesh of a converted face from its BRepMesh triangulation (UV nodes and
-// located nodes); false when the face has no usable triangulation.
+// Mesh of a converted face from its BRepMesh triangulation (UV nodes taken to
+// the surface's (u,v) by the face's UVMap, and located nodes); false when the
+// face has no usable triangulation.
 bool mesh_from_triangulation(const ConvertedFace& cf, FaceMesh& out);
 
 // Regular (u,v) grid over the box, triangles kept where their centroid lies

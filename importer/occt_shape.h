@@ -13,6 +13,7 @@
 #include <TopoDS_Shape.hxx>
 
 #include "importer/importer.h"
+#include "importer/uv_map.h"
 
 namespace nurbsrt::occt {
 
@@ -47,17 +48,21 @@ struct OcctModel {
 // read_attributes) hands the XDE document to the caller in OcctModel::document.
 OcctModel read_model(const std::string& path, bool read_attributes, bool keep_document = false);
 
-// One face converted for the renderer: `face` is the result of
-// BRepBuilderAPI_NurbsConvert (same orientation and location as the input;
-// a face whose surface already is a Geom_BSplineSurface is copied instead,
-// which gives the same surface and (u,v) without re-approximating its edges),
-// `surface` its B-spline surface made non-periodic and clamped, with the
-// face's location (instance transform) applied, so that `surface->D1(u,v)` is
-// the reference for nurbsrt::evaluate_d1 on Scene::faces[i-1].surface at the
-// same (u,v). (u,v) are the converted face's parameters (pcurves, UVBounds).
+// One face converted for the renderer. `surface`: its B-spline surface made
+// non-periodic and clamped, with the face's location (instance transform)
+// applied, so that `surface->D1(u,v)` is the reference for
+// nurbsrt::evaluate_d1 on Scene::faces[i-1].surface at the same (u,v).
+// `face`: the face whose pcurves bound it, with its own copies of the edges
+// (same orientation and location as the input). Its (u,v) are the surface's
+// through `map`: the identity when the face's surface already was a B-spline
+// (the face is copied) or was converted with its edges
+// (BRepBuilderAPI_NurbsConvert); for an analytic surface converted alone
+// (GeomConvert) `face` is the input's and `map` takes its (u,v) to the
+// surface's (uv_map.h).
 struct ConvertedFace {
     TopoDS_Face face;
     Handle(Geom_BSplineSurface) surface;
+    UVMap map;
 };
 ConvertedFace convert_face(const TopoDS_Face& face);
 

@@ -33,15 +33,22 @@ double dist_to_chord(Vec2 p, Vec2 a, Vec2 b) {
     return std::hypot(ap.x - t * ab.x, ap.y - t * ab.y);
 }
 
-Vec2 at(const Geom2dAdaptor_Curve& c, double t) {
-    const gp_Pnt2d p = c.Value(t);
-    return {p.X(), p.Y()};
+// A pcurve evaluated in the surface's (u,v): sampling after the map keeps the
+// chord tolerance in the parameters the trim test uses.
+struct MappedCurve {
+    const Geom2dAdaptor_Curve& c;
+    const UVMap& map;
+};
+
+Vec2 at(const MappedCurve& m, double t) {
+    const gp_Pnt2d p = m.c.Value(t);
+    return m.map.identity() ? Vec2{p.X(), p.Y()} : m.map.to_surface({p.X(), p.Y()});
 }
 
 // Appends points of (t0, t1] so that the chord of every piece deviates from the
 // curve by at most `tol`. The deviation is probed at 1/4, 1/2, 3/4 of each piece,
 // which catches S-shaped pieces whose midpoint happens to lie on the chord.
-void refine(const Geom2dAdaptor_Curve& c, double t0, Vec2 p0, double t1, Vec2 p1, double tol,
+void refine(const MappedCurve& c, double t0, Vec2 p0, double t1, Vec2 p1, double tol,
             int depth, std::vector<Vec2>& out) {
     if (depth < kMaxDepth && out.size() < kMaxPointsPerEdge) {
         const double tm = 0.5 * (t0 + t1);
@@ -70,9 +77,11 @@ int initial_pieces(const Geom2dAdaptor_Curve& c) {
     }
 }
 
-std::vector<Vec2> sample_pcurve(const Handle(Geom2d_Curve)& pc, double f, double l, double tol) {
-    const Geom2dAdaptor_Curve c(pc, f, l);
-    const int n = initial_pieces(c);
+std::vector<Vec2> sample_pcurve(const Handle(Geom2d_Curve)& pc, double f, double l, double tol,
+                                const UVMap& map) {
+    const Geom2dAdaptor_Curve curve(pc, f, l);
+    const MappedCurve c{curve, map};
+    const int n = initial_pieces(curve);
     std::vector<Vec2> pts{at(c, f)};
     double t_prev = f;
     Vec2 p_prev = pts.front();
@@ -193,7 +202,7 @@ TrimResult sample_trim_loops(const ConvertedFace& cf, const UVBox& box, double r
                 ++missing_pcurves;
                 continue;
             }
-            std::vector<Vec2> pts = sample_pcurve(pc, f, l, tol);
+            std::vector<Vec2> pts = sample_pcurve(pc, f, l, tol, cf.map);
             if (e.Orientation() == TopAbs_REVERSED) std::reverse(pts.begin(), pts.end());
             pieces.push_back(std::move(pts));
         }

@@ -31,6 +31,15 @@ constexpr double kNearerRelative = 1e-6;
 // opposite neighbour's, or than half the distance between the two neighbours'
 // (compared squared: 9): on one smooth sheet all three are about equal.
 constexpr double kUvJump2 = 9.0;
+// A neighbour nearer than the pixel by this many times the depth step to the
+// pair's other neighbour is on another sheet, whatever the (u, v) say: on one
+// smooth sheet the steps to both sides are about equal (a slope), differing by
+// a factor of a few only where the sheet turns edge-on within a pixel; at the
+// end of a run of far-sheet pixels the near neighbour lies a whole gap between
+// sheets away while the far one is level with the pixel. The (u, v) test misses
+// that end where a pixel step in one parameter exceeds the sheets' distance in
+// the other (a cylinder's axial parameter near its silhouette).
+constexpr double kSheetStepRatio = 8;
 // Passes after the first: a run of far-sheet pixels is peeled one pixel per pass
 // from each end, so runs of up to about 64 pixels are cleared; longer runs are not spikes
 // but a whole region the map got wrong, which this pass does not claim to fix.
@@ -107,7 +116,8 @@ public:
             for (int q = 0; q < 2; ++q) {
                 const PixelHit& n = q == 0 ? a : b;
                 const PixelHit& other = q == 0 ? b : a;
-                const bool jump = deep || n.face != p.face || other.face != p.face ||
+                const bool step = p.t - n.t > kSheetStepRatio * std::fabs(p.t - other.t);
+                const bool jump = deep || step || n.face != p.face || other.face != p.face ||
                                   uv_dist2(n, p) > kUvJump2 * std::min(uv_dist2(other, p), half_pair2);
                 from[q] = jump && n.t < p.t - nearer_;
             }

@@ -614,6 +614,9 @@ TEST_P(Eval, CartesianD1MatchesGeomBSplineSurfaceD1) {
         ASSERT_FALSE(cf.surface.IsNull()) << "face " << i;
         double u0, u1, v0, v1, su0, su1, sv0, sv1;
         BRepTools::UVBounds(cf.face, u0, u1, v0, v1);
+        // The face's (u,v) in the surface's (the identity unless the surface was converted alone).
+        const nurbsrt::Vec2 lo = cf.map.to_surface({u0, v0}), hi = cf.map.to_surface({u1, v1});
+        u0 = lo.x, v0 = lo.y, u1 = hi.x, v1 = hi.y;
         cf.surface->Bounds(su0, su1, sv0, sv1);
         u0 = std::clamp(u0, su0, su1), u1 = std::clamp(u1, su0, su1);
         v0 = std::clamp(v0, sv0, sv1), v1 = std::clamp(v1, sv0, sv1);
@@ -769,7 +772,9 @@ TEST_P(Trim, EvenOddOverLoopsMatchesBRepClass) {
                 continue;
             }
             const bool ours = inside_even_odd(face.loops, u, v);
-            const TopAbs_State st = BRepClass_FaceClassifier(cf.face, gp_Pnt2d(u, v), class_tol).State();
+            // OCCT classifies in the face's own (u,v).
+            const nurbsrt::Vec2 f = cf.map.to_face({u, v});
+            const TopAbs_State st = BRepClass_FaceClassifier(cf.face, gp_Pnt2d(f.x, f.y), class_tol).State();
             if (st == TopAbs_ON) ++on;
             const bool theirs = st == TopAbs_IN;  // ON counts as excluded (not inside)
             ++total;
