@@ -97,6 +97,38 @@ Handle(Geom_Surface) separable_surface(const Handle(Geom_Surface)& g) {
     return Handle(Geom_ElementarySurface)::DownCast(basis).IsNull() ? Handle(Geom_Surface)() : basis;
 }
 
+// Relative excess of a box over its surface's period or parameter range that
+// is rounding, not a face reaching further (which its pcurves would show by
+// far more).
+constexpr double kRounding = 1e-9;
+
+// A face box as GeomConvert takes it, false when it cannot: over one period of
+// a periodic direction by rounding (u from -4.8e-13 to 2 pi - 4.8e-13), cut
+// to exactly one period, starting at the nearby multiple of the period if any
+// (Convert_*ToBSplineSurface fails on a whole period from a start just below
+// 0: NCollection_Array2::Allocate); over a bounded direction's range by
+// rounding (a sphere's latitude past the pole), clamped to it.
+bool convertible_range(bool periodic, double period, double lo, double hi, double& t0, double& t1) {
+    const double eps = kRounding * std::max(t1 - t0, 1.0);
+    if (periodic) {
+        if (t1 - t0 < period - eps) return true;
+        if (t1 - t0 > period + eps) return false;
+        const double k = std::round(t0 / period) * period;
+        if (std::fabs(t0 - k) <= eps) t0 = k;
+        t1 = t0 + period;
+        return true;
+    }
+    if (t0 < lo) {
+        if (lo - t0 > eps) return false;
+        t0 = lo;
+    }
+    if (t1 > hi) {
+        if (t1 - hi > eps) return false;
+        t1 = hi;
+    }
+    return t1 > t0;
+}
+
 // The surface converted alone (GeomConvert, microseconds) with the map from
 // the face's (u,v) to the new ones, instead of BRepBuilderAPI_NurbsConvert,
 // which re-fits every pcurve of the face (most of an import's time on
@@ -110,6 +142,11 @@ std::optional<ConvertedFace> convert_surface_alone(const TopoDS_Face& face, cons
     BRepTools::UVBounds(face, fu0, fu1, fv0, fv1);
     if (!(fu1 > fu0) || !(fv1 > fv0) || Precision::IsInfinite(fu0) || Precision::IsInfinite(fu1) ||
         Precision::IsInfinite(fv0) || Precision::IsInfinite(fv1))
+        return std::nullopt;
+    double bu0, bu1, bv0, bv1;
+    basis->Bounds(bu0, bu1, bv0, bv1);
+    if (!convertible_range(basis->IsUPeriodic(), basis->IsUPeriodic() ? basis->UPeriod() : 0, bu0, bu1, fu0, fu1) ||
+        !convertible_range(basis->IsVPeriodic(), basis->IsVPeriodic() ? basis->VPeriod() : 0, bv0, bv1, fv0, fv1))
         return std::nullopt;
     Handle(Geom_BSplineSurface) bs;
     std::optional<UVMap> map;
