@@ -8,6 +8,7 @@
 #include <cmath>
 #include <random>
 
+#include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <GeomConvert.hxx>
@@ -128,6 +129,18 @@ TEST(UVMap, ConvertFaceConvertsAnalyticSurfacesAlone) {
         // planes too (their map is affine).
         EXPECT_EQ(mapped, faces);
     }
+    // A closed face whose box exceeds the period by rounding (as written by
+    // some CAD systems): Convert_CylinderToBSplineSurface refuses that box, so
+    // it is cut to one period, and the face still takes the fast path.
+    const double start = -4.8316906031686813e-13;
+    const TopoDS_Face closed =
+        BRepBuilderAPI_MakeFace(new Geom_CylindricalSurface(gp_Ax3(gp::XOY()), 2.5), start, start + 2 * M_PI + 9e-13,
+                                -1, 4, 1e-7);
+    const nurbsrt::occt::ConvertedFace cf = nurbsrt::occt::convert_face(closed);
+    ASSERT_FALSE(cf.surface.IsNull());
+    EXPECT_FALSE(cf.map.identity());
+    const Vec2 s = cf.map.to_surface({1.0, 2.0});
+    EXPECT_LE(cf.surface->Value(s.x, s.y).Distance(gp_Pnt(2.5 * std::cos(1.0), 2.5 * std::sin(1.0), 2.0)), 1e-12);
 }
 
 }  // namespace
