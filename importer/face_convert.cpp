@@ -12,6 +12,7 @@
 #include <BRep_Tool.hxx>
 #include <Geom_ElementarySurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
+#include <Geom_SweptSurface.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_Surface.hxx>
 #include <Precision.hxx>
@@ -89,12 +90,17 @@ TopoDS_Face copied_face(const TopoDS_Face& face) {
 }
 
 // Surfaces whose conversion is exact and whose parameters stay separable (one
-// function per direction; see uv_map.h): the elementary ones, also trimmed.
+// function per direction; see uv_map.h), also trimmed: the elementary ones,
+// and the swept ones (a curve revolved or extruded: the sweep's parameter and
+// the curve's each map alone). Whether GeomConvert was exact for the curve
+// there is what UVMap::between checks.
 Handle(Geom_Surface) separable_surface(const Handle(Geom_Surface)& g) {
     Handle(Geom_Surface) basis = g;
     if (const auto rts = Handle(Geom_RectangularTrimmedSurface)::DownCast(g); !rts.IsNull())
         basis = rts->BasisSurface();
-    return Handle(Geom_ElementarySurface)::DownCast(basis).IsNull() ? Handle(Geom_Surface)() : basis;
+    if (Handle(Geom_ElementarySurface)::DownCast(basis).IsNull() && Handle(Geom_SweptSurface)::DownCast(basis).IsNull())
+        return {};
+    return basis;
 }
 
 // Relative excess of a box over its surface's period or parameter range that
