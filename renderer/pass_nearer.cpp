@@ -270,7 +270,10 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
         for (size_t q = 0; q < cand.size(); ++q)
             if (cand_changed[q]) updates.push_back({cand[q], cand_hit[q]});
     }
-    return replaced;
+    // The last pass's finds are nearer hits on their own rays like any other:
+    // kept, though their neighbours are not examined again.
+    for (const Update& u : updates) b.hits[u.k] = u.hit;
+    return replaced + updates.size();
 }
 
 }  // namespace nurbsrt
