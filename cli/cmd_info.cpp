@@ -105,9 +105,11 @@ void print_text(const json& j) {
     std::printf("bbox:        %s .. %s, diagonal %.6g mm\n", v3(j["bbox"]["min"]).c_str(),
                 v3(j["bbox"]["max"]).c_str(), j["bbox"]["diagonal"].get<double>());
     const json& p = j["patches"];
-    std::printf("faces:       %zu in %zu bodies (B-spline %zu: rational %zu, polynomial %zu; reversed %zu)\n",
+    std::printf("faces:       %zu in %zu bodies (B-spline %zu: rational %zu, polynomial %zu; reversed %zu; "
+                "with a colour of their own %zu)\n",
                 j["faces"].get<size_t>(), j["bodies"].get<size_t>(), p["bspline"].get<size_t>(),
-                p["rational"].get<size_t>(), p["polynomial"].get<size_t>(), p["reversed"].get<size_t>());
+                p["rational"].get<size_t>(), p["polynomial"].get<size_t>(), p["reversed"].get<size_t>(),
+                j["colored_faces"].get<size_t>());
     std::string degrees;
     for (const auto& [k, v] : p["degrees"].items()) degrees += (degrees.empty() ? "" : ", ") + k + ": " + v.dump();
     std::printf("degrees:     %s\n", degrees.c_str());

@@ -84,6 +84,19 @@ TEST(Cli, InfoTextShowsStageTimes) {
     EXPECT_NE(r.out.find("nurbs_convert"), std::string::npos);
 }
 
+// The text says as much about colours as --json does: the count of faces with a colour of their own.
+TEST(Cli, InfoTextCountsColouredFacesAsJsonDoes) {
+    const std::string file = nurbsrt::test::fixture_by_name("assembly");  // coloured parts (XDE colours)
+    const CliRun text = run_nurbsrt("info " + file);
+    const CliRun js = run_nurbsrt("info --json " + file);
+    ASSERT_EQ(text.status, 0) << text.err;
+    ASSERT_EQ(js.status, 0) << js.err;
+    const size_t coloured = nlohmann::json::parse(js.out)["colored_faces"].get<size_t>();
+    EXPECT_GT(coloured, 0u) << "the assembly fixture's parts carry colours";
+    EXPECT_NE(text.out.find("with a colour of their own " + std::to_string(coloured) + ")"), std::string::npos)
+        << text.out;
+}
+
 TEST(Cli, IsolatedInfoMatchesInProcess) {
     const CliRun a = run_nurbsrt("info --json " + kScrew);
     const CliRun b = run_nurbsrt("info --json --isolated " + kScrew);
