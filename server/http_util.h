@@ -35,7 +35,7 @@ RequestNote take_request_note();
 // Fills `res` with the problem+json body and status for `code` (plus
 // Retry-After for overloaded).
 void send_problem(httplib::Response& res, ProblemCode code, const std::string& detail, int retry_after_s = 0);
-// The same with an HTTP status other than the code's own (405, 414, 431, ...),
+// The same with an HTTP status other than the code's own (413, 414, 431, ...),
 // which the body's `status` repeats.
 void send_problem_with_status(httplib::Response& res, int status, ProblemCode code, const std::string& detail);
 
