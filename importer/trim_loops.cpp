@@ -42,7 +42,7 @@ struct MappedCurve {
 
 Vec2 at(const MappedCurve& m, double t) {
     const gp_Pnt2d p = m.c.Value(t);
-    return m.map.identity() ? Vec2{p.X(), p.Y()} : m.map.to_surface({p.X(), p.Y()});
+    return m.map.to_surface({p.X(), p.Y()});  // the identity leaves it as it is
 }
 
 // Appends points of (t0, t1] so that the chord of every piece deviates from the

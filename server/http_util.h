@@ -61,12 +61,15 @@ PageQuery parse_page_query(const httplib::Request& req, std::initializer_list<co
 template <typename Ctx, typename F>
 httplib::Server::Handler guarded(Ctx& ctx, F f) {
     return [&ctx, f](const httplib::Request& req, httplib::Response& res) {
+        auto answer = [&](ProblemCode code, const char* what) {
+            send_problem(res, code, without_service_paths(what, ctx), ctx.config.retry_after_s);
+        };
         try {
             f(ctx, req, res);
         } catch (const Error& e) {
-            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
+            answer(e.code(), e.what());
         } catch (const ServiceError& e) {
-            send_problem(res, e.code(), without_service_paths(e.what(), ctx), ctx.config.retry_after_s);
+            answer(e.code(), e.what());
         }
     };
 }

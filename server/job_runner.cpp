@@ -25,9 +25,9 @@
 #include "server/render_service.h"
 #include "server/request_log.h"
 #include "server/scratch.h"
+#include "server/service_error.h"
 #include "server/stage_timings.h"
 #include "server/work.h"
-#include "server/service_error.h"
 
 namespace nurbsrt::server {
 namespace fs = std::filesystem;
@@ -328,17 +328,18 @@ void JobService::run_claim(JobClaim& claim) {
     for (const int index : claim.run) {
         const JobOutput& out = claim.outputs.at(static_cast<size_t>(index));
         if (cancel->load() || !store_->running(claim.id)) break;
+        auto failed = [&](ProblemCode code, const char* what) {
+            store_->output_failed(claim.id, out.index, code.name(),
+                                  without_paths(what, job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
+                                  claim.lease);
+        };
         try {
             run_output(claim, out, cancel);
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) break;
-            store_->output_failed(claim.id, out.index, error_code_name(e.code()),
-                                  without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
-                                  claim.lease);
+            failed(e.code(), e.what());
         } catch (const ServiceError& e) {  // the render's time limit
-            store_->output_failed(claim.id, out.index, service_code_name(e.code()),
-                                  without_paths(e.what(), job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
-                                  claim.lease);
+            failed(e.code(), e.what());
         } catch (const std::exception& e) {
             store_->output_failed(claim.id, out.index, "internal", e.what(), unix_now_ms(), claim.lease);
         }
