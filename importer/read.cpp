@@ -223,8 +223,48 @@ TopoDS_Shape all_roots(XSControl_Reader& reader) {
     return reader.OneShape();
 }
 
-void read_step(const std::string& path, bool attributes, bool keep_document, OcctModel& m) {
+// The file status after ReadFile, as the user's error: `format` names the reader.
+void check_read_status(IFSelect_ReturnStatus st, const std::string& format) {
+    // RetVoid: parsed fine but holds no entities at all.
+    if (st == IFSelect_RetVoid) throw Error(ErrorCode::no_faces, format + " file read, but it holds no entities");
+    if (st != IFSelect_RetDone)
+        throw Error(ErrorCode::unreadable_file, format + " reader: file status " + status_name(st));
+}
+
+// What follows a successful ReadFile, the same for STEP and IGES: transfer the
+// roots (into an XDE document when attributes are read), then the faces, their
+// bodies and the document's colours and names. `reader` is `caf`'s own reader
+// when attributes are read, else a plain one.
+template <class CafReader>
+void transfer_model(XSControl_Reader& reader, CafReader& caf, bool attributes, bool keep_document,
+                    const std::string& format, OcctModel& m) {
     Handle(TDocStd_Document) doc;
+    const int roots = reader.NbRootsForTransfer();
+    if (attributes) {
+        XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+        caf.Transfer(doc);  // false also for "nothing to transfer": judged below
+    } else {
+        reader.TransferRoots();
+    }
+    if (reader.NbShapes() == 0) {
+        // A syntactically fine file with nothing to transfer holds no faces;
+        // roots that all fail to transfer mean content OCCT cannot read.
+        if (roots == 0) throw Error(ErrorCode::no_faces, format + " file read, but it has no shape to transfer");
+        throw Error(ErrorCode::unreadable_file,
+                    format + " reader: 0 of " + std::to_string(roots) + " roots transferred");
+    }
+    m.shape = all_roots(reader);
+    if (m.shape.IsNull()) throw Error(ErrorCode::unreadable_file, format + " reader: transferred shape is null");
+    TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
+    assign_bodies(m);
+    if (attributes && !doc.IsNull()) {
+        apply_xde_attributes(m, doc);
+        if (keep_document) m.document = doc;
+        else XCAFApp_Application::GetApplication()->Close(doc);
+    }
+}
+
+void read_step(const std::string& path, bool attributes, bool keep_document, OcctModel& m) {
     STEPCAFControl_Reader caf;
     STEPControl_Reader plain;
     STEPControl_Reader& reader = attributes ? caf.ChangeReader() : plain;
@@ -239,41 +279,12 @@ void read_step(const std::string& path, bool attributes, bool keep_document, Occ
         caf.SetMatMode(false);
         caf.SetViewMode(false);
     }
-    const IFSelect_ReturnStatus st = attributes ? caf.ReadFile(path.c_str()) : plain.ReadFile(path.c_str());
-    // RetVoid: parsed fine but holds no entities at all.
-    if (st == IFSelect_RetVoid) throw Error(ErrorCode::no_faces, "STEP file read, but it holds no entities");
-    if (st != IFSelect_RetDone)
-        throw Error(ErrorCode::unreadable_file,
-                    std::string("STEP reader: file status ") + status_name(st));
+    check_read_status(attributes ? caf.ReadFile(path.c_str()) : plain.ReadFile(path.c_str()), "STEP");
     m.units = step_units(reader);
-    const int roots = reader.NbRootsForTransfer();
-    if (attributes) {
-        XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
-        caf.Transfer(doc);  // false also for "nothing to transfer": judged below
-    } else {
-        reader.TransferRoots();
-    }
-    if (reader.NbShapes() == 0) {
-        // A syntactically fine file with nothing to transfer holds no faces;
-        // roots that all fail to transfer mean content OCCT cannot read.
-        if (roots == 0) throw Error(ErrorCode::no_faces, "STEP file read, but it has no shape to transfer");
-        throw Error(ErrorCode::unreadable_file,
-                    "STEP reader: 0 of " + std::to_string(roots) + " roots transferred");
-    }
-    m.shape = all_roots(reader);
-    if (m.shape.IsNull())
-        throw Error(ErrorCode::unreadable_file, "STEP reader: transferred shape is null");
-    TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
-    assign_bodies(m);
-    if (attributes && !doc.IsNull()) {
-        apply_xde_attributes(m, doc);
-        if (keep_document) m.document = doc;
-        else XCAFApp_Application::GetApplication()->Close(doc);
-    }
+    transfer_model(reader, caf, attributes, keep_document, "STEP", m);
 }
 
 void read_iges(const std::string& path, bool attributes, bool keep_document, OcctModel& m) {
-    Handle(TDocStd_Document) doc;
     IGESCAFControl_Reader caf;
     IGESControl_Reader plain;
     IGESControl_Reader& reader = attributes ? static_cast<IGESControl_Reader&>(caf) : plain;
@@ -282,37 +293,9 @@ void read_iges(const std::string& path, bool attributes, bool keep_document, Occ
         caf.SetNameMode(true);
         caf.SetLayerMode(keep_document);  // as for STEP
     }
-    const IFSelect_ReturnStatus st = reader.ReadFile(path.c_str());
-    // RetVoid: parsed fine but holds no entities at all.
-    if (st == IFSelect_RetVoid) throw Error(ErrorCode::no_faces, "IGES file read, but it holds no entities");
-    if (st != IFSelect_RetDone)
-        throw Error(ErrorCode::unreadable_file,
-                    std::string("IGES reader: file status ") + status_name(st));
+    check_read_status(reader.ReadFile(path.c_str()), "IGES");
     m.units = iges_units(reader);
-    const int roots = reader.NbRootsForTransfer();
-    if (attributes) {
-        XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
-        caf.Transfer(doc);
-    } else {
-        reader.TransferRoots();
-    }
-    if (reader.NbShapes() == 0) {
-        // A syntactically fine file with nothing to transfer holds no faces;
-        // roots that all fail to transfer mean content OCCT cannot read.
-        if (roots == 0) throw Error(ErrorCode::no_faces, "IGES file read, but it has no shape to transfer");
-        throw Error(ErrorCode::unreadable_file,
-                    "IGES reader: 0 of " + std::to_string(roots) + " roots transferred");
-    }
-    m.shape = all_roots(reader);
-    if (m.shape.IsNull())
-        throw Error(ErrorCode::unreadable_file, "IGES reader: transferred shape is null");
-    TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
-    assign_bodies(m);
-    if (attributes && !doc.IsNull()) {
-        apply_xde_attributes(m, doc);
-        if (keep_document) m.document = doc;
-        else XCAFApp_Application::GetApplication()->Close(doc);
-    }
+    transfer_model(reader, caf, attributes, keep_document, "IGES", m);
 }
 
 }  // namespace
