@@ -5,11 +5,12 @@
 // the same arguments as the hidden subcommands of `nurbsrt` itself.
 //
 // Why a program of its own: a child pays the dynamic linking of everything its
-// executable links before it reads a byte. `nurbsrt` links OpenImageIO (which on
-// Debian 12 pulls in OpenCV, FFmpeg, GDAL, DCMTK: about 300 libraries in all) and
-// OSMesa (LLVM); the child needs only OCCT. Linked with --as-needed, this program
-// starts in a fraction of the time (figures in importer/isolated.cpp), and every
-// upload the service imports waits for that start.
+// executable links before it reads a byte. `nurbsrt` links OSMesa (LLVM), the
+// HTTP and database clients and Embree besides OCCT (107 libraries; OpenImageIO
+// is a module it loads only to write images, renderer/image_module.h); the child
+// needs only OCCT. Linked with --as-needed, this program starts in a fraction of
+// the time (figures in importer/isolated.cpp), and every upload the service
+// imports waits for that start.
 #include <cstdio>
 #include <cstring>
 #include <exception>

@@ -38,10 +38,14 @@ cp docker/install-runtime.sh docker/runtime-packages.txt "$ROOT/tmp/"
 echo "verify-runtime-chroot: docker/install-runtime.sh (the Dockerfile's runtime stage)"
 chroot "$ROOT" /tmp/install-runtime.sh /tmp/runtime-packages.txt >/dev/null
 install -m 0755 "$BIN" "$ROOT/usr/local/bin/nurbsrt"
+# The image writer module, beside the binary as in the image.
+install -m 0644 "$(dirname "$BIN")/libnurbsrt_image.so" "$ROOT/usr/local/bin/libnurbsrt_image.so"
 mount -t proc proc "$ROOT/proc"   # the service finds its own binary through /proc/self/exe
 
-missing=$(chroot "$ROOT" ldd /usr/local/bin/nurbsrt | grep -c "not found" || true)
-[ "$missing" -eq 0 ] || { chroot "$ROOT" ldd /usr/local/bin/nurbsrt | grep "not found"; exit 1; }
+for f in nurbsrt libnurbsrt_image.so; do
+  missing=$(chroot "$ROOT" ldd "/usr/local/bin/$f" | grep -c "not found" || true)
+  [ "$missing" -eq 0 ] || { chroot "$ROOT" ldd "/usr/local/bin/$f" | grep "not found"; exit 1; }
+done
 
 # The image's ENV, USER and CMD (nothing else of the host leaks in: env -i).
 chroot --userspec=10001:10001 "$ROOT" env -i HOME=/home/nurbsrt PATH=/usr/local/bin:/usr/bin:/bin \

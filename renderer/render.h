@@ -145,7 +145,8 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
 // Writes by extension: .exr -> channels R, G, B, A, Z (float), face (uint32),
 // N.X, N.Y, N.Z, u, v (float) and iterations (uint32) (DESIGN.md AOVs);
 // .png/.jpg/.tif -> 8-bit RGBA (RGB for jpg), colour sRGB-encoded (IEC 61966-2-1), alpha linear.
-// Throws Error(io) or Error(unsupported_format).
+// Throws Error(io) or Error(unsupported_format); Error(internal) when the
+// image writer module (image_module.h) cannot be loaded.
 void write_image(const RenderImage& image, const std::string& path);
 
 }  // namespace nurbsrt

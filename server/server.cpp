@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "renderer/error.h"
+#include "renderer/image_module.h"
 #include "server/api_keys.h"
 #include "server/context.h"
 #include "server/cors.h"
@@ -305,6 +306,8 @@ int run_server(const ServerConfig& given) {
     sigaddset(&stop_signals, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
     signal(SIGPIPE, SIG_IGN);
+    // Every render encodes an image: load the writer now, not in the first request.
+    preload_image_writer();
 
     ApiKeys keys;
     if (!config.api_keys_file.empty()) keys.add_file(config.api_keys_file);

@@ -1,0 +1,71 @@
+// write_image through the image writer module (see image_module.h).
+#include "renderer/image_module.h"
+
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "renderer/error.h"
+#include "renderer/render.h"
+
+namespace nurbsrt {
+
+namespace {
+
+using WriteFn = decltype(&nurbsrt_write_image_v1);
+
+// The directory of the running executable, with its trailing slash ("" if unknown).
+std::string executable_dir() {
+    char buf[4096];
+    const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
+    if (n <= 0) return {};
+    const std::string self(buf, static_cast<size_t>(n));
+    const size_t slash = self.rfind('/');
+    return slash == std::string::npos ? std::string() : self.substr(0, slash + 1);
+}
+
+// Loads the module once per process (beside the executable first, then the
+// library search path) and never unloads it. RTLD_LOCAL: its libraries' symbols
+// stay out of the global scope the rest of the program resolves against.
+WriteFn load_writer() {
+    static std::mutex m;
+    static WriteFn fn = nullptr;
+    std::lock_guard<std::mutex> lock(m);
+    if (fn) return fn;
+    const std::string beside = executable_dir() + kImageModuleFile;
+    void* handle = dlopen(beside.c_str(), RTLD_LAZY | RTLD_LOCAL);
+    std::string why = handle ? "" : dlerror();
+    if (!handle) handle = dlopen(kImageModuleFile, RTLD_LAZY | RTLD_LOCAL);
+    if (!handle)
+        throw Error(ErrorCode::internal, std::string("cannot load the image writer module: ") + why + "; " + dlerror());
+    fn = reinterpret_cast<WriteFn>(dlsym(handle, kImageWriteSymbol));
+    if (!fn) throw Error(ErrorCode::internal, std::string("image writer module without ") + kImageWriteSymbol);
+    return fn;
+}
+
+}  // namespace
+
+void preload_image_writer() {
+    // Detached: a program that ends first leaves it to the loader's own lock.
+    std::thread([] {
+        try {
+            load_writer();
+        } catch (const Error&) {
+            // write_image will try again and report it
+        }
+    }).detach();
+}
+
+void write_image(const RenderImage& image, const std::string& path) {
+    char message[1024];
+    switch (load_writer()(&image, path.c_str(), message, sizeof message)) {
+        case kImageWritten: return;
+        case kImageFormatUnsupported: throw Error(ErrorCode::unsupported_format, message);
+        default: throw Error(ErrorCode::io, message);
+    }
+}
+
+}  // namespace nurbsrt

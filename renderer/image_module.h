@@ -1,0 +1,36 @@
+// Image files are written by a module loaded on first use, libnurbsrt_image.so
+// (renderer/image_writer/), not by code linked into the programs: Debian 12
+// builds OpenImageIO against ~260 shared libraries (OpenCV with its video I/O,
+// FFmpeg, DCMTK, OpenVDB, ...), and relocating them took 0.35-0.4 s of every
+// nurbsrt process's start, before main (an empty program linked with the same
+// libraries: 0.46-0.53 s, without OpenImageIO's: 0.08-0.14 s). Commands that
+// write no image (info, convert, a service before its first render) no longer
+// pay it. The module lives beside the executable, as nurbsrt-worker does, or on
+// the library search path.
+#pragma once
+
+#include <cstddef>
+
+namespace nurbsrt {
+
+struct RenderImage;
+
+// What the module's entry point answers.
+enum ImageWriteStatus : int { kImageWritten = 0, kImageFormatUnsupported = 1, kImageIoError = 2 };
+
+// The module's file name and its entry point, looked up by name (C linkage). The
+// version suffix changes with the entry point's signature or RenderImage's layout.
+inline constexpr const char* kImageModuleFile = "libnurbsrt_image.so";
+inline constexpr const char* kImageWriteSymbol = "nurbsrt_write_image_v1";
+
+// Starts loading the module on a thread of its own and returns: a program that
+// will write an image calls it early, so that the loading overlaps its other
+// work. Errors surface at write_image (render.h), which loads it otherwise.
+void preload_image_writer();
+
+}  // namespace nurbsrt
+
+// Writes `image` to `path` as write_image (render.h) describes; on failure a
+// NUL-terminated message of at most message_size bytes. Never throws.
+extern "C" int nurbsrt_write_image_v1(const nurbsrt::RenderImage* image, const char* path, char* message,
+                                      size_t message_size);
