@@ -85,12 +85,16 @@ std::optional<UVMap> UVMap::between(const Handle(Geom_Surface)& face_surface,
     converted->Bounds(s0, s1, t0, t1);
     // Tolerance of the check: rounding of the rational evaluation, relative to
     // the face's size and to its coordinates (a part far from the origin).
+    // The face's points on the check's grid, evaluated once: they give the
+    // tolerance here and are compared with the B-spline's at the end.
+    const auto grid_u = [&](int i) { return u0 + (u1 - u0) * i / (kCheckPoints - 1); };
+    const auto grid_v = [&](int j) { return v0 + (v1 - v0) * j / (kCheckPoints - 1); };
+    gp_Pnt grid[kCheckPoints][kCheckPoints];
     double extent = 0, coords = 0;
     const gp_Pnt corner = face_surface->Value(u0, v0);
     for (int i = 0; i < kCheckPoints; ++i)
         for (int j = 0; j < kCheckPoints; ++j) {
-            const gp_Pnt p = face_surface->Value(u0 + (u1 - u0) * i / (kCheckPoints - 1),
-                                                 v0 + (v1 - v0) * j / (kCheckPoints - 1));
+            const gp_Pnt& p = grid[i][j] = face_surface->Value(grid_u(i), grid_v(j));
             extent = std::max(extent, p.Distance(corner));
             coords = std::max({coords, std::fabs(p.X()), std::fabs(p.Y()), std::fabs(p.Z())});
         }
@@ -119,8 +123,7 @@ std::optional<UVMap> UVMap::between(const Handle(Geom_Surface)& face_surface,
         return std::nullopt;
     double prev_s = -HUGE_VAL, prev_t = -HUGE_VAL;
     for (int i = 0; i < kCheckPoints; ++i) {
-        const double u = u0 + (u1 - u0) * i / (kCheckPoints - 1);
-        const double v = v0 + (v1 - v0) * i / (kCheckPoints - 1);
+        const double u = grid_u(i), v = grid_v(i);
         const double s = m.u_.to_surface(u), t = m.v_.to_surface(v);
         if (!(s > prev_s) || !(t > prev_t)) return std::nullopt;
         if (std::fabs(m.u_.to_face(s) - u) > 1e-9 * (u1 - u0) || std::fabs(m.v_.to_face(t) - v) > 1e-9 * (v1 - v0))
@@ -130,9 +133,8 @@ std::optional<UVMap> UVMap::between(const Handle(Geom_Surface)& face_surface,
     }
     for (int i = 0; i < kCheckPoints; ++i)
         for (int j = 0; j < kCheckPoints; ++j) {
-            const Vec2 f{u0 + (u1 - u0) * i / (kCheckPoints - 1), v0 + (v1 - v0) * j / (kCheckPoints - 1)};
-            const Vec2 s = m.to_surface(f);
-            if (!(converted->Value(s.x, s.y).Distance(face_surface->Value(f.x, f.y)) <= tol)) return std::nullopt;
+            const Vec2 s = m.to_surface({grid_u(i), grid_v(j)});
+            if (!(converted->Value(s.x, s.y).Distance(grid[i][j]) <= tol)) return std::nullopt;
         }
     return m;
 }
