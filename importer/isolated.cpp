@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "renderer/error.h"
+#include "renderer/executable_path.h"
 #include "renderer/scene_io.h"
 
 namespace nurbsrt {
@@ -29,13 +30,6 @@ namespace {
 // How often a running worker's should_stop is asked: a canceled job or a gone
 // client frees its worker within this time (plus the kill).
 constexpr int kStopPollMs = 100;
-
-std::string self_executable() {
-    char buf[4096];
-    const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
-    if (n <= 0) throw Error(ErrorCode::internal, "cannot resolve /proc/self/exe");
-    return std::string(buf, static_cast<size_t>(n));
-}
 
 // The worker program: nurbsrt-worker beside this executable when it is there
 // (the build and the Docker image put it there), else this executable itself,
@@ -46,10 +40,8 @@ std::string self_executable() {
 // --help`, 2-core EPYC), on every upload the service imports. (Before OpenImageIO
 // became a module loaded on demand, nurbsrt linked 305 and took 0.37-0.5 s.)
 std::string default_worker_executable() {
-    const std::string self = self_executable();
-    const size_t slash = self.rfind('/');
-    const std::string sibling = self.substr(0, slash + 1) + "nurbsrt-worker";
-    return access(sibling.c_str(), X_OK) == 0 ? sibling : self;
+    const std::string sibling = beside_executable("nurbsrt-worker");
+    return access(sibling.c_str(), X_OK) == 0 ? sibling : executable_path();
 }
 
 std::string worker_executable(const IsolationLimits& limits) {

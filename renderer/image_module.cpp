@@ -2,13 +2,13 @@
 #include "renderer/image_module.h"
 
 #include <dlfcn.h>
-#include <unistd.h>
 
 #include <mutex>
 #include <string>
 #include <thread>
 
 #include "renderer/error.h"
+#include "renderer/executable_path.h"
 #include "renderer/render.h"
 
 namespace nurbsrt {
@@ -16,16 +16,6 @@ namespace nurbsrt {
 namespace {
 
 using WriteFn = decltype(&nurbsrt_write_image_v1);
-
-// The directory of the running executable, with its trailing slash ("" if unknown).
-std::string executable_dir() {
-    char buf[4096];
-    const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-    if (n <= 0) return {};
-    const std::string self(buf, static_cast<size_t>(n));
-    const size_t slash = self.rfind('/');
-    return slash == std::string::npos ? std::string() : self.substr(0, slash + 1);
-}
 
 // Loads the module once per process (beside the executable first, then the
 // library search path) and never unloads it. RTLD_LOCAL: its libraries' symbols
@@ -35,7 +25,7 @@ WriteFn load_writer() {
     static WriteFn fn = nullptr;
     std::lock_guard<std::mutex> lock(m);
     if (fn) return fn;
-    const std::string beside = executable_dir() + kImageModuleFile;
+    const std::string beside = beside_executable(kImageModuleFile);
     void* handle = dlopen(beside.c_str(), RTLD_LAZY | RTLD_LOCAL);
     std::string why = handle ? "" : dlerror();
     if (!handle) handle = dlopen(kImageModuleFile, RTLD_LAZY | RTLD_LOCAL);
