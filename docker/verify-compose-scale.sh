@@ -40,7 +40,7 @@ export CONTAINERS
 import json, os, pathlib, subprocess, sys, time
 import requests
 sys.path.insert(0, "tests/api")
-from test_jobs import png_size  # noqa: E402
+from test_jobs import check_artifact  # noqa: E402
 
 BASE = f"http://127.0.0.1:{os.environ['NURBSRT_BALANCER_PORT']}"
 ENGINE, PG = os.environ["ENGINE"], os.environ["PG"]
@@ -114,14 +114,7 @@ for job_id in jobs:
     job = requests.get(f"{BASE}/v1/jobs/{job_id}", timeout=30).json()
     assert job["state"] == "succeeded", json.dumps(job)[:800]
     for out in job["outputs"]:
-        data = requests.get(BASE + out["artifact"]["url"], timeout=60).content
-        assert len(data) == out["artifact"]["bytes"] > 0
-        if out["type"] == "render":
-            assert png_size(data) == (out["options"]["width"], out["options"]["height"])
-        elif out["format"] == "step":
-            assert data.startswith(b"ISO-10303-21;") and b"END-ISO-10303-21;" in data[-200:]
-        else:
-            assert data[72:73] == b"S" and data.rstrip()[-8:-7] == b"T"
+        check_artifact(BASE, out)
         artifacts += 1
 (outputs, once, most, rerun), = sql(f"SELECT COUNT(*), SUM((completions = 1)::int), MAX(completions), "
                                     f"SUM((attempts > 1)::int) FROM job_outputs WHERE job_id IN ({ids})")

@@ -151,6 +151,18 @@ def png_size(data):
     return width, height
 
 
+def check_artifact(base, output):
+    """Downloads a PNG render, STEP or IGES conversion artifact and checks it whole: a PNG of the
+    requested size inflated row by row (a half-written file fails), a STEP or IGES file with its end."""
+    data = download(base, output)
+    if output["type"] == "render":
+        assert png_size(data) == (output["options"]["width"], output["options"]["height"])
+    elif output["format"] in ("step", "stp"):
+        assert data.startswith(b"ISO-10303-21;") and b"END-ISO-10303-21;" in data[-200:]
+    else:
+        assert data[72:73] == b"S" and data.rstrip()[-8:-7] == b"T", data[-80:]  # IGES: Start ... Terminate
+
+
 def exr_size(data):
     """OpenEXR magic, then the header's dataWindow attribute (box2i)."""
     assert data[:4] == b"\x76\x2f\x31\x01"

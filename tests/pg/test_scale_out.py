@@ -18,7 +18,7 @@ import time
 import requests
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "api"))
-from test_jobs import accepted, download, get_job, png_size, submit  # noqa: E402
+from test_jobs import accepted, check_artifact, get_job, submit  # noqa: E402
 
 PG_URL = os.environ["NURBSRT_TEST_PG_URL"]
 OCCT = pathlib.Path("/usr/share/opencascade/data")
@@ -70,17 +70,6 @@ def spec_for(n):
     size = 160 + 40 * (n % 5)
     return src, {"outputs": [{"file": 0, "type": "render", "options": {"width": size, "height": size}},
                              {"file": 0, "type": "conversion", "format": target}]}
-
-
-def check_artifact(url, out):
-    data = download(url, out)
-    if out["type"] == "render":
-        w, h = png_size(data)  # inflates every row: a half-written file fails here
-        assert (w, h) == (out["options"]["width"], out["options"]["height"])
-    elif out["format"] in ("step", "stp"):
-        assert data.startswith(b"ISO-10303-21;") and b"END-ISO-10303-21;" in data[-200:]
-    else:
-        assert data[72:73] == b"S" and data.rstrip()[-8:-7] == b"T", data[-80:]  # IGES: Start ... Terminate
 
 
 def wait_until(pred, timeout, what):
