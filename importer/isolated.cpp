@@ -65,10 +65,14 @@ ErrorCode error_code_from_name(const std::string& name) {
 // Removes the scratch files on every exit path.
 struct ScratchFiles {
     std::string scene, error;
-    ~ScratchFiles() {
+    // Removes them (once); also on every exit by the destructor.
+    void remove() {
         if (!scene.empty()) unlink(scene.c_str());
         if (!error.empty()) unlink(error.c_str());
+        scene.clear();
+        error.clear();
     }
+    ~ScratchFiles() { remove(); }
 };
 
 // Waits for `pid` for at most `seconds`; returns true and fills `status` when it
@@ -313,6 +317,7 @@ Scene import_isolated(const std::string& path, const ImportOptions& options, con
     run_worker(std::move(args), limits, scratch.error, "import", path);
     const auto t_read = Clock::now();
     Scene scene = read_scene_file(scratch.scene);
+    scratch.remove();  // inside the transfer stage: the stages cover the whole call
     if (timings) {
         const ImportTimings& c = scene.timings;
         timings->prescan_ms = ms_between(t0, t_child);
@@ -334,6 +339,7 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
                in_path);
     const auto t_read = Clock::now();
     ConvertReport r = parse_convert_report(read_small_file(scratch.scene));
+    scratch.remove();  // inside the transfer stage: the stages cover the whole call
     if (timings) {
         timings->prescan_ms = ms_between(t0, t_child);
         timings->isolation_ms = isolation_ms(t_child, t_read, r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms);
