@@ -232,6 +232,16 @@ void mesh_tracer(std::string& o, const json& t) {
              ms(d(x, "embree_trace_ms")) + " | " + std::to_string(n(x, "fine_triangles")) + " | **" +
              num(d(x, "frame_over_trace"), 2) + "** | " + ms(d(x, "ours_first_frame_ms")) + " | " +
              ms(d(x, "mesh_first_frame_ms")) + " | **" + num(d(x, "first_over_mesh_first"), 2) + "** |\n";
+    o += "\nWhere our frame goes (one run's stages, ms): the map, the primary Newton pass, the rescue and "
+         "nearer-sheet passes, shading, the rest (set-up, statistics).\n\n| scene | map | primary | rescue + nearer | "
+         "shade | rest | frame |\n|---|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& x : t["rows"]) {
+        if (!x.contains("ours_frame_stages")) continue;
+        const json& g = x["ours_frame_stages"];
+        o += "| " + s(x, "title") + " | " + ms(d(g, "preliminary_map_ms")) + " | " + ms(d(g, "newton_primary_ms")) +
+             " | " + ms(d(g, "newton_rescue_ms")) + " | " + ms(d(g, "shade_ms")) + " | " + ms(d(g, "other_ms")) +
+             " | " + ms(d(g, "total_ms")) + " |\n";
+    }
     if (t.contains("missing_models") && !t["missing_models"].empty()) {
         o += "\nNot found under the models directory (skipped):";
         for (const json& m : t["missing_models"]) o += " `" + m.get<std::string>() + "`";

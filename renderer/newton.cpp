@@ -132,16 +132,19 @@ namespace {
 // step inline into its own copy of the loop, with no indirect call per iteration.
 //   State eval(u, v)                  the surface and F at (u, v); State::r = ||F||,
 //                                     model units (12)
+//   State at(d)                       the same from the surface's derivatives d
+//                                     at (u, v), evaluated already (`start`)
 //   bool step(state, eps_det, Step&)  the method's Newton step; false when
 //                                     singular by (14)
 //   void finish(state, NewtonResult&) t and the model-space partials at the root
 template <class System>
-NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox& box, const NewtonParams& params) {
+NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox& box, const NewtonParams& params,
+                            const SurfaceDerivs* start) {
     NewtonResult res;
     double u = u0, v = v0;
     clamp_to_box(u, v, box);
     bool clamped_once = false;
-    auto s = sys.eval(u, v);
+    auto s = start && u == u0 && v == v0 ? sys.at(*start) : sys.eval(u, v);
     for (int it = 0;; ++it) {
         res.u = u;
         res.v = v;
@@ -198,9 +201,9 @@ struct ProposedSystem {
         double r;
     };
     State eval(double u, double v) const {
-        const SurfaceDerivs d = spans ? evaluate_d1(projected, *spans, u, v) : evaluate_d1(projected, u, v);
-        return {d, proposed_residual(d.S, camera, s)};
+        return at(spans ? evaluate_d1(projected, *spans, u, v) : evaluate_d1(projected, u, v));
     }
+    State at(const SurfaceDerivs& d) const { return {d, proposed_residual(d.S, camera, s)}; }
     bool step(const State& st, double eps_det, Step& out) const { return proposed_step(st.d, s, eps_det, out); }
     void finish(const State& st, NewtonResult& res) const {
         res.t = camera.hit_distance_from_depth(camera.depth(st.d.S), s);
@@ -220,7 +223,11 @@ struct MartinSystem {
         double f1, f2, r;
     };
     State eval(double u, double v) const {
-        const CartesianDerivs c = spans ? cartesian_d1(surface, *spans, u, v) : cartesian_d1(surface, u, v);
+        return at(spans ? cartesian_d1(surface, *spans, u, v) : cartesian_d1(surface, u, v));
+    }
+    // cartesian_d1 is cartesian_from(evaluate_d1) on either path: the same numbers.
+    State at(const SurfaceDerivs& d) const { return at(cartesian_from(d)); }
+    State at(const CartesianDerivs& c) const {
         const double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
         return {c, f1, f2, std::hypot(f1, f2)};
     }
@@ -245,13 +252,14 @@ struct MartinSystem {
 
 NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
                              double u0, double v0, const UvBox& box, const NewtonParams& params,
-                             const SurfaceSpans* spans) {
-    return newton_iterate(ProposedSystem{projected, camera, s, spans}, u0, v0, box, params);
+                             const SurfaceSpans* spans, const SurfaceDerivs* start) {
+    return newton_iterate(ProposedSystem{projected, camera, s, spans}, u0, v0, box, params, start);
 }
 
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans) {
-    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray), spans}, u0, v0, box, params);
+                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans,
+                           const SurfaceDerivs* start) {
+    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray), spans}, u0, v0, box, params, start);
 }
 
 }  // namespace nurbsrt

@@ -120,13 +120,20 @@ struct NewtonResult {
 // surface's per-span basis tables (span_basis.h; the same for the projected and
 // the model surface), or null for the knot search and A2.2 in every step. Both
 // give the same iterates to rounding.
+// `start`: the derivatives evaluate_d1 gives at (u0, v0) on the surface the
+// method iterates on (here `projected`), when the caller has them already: a
+// start shared by several rays (the sub-pixel samples of anti-aliasing, solved
+// from the same neighbours' hits) is then evaluated once, not once per ray. The
+// iterates are the same as without (the same numbers, not recomputed). Ignored
+// when (u0, v0) lies outside `box`, where the iteration starts from its clamp.
 NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
                              double u0, double v0, const UvBox& box, const NewtonParams& params,
-                             const SurfaceSpans* spans = nullptr);
+                             const SurfaceSpans* spans = nullptr, const SurfaceDerivs* start = nullptr);
 
-// martin: on the model-space surface and the pixel ray.
+// martin: on the model-space surface and the pixel ray; `start` as above, on `surface`.
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans = nullptr);
+                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans = nullptr,
+                           const SurfaceDerivs* start = nullptr);
 
 // The two planes of Martin et al.: N1 perpendicular to dir (built from dir's two
 // largest components), N2 = N1 x dir, d_i = -N_i . origin.

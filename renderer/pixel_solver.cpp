@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "renderer/nurbs.h"
+#include "renderer/span_basis.h"
 
 namespace nurbsrt {
 
@@ -25,14 +26,20 @@ void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, 
 
 }  // namespace
 
+SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
+    const NurbsSurface& s =
+        ctx.options.method == NewtonMethod::proposed ? projected[id - 1] : ctx.scene.faces[id - 1].surface;
+    return evaluate_d1(s, ctx.prepared.faces()[id - 1].spans, u0, v0);
+}
+
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
-                      PixelHit& hit) const {
+                      PixelHit& hit, const SurfaceDerivs* start) const {
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const Camera& camera = ctx.camera;
     const NewtonResult r =
         ctx.options.method == NewtonMethod::proposed
-            ? newton_proposed(projected[id - 1], camera, sp, u0, v0, ff.box, p, &ff.spans)
-            : newton_martin(ctx.scene.faces[id - 1].surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans);
+            ? newton_proposed(projected[id - 1], camera, sp, u0, v0, ff.box, p, &ff.spans, start)
+            : newton_martin(ctx.scene.faces[id - 1].surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start);
     hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
     if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
         border_gap_hit(id, sp, r, hit))

@@ -29,8 +29,13 @@ struct Solver {
         return solve(id, i, j, u0, v0, params, false, hit);
     }
     // The same for the ray through any screen point (a sub-pixel sample).
+    // `start`: start_derivs(id, u0, v0), when several rays are solved from that start.
     Outcome solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
-                  PixelHit& hit) const;
+                  PixelHit& hit, const SurfaceDerivs* start = nullptr) const;
+    // The derivatives the method's Newton iteration evaluates first when it
+    // starts face id at (u0, v0) (newton.h, `start`): of the frame's projected
+    // surface for proposed, of the model surface for martin.
+    SurfaceDerivs start_derivs(uint32_t id, double u0, double v0) const;
 
 private:
     bool border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const;
