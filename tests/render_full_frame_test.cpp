@@ -78,8 +78,6 @@ const Known kKnownRemaining[] = {
     {"iges/bearing.iges", "iso", 0, 1, "a farther root of the pixel's own face; the nearer one from a neighbour's start"},
     {"iges/marsCapsule.igs", "iso", 0, 1, "a face in front not in the candidates (not adjacent to the 3x3's)"},
     {"iges/heartValve.igs", "iso", 0, 1, "a farther root of the pixel's own face; the nearer one from a neighbour's start"},
-    {"duck/duck_from_glscene.igs", "front", 0, 1, "a neighbour's start runs to the far side of the same closed face"},
-    {"duck/duck_from_glscene.stp", "front", 0, 1, "a neighbour's start runs to the far side of the same closed face"},
     // With the map meshed from the analytic faces themselves (their surfaces
     // converted alone, without re-fitted pcurves) these pixels land on defects
     // the B-spline faces' mesh did not expose; the mesh decides which pixels the
