@@ -170,18 +170,11 @@ private:
     // pixel of it here (a fillet or blend strip seen edge-on) lies in front,
     // between the faces it touches.
     // One start per face (the first in for_each_neighbour's order): the 3x3's
-    // starts of one face lie on one sheet within a pixel or two and end at one root.
-    // Except on the pixel's own face, where the pit is a farther root of the very
-    // face its neighbours show in front (a closed or folded face: the duck's body
-    // seen through its near side): there the pixel lies near that sheet's
-    // silhouette, where Newton from one start runs over the fold to the far
-    // root and from the next one stays on the near sheet; so every neighbour
-    // hit on it that lies on another sheet (nearer by a pixel footprint, as in
-    // find) is a start, until one gives the nearer root.
+    // starts of one face lie on one sheet within a pixel or two and end at one
+    // root; except on the pixel's own face (other_sheet_starts).
     void fill_pit(int i, int j, PixelHit& best) const {
         const PixelHit p = best;
         auto found = [&] { return best.face != p.face || best.t != p.t; };
-        const double sheet = kSheetFootprints * footprint(p.t);  // a neighbour this much nearer is on another sheet
         uint32_t tried[2 * 9];
         int ntried = 0;
         auto once = [&](uint32_t id) {
@@ -189,17 +182,35 @@ private:
             tried[ntried++] = id;
             return true;
         };
-        for (int kind = 0; kind < 2 && !found(); ++kind)
+        for (int kind = 0; kind < 2 && !found(); ++kind) {
             for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
                 const size_t n = c_.map.index(ni, nj);
                 if (ni == i && nj == j) return;
-                const PixelHit& h = hits_[n];
-                if (kind == 0 && (once(h.face) || (h.face == p.face && h.t < p.t - sheet && !found())))
-                    consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+                if (kind == 0 && once(hits_[n].face))
+                    consider(hits_[n].face, i, j, hits_[n].u, hits_[n].v, solver_.robust, false, best);
                 if (kind == 1 && once(c_.map.face[n]))
                     consider(c_.map.face[n], i, j, c_.map.u[n], c_.map.v[n], solver_.robust, false, best);
             });
+            if (kind == 0 && !found()) other_sheet_starts(i, j, best);
+        }
         if (!found()) adjacent_faces(i, j, best);
+    }
+    // Where the pixel's hit is a farther root of the very face its neighbours
+    // show in front (a closed or folded face: the duck's body seen through its
+    // near side; a dense face folded over itself), the pixel lies near that
+    // sheet's silhouette, where Newton from one start runs over the fold to the
+    // far root and from the next one stays on the near sheet: every neighbour
+    // hit on the pixel's face that lies on another sheet (nearer by a pixel
+    // footprint, as in find) is a robust start, until one gives a nearer root.
+    void other_sheet_starts(int i, int j, PixelHit& best) const {
+        const PixelHit p = best;
+        const double sheet = kSheetFootprints * footprint(p.t);
+        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+            const PixelHit& h = hits_[c_.map.index(ni, nj)];
+            if (h.face == p.face && h.t < p.t - sheet)
+                consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+            return best.face == p.face && best.t == p.t;  // on until found
+        });
     }
     // The faces adjacent to those of the 3x3 around pixel (i, j), hit or in the
     // map (PreparedFace::adjacent), that none of them shows, from their mesh starts.
