@@ -201,14 +201,21 @@ private:
     // sheet's silhouette, where Newton from one start runs over the fold to the
     // far root and from the next one stays on the near sheet: every neighbour
     // hit on the pixel's face that lies on another sheet (nearer by a pixel
-    // footprint, as in find) is a robust start, until one gives a nearer root.
+    // footprint, as in find) is a robust start, until one gives a nearer root;
+    // but the first hit on the face, which fill_pit's round of one start per
+    // face has solved from already.
     void other_sheet_starts(int i, int j, PixelHit& best) const {
         const PixelHit p = best;
         const double sheet = kSheetFootprints * footprint(p.t);
+        bool first = true;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
-            if (h.face == p.face && h.t < p.t - sheet)
-                consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+            if ((ni == i && nj == j) || h.face != p.face) return true;
+            if (first) {
+                first = false;
+                return true;
+            }
+            if (h.t < p.t - sheet) consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
             return best.face == p.face && best.t == p.t;  // on until found
         });
     }
