@@ -132,13 +132,7 @@ public:
     void general_starts(const MeshScreenPoints& screen_points, bool thorough) {
         const PreliminaryMap& map = c_.map;
         uint32_t faces[kMaxGeneralFaces];
-        int nf = 0;
-        for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
-            const size_t n = map.index(ni, nj);
-            for (const uint32_t id : {src_[n].face, map.face[n]})
-                if (id && id <= c_.nfaces && nf < kMaxGeneralFaces && std::find(faces, faces + nf, id) == faces + nf)
-                    faces[nf++] = id;
-        });
+        const int nf = general_faces(faces);
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
         for (int q = 0; q < nf; ++q) {
             const uint32_t id = faces[q];
@@ -170,15 +164,8 @@ public:
     // cover no pixel centre of the map at all, and its mesh may lie a little inside
     // its true extent; the exact ray still hits it, between the faces it touches.
     void adjacent_starts(const MeshScreenPoints& screen_points) {
-        const PreliminaryMap& map = c_.map;
         uint32_t near[kMaxGeneralFaces];
-        int nn = 0;
-        for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
-            const size_t n = map.index(ni, nj);
-            for (const uint32_t id : {src_[n].face, map.face[n]})
-                if (id && id <= c_.nfaces && nn < kMaxGeneralFaces && std::find(near, near + nn, id) == near + nn)
-                    near[nn++] = id;
-        });
+        const int nn = general_faces(near);
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
         const double reach = kAdjacentReachPixels * 2.0 / c_.height;  // screen units span 2 over the height
         MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
@@ -190,6 +177,18 @@ public:
     PixelHit best, best_near;
 
 private:
+    // B's faces: those hit or in the map in the 5x5 neighbourhood, in
+    // for_each_neighbour's order, at most kMaxGeneralFaces; returns how many.
+    int general_faces(uint32_t (&out)[kMaxGeneralFaces]) const {
+        int n = 0;
+        for_each_neighbour(c_, i_, j_, kGeneralRadius, [&](int ni, int nj) {
+            const size_t k = c_.map.index(ni, nj);
+            for (const uint32_t id : {src_[k].face, c_.map.face[k]})
+                if (id && id <= c_.nfaces && n < kMaxGeneralFaces && std::find(out, out + n, id) == out + n)
+                    out[n++] = id;
+        });
+        return n;
+    }
     // Whether face id has been solved from any start for this pixel.
     bool solved(uint32_t id) const {
         return std::any_of(tried_, tried_ + ntried_, [id](const Start& t) { return t.id == id; });
