@@ -26,10 +26,12 @@ void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, 
 
 }  // namespace
 
+const NurbsSurface& Solver::iterated_surface(uint32_t id) const {
+    return ctx.options.method == NewtonMethod::proposed ? projected[id - 1] : ctx.scene.faces[id - 1].surface;
+}
+
 SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
-    const NurbsSurface& s =
-        ctx.options.method == NewtonMethod::proposed ? projected[id - 1] : ctx.scene.faces[id - 1].surface;
-    return evaluate_d1(s, ctx.prepared.faces()[id - 1].spans, u0, v0);
+    return evaluate_d1(iterated_surface(id), ctx.prepared.faces()[id - 1].spans, u0, v0);
 }
 
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
@@ -38,8 +40,8 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
     const Camera& camera = ctx.camera;
     const NewtonResult r =
         ctx.options.method == NewtonMethod::proposed
-            ? newton_proposed(projected[id - 1], camera, sp, u0, v0, ff.box, p, &ff.spans, start)
-            : newton_martin(ctx.scene.faces[id - 1].surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start);
+            ? newton_proposed(iterated_surface(id), camera, sp, u0, v0, ff.box, p, &ff.spans, start)
+            : newton_martin(iterated_surface(id), camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start);
     hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
     if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
         border_gap_hit(id, sp, r, hit))

@@ -38,6 +38,9 @@ struct Solver {
     SurfaceDerivs start_derivs(uint32_t id, double u0, double v0) const;
 
 private:
+    // The surface the method's Newton iterates on: the frame's projection of
+    // face id (proposed) or its model surface (martin).
+    const NurbsSurface& iterated_surface(uint32_t id) const;
     bool border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const;
 };
 
