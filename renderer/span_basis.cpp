@@ -66,18 +66,21 @@ KnotSpans::KnotSpans(int n, int p, const std::vector<double>& knots) : p_(p) {
     std::array<std::array<double, kM>, kM> ders{};
     for (int s = p; s < n; ++s) {
         if (!(U[s] < U[s + 1])) continue;
-        const double h = U[s + 1] - U[s];
-        ders_basis_funs(s, U[s], p, U, ders);
+        const double h = U[s + 1] - U[s], half = 0.5 * h;
+        const double mid = U[s] + half;  // rounded: x below is measured from this very value
+        ders_basis_funs(s, mid, p, U, ders);
         span_.push_back(s);
         start_.push_back(U[s]);
+        mid_.push_back(mid);
         inv_h_.push_back(1.0 / h);
-        // Taylor coefficients in t = (u - u_s) / h: N^(k)(u_s) h^k / k!.
-        double hk = 1.0;  // h^k / k!
+        // Taylor coefficients in x = (u - m) / (h/2), m the span's midpoint:
+        // N^(k)(m) (h/2)^k / k!.
+        double hk = 1.0;  // (h/2)^k / k!
         const size_t base = coef_.size();
         coef_.resize(base + static_cast<size_t>((p + 1) * (p + 1)));
         for (int k = 0; k <= p; ++k) {
             for (int r = 0; r <= p; ++r) coef_[base + static_cast<size_t>(r * (p + 1) + k)] = ders[k][r] * hk;
-            hk *= h / (k + 1);
+            hk *= half / (k + 1);
         }
     }
     if (span_.empty()) return;
@@ -96,18 +99,18 @@ void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
         t = start_[0];
     }
     s = span_[k];
-    const double x = (t - start_[k]) * inv_h_[k];
+    const double x = (t - mid_[k]) * (2.0 * inv_h_[k]);
     const int p = p_;
     const double* c = coef_.data() + k * static_cast<size_t>((p + 1) * (p + 1));
     for (int r = 0; r <= p; ++r, c += p + 1) {
-        // Horner for the value and its derivative in t together.
+        // Horner for the value and its derivative in x together.
         double val = c[p], der = 0.0;
         for (int q = p - 1; q >= 0; --q) {
             der = der * x + val;
             val = val * x + c[q];
         }
         N[r] = val;
-        dN[r] = der * inv_h_[k];
+        dN[r] = der * (2.0 * inv_h_[k]);
     }
 }
 

@@ -5,13 +5,18 @@
 // per direction and evaluation, on one dependency chain).
 //
 // On a non-empty knot span [u_s, u_{s+1}) the p+1 nonzero basis functions are
-// polynomials of degree p. In the local parameter t = (u - u_s) / h, h = u_{s+1} - u_s,
-//   N_{s-p+r,p}(u) = sum_k c[r][k] t^k,   c[r][k] = N^(k)_{s-p+r,p}(u_s) h^k / k!
-// (Taylor at the span's left end), the derivatives N^(k) from A2.3 (DersBasisFuns).
-// With t in [0, 1] the coefficients stay of the size of the binomial ones, so for
-// the degrees tabulated (kMaxTableDegree) the Horner sum is as accurate as A2.2 to
-// a few units in the last place (the unit tests compare them on uneven, repeated
-// and offset knot vectors).
+// polynomials of degree p. In the local parameter x = (u - m) / (h/2), m the
+// span's midpoint and h = u_{s+1} - u_s,
+//   N_{s-p+r,p}(u) = sum_k c[r][k] x^k,   c[r][k] = N^(k)_{s-p+r,p}(m) (h/2)^k / k!
+// (Taylor at the midpoint), the derivatives N^(k) from A2.3 (DersBasisFuns).
+// Centred, x lies in [-1, 1] and the coefficients are those of (1+x)^a (1-x)^b
+// scaled by 2^-p: no larger than the binomial ones. Expanded at the left end
+// instead (t in [0, 1]) they grow like 3^p / 2^p times more, and the Horner sum's
+// cancellation cost digits with the degree (measured: 1e-13 at degree 8, 2e-12 at
+// 11, against ~1e-15 and ~1e-14 centred). So the Horner sum is as accurate as A2.2
+// to a few units in the last place up to degree 11 and to ~2e-13 at 15 (the unit
+// tests compare them on uneven, repeated and offset knot vectors and print the
+// largest differences per degree).
 // The table depends on the knot vector only: the projected surface of a frame
 // (project_surface) shares the model surface's table.
 #pragma once
@@ -23,14 +28,13 @@
 
 namespace nurbsrt {
 
-// Degrees tabulated. CAD surfaces are almost all of degree <= 5 (STEP/IGES from
-// the CAD systems of ../shared/models: 1-3, some 5), but NURBS conversion gives
-// degree 8 too: 144 of the 415 faces of the machine component (trj8), which took
-// half of its primary solves' time on the A2.2 path. A higher degree takes that
-// path, where the power basis's conditioning (growing like 2^p) costs digits:
-// the largest basis error against A2.2 is ~1e-14 up to degree 7, ~1e-13 at 8,
-// ~2e-12 at 11 (the unit test prints them).
-constexpr int kMaxTableDegree = 8;
+// Degrees tabulated: all that the stack-only A2.2 path takes (kMaxFastDegree).
+// CAD surfaces are almost all of degree <= 5 (STEP/IGES from the CAD systems of
+// ../shared/models: 1-3, some 5), but NURBS conversion gives degree 8 and 11 too:
+// 144 and 14 of the 415 faces of the machine component (trj8). Its degree-8
+// faces took half of its primary solves' time on the A2.2 path; with the table
+// up to degree 8 only, the 14 of degree 11 still took 15 % of it (profile).
+constexpr int kMaxTableDegree = kMaxFastDegree;
 
 // The table of one knot vector.
 class KnotSpans {
@@ -46,7 +50,7 @@ public:
     // find_span + basis_and_derivs give them.
     void basis(double t, int& s, double* N, double* dN) const;
     size_t memory_bytes() const {
-        return (start_.capacity() + inv_h_.capacity() + coef_.capacity()) * sizeof(double) +
+        return (start_.capacity() + mid_.capacity() + inv_h_.capacity() + coef_.capacity()) * sizeof(double) +
                span_.capacity() * sizeof(int);
     }
 
@@ -54,6 +58,7 @@ private:
     int p_ = 0;
     std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
     std::vector<int> span_;      // knot index s of each non-empty span
+    std::vector<double> mid_;    // midpoint of each non-empty span, the Taylor expansion's centre
     std::vector<double> inv_h_;  // 1 / span length
     std::vector<double> coef_;   // per span (p+1) x (p+1): c[r][k]
 };
