@@ -25,10 +25,9 @@
 #include <memory>
 #include <string>
 
-#include "importer/importer.h"
+#include "bench/bench_context.h"
 #include "renderer/heap_tuning.h"
 #include "renderer/render.h"
-#include "renderer/scene_ops.h"
 
 namespace {
 
@@ -52,26 +51,16 @@ const BenchScene kScenes[] = {
     {"27_ducks", "duck/duck_from_glscene.igs", 3},
 };
 
-// Imported once per process and reused by every benchmark of that scene.
+// Imported once per process and reused by every benchmark of that scene, built
+// as `nurbsrt bench` builds it (bench_common.cpp: the 27 ducks' grid and its map mesh).
 const Scene* load(const BenchScene& s) {
     static std::map<std::string, std::unique_ptr<Scene>> cache;
     auto it = cache.find(s.name);
     if (it != cache.end()) return it->second.get();
     const std::string path = models_dir() + "/" + s.file;
     std::unique_ptr<Scene> scene;
-    if (fs::exists(path)) {
-        const Scene one = import_file(path);
-        scene = std::make_unique<Scene>();
-        const Vec3 size = one.bbox.hi - one.bbox.lo;
-        const double step = 1.25 * std::max({size.x, size.y, size.z});
-        for (int i = 0; i < s.copies_per_axis; ++i)
-            for (int j = 0; j < s.copies_per_axis; ++j)
-                for (int k = 0; k < s.copies_per_axis; ++k) {
-                    Scene copy = one;
-                    transform_scene(copy, Affine::translation({i * step, j * step, k * step}));
-                    append_scene(*scene, copy);
-                }
-    }
+    if (fs::exists(path))
+        scene = std::make_unique<Scene>(bench::load_bench_scene(s.name, s.name, path, s.copies_per_axis).scene);
     return cache.emplace(s.name, std::move(scene)).first->second.get();
 }
 
