@@ -21,6 +21,14 @@ namespace {
 
 // The 3x3 neighbourhood: its faces and starts are the candidates of every sample.
 constexpr int kNeighbours = 9;
+// An edge pixel whose 3x3 centre samples all show the same colour and alpha to
+// within this, in a gamma-2 encoding of the premultiplied colour (close to how
+// 8-bit sRGB spaces its steps), gets no extra rays: its samples, on the same
+// faces, could move it by less than one output step (Mitchell 1987 refines
+// where the samples' contrast exceeds a threshold). Two tangent faces of one
+// colour meeting, or a crease both sides of which the light hits alike: 18 % of
+// the machine component's edge pixels, 26 % of the phone's.
+constexpr double kFlatContrast = 1.0 / 255;
 
 // Van der Corput's radical inverse in base 2: the second coordinate of the
 // Hammersley point set, whose first coordinate is (s + 0.5) / n.
@@ -178,6 +186,23 @@ bool is_edge(const FrameContext& c, const std::vector<uint8_t>& diff, int i, int
            (i + 1 < W && (diff[k - W + 1] & kDiffDownLeft));
 }
 
+// Whether the centre samples of pixel (i, j)'s 3x3 agree to within
+// kFlatContrast in every channel (see there).
+bool is_flat(const FrameContext& c, const RenderImage& img, int i, int j) {
+    double lo[4] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[4] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
+        const float* px = &img.rgba[4 * c.map.index(ni, nj)];
+        for (int q = 0; q < 4; ++q) {
+            const double v = q < 3 ? std::sqrt(std::max(0.0, double(px[q]) * px[3])) : px[3];
+            lo[q] = std::min(lo[q], v);
+            hi[q] = std::max(hi[q], v);
+        }
+    });
+    for (int q = 0; q < 4; ++q)
+        if (hi[q] - lo[q] >= kFlatContrast) return false;
+    return true;
+}
+
 }  // namespace
 
 void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
@@ -189,7 +214,8 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& s
     // colour changes, so the result does not depend on the order of the rows.
     std::vector<uint8_t> edge(c.pixels(), 0);
     parallel_rows(c, false, [&](int j) {
-        for (int i = 0; i < c.width; ++i) edge[c.map.index(i, j)] = is_edge(c, diff, i, j);
+        for (int i = 0; i < c.width; ++i)
+            edge[c.map.index(i, j)] = is_edge(c, diff, i, j) && !is_flat(c, img, i, j);
     });
     std::atomic<uint64_t> pixels{0}, rays{0};
     parallel_rows(c, true, [&](int j) {

@@ -141,3 +141,50 @@ TEST(RendererAntialias, OpaqueBackgroundBlendsIntoEdges) {
     }
     EXPECT_GT(blended, 10);
 }
+
+TEST(RendererAntialias, FlatFaceBordersGetNoExtraRays) {
+    // Two coplanar faces of one colour side by side: their shared border is a
+    // face border (an edge pixel by face ids) across which nothing changes, so it
+    // keeps its one ray; the silhouette against the background is refined.
+    AnalyticPatch left = plane_patch(), right = plane_patch();
+    const Vec3 e1{2.2, 0.3, 0.1};  // plane_patch's u edge: the right face starts where the left ends
+    for (Vec4& c : right.surface.cp) c = Vec4{c.x + e1.x * c.w, c.y + e1.y * c.w, c.z + e1.z * c.w, c.w};
+    right.box = BBox{};
+    finish_box(right);
+    Scene scene;
+    scene.faces.push_back(make_face(left, 1, 8));
+    scene.faces.push_back(make_face(right, 2, 8));
+    for (Face& f : scene.faces) f.color = {0.6f, 0.6f, 0.6f}, f.has_color = true;
+    scene.bbox.extend(left.box);
+    scene.bbox.extend(right.box);
+    const Camera cam(iso_view(scene, 160, 120));
+    RenderOptions off, on;
+    on.antialias = 4;
+    const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
+    const int W = cam.width(), H = cam.height();
+    auto face = [&](int i, int j) { return a.image.face[static_cast<size_t>(j) * W + i]; };
+    // ring: pixels (hit or not) whose 3x3 holds both a hit and background.
+    int border = 0, border_changed = 0, ring = 0, ring_changed = 0;
+    for (int j = 1; j + 1 < H; ++j)
+        for (int i = 1; i + 1 < W; ++i) {
+            bool background = false, hit = false, other_face = false;
+            for (int dj = -1; dj <= 1; ++dj)
+                for (int di = -1; di <= 1; ++di) {
+                    const uint32_t f = face(i + di, j + dj);
+                    background |= f == 0;
+                    hit |= f != 0;
+                    other_face |= f != 0 && face(i, j) != 0 && f != face(i, j);
+                }
+            const size_t k = static_cast<size_t>(j) * W + i;
+            const bool changed = !std::equal(&a.image.rgba[4 * k], &a.image.rgba[4 * k + 4], &b.image.rgba[4 * k]);
+            if (background && hit) ring++, ring_changed += changed;
+            else if (other_face) border++, border_changed += changed;
+        }
+    std::printf("[ antialias ] two coplanar faces: %d border pixels (%d changed), %d silhouette pixels (%d changed), "
+                "%llu refined\n",
+                border, border_changed, ring, ring_changed, (unsigned long long)b.stats.antialias_pixels);
+    ASSERT_GT(border, 40);
+    EXPECT_EQ(border_changed, 0);
+    EXPECT_GT(ring_changed, ring / 4);
+    EXPECT_LE(b.stats.antialias_pixels, static_cast<uint64_t>(ring));
+}
