@@ -2,7 +2,8 @@
 // trim edges and face borders jagged; supersampling every pixel would multiply
 // the frame's cost by the sample count although the colour varies within a pixel
 // only where an edge crosses it. So only edge pixels (from the exact per-pixel
-// hits: hit/background, another face, a depth step, a crease in the normal) get
+// hits: hit/background, another face, a depth step, a crease in the normal)
+// whose neighbourhood's centre samples differ in colour (kFlatContrast) get
 // extra rays, and each extra ray is solved exactly like the centre one, by
 // Newton from the (face, u, v) of the pixel and its 8 neighbours: the hits there
 // lie within 1.5 pixels of any sub-pixel sample, on the same sheet. This is
