@@ -94,6 +94,10 @@ struct FrameContext {
 
     bool in_frame(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
     size_t pixels() const { return static_cast<size_t>(width) * height; }
+    // The size of one pixel in model units at hit distance t (screen units span
+    // 2 over the height; depth along the view direction for orthographic views,
+    // where it does not matter).
+    double pixel_footprint(double t) const { return 2.0 * camera.image_to_model_scale(t) / height; }
 };
 
 // Calls fn(ni, nj) for every pixel of the (2 radius + 1)^2 square around (i, j)

@@ -33,7 +33,7 @@ bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, con
     const PixelHit &p = hits[k], &q = hits[n];
     if (!p.face && !q.face) return false;
     if (!p.face || !q.face || p.face != q.face) return true;  // silhouette, face border
-    const double footprint = 2.0 * c.camera.image_to_model_scale(std::min(p.t, q.t)) / c.height;
+    const double footprint = c.pixel_footprint(std::min(p.t, q.t));
     if (std::abs(p.t - q.t) > kDepthStepFootprints * footprint) return true;  // one face folding over itself
     const float *a = &img.normal[3 * k], *b = &img.normal[3 * n];
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < kCreaseCos;

@@ -111,7 +111,7 @@ public:
             // model units, a pixel deeper than both of its pair by more than its own
             // footprint is not on their smooth sheet either (on a slope it lies
             // between them, so grazing views cost no extra solves).
-            const bool deep = p.t - std::max(a.t, b.t) > kSheetFootprints * footprint(p.t);
+            const bool deep = p.t - std::max(a.t, b.t) > kSheetFootprints * c_.pixel_footprint(p.t);
             bool from[2] = {false, false};
             for (int q = 0; q < 2; ++q) {
                 const PixelHit& n = q == 0 ? a : b;
@@ -146,11 +146,6 @@ public:
     }
 
 private:
-    // The size of one pixel in model units at hit distance t (depth along the
-    // view direction for orthographic views, where it does not matter).
-    double footprint(double t) const {
-        return 2.0 * c_.camera.image_to_model_scale(t) / c_.height;
-    }
     // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
     void consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
                   PixelHit& best) const {
@@ -206,7 +201,7 @@ private:
     // face has solved from already.
     void other_sheet_starts(int i, int j, PixelHit& best) const {
         const PixelHit p = best;
-        const double sheet = kSheetFootprints * footprint(p.t);
+        const double sheet = kSheetFootprints * c_.pixel_footprint(p.t);
         bool first = true;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const PixelHit& h = hits_[c_.map.index(ni, nj)];

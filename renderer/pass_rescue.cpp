@@ -231,7 +231,7 @@ private:
 // Whether both pixels of a row or column pair around (i, j) are hit nearer than
 // t by more than a pixel footprint at t.
 bool behind_pair(const FrameContext& c, const std::vector<PixelHit>& src, int i, int j, double t) {
-    const double margin = 2.0 * c.camera.image_to_model_scale(t) / c.height;
+    const double margin = c.pixel_footprint(t);
     auto nearer = [&](int a, int b) {
         if (!c.in_frame(a, b)) return false;
         const PixelHit& h = src[c.map.index(a, b)];
@@ -248,7 +248,7 @@ bool behind_pair(const FrameContext& c, const std::vector<PixelHit>& src, int i,
 // between two separate things, one seen behind the other (27 ducks: 23 % of the
 // rescue's surface evaluations went to searching such gaps thoroughly, in vain).
 bool may_share_crack(const FrameContext& c, const PixelHit& a, const PixelHit& b) {
-    const double footprint = 2.0 * c.camera.image_to_model_scale(std::min(a.t, b.t)) / c.height;
+    const double footprint = c.pixel_footprint(std::min(a.t, b.t));
     if (std::abs(a.t - b.t) <= kCrackDepthFootprints * footprint || a.face == b.face) return true;
     const std::vector<uint32_t>& na = c.prepared.faces()[a.face - 1].adjacent;
     const std::vector<uint32_t>& nb = c.prepared.faces()[b.face - 1].adjacent;
