@@ -188,20 +188,21 @@ bool is_edge(const FrameContext& c, const std::vector<uint8_t>& diff, int i, int
 }
 
 // Whether the centre samples of pixel (i, j)'s 3x3 agree to within
-// kFlatContrast in every channel (see there).
+// kFlatContrast in every channel (see there). The square root is monotonic, so
+// the extremes are taken of the premultiplied values and encoded once.
 bool is_flat(const FrameContext& c, const RenderImage& img, int i, int j) {
     double lo[4] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[4] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
         const float* px = &img.rgba[4 * c.map.index(ni, nj)];
         for (int q = 0; q < 4; ++q) {
-            const double v = q < 3 ? std::sqrt(std::max(0.0, double(px[q]) * px[3])) : px[3];
+            const double v = q < 3 ? std::max(0.0, double(px[q]) * px[3]) : px[3];
             lo[q] = std::min(lo[q], v);
             hi[q] = std::max(hi[q], v);
         }
     });
-    for (int q = 0; q < 4; ++q)
-        if (hi[q] - lo[q] >= kFlatContrast) return false;
-    return true;
+    for (int q = 0; q < 3; ++q)
+        if (std::sqrt(hi[q]) - std::sqrt(lo[q]) >= kFlatContrast) return false;
+    return hi[3] - lo[3] < kFlatContrast;
 }
 
 }  // namespace
