@@ -72,7 +72,7 @@ KnotSpans::KnotSpans(int n, int p, const std::vector<double>& knots) : p_(p) {
         span_.push_back(s);
         start_.push_back(U[s]);
         mid_.push_back(mid);
-        inv_h_.push_back(1.0 / h);
+        inv_half_.push_back(2.0 / h);
         // Taylor coefficients in x = (u - m) / (h/2), m the span's midpoint:
         // N^(k)(m) (h/2)^k / k!.
         double hk = 1.0;  // (h/2)^k / k!
@@ -99,7 +99,7 @@ void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
         t = start_[0];
     }
     s = span_[k];
-    const double x = (t - mid_[k]) * (2.0 * inv_h_[k]);
+    const double x = (t - mid_[k]) * inv_half_[k];
     const int p = p_;
     const double* c = coef_.data() + k * static_cast<size_t>((p + 1) * (p + 1));
     for (int r = 0; r <= p; ++r, c += p + 1) {
@@ -110,7 +110,7 @@ void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
             val = val * x + c[q];
         }
         N[r] = val;
-        dN[r] = der * (2.0 * inv_h_[k]);
+        dN[r] = der * inv_half_[k];
     }
 }
 

@@ -50,7 +50,7 @@ public:
     // find_span + basis_and_derivs give them.
     void basis(double t, int& s, double* N, double* dN) const;
     size_t memory_bytes() const {
-        return (start_.capacity() + mid_.capacity() + inv_h_.capacity() + coef_.capacity()) * sizeof(double) +
+        return (start_.capacity() + mid_.capacity() + inv_half_.capacity() + coef_.capacity()) * sizeof(double) +
                span_.capacity() * sizeof(int);
     }
 
@@ -59,7 +59,7 @@ private:
     std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
     std::vector<int> span_;      // knot index s of each non-empty span
     std::vector<double> mid_;    // midpoint of each non-empty span, the Taylor expansion's centre
-    std::vector<double> inv_h_;  // 1 / span length
+    std::vector<double> inv_half_;  // 2 / span length: dx/du
     std::vector<double> coef_;   // per span (p+1) x (p+1): c[r][k]
 };
 
