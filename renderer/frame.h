@@ -28,6 +28,43 @@
 
 namespace nurbsrt {
 
+// RenderOptions::cancel: blocks of rows are skipped once it is set, and the pass
+// then ends with Error(canceled) (a partial pass is never used).
+inline bool canceled(const RenderOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
+void throw_if_canceled(const RenderOptions& o);
+
+// Frame-sized buffers are filled in blocks of this many bytes with a cancel check
+// between blocks. Filling fresh pages (frame buffers above glibc's mmap
+// threshold get new pages every frame) is serial and costs ~0.8 s per GiB on the
+// shared 2-core machines, most of it the kernel zeroing the pages; a 25-Mpixel
+// frame has over 3 GiB of them, which a canceled render must not go on filling.
+inline constexpr size_t kCancelBlockBytes = size_t(64) << 20;
+
+// v = n copies of value, in blocks; throws Error(canceled) between them.
+template <class T>
+void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const RenderOptions& o) {
+    v.clear();
+    v.reserve(n);
+    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
+    while (v.size() < n) {
+        throw_if_canceled(o);
+        v.resize(std::min(n, v.size() + block), value);
+    }
+}
+
+// v = src, in blocks; throws Error(canceled) between them.
+template <class T>
+void copy_cancelable(std::vector<T>& v, const std::vector<T>& src, const RenderOptions& o) {
+    v.clear();
+    v.reserve(src.size());
+    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
+    while (v.size() < src.size()) {
+        throw_if_canceled(o);
+        const size_t end = std::min(src.size(), v.size() + block);
+        v.insert(v.end(), src.begin() + static_cast<std::ptrdiff_t>(v.size()), src.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+}
+
 // Per-pixel solve result of a pass.
 struct PixelHit {
     uint32_t face = 0;       // 0: no hit
@@ -49,7 +86,11 @@ enum RescueKind : uint8_t { kNoRescue, kRescueNeighbour, kRescueSilhouette, kRes
 
 // The frame's per-pixel arrays, row-major like the map (PreliminaryMap::index).
 struct FrameBuffers {
-    explicit FrameBuffers(size_t npx) : first(npx), outcome(npx, kNone), rescued(npx, kNoRescue) {}
+    FrameBuffers(size_t npx, const RenderOptions& o) {
+        assign_cancelable(first, npx, PixelHit{}, o);
+        assign_cancelable(outcome, npx, uint8_t(kNone), o);
+        assign_cancelable(rescued, npx, uint8_t(kNoRescue), o);
+    }
     std::vector<PixelHit> first;    // the primary solve's hit (face 0: none)
     std::vector<uint8_t> outcome;   // Outcome of the primary solve; kNone where the map has no face
     std::vector<PixelHit> hits;     // the final hit: `first`, then the rescue and nearer-sheet passes
@@ -74,11 +115,6 @@ private:
     std::mutex m_;
     double last_ = 0;
 };
-
-// RenderOptions::cancel: blocks of rows are skipped once it is set, and the pass
-// then ends with Error(canceled) (a partial pass is never used).
-inline bool canceled(const RenderOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
-void throw_if_canceled(const RenderOptions& o);
 
 // The inputs of one frame, shared read-only by its passes.
 struct FrameContext {

@@ -175,26 +175,24 @@ void depth_range(const Scene& scene, const Camera& camera, double& znear, double
     }
 }
 
-// GL row 0 is the bottom: flip to the contract's row order. rgb8: eq. (4).
-PreliminaryMap read_back(int W, int H, const Scene& scene, MapPrecision precision) {
-    PreliminaryMap map;
-    map.width = W;
-    map.height = H;
-    const size_t npx = static_cast<size_t>(W) * H;
-    std::vector<uint32_t> ids(npx);
-    std::vector<float> uv(2 * npx);
+// Reads the `rows` framebuffer rows of the band whose bottom is GL window row
+// y_lo into the map (ids and uv: reused read buffers). GL row 0 is the bottom:
+// flip to the contract's row order. rgb8: eq. (4).
+void read_back_band(PreliminaryMap& map, int y_lo, int rows, const Scene& scene, MapPrecision precision,
+                    std::vector<uint32_t>& ids, std::vector<float>& uv) {
+    const int W = map.width, H = map.height;
+    const size_t npx = static_cast<size_t>(W) * rows;
+    ids.resize(npx);
+    uv.resize(2 * npx);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_INT, ids.data());
+    glReadPixels(0, 0, W, rows, GL_RED_INTEGER, GL_UNSIGNED_INT, ids.data());
     glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, W, H, GL_RG, GL_FLOAT, uv.data());
+    glReadPixels(0, 0, W, rows, GL_RG, GL_FLOAT, uv.data());
     if (glGetError() != GL_NO_ERROR) fail("OpenGL error while rendering");
-
-    map.face.resize(npx);
-    map.u.resize(npx);
-    map.v.resize(npx);
-    for (int j = 0; j < H; ++j) {
-        const size_t src = static_cast<size_t>(H - 1 - j) * W, dst = static_cast<size_t>(j) * W;
+    for (int r = 0; r < rows; ++r) {
+        // Framebuffer row r is GL window row y_lo + r; GL counts rows bottom-up.
+        const size_t src = static_cast<size_t>(r) * W, dst = static_cast<size_t>(H - 1 - (y_lo + r)) * W;
         for (int i = 0; i < W; ++i) {
             const uint32_t id = ids[src + i];
             float u = uv[2 * (src + i)], v = uv[2 * (src + i) + 1];
@@ -208,10 +206,8 @@ PreliminaryMap read_back(int W, int H, const Scene& scene, MapPrecision precisio
             map.v[dst + i] = v;
         }
     }
-    return map;
 }
 
-// Releases the context on every exit of a frame, so the next user may be another thread.
 struct ReleaseOnExit {
     GlContext& gl;
     ~ReleaseOnExit() { gl.release_current(); }
@@ -219,15 +215,20 @@ struct ReleaseOnExit {
 
 }  // namespace
 
-PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera, MapPrecision precision) {
+PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera, MapPrecision precision,
+                                   const MapBands& bands) {
     const int W = camera.width(), H = camera.height();
-    GLint max_size = 0;
+    GLint max_size = 0, max_viewport[2] = {0, 0};
     impl_->make_current();
     const ReleaseOnExit release{impl_->gl};
     glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
-    if (W > max_size || H > max_size)
-        throw Error(ErrorCode::limit_exceeded, "preliminary map: image larger than " + std::to_string(max_size));
-    impl_->ensure_fbo(W, H);
+    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_viewport);
+    if (W > std::min(max_size, max_viewport[0]) || H > max_viewport[1])
+        throw Error(ErrorCode::limit_exceeded,
+                    "preliminary map: image larger than " + std::to_string(std::min(max_size, max_viewport[0])));
+    const int band_rows = static_cast<int>(std::clamp<size_t>(
+        bands.rows > 0 ? size_t(bands.rows) : kMapBandPixels / size_t(W), 1, size_t(std::min(H, max_size))));
+    impl_->ensure_fbo(W, band_rows);
 
     double znear = 0, zfar = 0;
     depth_range(ps.scene(), camera, znear, zfar);
@@ -236,16 +237,9 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
     last_triangles_ = draw ? mesh.triangles() : 0;
 
     glBindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
-    glViewport(0, 0, W, H);
     glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
-    const GLuint zero_u[4] = {0, 0, 0, 0};
-    const GLfloat zero_f[4] = {0, 0, 0, 0};
-    const GLfloat one = 1.0f;
-    glClearBufferuiv(GL_COLOR, 0, zero_u);
-    glClearBufferfv(GL_COLOR, 1, zero_f);
-    glClearBufferfv(GL_DEPTH, 0, &one);
     if (draw) {
         // Positions to clip space on the CPU in double, relative to the eye
         // (Camera::clip), rounded to float only at the end (see the header).
@@ -262,9 +256,36 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         glBindVertexArray(impl_->vao);
         glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo_clip);
         glBufferData(GL_ARRAY_BUFFER, clip.size() * sizeof(float), clip.data(), GL_STREAM_DRAW);
-        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
     }
-    return read_back(W, H, ps.scene(), precision);
+
+    PreliminaryMap map;
+    map.width = W;
+    map.height = H;
+    const size_t npx = static_cast<size_t>(W) * H;
+    map.face.resize(npx);
+    map.u.resize(npx);
+    map.v.resize(npx);
+    std::vector<uint32_t> ids;
+    std::vector<float> uv;
+    // Bands bottom-up in GL's rows. The whole frame's viewport, shifted so that
+    // the band's bottom row lands on framebuffer row 0: the same integer shift
+    // for every vertex, so each pixel of a band sees the same clip-space
+    // geometry as in one frame-sized draw.
+    for (int y_lo = 0; y_lo < H; y_lo += band_rows) {
+        if (bands.cancel && bands.cancel->load(std::memory_order_relaxed))
+            throw Error(ErrorCode::canceled, "the render was canceled");
+        const int rows = std::min(band_rows, H - y_lo);
+        glViewport(0, -y_lo, W, H);
+        const GLuint zero_u[4] = {0, 0, 0, 0};
+        const GLfloat zero_f[4] = {0, 0, 0, 0};
+        const GLfloat one = 1.0f;
+        glClearBufferuiv(GL_COLOR, 0, zero_u);
+        glClearBufferfv(GL_COLOR, 1, zero_f);
+        glClearBufferfv(GL_DEPTH, 0, &one);
+        if (draw) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
+        read_back_band(map, y_lo, rows, ps.scene(), precision, ids, uv);
+    }
+    return map;
 }
 
 namespace {
@@ -302,7 +323,8 @@ MapRendererPool& map_renderer_pool() {
 
 }  // namespace
 
-PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision) {
+PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
+                                      const MapBands& bands) {
     MapRendererPool& pool = map_renderer_pool();
     std::unique_ptr<MapRenderer> renderer = pool.acquire();
     // A renderer whose frame threw goes back too: every error path leaves its
@@ -312,7 +334,7 @@ PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& 
         std::unique_ptr<MapRenderer>& r;
         ~GiveBack() { pool.release(std::move(r)); }
     } give_back{pool, renderer};
-    return renderer->render(scene, camera, precision);
+    return renderer->render(scene, camera, precision, bands);
 }
 
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera, MapPrecision precision) {

@@ -29,10 +29,14 @@
 //    face id, triangle indices) of the last PreparedScene it drew in GPU buffers
 //    (keyed by PreparedScene::id); a frame of the same prepared scene uploads
 //    only the clip-space positions.
+//  - The framebuffer holds one band of rows (kMapBandPixels below): frames
+//    taller than a band are drawn band by band, the cancel flag checked between.
 //  - llvmpipe starts its own rasterizer threads per context; LP_NUM_THREADS
 //    (read by Mesa at start-up) sets their number, 0 rasterizes in the calling thread.
 #pragma once
 
+#include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -63,6 +67,21 @@ struct PreliminaryMap {
     size_t index(int i, int j) const { return static_cast<size_t>(j) * width + i; }
 };
 
+// Frames taller than this many pixels' worth of rows are drawn in horizontal
+// bands, each a draw of the whole map mesh into a band-sized framebuffer. 4
+// Mpixel (a 2048^2 frame is one band) keeps the framebuffer at 64 MiB however
+// large the image, and bounds the uninterruptible part of a map (one OpenGL
+// draw and readback) to ~0.2 s of llvmpipe, so that a canceled 25-Mpixel frame
+// stops within one band; the mesh's vertex work is repeated per band, a small
+// share at these sizes.
+inline constexpr size_t kMapBandPixels = size_t(1) << 22;
+
+struct MapBands {
+    int rows = 0;  // rows per band; 0: kMapBandPixels / width
+    // Checked between bands: when it is true, Error(canceled) is thrown.
+    const std::atomic<bool>* cancel = nullptr;
+};
+
 class MapRenderer {
 public:
     MapRenderer();   // creates the OSMesa context, compiles the shaders; throws Error(internal) on failure
@@ -70,7 +89,8 @@ public:
     MapRenderer(const MapRenderer&) = delete;
     MapRenderer& operator=(const MapRenderer&) = delete;
 
-    PreliminaryMap render(const PreparedScene& scene, const Camera& camera, MapPrecision precision);
+    PreliminaryMap render(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
+                          const MapBands& bands = {});
 
     // Triangles drawn by the last render (for statistics).
     size_t last_triangles() const { return last_triangles_; }
@@ -83,7 +103,7 @@ private:
 
 // Renders with a MapRenderer borrowed from the process-wide pool (see above).
 PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera,
-                                      MapPrecision precision = MapPrecision::float32);
+                                      MapPrecision precision = MapPrecision::float32, const MapBands& bands = {});
 // Convenience for one map of a Scene: prepares it first.
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera,
                                       MapPrecision precision = MapPrecision::float32);

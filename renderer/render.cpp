@@ -82,7 +82,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
 
     // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
     throw_if_canceled(options);
-    const PreliminaryMap map = render_preliminary_map(prepared, camera, options.map_precision);
+    const PreliminaryMap map = render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()});
     throw_if_canceled(options);
     st.preliminary_map_ms = lap();
 
@@ -92,7 +92,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     Progress progress(options.progress, (options.antialias > 0 ? 4 : 3) * static_cast<int64_t>(H));
     const FrameContext ctx{prepared, scene, camera, map, options, arena, progress, W, H,
                            static_cast<uint32_t>(scene.faces.size())};
-    FrameBuffers buf(ctx.pixels());
+    FrameBuffers buf(ctx.pixels(), options);
     st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of
     // the control points (the rest was done once by prepare()).
@@ -112,10 +112,11 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     primary_pass(ctx, solver, buf);
     st.newton_primary_ms = ms_since(last);  // a part of newton_ms, not a stage of its own
 
-    buf.hits = buf.first;
+    copy_cancelable(buf.hits, buf.first, options);
     if (options.rescue) {
         const MeshScreenPoints screen_points(ctx);
         rescue_pass(ctx, solver, screen_points, buf);
+        throw_if_canceled(options);
         st.rescue_nearer += nearer_sheet_pass(ctx, solver, screen_points, buf);
     } else {
         progress.add(H);
@@ -134,6 +135,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     }
     const Shader shader(ctx, shadows ? &*shadows : nullptr);
     shade_pass(ctx, shader, buf, res.image);
+    throw_if_canceled(options);
     st.shade_ms = lap();
     // Which neighbours differ: from the hits and normals, which the two passes
     // below leave as they are (anti-aliasing changes colours only).

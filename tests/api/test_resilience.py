@@ -65,8 +65,9 @@ def test_disconnect_cancels_the_render(own_server):
     assert r.status_code == 200
     u = urlparse(s.url)
     sock = socket.create_connection((u.hostname, u.port), timeout=30)
-    # 25 Mpixel: ~1 s of preliminary map (one OpenGL draw, not interruptible),
-    # then ~9 s of Newton iteration on this machine, where the disconnect falls.
+    # 25 Mpixel: ~1 s of filling frame buffers (3 GiB of fresh pages) and ~0.5 s
+    # of preliminary map, then ~10 s of Newton iteration and shading on this
+    # machine; the disconnect falls in one of them.
     sock.sendall(b"POST /v1/renders?width=5000&height=5000&view=front HTTP/1.1\r\nHost: x\r\n"
                  b"Content-Type: application/octet-stream\r\nContent-Length: %d\r\n\r\n" % len(data) + data)
     time.sleep(2.5)
@@ -87,12 +88,13 @@ def test_disconnect_cancels_the_render(own_server):
     # The render notices the disconnect within a row block and logs the cancel;
     # the remaining ~9 s of Newton iteration (two threads busy) must not run.
     wait_until(canceled_in_log, 5.0, "the render was not canceled within 5 s of the disconnect")
-    # The render thread stops at its next row block, frees its frame buffers
-    # (gigabytes: tenths of a second of system time) and, if the disconnect fell
-    # in the preliminary map, first finishes that one uninterruptible OpenGL draw
-    # (~1 s, two to three times that on a machine loaded by other work). So the
-    # service must go idle (a half second with under 0.1 s of CPU) within 5 s of
-    # the cancel: a render that went on would keep both threads busy for 10 s more.
+    # The render thread stops at its next block of rows, of buffer filling (64 MiB)
+    # or of the map (a 4-Mpixel band), and frees its frame buffers (gigabytes:
+    # tenths of a second of system time). Measured on the 2-core machine: idle
+    # 0.5-1 s after the disconnect wherever it falls, also with two other
+    # CPU-bound processes running. So the service must go idle (a half second with
+    # under 0.1 s of CPU) within 5 s of the cancel: a render that went on would
+    # keep both threads busy for 10 s more.
     deadline = time.monotonic() + 5.0
     windows = []
     while True:
