@@ -3,7 +3,7 @@
 // the frame's cost by the sample count although the colour varies within a pixel
 // only where an edge crosses it. So only edge pixels (from the exact per-pixel
 // hits: hit/background, another face, a depth step, a crease in the normal)
-// whose neighbourhood's centre samples differ in colour (kFlatContrast) get
+// across which the centre samples' colour is not smooth (kSmoothContrast) get
 // extra rays, and each extra ray is solved exactly like the centre one, by
 // Newton from the (face, u, v) of the pixel and its 8 neighbours: the hits there
 // lie within 1.5 pixels of any sub-pixel sample, on the same sheet. This is
@@ -22,14 +22,14 @@ namespace {
 
 // The 3x3 neighbourhood: its faces and starts are the candidates of every sample.
 constexpr int kNeighbours = 9;
-// An edge pixel whose 3x3 centre samples all show the same colour and alpha to
-// within this, in a gamma-2 encoding of the premultiplied colour (close to how
-// 8-bit sRGB spaces its steps), gets no extra rays: its samples, on the same
-// faces, could move it by less than one output step (Mitchell 1987 refines
-// where the samples' contrast exceeds a threshold). Two tangent faces of one
-// colour meeting, or a crease both sides of which the light hits alike: 18 % of
-// the machine component's edge pixels, 26 % of the phone's.
-constexpr double kFlatContrast = 1.0 / 255;
+// An edge pixel across which the colour is smooth to within this (is_smooth),
+// in a gamma-2 encoding of the premultiplied colour (close to how 8-bit sRGB
+// spaces its steps), gets no extra rays: its samples, on the same smooth
+// shading, could move it by far less than one output step (Mitchell 1987
+// refines where the samples' contrast exceeds a threshold). Two tangent faces of
+// one colour meeting (a fillet's borders), or a crease both sides of which the
+// light hits alike.
+constexpr double kSmoothContrast = 1.0 / 255;
 
 // Van der Corput's radical inverse in base 2: the second coordinate of the
 // Hammersley point set, whose first coordinate is (s + 0.5) / n.
@@ -56,6 +56,9 @@ uint32_t hash32(uint32_t x) {
     return x;
 }
 
+// x mod 1 for x in [0, 2): a stratum's coordinate plus the pixel's rotation.
+double wrap01(double x) { return x >= 1.0 ? x - 1.0 : x; }
+
 class EdgeSampler {
 public:
     EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b)
@@ -71,8 +74,8 @@ public:
         const uint32_t rot = hash32(static_cast<uint32_t>(c_.map.index(i, j)));
         const double rx = (rot & 0xffffu) * 0x1p-16, ry = (rot >> 16) * 0x1p-16;
         for (int s = 0; s < n; ++s) {
-            const double x = std::fmod((s + 0.5) / n + rx, 1.0);
-            const double y = std::fmod(radical_inverse2(static_cast<uint32_t>(s)) + ry, 1.0);
+            const double x = wrap01((s + 0.5) / n + rx);
+            const double y = wrap01(radical_inverse2(static_cast<uint32_t>(s)) + ry);
             double sample[4];
             trace(i + x, j + y, sample);
             for (int q = 0; q < 4; ++q) sum[q] += sample[q];
@@ -102,7 +105,10 @@ private:
         std::fill(evaluated_, evaluated_ + kNeighbours, false);
         // Front first: a sample's nearest hit is on the face that is in front
         // around it, so the first hit inside a trim ends the sample's search.
-        std::stable_sort(starts_, starts_ + nstarts_, [](const Start& a, const Start& b) { return a.t < b.t; });
+        // Insertion sort, stable (equal depths keep the walk's order): at most 9
+        // entries, and std::stable_sort allocated a buffer per edge pixel.
+        for (int q = 1; q < nstarts_; ++q)
+            for (int r = q; r > 0 && starts_[r].t < starts_[r - 1].t; --r) std::swap(starts_[r], starts_[r - 1]);
         own_hit_ = hits_[c_.map.index(i, j)].face != 0;
     }
     // The premultiplied colour of the exact ray through pixel coordinates (px, py).
@@ -187,22 +193,47 @@ bool is_edge(const FrameContext& c, const std::vector<uint8_t>& diff, int i, int
            (i + 1 < W && (diff[k - W + 1] & kDiffDownLeft));
 }
 
-// Whether the centre samples of pixel (i, j)'s 3x3 agree to within
-// kFlatContrast in every channel (see there). The square root is monotonic, so
-// the extremes are taken of the premultiplied values and encoded once.
-bool is_flat(const FrameContext& c, const RenderImage& img, int i, int j) {
-    double lo[4] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[4] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
-        const float* px = &img.rgba[4 * c.map.index(ni, nj)];
-        for (int q = 0; q < 4; ++q) {
-            const double v = q < 3 ? std::max(0.0, double(px[q]) * px[3]) : px[3];
-            lo[q] = std::min(lo[q], v);
-            hi[q] = std::max(hi[q], v);
+// A pixel's colour in the encoding kSmoothContrast is measured in: gamma 2 of
+// the premultiplied colour (close to how 8-bit sRGB spaces its steps), and alpha.
+struct Encoded {
+    double q[4];
+};
+Encoded encoded(const RenderImage& img, size_t k) {
+    const float* px = &img.rgba[4 * k];
+    Encoded e;
+    for (int q = 0; q < 3; ++q) e.q[q] = std::sqrt(std::max(0.0, double(px[q]) * px[3]));
+    e.q[3] = px[3];
+    return e;
+}
+
+// Whether the image is smooth across pixel (i, j): on each of the four lines of
+// its 3x3 through the centre (row, column, both diagonals) the centre samples'
+// second difference stays under kSmoothContrast in every channel. An edge
+// through the pixel or between it and a neighbour is a step in the colour, and a
+// step J shows as a second difference of J (or J/2 where the step is shared),
+// however the shading slopes around it; where there is none, the colour is
+// linear to second order across the pixel and its box-filtered value is the
+// centre sample's up to 1/24 of the second difference (Taylor expansion of the
+// pixel's mean). A pixel at the frame's border (lines cut short) is smooth only
+// where all the centre samples it has agree.
+bool is_smooth(const FrameContext& c, const RenderImage& img, int i, int j) {
+    const Encoded m = encoded(img, c.map.index(i, j));
+    if (i > 0 && j > 0 && i + 1 < c.width && j + 1 < c.height) {
+        constexpr int kLines[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+        for (const auto& d : kLines) {
+            const Encoded a = encoded(img, c.map.index(i - d[0], j - d[1]));
+            const Encoded b = encoded(img, c.map.index(i + d[0], j + d[1]));
+            for (int q = 0; q < 4; ++q)
+                if (std::abs(a.q[q] + b.q[q] - 2 * m.q[q]) >= kSmoothContrast) return false;
         }
+        return true;
+    }
+    bool flat = true;
+    for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
+        const Encoded e = encoded(img, c.map.index(ni, nj));
+        for (int q = 0; q < 4; ++q) flat = flat && std::abs(e.q[q] - m.q[q]) < kSmoothContrast;
     });
-    for (int q = 0; q < 3; ++q)
-        if (std::sqrt(hi[q]) - std::sqrt(lo[q]) >= kFlatContrast) return false;
-    return hi[3] - lo[3] < kFlatContrast;
+    return flat;
 }
 
 }  // namespace
@@ -217,7 +248,7 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& s
     std::vector<uint8_t> edge(c.pixels(), 0);
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < c.width; ++i)
-            edge[c.map.index(i, j)] = is_edge(c, diff, i, j) && !is_flat(c, img, i, j);
+            edge[c.map.index(i, j)] = is_edge(c, diff, i, j) && !is_smooth(c, img, i, j);
     });
     std::atomic<uint64_t> pixels{0}, rays{0};
     parallel_rows(c, true, [&](int j) {

@@ -188,3 +188,63 @@ TEST(RendererAntialias, FlatFaceBordersGetNoExtraRays) {
     EXPECT_GT(ring_changed, ring / 4);
     EXPECT_LE(b.stats.antialias_pixels, static_cast<uint64_t>(ring));
 }
+
+TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
+    // A cylinder made of two half-cylinder faces of one colour: their seam is a
+    // face border (an edge pixel by face ids) across which the shading slopes
+    // (the normal turns with the angle) but has no step. Seen at 45 degrees to
+    // the seam, the colour changes by more than an output step across its 3x3
+    // (so a test of flat colour would refine it), yet it is smooth: it keeps its
+    // one ray, while the silhouette against the background is refined.
+    AnalyticPatch front = cylinder_patch(), back = cylinder_patch();
+    for (Vec4& c : back.surface.cp) c = Vec4{-c.x, -c.y, c.z, c.w};  // the half y <= 0
+    back.box = BBox{};
+    finish_box(back);
+    Scene scene;
+    scene.faces.push_back(make_face(front, 1, 16));
+    scene.faces.push_back(make_face(back, 2, 16));
+    for (Face& f : scene.faces) f.color = {0.6f, 0.6f, 0.6f}, f.has_color = true;
+    scene.bbox.extend(front.box);
+    scene.bbox.extend(back.box);
+    // Level with the middle: the open ends are seen edge-on, so no inside shows.
+    CameraSpec spec = look({7.0, -7.0, 1.5}, {0.0, 0.0, 1.5}, {0, 0, 1});  // the seam x = R, y = 0 at 45 degrees
+    spec.width = 160;
+    spec.height = 120;
+    const Camera cam(spec);
+    RenderOptions off, on;
+    on.antialias = 4;
+    const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
+    const int W = cam.width(), H = cam.height();
+    auto face = [&](int i, int j) { return a.image.face[static_cast<size_t>(j) * W + i]; };
+    int seam = 0, seam_sloped = 0, seam_changed = 0, ring = 0, ring_changed = 0;
+    for (int j = 1; j + 1 < H; ++j)
+        for (int i = 1; i + 1 < W; ++i) {
+            bool background = false, hit = false, other_face = false;
+            float lo = 1, hi = 0;
+            for (int dj = -1; dj <= 1; ++dj)
+                for (int di = -1; di <= 1; ++di) {
+                    const uint32_t f = face(i + di, j + dj);
+                    background |= f == 0;
+                    hit |= f != 0;
+                    other_face |= f != 0 && face(i, j) != 0 && f != face(i, j);
+                    const float g = std::sqrt(a.image.rgba[4 * (static_cast<size_t>(j + dj) * W + i + di) + 1]);
+                    lo = std::min(lo, g);
+                    hi = std::max(hi, g);
+                }
+            const size_t k = static_cast<size_t>(j) * W + i;
+            const bool changed = !std::equal(&a.image.rgba[4 * k], &a.image.rgba[4 * k + 4], &b.image.rgba[4 * k]);
+            if (background && hit) {
+                ring++, ring_changed += changed;
+            } else if (other_face) {
+                seam++, seam_changed += changed;
+                seam_sloped += hi - lo > 1.0f / 255;
+            }
+        }
+    std::printf("[ antialias ] two tangent half-cylinders: %d seam pixels (%d with a colour change over 1/255 in "
+                "their 3x3, %d changed), %d silhouette pixels (%d changed)\n",
+                seam, seam_sloped, seam_changed, ring, ring_changed);
+    ASSERT_GT(seam, 40);
+    EXPECT_GT(seam_sloped, seam / 2);
+    EXPECT_EQ(seam_changed, 0);
+    EXPECT_GT(ring_changed, ring / 4);
+}
