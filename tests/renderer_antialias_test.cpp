@@ -53,6 +53,57 @@ Coverage exact_coverage(const AnalyticPatch& sphere, const AnalyticPatch& plane,
     return c;
 }
 
+// Two faces of one grey: the second patch moved by its control points (box
+// recomputed), both meshed with n segments per side.
+Scene two_grey_faces(const AnalyticPatch& first, AnalyticPatch second, int n) {
+    second.box = BBox{};
+    finish_box(second);
+    Scene scene;
+    scene.faces.push_back(make_face(first, 1, n));
+    scene.faces.push_back(make_face(second, 2, n));
+    for (Face& f : scene.faces) f.color = {0.6f, 0.6f, 0.6f}, f.has_color = true;
+    scene.bbox.extend(first.box);
+    scene.bbox.extend(second.box);
+    return scene;
+}
+
+// Which pixels anti-aliasing changed, by kind: `border` pixels see another face
+// in their 3x3 (and no background), `ring` pixels both a hit and background.
+// `sloped`: border pixels whose 3x3 green channel (gamma 2) spans over 1/255.
+struct BorderCounts {
+    int border = 0, border_changed = 0, sloped = 0, ring = 0, ring_changed = 0;
+};
+BorderCounts count_changes(const RenderResult& off, const RenderResult& on, int W, int H) {
+    auto face = [&](int i, int j) { return off.image.face[static_cast<size_t>(j) * W + i]; };
+    BorderCounts n;
+    for (int j = 1; j + 1 < H; ++j)
+        for (int i = 1; i + 1 < W; ++i) {
+            bool background = false, hit = false, other_face = false;
+            float lo = 1, hi = 0;
+            for (int dj = -1; dj <= 1; ++dj)
+                for (int di = -1; di <= 1; ++di) {
+                    const uint32_t f = face(i + di, j + dj);
+                    background |= f == 0;
+                    hit |= f != 0;
+                    other_face |= f != 0 && face(i, j) != 0 && f != face(i, j);
+                    const float g = std::sqrt(off.image.rgba[4 * (static_cast<size_t>(j + dj) * W + i + di) + 1]);
+                    lo = std::min(lo, g);
+                    hi = std::max(hi, g);
+                }
+            const size_t k = static_cast<size_t>(j) * W + i;
+            const bool changed =
+                !std::equal(&off.image.rgba[4 * k], &off.image.rgba[4 * k + 4], &on.image.rgba[4 * k]);
+            if (background && hit) {
+                n.ring++, n.ring_changed += changed;
+            } else if (other_face) {
+                n.border++, n.border_changed += changed;
+                n.sloped += hi - lo > 1.0f / 255;
+            }
+        }
+    return n;
+}
+
+
 }  // namespace
 
 TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
@@ -149,44 +200,19 @@ TEST(RendererAntialias, FlatFaceBordersGetNoExtraRays) {
     AnalyticPatch left = plane_patch(), right = plane_patch();
     const Vec3 e1{2.2, 0.3, 0.1};  // plane_patch's u edge: the right face starts where the left ends
     for (Vec4& c : right.surface.cp) c = Vec4{c.x + e1.x * c.w, c.y + e1.y * c.w, c.z + e1.z * c.w, c.w};
-    right.box = BBox{};
-    finish_box(right);
-    Scene scene;
-    scene.faces.push_back(make_face(left, 1, 8));
-    scene.faces.push_back(make_face(right, 2, 8));
-    for (Face& f : scene.faces) f.color = {0.6f, 0.6f, 0.6f}, f.has_color = true;
-    scene.bbox.extend(left.box);
-    scene.bbox.extend(right.box);
+    const Scene scene = two_grey_faces(left, right, 8);
     const Camera cam(iso_view(scene, 160, 120));
     RenderOptions off, on;
     on.antialias = 4;
     const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
-    const int W = cam.width(), H = cam.height();
-    auto face = [&](int i, int j) { return a.image.face[static_cast<size_t>(j) * W + i]; };
-    // ring: pixels (hit or not) whose 3x3 holds both a hit and background.
-    int border = 0, border_changed = 0, ring = 0, ring_changed = 0;
-    for (int j = 1; j + 1 < H; ++j)
-        for (int i = 1; i + 1 < W; ++i) {
-            bool background = false, hit = false, other_face = false;
-            for (int dj = -1; dj <= 1; ++dj)
-                for (int di = -1; di <= 1; ++di) {
-                    const uint32_t f = face(i + di, j + dj);
-                    background |= f == 0;
-                    hit |= f != 0;
-                    other_face |= f != 0 && face(i, j) != 0 && f != face(i, j);
-                }
-            const size_t k = static_cast<size_t>(j) * W + i;
-            const bool changed = !std::equal(&a.image.rgba[4 * k], &a.image.rgba[4 * k + 4], &b.image.rgba[4 * k]);
-            if (background && hit) ring++, ring_changed += changed;
-            else if (other_face) border++, border_changed += changed;
-        }
+    const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
     std::printf("[ antialias ] two coplanar faces: %d border pixels (%d changed), %d silhouette pixels (%d changed), "
                 "%llu refined\n",
-                border, border_changed, ring, ring_changed, (unsigned long long)b.stats.antialias_pixels);
-    ASSERT_GT(border, 40);
-    EXPECT_EQ(border_changed, 0);
-    EXPECT_GT(ring_changed, ring / 4);
-    EXPECT_LE(b.stats.antialias_pixels, static_cast<uint64_t>(ring));
+                n.border, n.border_changed, n.ring, n.ring_changed, (unsigned long long)b.stats.antialias_pixels);
+    ASSERT_GT(n.border, 40);
+    EXPECT_EQ(n.border_changed, 0);
+    EXPECT_GT(n.ring_changed, n.ring / 4);
+    EXPECT_LE(b.stats.antialias_pixels, static_cast<uint64_t>(n.ring));
 }
 
 TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
@@ -198,14 +224,7 @@ TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
     // one ray, while the silhouette against the background is refined.
     AnalyticPatch front = cylinder_patch(), back = cylinder_patch();
     for (Vec4& c : back.surface.cp) c = Vec4{-c.x, -c.y, c.z, c.w};  // the half y <= 0
-    back.box = BBox{};
-    finish_box(back);
-    Scene scene;
-    scene.faces.push_back(make_face(front, 1, 16));
-    scene.faces.push_back(make_face(back, 2, 16));
-    for (Face& f : scene.faces) f.color = {0.6f, 0.6f, 0.6f}, f.has_color = true;
-    scene.bbox.extend(front.box);
-    scene.bbox.extend(back.box);
+    const Scene scene = two_grey_faces(front, back, 16);
     // Level with the middle: the open ends are seen edge-on, so no inside shows.
     CameraSpec spec = look({7.0, -7.0, 1.5}, {0.0, 0.0, 1.5}, {0, 0, 1});  // the seam x = R, y = 0 at 45 degrees
     spec.width = 160;
@@ -214,37 +233,12 @@ TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
     RenderOptions off, on;
     on.antialias = 4;
     const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
-    const int W = cam.width(), H = cam.height();
-    auto face = [&](int i, int j) { return a.image.face[static_cast<size_t>(j) * W + i]; };
-    int seam = 0, seam_sloped = 0, seam_changed = 0, ring = 0, ring_changed = 0;
-    for (int j = 1; j + 1 < H; ++j)
-        for (int i = 1; i + 1 < W; ++i) {
-            bool background = false, hit = false, other_face = false;
-            float lo = 1, hi = 0;
-            for (int dj = -1; dj <= 1; ++dj)
-                for (int di = -1; di <= 1; ++di) {
-                    const uint32_t f = face(i + di, j + dj);
-                    background |= f == 0;
-                    hit |= f != 0;
-                    other_face |= f != 0 && face(i, j) != 0 && f != face(i, j);
-                    const float g = std::sqrt(a.image.rgba[4 * (static_cast<size_t>(j + dj) * W + i + di) + 1]);
-                    lo = std::min(lo, g);
-                    hi = std::max(hi, g);
-                }
-            const size_t k = static_cast<size_t>(j) * W + i;
-            const bool changed = !std::equal(&a.image.rgba[4 * k], &a.image.rgba[4 * k + 4], &b.image.rgba[4 * k]);
-            if (background && hit) {
-                ring++, ring_changed += changed;
-            } else if (other_face) {
-                seam++, seam_changed += changed;
-                seam_sloped += hi - lo > 1.0f / 255;
-            }
-        }
+    const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
     std::printf("[ antialias ] two tangent half-cylinders: %d seam pixels (%d with a colour change over 1/255 in "
                 "their 3x3, %d changed), %d silhouette pixels (%d changed)\n",
-                seam, seam_sloped, seam_changed, ring, ring_changed);
-    ASSERT_GT(seam, 40);
-    EXPECT_GT(seam_sloped, seam / 2);
-    EXPECT_EQ(seam_changed, 0);
-    EXPECT_GT(ring_changed, ring / 4);
+                n.border, n.sloped, n.border_changed, n.ring, n.ring_changed);
+    ASSERT_GT(n.border, 40);
+    EXPECT_GT(n.sloped, n.border / 2);
+    EXPECT_EQ(n.border_changed, 0);
+    EXPECT_GT(n.ring_changed, n.ring / 4);
 }
