@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "renderer/camera.h"
+#include "renderer/heap_tuning.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render.h"
@@ -32,38 +33,6 @@ namespace nurbsrt {
 // then ends with Error(canceled) (a partial pass is never used).
 inline bool canceled(const RenderOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
 void throw_if_canceled(const RenderOptions& o);
-
-// Frame-sized buffers are filled in blocks of this many bytes with a cancel check
-// between blocks. Filling fresh pages (frame buffers above glibc's mmap
-// threshold get new pages every frame) is serial and costs ~0.8 s per GiB on the
-// shared 2-core machines, most of it the kernel zeroing the pages; a 25-Mpixel
-// frame has over 3 GiB of them, which a canceled render must not go on filling.
-inline constexpr size_t kCancelBlockBytes = size_t(64) << 20;
-
-// v = n copies of value, in blocks; throws Error(canceled) between them.
-template <class T>
-void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const RenderOptions& o) {
-    v.clear();
-    v.reserve(n);
-    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
-    while (v.size() < n) {
-        throw_if_canceled(o);
-        v.resize(std::min(n, v.size() + block), value);
-    }
-}
-
-// v = src, in blocks; throws Error(canceled) between them.
-template <class T>
-void copy_cancelable(std::vector<T>& v, const std::vector<T>& src, const RenderOptions& o) {
-    v.clear();
-    v.reserve(src.size());
-    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
-    while (v.size() < src.size()) {
-        throw_if_canceled(o);
-        const size_t end = std::min(src.size(), v.size() + block);
-        v.insert(v.end(), src.begin() + static_cast<std::ptrdiff_t>(v.size()), src.begin() + static_cast<std::ptrdiff_t>(end));
-    }
-}
 
 // Per-pixel solve result of a pass.
 struct PixelHit {
@@ -83,19 +52,6 @@ enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLef
 
 // Which rescue gave a pixel its hit (RenderStats::rescue_*).
 enum RescueKind : uint8_t { kNoRescue, kRescueNeighbour, kRescueSilhouette, kRescueGeneral, kRescueTrimTol };
-
-// The frame's per-pixel arrays, row-major like the map (PreliminaryMap::index).
-struct FrameBuffers {
-    FrameBuffers(size_t npx, const RenderOptions& o) {
-        assign_cancelable(first, npx, PixelHit{}, o);
-        assign_cancelable(outcome, npx, uint8_t(kNone), o);
-        assign_cancelable(rescued, npx, uint8_t(kNoRescue), o);
-    }
-    std::vector<PixelHit> first;    // the primary solve's hit (face 0: none)
-    std::vector<uint8_t> outcome;   // Outcome of the primary solve; kNone where the map has no face
-    std::vector<PixelHit> hits;     // the final hit: `first`, then the rescue and nearer-sheet passes
-    std::vector<uint8_t> rescued;   // RescueKind of the pixel's hit
-};
 
 // Fraction-done reporting for RenderOptions::progress: rows are counted with one
 // relaxed atomic add; a thread that crosses the next ~2% mark reports, serialized
@@ -134,6 +90,74 @@ struct FrameContext {
     // 2 over the height; depth along the view direction for orthographic views,
     // where it does not matter).
     double pixel_footprint(double t) const { return 2.0 * camera.image_to_model_scale(t) / height; }
+};
+
+// Frame-sized buffers are filled in blocks of this many bytes with a cancel check
+// between blocks. Filling fresh pages (frame buffers above glibc's mmap
+// threshold get new pages every frame) costs ~0.8 s per GiB on the shared
+// 2-core machines when one thread does it, most of it the kernel zeroing the
+// pages; a 25-Mpixel frame has over 3 GiB of them, which a canceled render must
+// not go on filling.
+inline constexpr size_t kCancelBlockBytes = size_t(64) << 20;
+// From this size on a buffer's storage is fresh pages (glibc's mmap threshold as
+// tune_heap_for_frames sets it), and the frame's threads fault them in together
+// (populate_pages) before the fill: ~2x faster on 2 cores.
+inline constexpr size_t kPopulateMinBytes = size_t(32) << 20;
+
+// Faults in the pages of v's storage for n elements, in blocks spread over the
+// frame's threads; nothing for small buffers or where the kernel cannot.
+template <class T>
+void populate_storage(std::vector<T>& v, size_t n, const FrameContext& c) {
+    v.reserve(n);
+    const size_t bytes = n * sizeof(T);
+    if (bytes < kPopulateMinBytes) return;
+    char* data = reinterpret_cast<char*>(v.data());
+    const size_t blocks = (bytes + kCancelBlockBytes - 1) / kCancelBlockBytes;
+    c.arena.execute([&] {
+        tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+            if (canceled(c.options)) return;
+            const size_t begin = b * kCancelBlockBytes;
+            populate_pages(data + begin, std::min(kCancelBlockBytes, bytes - begin));
+        });
+    });
+}
+
+// v = n copies of value, in blocks; throws Error(canceled) between them.
+template <class T>
+void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const FrameContext& c) {
+    v.clear();
+    populate_storage(v, n, c);
+    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
+    while (v.size() < n) {
+        throw_if_canceled(c.options);
+        v.resize(std::min(n, v.size() + block), value);
+    }
+}
+
+// v = src, in blocks; throws Error(canceled) between them.
+template <class T>
+void copy_cancelable(std::vector<T>& v, const std::vector<T>& src, const FrameContext& c) {
+    v.clear();
+    populate_storage(v, src.size(), c);
+    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
+    while (v.size() < src.size()) {
+        throw_if_canceled(c.options);
+        const size_t end = std::min(src.size(), v.size() + block);
+        v.insert(v.end(), src.begin() + static_cast<std::ptrdiff_t>(v.size()), src.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+}
+
+// The frame's per-pixel arrays, row-major like the map (PreliminaryMap::index).
+struct FrameBuffers {
+    explicit FrameBuffers(const FrameContext& c) {
+        assign_cancelable(first, c.pixels(), PixelHit{}, c);
+        assign_cancelable(outcome, c.pixels(), uint8_t(kNone), c);
+        assign_cancelable(rescued, c.pixels(), uint8_t(kNoRescue), c);
+    }
+    std::vector<PixelHit> first;    // the primary solve's hit (face 0: none)
+    std::vector<uint8_t> outcome;   // Outcome of the primary solve; kNone where the map has no face
+    std::vector<PixelHit> hits;     // the final hit: `first`, then the rescue and nearer-sheet passes
+    std::vector<uint8_t> rescued;   // RescueKind of the pixel's hit
 };
 
 // Calls fn(ni, nj) for every pixel of the (2 radius + 1)^2 square around (i, j)

@@ -2,8 +2,14 @@
 
 #include <cstdlib>  // defines __GLIBC__ (through <features.h>) on glibc
 
+#include <cstdint>
+
 #if defined(__GLIBC__)
 #include <malloc.h>
+#endif
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 namespace nurbsrt {
@@ -15,6 +21,25 @@ bool tune_heap_for_frames() {
     constexpr int kTrimThreshold = 256 << 20;
     return mallopt(M_MMAP_THRESHOLD, kMmapThreshold) == 1 && mallopt(M_TRIM_THRESHOLD, kTrimThreshold) == 1;
 #else
+    return false;
+#endif
+}
+
+bool populate_pages(void* data, size_t bytes) {
+#if defined(__linux__)
+    // The value of the Linux UAPI (include/uapi/asm-generic/mman-common.h), for
+    // C library headers older than the kernel.
+#ifndef MADV_POPULATE_WRITE
+    constexpr int MADV_POPULATE_WRITE = 23;
+#endif
+    static const uintptr_t page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
+    const uintptr_t begin = (reinterpret_cast<uintptr_t>(data) + page - 1) & ~(page - 1);
+    const uintptr_t end = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(page - 1);
+    if (end <= begin) return true;
+    return madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE) == 0;
+#else
+    (void)data;
+    (void)bytes;
     return false;
 #endif
 }

@@ -43,7 +43,7 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
     const int W = c.width, H = c.height;
     const bool diagonals = c.options.antialias > 0;  // only anti-aliasing reads them
     std::vector<uint8_t> diff;
-    assign_cancelable(diff, c.pixels(), uint8_t(0), c.options);
+    assign_cancelable(diff, c.pixels(), uint8_t(0), c);
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t k = c.map.index(i, j);

@@ -70,14 +70,14 @@ void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers&
     const RenderOptions& options = c.options;
     img.width = c.width;
     img.height = c.height;
-    assign_cancelable(img.rgba, 4 * npx, 0.0f, options);
-    assign_cancelable(img.z, npx, std::numeric_limits<float>::infinity(), options);
-    assign_cancelable(img.normal, 3 * npx, 0.0f, options);
-    assign_cancelable(img.face, npx, uint32_t(0), options);
-    assign_cancelable(img.u, npx, 0.0f, options);
-    assign_cancelable(img.v, npx, 0.0f, options);
-    assign_cancelable(img.iterations, npx, uint8_t(0), options);
-    if (shader.shadows()) assign_cancelable(img.shadow, npx, uint8_t(0), options);
+    assign_cancelable(img.rgba, 4 * npx, 0.0f, c);
+    assign_cancelable(img.z, npx, std::numeric_limits<float>::infinity(), c);
+    assign_cancelable(img.normal, 3 * npx, 0.0f, c);
+    assign_cancelable(img.face, npx, uint32_t(0), c);
+    assign_cancelable(img.u, npx, 0.0f, c);
+    assign_cancelable(img.v, npx, 0.0f, c);
+    assign_cancelable(img.iterations, npx, uint8_t(0), c);
+    if (shader.shadows()) assign_cancelable(img.shadow, npx, uint8_t(0), c);
     parallel_rows(c, true, [&](int j) {
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);

@@ -92,7 +92,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     Progress progress(options.progress, (options.antialias > 0 ? 4 : 3) * static_cast<int64_t>(H));
     const FrameContext ctx{prepared, scene, camera, map, options, arena, progress, W, H,
                            static_cast<uint32_t>(scene.faces.size())};
-    FrameBuffers buf(ctx.pixels(), options);
+    FrameBuffers buf(ctx);
     st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of
     // the control points (the rest was done once by prepare()).
@@ -112,7 +112,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     primary_pass(ctx, solver, buf);
     st.newton_primary_ms = ms_since(last);  // a part of newton_ms, not a stage of its own
 
-    copy_cancelable(buf.hits, buf.first, options);
+    copy_cancelable(buf.hits, buf.first, ctx);
     if (options.rescue) {
         const MeshScreenPoints screen_points(ctx);
         rescue_pass(ctx, solver, screen_points, buf);

@@ -1,10 +1,14 @@
 // for_each_neighbour: the neighbourhood walk every pass of a frame uses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <utility>
 #include <vector>
 
 #include "renderer/frame.h"
+#include "renderer/heap_tuning.h"
 
 namespace nurbsrt {
 namespace {
@@ -44,3 +48,22 @@ TEST(ForEachNeighbour, StopsWhenTheCallbackReturnsFalse) {
 
 }  // namespace
 }  // namespace nurbsrt
+
+// Faulting in a buffer's pages leaves what it holds as it was (populate_pages
+// only maps pages; fresh ones read as zero either way), for a buffer of fresh
+// pages above glibc's mmap threshold and for one already written, unaligned
+// ends included.
+TEST(PopulatePages, KeepsTheContents) {
+    constexpr size_t kBytes = (size_t(40) << 20) + 12345;  // over kPopulateMinBytes, not whole pages
+    std::vector<uint8_t> fresh;
+    fresh.reserve(kBytes);
+    const bool supported = nurbsrt::populate_pages(fresh.data(), kBytes);
+    fresh.resize(kBytes);  // value-initialized after the populate
+    EXPECT_TRUE(std::all_of(fresh.begin(), fresh.end(), [](uint8_t b) { return b == 0; }));
+    std::vector<uint8_t> written(kBytes);
+    for (size_t k = 0; k < kBytes; ++k) written[k] = static_cast<uint8_t>(k * 2654435761u >> 24);
+    EXPECT_EQ(nurbsrt::populate_pages(written.data() + 7, kBytes - 7), supported);
+    for (size_t k = 0; k < kBytes; ++k)
+        ASSERT_EQ(written[k], static_cast<uint8_t>(k * 2654435761u >> 24)) << "byte " << k;
+    if (!supported) std::printf("[ populate ] madvise(MADV_POPULATE_WRITE) is not supported here: buffers fill on one thread\n");
+}
