@@ -1,5 +1,6 @@
 #include "renderer/frame_cost.h"
 
+#include <algorithm>
 #include <cstdint>
 
 #include "renderer/frame.h"
@@ -19,7 +20,8 @@ constexpr size_t kSolveBytesPerPixel = 2 * sizeof(PixelHit) + 2 * sizeof(uint8_t
 // The rescue and nearer-sheet passes' lists, at worst one entry per pixel.
 constexpr size_t kRescueBytesPerPixel = 2 * sizeof(size_t) + sizeof(PixelHit) + 2 * sizeof(uint8_t);
 constexpr size_t kMapBytesPerPixel = sizeof(uint32_t) + 2 * sizeof(float);
-// The GL framebuffer (R32UI id, RG32F (u, v), 32-bit depth) and its readback copy.
+// The GL framebuffer (R32UI id, RG32F (u, v), 32-bit depth) and its readback
+// copy, per pixel of one band of the map (kMapBandPixels at most).
 constexpr size_t kFramebufferBytesPerPixel = 2 * (sizeof(uint32_t) + 2 * sizeof(float) + sizeof(float));
 // The encoder's 8-bit RGBA copy and the encoded file (at most as large again).
 constexpr size_t kEncodeBytesPerPixel = 2 * 4;
@@ -75,10 +77,12 @@ FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int heig
 
     FrameCost c;
     const double per_pixel = kImageBytesPerPixel + kSolveBytesPerPixel + kRescueBytesPerPixel + kMapBytesPerPixel +
-                             kFramebufferBytesPerPixel + kEncodeBytesPerPixel;
+                             kEncodeBytesPerPixel;
+    const auto band_pixels = [](double px) { return std::min(px, double(kMapBandPixels)); };
     // Every term above is already a worst case (all candidate lists full), so no slack factor:
     // measured peaks were 0.4-0.65 of this at 1024x768 and more.
-    const double bytes = pixels * per_pixel + projected_bytes + double(map.xyz.size()) * kBytesPerMapVertex;
+    const double bytes = pixels * per_pixel + band_pixels(pixels) * kFramebufferBytesPerPixel + projected_bytes +
+                         double(map.xyz.size()) * kBytesPerMapVertex;
     double extra_bytes = 0;
     double work_factor = 1;
     if (options.antialias > 0) {
@@ -89,7 +93,8 @@ FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int heig
         // The light's own map (as the view's: map, framebuffer, clip positions,
         // the surfaces projected for it) and the shadow AOV.
         const double light = double(light_map_size(width, height));
-        extra_bytes += light * light * (kMapBytesPerPixel + kFramebufferBytesPerPixel) + projected_bytes +
+        extra_bytes += light * light * kMapBytesPerPixel + band_pixels(light * light) * kFramebufferBytesPerPixel +
+                       projected_bytes +
                        double(map.xyz.size()) * kBytesPerMapVertex + pixels * kShadowBytesPerPixel;
         work_factor *= 1 + kShadowWork;
     }
