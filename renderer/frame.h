@@ -122,29 +122,31 @@ void populate_storage(std::vector<T>& v, size_t n, const FrameContext& c) {
     });
 }
 
-// v = n copies of value, in blocks; throws Error(canceled) between them.
-template <class T>
-void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const FrameContext& c) {
+// Grows v from empty to n elements in blocks of kCancelBlockBytes, append(end)
+// growing it to `end`; throws Error(canceled) between blocks.
+template <class T, class Append>
+void grow_cancelable(std::vector<T>& v, size_t n, const FrameContext& c, Append&& append) {
     v.clear();
     populate_storage(v, n, c);
     const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
     while (v.size() < n) {
         throw_if_canceled(c.options);
-        v.resize(std::min(n, v.size() + block), value);
+        append(std::min(n, v.size() + block));
     }
 }
 
-// v = src, in blocks; throws Error(canceled) between them.
+// v = n copies of value, in blocks (grow_cancelable).
+template <class T>
+void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const FrameContext& c) {
+    grow_cancelable(v, n, c, [&](size_t end) { v.resize(end, value); });
+}
+
+// v = src, in blocks (grow_cancelable).
 template <class T>
 void copy_cancelable(std::vector<T>& v, const std::vector<T>& src, const FrameContext& c) {
-    v.clear();
-    populate_storage(v, src.size(), c);
-    const size_t block = std::max<size_t>(kCancelBlockBytes / sizeof(T), 1);
-    while (v.size() < src.size()) {
-        throw_if_canceled(c.options);
-        const size_t end = std::min(src.size(), v.size() + block);
+    grow_cancelable(v, src.size(), c, [&](size_t end) {
         v.insert(v.end(), src.begin() + static_cast<std::ptrdiff_t>(v.size()), src.begin() + static_cast<std::ptrdiff_t>(end));
-    }
+    });
 }
 
 // The frame's per-pixel arrays, row-major like the map (PreliminaryMap::index).
