@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "bench/bench_context.h"
 #include "importer/importer.h"
@@ -89,6 +90,37 @@ RenderOptions BenchContext::render_options(NewtonMethod method, MapPrecision pre
     o.map_precision = precision;
     o.threads = threads > 0 ? threads : opt.threads;
     return o;  // newton.eps 0: the default relative tolerance, identical for both methods
+}
+
+namespace {
+
+struct ExtraScene {
+    const char* key;
+    const char* title;
+    const char* file;  // relative to the models directory
+};
+const ExtraScene kExtraScenes[] = {
+    {"space_ship", "Free-form (Alias, 94 rational B-spline faces)", "step/trj3_s1-al-214.stp"},
+    {"cylinder_block", "Mechanical part (cylinder block)", "step/cylinder_block.stp"},
+    {"as1_assembly", "Assembly (CAx-IF AS1, 18 parts)", "step/as1-oc-214.stp"},
+    {"bearing_iges", "IGES (bearing)", "iges/bearing.iges"},
+};
+
+}  // namespace
+
+std::vector<BenchScene>& extra_scenes(BenchContext& ctx) {
+    if (ctx.extras_loaded || ctx.opt.quick || ctx.fallback_models) return ctx.extras;
+    ctx.extras_loaded = true;
+    for (const ExtraScene& e : kExtraScenes) {
+        const std::filesystem::path file = std::filesystem::path(ctx.models_dir) / e.file;
+        if (!std::filesystem::is_regular_file(file)) {
+            ctx.missing_extras.push_back(e.file);
+            continue;
+        }
+        ctx.say("importing %s (%s)", e.key, e.file);
+        ctx.extras.push_back(load_bench_scene(e.key, e.title, file.string(), 1));
+    }
+    return ctx.extras;
 }
 
 const RenderResult& exact_render(BenchContext& ctx, BenchScene& s) {

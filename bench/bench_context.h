@@ -68,6 +68,10 @@ struct BenchContext {
     std::string models_dir;       // where the scenes came from
     bool fallback_models = false; // OCCT's sample files instead of ../shared/models
     std::vector<BenchScene> scenes;
+    // The models beside the paper's scenes (extra_scenes()), imported on first use.
+    std::vector<BenchScene> extras;
+    std::vector<std::string> missing_extras;  // their files not found
+    bool extras_loaded = false;
     Clock::time_point t0 = Clock::now();
     nlohmann::json doc;           // sections write their results here
 
@@ -84,6 +88,12 @@ struct BenchContext {
         std::fputc('\n', stderr);
     }
 };
+
+// Four models beside the paper's scenes, each standing for a kind of file users
+// send (free-form, mechanical, an assembly, IGES), from the models directory:
+// imported on first use, once for every section; none in a --quick run or on
+// the fallback models. Files that are missing are listed in ctx.missing_extras.
+std::vector<BenchScene>& extra_scenes(BenchContext& ctx);
 
 // The scene's exact frame (rendered on first use, timed over ctx.runs runs when
 // Table 1 did not already time it).

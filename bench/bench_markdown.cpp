@@ -58,6 +58,9 @@ void machine(std::string& o, const json& doc) {
     o += "\n";
 }
 
+// A Table 1 row's scene name, marked where it is not one of the paper's scenes.
+std::string table1_title(const json& r) { return s(r, "title") + (r.value("extra", false) ? " (extra)" : ""); }
+
 void table1(std::string& o, const json& t) {
     o += "## Table 1: proposed (eq. 9-11) vs Martin et al., same preliminary map\n\n";
     o += "Medians of interleaved runs (at least " + std::to_string(n(t, "min_runs")) +
@@ -67,12 +70,13 @@ void table1(std::string& o, const json& t) {
          " thread(s). Speed-up as the paper computes it: 100 (t_Martin - t_proposed) / t_Martin, from the medians; "
          "in brackets the middle half (25th..75th percentile) of the speed-ups of each pair of neighbouring runs. "
          "Interference from other work only adds time, so the speed-up of the fastest runs (minima) and of the "
-         "process CPU time per frame are given too.\n\n";
+         "process CPU time per frame are given too. Rows marked (extra) are models beside the paper's scenes "
+         "(a full run only), where the issue asks for the same 14 % lower bound.\n\n";
     o += "| scene | runs | proposed Newton ms | Martin Newton ms | speed-up Newton % (pairs p25..p75) | proposed "
          "frame ms | Martin frame ms | speed-up frame % |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : t["rows"]) {
         const json &p = r["proposed"], &m = r["martin"];
-        o += "| " + s(r, "title") + " | " + std::to_string(n(r, "runs")) + " | " + ms(d(p, "newton_ms")) + " | " +
+        o += "| " + table1_title(r) + " | " + std::to_string(n(r, "runs")) + " | " + ms(d(p, "newton_ms")) + " | " +
              ms(d(m, "newton_ms")) + " | **" + num(d(r, "speedup_newton_pct"), 1) + "** (" +
              num(d(r, "speedup_newton_pct_p25"), 1) + " .. " + num(d(r, "speedup_newton_pct_p75"), 1) + ") | " +
              ms(d(p, "frame_ms")) + " | " + ms(d(m, "frame_ms")) + " | " + num(d(r, "speedup_frame_pct"), 1) + " |\n";
@@ -86,7 +90,7 @@ void table1(std::string& o, const json& t) {
          "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : t["rows"]) {
         const json &p = r["proposed"], &m = r["martin"];
-        o += "| " + s(r, "title") + " | " + ms(d(p, "newton_primary_ms")) + " / " + ms(d(m, "newton_primary_ms")) +
+        o += "| " + table1_title(r) + " | " + ms(d(p, "newton_primary_ms")) + " / " + ms(d(m, "newton_primary_ms")) +
              " | **" + num(d(r, "speedup_primary_pct"), 1) + "** | " + ms(d(p, "rescue_ms")) + " / " +
              ms(d(m, "rescue_ms")) + " | " + num(d(r, "speedup_newton_min_pct"), 1) + " | " +
              num(d(r, "speedup_frame_cpu_pct"), 1) + " | " + num(d(p, "mean_iterations"), 2) + " / " +

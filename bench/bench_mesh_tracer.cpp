@@ -7,10 +7,7 @@
 //   first frame     ours: NURBS conversion + map meshing at import + prepare +
 //                   frame; the tracer's: BRepMesh at 1e-3 + copying the mesh out +
 //                   BVH build + trace. Neither counts reading the file.
-// On the Table 1 scenes and, in a full run, four more models of other kinds
-// (free-form, mechanical, an assembly, IGES) when ../shared/models has them.
-#include <filesystem>
-
+// On the Table 1 scenes and, in a full run, the four extra models (extra_scenes).
 #include "bench/bench_context.h"
 #include "bench/embree_peer.h"
 #include "importer/tessellate.h"
@@ -18,18 +15,6 @@
 namespace nurbsrt::bench {
 namespace {
 
-// Models beside the paper's scenes, each standing for a kind of file users send.
-struct ExtraScene {
-    const char* key;
-    const char* title;
-    const char* file;  // relative to the models directory
-};
-const ExtraScene kExtraScenes[] = {
-    {"space_ship", "Free-form (Alias, 94 rational B-spline faces)", "step/trj3_s1-al-214.stp"},
-    {"cylinder_block", "Mechanical part (cylinder block)", "step/cylinder_block.stp"},
-    {"as1_assembly", "Assembly (CAx-IF AS1, 18 parts)", "step/as1-oc-214.stp"},
-    {"bearing_iges", "IGES (bearing)", "iges/bearing.iges"},
-};
 // The fine mesh of "further frames" and the coarse one of "first frame", relative
 // to the bounding-box diagonal: 1e-4 is about what a 512-pixel view of the whole
 // model can show (a pixel is ~2e-3 of the diagonal), 1e-3 what a quick first look uses.
@@ -103,23 +88,12 @@ void run_mesh_tracer(BenchContext& ctx) {
     }
     nlohmann::json rows = nlohmann::json::array();
     for (BenchScene& sc : ctx.scenes) rows.push_back(measure(ctx, sc));
-    std::vector<std::string> missing;
-    if (!ctx.opt.quick && !ctx.fallback_models)
-        for (const ExtraScene& e : kExtraScenes) {
-            const std::filesystem::path file = std::filesystem::path(ctx.models_dir) / e.file;
-            if (!std::filesystem::is_regular_file(file)) {
-                missing.push_back(e.file);
-                continue;
-            }
-            ctx.say("mesh tracer: importing %s (%s)", e.key, e.file);
-            BenchScene sc = load_bench_scene(e.key, e.title, file.string(), 1);
-            rows.push_back(measure(ctx, sc));
-        }
+    for (BenchScene& sc : extra_scenes(ctx)) rows.push_back(measure(ctx, sc));
     ctx.doc["meshtracer"] = {{"embree", true},
                              {"threads", ctx.opt.threads},
                              {"fine_relative_deflection", kFineDeflection},
                              {"coarse_relative_deflection", kCoarseDeflection},
-                             {"missing_models", missing},
+                             {"missing_models", ctx.missing_extras},
                              {"rows", rows}};
 }
 
