@@ -208,6 +208,7 @@ void read_back_band(PreliminaryMap& map, int y_lo, int rows, const Scene& scene,
     }
 }
 
+// Releases the context on every exit of a frame, so the next user may be another thread.
 struct ReleaseOnExit {
     GlContext& gl;
     ~ReleaseOnExit() { gl.release_current(); }
