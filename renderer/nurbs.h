@@ -39,15 +39,18 @@ SurfaceDerivs evaluate_d1(const NurbsSurface& s, double u, double v);
 struct HomogDerivs {
     Vec4 S, Su, Sv, Suv;
 };
-template <int kLevel>
+// kP, kQ >= 0: the degrees, known at compile time (they must equal s's), so
+// that the loops unroll (span_basis.cpp instantiates the common low degrees).
+template <int kLevel, int kP = -1, int kQ = -1>
 inline HomogDerivs tensor_product(const NurbsSurface& s, int su, int sv, const double* Nu, const double* dNu,
                                   const double* Nv, const double* dNv) {
     constexpr bool kD = kLevel >= 1;
+    const int p = kP >= 0 ? kP : s.degree_u, q = kQ >= 0 ? kQ : s.degree_v;
     HomogDerivs r{};
-    const Vec4* row = s.cp.data() + static_cast<size_t>(su - s.degree_u) * s.num_v + (sv - s.degree_v);
-    for (int i = 0; i <= s.degree_u; ++i, row += s.num_v) {
+    const Vec4* row = s.cp.data() + static_cast<size_t>(su - p) * s.num_v + (sv - q);
+    for (int i = 0; i <= p; ++i, row += s.num_v) {
         Vec4 T{}, Tv{};
-        for (int j = 0; j <= s.degree_v; ++j) {
+        for (int j = 0; j <= q; ++j) {
             const Vec4 P = row[j];
             T += Nv[j] * P;
             if constexpr (kD) Tv += dNv[j] * P;

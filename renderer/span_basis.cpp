@@ -87,7 +87,7 @@ KnotSpans::KnotSpans(int n, int p, const std::vector<double>& knots) : p_(p) {
     start_.push_back(U[span_.back() + 1]);
 }
 
-void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
+size_t KnotSpans::locate(double t, double& x) const {
     const size_t nspans = span_.size();
     // The span whose [start, next start) holds t; clamped at both ends like find_span.
     size_t k = 0;
@@ -98,9 +98,16 @@ void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
     } else {
         t = start_[0];
     }
+    x = (t - mid_[k]) * inv_half_[k];
+    return k;
+}
+
+template <int kP>
+void KnotSpans::basis_fixed(double t, int& s, double* N, double* dN) const {
+    const int p = kP >= 0 ? kP : p_;
+    double x;
+    const size_t k = locate(t, x);
     s = span_[k];
-    const double x = (t - mid_[k]) * inv_half_[k];
-    const int p = p_;
     const double* c = coef_.data() + k * static_cast<size_t>((p + 1) * (p + 1));
     for (int r = 0; r <= p; ++r, c += p + 1) {
         // Horner for the value and its derivative in x together.
@@ -114,12 +121,79 @@ void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
     }
 }
 
+void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
+    // The degrees NURBS conversion and CAD systems produce, unrolled.
+    switch (p_) {
+        case 1: return basis_fixed<1>(t, s, N, dN);
+        case 2: return basis_fixed<2>(t, s, N, dN);
+        case 3: return basis_fixed<3>(t, s, N, dN);
+        case 4: return basis_fixed<4>(t, s, N, dN);
+        case 5: return basis_fixed<5>(t, s, N, dN);
+        case 6: return basis_fixed<6>(t, s, N, dN);
+        case 7: return basis_fixed<7>(t, s, N, dN);
+        case 8: return basis_fixed<8>(t, s, N, dN);
+        default: return basis_fixed<-1>(t, s, N, dN);
+    }
+}
+
 SurfaceSpans make_surface_spans(const NurbsSurface& s) {
     return {KnotSpans(s.num_u, s.degree_u, s.knots_u), KnotSpans(s.num_v, s.degree_v, s.knots_v)};
 }
 
+namespace {
+
+// evaluate_d1 with the degrees as template arguments where they are known (-1:
+// read from s at run time), so that the basis and tensor-product loops unroll.
+// The same operations in the same order as the run-time loops: the same numbers.
+template <int kP, int kQ>
+SurfaceDerivs evaluate_fixed(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
+    constexpr int kMu = kP >= 0 ? kP + 1 : kM, kMv = kQ >= 0 ? kQ + 1 : kM;
+    double Nu[kMu], dNu[kMu], Nv[kMv], dNv[kMv];
+    int su = 0, sv = 0;
+    if constexpr (kP >= 0) spans.u.basis_fixed<kP>(u, su, Nu, dNu);
+    else spans.u.basis(u, su, Nu, dNu);
+    spans.v.basis_fixed<kQ>(v, sv, Nv, dNv);
+    const HomogDerivs h = tensor_product<1, kP, kQ>(s, su, sv, Nu, dNu, Nv, dNv);
+    return {h.S, h.Su, h.Sv};
+}
+
+// Degrees up to this in both directions get a fully unrolled evaluation (CAD
+// surfaces are mostly of degree 1-3: planes, cylinders, cones, bicubic
+// free-form). Above it, the v degree alone (the contiguous inner loop of the
+// tensor product) up to kMaxUnrolledV, as NURBS conversion makes degree 5-8
+// surfaces of some swept and offset faces.
+constexpr int kMaxUnrolledBoth = 3;
+constexpr int kMaxUnrolledV = 8;
+
+template <int kP, int kQ>
+SurfaceDerivs dispatch_both(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
+    if constexpr (kQ > kMaxUnrolledBoth) {
+        return dispatch_both<kP + 1, 1>(s, spans, u, v);
+    } else if constexpr (kP > kMaxUnrolledBoth) {
+        return SurfaceDerivs{};  // unreachable: the caller checked the degrees
+    } else {
+        if (s.degree_u == kP && s.degree_v == kQ) return evaluate_fixed<kP, kQ>(s, spans, u, v);
+        return dispatch_both<kP, kQ + 1>(s, spans, u, v);
+    }
+}
+
+template <int kQ>
+SurfaceDerivs dispatch_v(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
+    if constexpr (kQ > kMaxUnrolledV) {
+        return SurfaceDerivs{};  // unreachable: the caller checked the degree
+    } else {
+        if (s.degree_v == kQ) return evaluate_fixed<-1, kQ>(s, spans, u, v);
+        return dispatch_v<kQ + 1>(s, spans, u, v);
+    }
+}
+
+}  // namespace
+
 SurfaceDerivs evaluate_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
     if (!spans.usable()) return evaluate_d1(s, u, v);
+    if (s.degree_u >= 1 && s.degree_u <= kMaxUnrolledBoth && s.degree_v >= 1 && s.degree_v <= kMaxUnrolledBoth)
+        return dispatch_both<1, 1>(s, spans, u, v);
+    if (s.degree_v >= 1 && s.degree_v <= kMaxUnrolledV) return dispatch_v<1>(s, spans, u, v);
     double Nu[kM], dNu[kM], Nv[kM], dNv[kM];
     int su = 0, sv = 0;
     spans.u.basis(u, su, Nu, dNu);

@@ -49,12 +49,19 @@ public:
     // knot range, NaN to its start) and the knot span index s, exactly as
     // find_span + basis_and_derivs give them.
     void basis(double t, int& s, double* N, double* dN) const;
+    // The same with the degree known at compile time (kP == the table's degree),
+    // so that the loops unroll; kP = -1: the table's degree at run time.
+    template <int kP>
+    void basis_fixed(double t, int& s, double* N, double* dN) const;
     size_t memory_bytes() const {
         return (start_.capacity() + mid_.capacity() + inv_half_.capacity() + coef_.capacity()) * sizeof(double) +
                span_.capacity() * sizeof(int);
     }
 
 private:
+    // The non-empty span holding t (clamped like find_span) and t's local
+    // parameter x in [-1, 1] there.
+    size_t locate(double t, double& x) const;
     int p_ = 0;
     std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
     std::vector<int> span_;      // knot index s of each non-empty span

@@ -87,37 +87,48 @@ TEST(SpanBasis, SameSpanAndBasisAsA22) {
         std::printf("degree %2d: max |N - N_A2.2| %.1e, max |dN - dN_A2.2| / max |dN| %.1e\n", p, worst_N[p], worst_dN[p]);
 }
 
+// Every way evaluate_d1 takes with the tables: both degrees unrolled (up to 3),
+// the v degree unrolled (up to 8), neither (above), rational or not.
 TEST(SpanBasis, SurfaceEvaluationMatches) {
-    NurbsSurface s;
-    s.degree_u = 3;
-    s.degree_v = 2;
-    s.num_u = 9;
-    s.num_v = 6;
-    s.knots_u = knots_for(s.num_u, s.degree_u, 0, 1);
-    s.knots_v = knots_for(s.num_v, s.degree_v, 10, 0.5);
-    s.rational = true;
+    const struct {
+        int p, q;
+        bool rational;
+    } degrees[] = {{1, 1, false}, {1, 2, true}, {2, 1, true}, {2, 2, true}, {3, 2, true}, {2, 3, true},
+                   {3, 3, false}, {1, 3, false}, {3, 1, true},  {5, 5, false}, {5, 1, false}, {1, 8, false},
+                   {8, 1, false}, {4, 7, true},  {8, 11, false}, {11, 3, true}, {12, 12, false}};
     std::mt19937 rng(11);
-    std::uniform_real_distribution<double> c(-50, 50), w(0.5, 2);
-    for (int k = 0; k < s.num_u * s.num_v; ++k) {
-        const double wk = w(rng);
-        s.cp.push_back({wk * c(rng), wk * c(rng), wk * c(rng), wk});
-    }
-    const SurfaceSpans spans = make_surface_spans(s);
-    ASSERT_TRUE(spans.usable());
-    std::uniform_real_distribution<double> uu(s.u_begin(), s.u_end()), vv(s.v_begin(), s.v_end());
-    for (int k = 0; k < 2000; ++k) {
-        const double u = uu(rng), v = vv(rng);
-        const SurfaceDerivs a = evaluate_d1(s, spans, u, v), b = evaluate_d1(s, u, v);
-        const double scale = 100 * 2 * s.num_u;  // control-point size times a derivative's p / h
-        for (const auto& [x, y] : {std::pair{a.S, b.S}, std::pair{a.Su, b.Su}, std::pair{a.Sv, b.Sv}}) {
-            EXPECT_NEAR(x.x, y.x, 1e-12 * scale);
-            EXPECT_NEAR(x.y, y.y, 1e-12 * scale);
-            EXPECT_NEAR(x.z, y.z, 1e-12 * scale);
-            EXPECT_NEAR(x.w, y.w, 1e-12 * scale);
+    for (const auto& d : degrees) {
+        SCOPED_TRACE("degrees " + std::to_string(d.p) + " x " + std::to_string(d.q));
+        NurbsSurface s;
+        s.degree_u = d.p;
+        s.degree_v = d.q;
+        s.num_u = d.p + 6;
+        s.num_v = d.q + 3;
+        s.knots_u = knots_for(s.num_u, s.degree_u, 0, 1);
+        s.knots_v = knots_for(s.num_v, s.degree_v, 10, 0.5);
+        s.rational = d.rational;
+        std::uniform_real_distribution<double> c(-50, 50), w(0.5, 2);
+        for (int k = 0; k < s.num_u * s.num_v; ++k) {
+            const double wk = d.rational ? w(rng) : 1.0;
+            s.cp.push_back({wk * c(rng), wk * c(rng), wk * c(rng), wk});
         }
-        const CartesianDerivs ca = cartesian_d1(s, spans, u, v), cb = cartesian_d1(s, u, v);
-        EXPECT_NEAR(length(ca.P - cb.P), 0, 1e-11 * scale);
-        EXPECT_NEAR(length(ca.Pu - cb.Pu), 0, 1e-10 * scale);
+        const SurfaceSpans spans = make_surface_spans(s);
+        ASSERT_TRUE(spans.usable());
+        std::uniform_real_distribution<double> uu(s.u_begin(), s.u_end()), vv(s.v_begin(), s.v_end());
+        const double scale = 100 * 2 * std::max(s.num_u, s.num_v);  // control-point size times a derivative's p / h
+        for (int k = 0; k < 500; ++k) {
+            const double u = uu(rng), v = vv(rng);
+            const SurfaceDerivs a = evaluate_d1(s, spans, u, v), b = evaluate_d1(s, u, v);
+            for (const auto& [x, y] : {std::pair{a.S, b.S}, std::pair{a.Su, b.Su}, std::pair{a.Sv, b.Sv}}) {
+                EXPECT_NEAR(x.x, y.x, 1e-12 * scale);
+                EXPECT_NEAR(x.y, y.y, 1e-12 * scale);
+                EXPECT_NEAR(x.z, y.z, 1e-12 * scale);
+                EXPECT_NEAR(x.w, y.w, 1e-12 * scale);
+            }
+            const CartesianDerivs ca = cartesian_d1(s, spans, u, v), cb = cartesian_d1(s, u, v);
+            EXPECT_NEAR(length(ca.P - cb.P), 0, 1e-11 * scale);
+            EXPECT_NEAR(length(ca.Pu - cb.Pu), 0, 1e-10 * scale);
+        }
     }
 }
 
