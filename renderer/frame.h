@@ -141,25 +141,21 @@ void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const FrameC
     grow_cancelable(v, n, c, [&](size_t end) { v.resize(end, value); });
 }
 
-// v = src, in blocks (grow_cancelable).
-template <class T>
-void copy_cancelable(std::vector<T>& v, const std::vector<T>& src, const FrameContext& c) {
-    grow_cancelable(v, src.size(), c, [&](size_t end) {
-        v.insert(v.end(), src.begin() + static_cast<std::ptrdiff_t>(v.size()), src.begin() + static_cast<std::ptrdiff_t>(end));
-    });
-}
-
 // The frame's per-pixel arrays, row-major like the map (PreliminaryMap::index).
 struct FrameBuffers {
     explicit FrameBuffers(const FrameContext& c) {
-        assign_cancelable(first, c.pixels(), PixelHit{}, c);
+        assign_cancelable(hits, c.pixels(), PixelHit{}, c);
         assign_cancelable(outcome, c.pixels(), uint8_t(kNone), c);
+        assign_cancelable(iterations, c.pixels(), uint8_t(0), c);
         assign_cancelable(rescued, c.pixels(), uint8_t(kNoRescue), c);
     }
-    std::vector<PixelHit> first;    // the primary solve's hit (face 0: none)
-    std::vector<uint8_t> outcome;   // Outcome of the primary solve; kNone where the map has no face
-    std::vector<PixelHit> hits;     // the final hit: `first`, then the rescue and nearer-sheet passes
-    std::vector<uint8_t> rescued;   // RescueKind of the pixel's hit
+    // The hit: the primary solve's, then the rescue and nearer-sheet passes'
+    // (face 0: none). Each of these passes reads the previous state and applies
+    // its changes after it (a handful of pixels), so no second frame-sized copy.
+    std::vector<PixelHit> hits;
+    std::vector<uint8_t> outcome;     // Outcome of the primary solve; kNone where the map has no face
+    std::vector<uint8_t> iterations;  // Newton steps of the primary solve (its statistics)
+    std::vector<uint8_t> rescued;     // RescueKind of the pixel's hit
 };
 
 // Calls fn(ni, nj) for every pixel of the (2 radius + 1)^2 square around (i, j)

@@ -16,7 +16,7 @@ namespace {
 // (shading, while the solve buffers still exist).
 constexpr size_t kImageBytesPerPixel =
     4 * sizeof(float) + sizeof(float) + 3 * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t);
-constexpr size_t kSolveBytesPerPixel = 2 * sizeof(PixelHit) + 2 * sizeof(uint8_t);
+constexpr size_t kSolveBytesPerPixel = sizeof(PixelHit) + 3 * sizeof(uint8_t);
 // The rescue and nearer-sheet passes' lists, at worst one entry per pixel.
 constexpr size_t kRescueBytesPerPixel = 2 * sizeof(size_t) + sizeof(PixelHit) + 2 * sizeof(uint8_t);
 constexpr size_t kMapBytesPerPixel = sizeof(uint32_t) + 2 * sizeof(float);

@@ -22,8 +22,8 @@ void frame_statistics(const FrameContext& c, const FrameBuffers& b, const Render
         }
         if (b.outcome[k] == kNone) continue;
         ++solves;
-        its += b.first[k].iterations;
-        const size_t bin = std::min<size_t>(b.first[k].iterations, st.iteration_histogram.size() - 1);
+        its += b.iterations[k];
+        const size_t bin = std::min<size_t>(b.iterations[k], st.iteration_histogram.size() - 1);
         ++st.iteration_histogram[bin];
         switch (b.outcome[k]) {
             case kConverged: ++st.converged; break;

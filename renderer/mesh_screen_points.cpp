@@ -192,20 +192,27 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
     });
 }
 
-int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2) const {
+int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2,
+                                      double max_d2) const {
     const Entry& e = projected(id);
     const std::vector<Projected>& pts = e.pts;
     const Grid* g = grid(id);
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
     const Vec2 p{sp.sx, sp.sy};
     NearestPoint best, vertex;
-    if (!(e.lo.x <= e.hi.x)) {  // no point in front of the eye
+    auto none = [&] {
         if (screen_d2) *screen_d2 = HUGE_VAL;
         return 0;
-    }
+    };
+    if (!(e.lo.x <= e.hi.x)) return none();  // no point in front of the eye
+    // Bounded: points at the bound still count (offer takes strictly nearer ones).
+    const bool bounded = max_d2 < HUGE_VAL;
+    if (bounded) best.d2 = std::nextafter(max_d2, HUGE_VAL);
+    bool any_triangle = false;
     // Triangles: a point inside one is at distance 0 (its depth decides between
     // several); else the nearest point of its edges.
     auto test_triangle = [&](uint32_t t) {
+        any_triangle = true;
         const uint32_t* idx = &mesh.triangles[3 * t];
         const Projected* q[3] = {&pts[idx[0]], &pts[idx[1]], &pts[idx[2]]};
         const Vec2 A = q[0]->s, B = q[1]->s, C = q[2]->s;
@@ -241,19 +248,31 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
         for_near_cells(*g, p, [&] { return best.d2; }, [&](size_t cell) {
             for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) test_triangle(g->tris[q]);
         });
-        for_near_cells(*g, p, [&] { return vertex.d2; }, [&](size_t cell) {
-            for (uint32_t q = g->vtx_begin[cell]; q < g->vtx_begin[cell + 1]; ++q) test_vertex(g->vtxs[q]);
-        });
+        any_triangle = !g->tris.empty();
     } else {
         const size_t ntri = mesh.triangles.size() / 3;
         for (size_t t = 0; t < ntri; ++t)
             if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
+    }
+    if (bounded && !best.found) {
+        // The mesh lies farther than the bound (its vertices belong to its
+        // triangles); only a mesh without usable triangles falls back on the
+        // vertices within the bound.
+        if (any_triangle) return none();
+        vertex.d2 = best.d2;
+    }
+    if (g) {
+        for_near_cells(*g, p, [&] { return vertex.d2; }, [&](size_t cell) {
+            for (uint32_t q = g->vtx_begin[cell]; q < g->vtx_begin[cell + 1]; ++q) test_vertex(g->vtxs[q]);
+        });
+    } else {
         for (size_t m = 0; m < pts.size(); ++m)
             if (!std::isnan(pts[m].s.x)) test_vertex(static_cast<uint32_t>(m));
     }
     int n = 0;
     for (const NearestPoint* q : {&best, &vertex})
         if (q->found && (n == 0 || out[0].x != q->uv.x || out[0].y != q->uv.y)) out[n++] = q->uv;
+    if (n == 0) return none();
     if (screen_d2) *screen_d2 = best.found ? best.d2 : vertex.d2;
     return n;
 }
@@ -276,7 +295,7 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
             if (!(box_distance2({sp.sx, sp.sy}, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2)) continue;
             FarFace f;
             f.id = id;
-            f.nstarts = nearest_starts(id, sp, f.starts, &f.d2);
+            f.nstarts = nearest_starts(id, sp, f.starts, &f.d2, max_d2);
             if (f.nstarts && f.d2 <= max_d2) all.push_back(f);
         }
     const size_t n = std::min(all.size(), static_cast<size_t>(std::max(max_out, 0)));

@@ -35,7 +35,10 @@ public:
     // points in front of the eye count; returns how many starts (0 to 2). Exact
     // ties (equal distance and depth) go to the lowest triangle or vertex index,
     // so the answer does not depend on the grid.
-    int nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2 = nullptr) const;
+    // max_d2: only a mesh within sqrt(max_d2) of sp (screen units) counts: 0
+    // starts where it lies farther, and the search skips what lies beyond.
+    int nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2 = nullptr,
+                       double max_d2 = HUGE_VAL) const;
 
     // A face that no pixel near sp shows, with its nearest_starts.
     struct FarFace {

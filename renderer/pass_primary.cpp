@@ -11,7 +11,8 @@ void primary_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b) 
             const size_t k = map.index(i, j);
             const uint32_t id = map.face[k];
             if (id == 0 || id > c.nfaces) continue;
-            b.outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], b.first[k]);
+            b.outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], b.hits[k]);
+            b.iterations[k] = b.hits[k].iterations;
         }
     });
     throw_if_canceled(c.options);

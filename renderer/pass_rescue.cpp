@@ -405,14 +405,30 @@ std::vector<uint8_t> rescue_candidates(const FrameContext& c, const std::vector<
 
 void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                  FrameBuffers& b) {
-    const std::vector<uint8_t> todo = rescue_candidates(c, b.first);
+    const std::vector<uint8_t> todo = rescue_candidates(c, b.hits);
+    // Every pixel reads the primary hits: the rescued ones are collected per row
+    // and written after the pass, so the result does not depend on the order
+    // (or the thread count).
+    struct Rescued {
+        size_t k;
+        PixelHit hit;
+        uint8_t kind;
+    };
+    std::vector<std::vector<Rescued>> rows(c.height);
     parallel_rows(c, true, [&](int j) {
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);
-            if (todo[k]) b.rescued[k] = rescue_pixel(c, solver, screen_points, i, j, b.first, b.hits[k]);
+            PixelHit h;
+            if (!todo[k]) continue;
+            if (const uint8_t kind = rescue_pixel(c, solver, screen_points, i, j, b.hits, h)) rows[j].push_back({k, h, kind});
         }
     });
     throw_if_canceled(c.options);
+    for (const std::vector<Rescued>& row : rows)
+        for (const Rescued& r : row) {
+            b.hits[r.k] = r.hit;
+            b.rescued[r.k] = r.kind;
+        }
     grow_silhouettes(c, solver, screen_points, b);
 }
 

@@ -23,7 +23,7 @@
 
 namespace nurbsrt {
 
-// Fills b.first and b.outcome.
+// Fills b.hits, b.outcome and b.iterations.
 void primary_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b);
 
 class MeshScreenPoints;

@@ -112,7 +112,6 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     primary_pass(ctx, solver, buf);
     st.newton_primary_ms = ms_since(last);  // a part of newton_ms, not a stage of its own
 
-    copy_cancelable(buf.hits, buf.first, ctx);
     if (options.rescue) {
         const MeshScreenPoints screen_points(ctx);
         rescue_pass(ctx, solver, screen_points, buf);
