@@ -92,7 +92,9 @@ size_t KnotSpans::locate(double t, double& x) const {
     // The span whose [start, next start) holds t; clamped at both ends like find_span.
     size_t k = 0;
     if (t > start_[0]) {  // false for NaN: the first span
-        k = static_cast<size_t>(std::upper_bound(start_.begin(), start_.end() - 1, t) - start_.begin()) - 1;
+        // One span (a Bezier patch, a plane, a cylinder along its axis): no search.
+        if (nspans > 1)
+            k = static_cast<size_t>(std::upper_bound(start_.begin(), start_.end() - 1, t) - start_.begin()) - 1;
         if (k >= nspans) k = nspans - 1;
         t = std::min(t, start_[nspans]);
     } else {
