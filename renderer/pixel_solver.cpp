@@ -74,7 +74,7 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
     if (!(r.u == b.u0 || r.u == b.u1 || r.v == b.v0 || r.v == b.v1)) return false;
     if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
         return false;
-    const CartesianDerivs c = cartesian_d1(ctx.scene.faces[id - 1].surface, r.u, r.v);
+    const CartesianDerivs c = cartesian_d1(ctx.scene.faces[id - 1].surface, ff.spans, r.u, r.v);
     const Ray ray = ctx.camera.ray(sp);
     const Vec3 q = c.P - ray.origin;
     const double t = dot(q, ray.dir);
