@@ -2,6 +2,7 @@
 #include "renderer/image_module.h"
 
 #include <dlfcn.h>
+#include <tbb/parallel_for.h>
 
 #include <mutex>
 #include <string>
@@ -39,6 +40,13 @@ WriteFn load_writer() {
 }  // namespace
 
 void preload_image_writer() {
+    // oneTBB loads its scalable allocator (libtbbmalloc) and its thread-pool
+    // server (libirml) with dlopen on first use. Had that first use to wait for
+    // the loader's lock while the thread below holds it (OpenImageIO's libraries:
+    // ~0.5 s of relocations), the first parallel work (the import's NURBS
+    // conversion) would wait for all of it (measured: 0.6-0.8 s of
+    // "nurbs_convert" for a 3-face file). So oneTBB starts here, first.
+    tbb::parallel_for(0, 2, [](int) {});
     // Detached: a program that ends first leaves it to the loader's own lock.
     std::thread([] {
         try {
