@@ -229,7 +229,10 @@ void mesh_tracer(std::string& o, const json& t) {
          "rays through a BRepMesh mesh at " + sci(d(t, "fine_relative_deflection")) + " of the diagonal (trace only, "
          "BVH built beforehand), " + std::to_string(n(t, "threads")) + " thread(s) each; goal: at most 2x. First "
          "frame after reading the file: ours (NURBS conversion + map mesh + prepare + frame) against BRepMesh at " +
-         sci(d(t, "coarse_relative_deflection")) + " + mesh copy + BVH + trace; goal: at most 1x.\n\n";
+         sci(d(t, "coarse_relative_deflection")) + " + mesh copy + BVH + trace; goal: at most 1x. The two sides run "
+         "alternately (frames: " + std::to_string(t["rows"].empty() ? 0 : n(t["rows"][0], "pairs")) + " pairs, first "
+         "frames: " + std::to_string(t["rows"].empty() ? 0 : n(t["rows"][0], "first_frame_pairs")) + "), so that both "
+         "see the same load of the machine; times are medians, ratios the medians of the pairs' ratios.\n\n";
     o += "| scene | faces | ours frame ms | Embree trace ms | triangles | frame / trace | ours first frame ms | "
          "mesh first frame ms | first / mesh first |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& x : t["rows"])
