@@ -64,6 +64,7 @@ private:
     size_t locate(double t, double& x) const;
     int p_ = 0;
     std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
+    double inv_span_ = 0;        // spans per parameter unit where they are uniform, else 0
     std::vector<int> span_;      // knot index s of each non-empty span
     std::vector<double> mid_;    // midpoint of each non-empty span, the Taylor expansion's centre
     std::vector<double> inv_half_;  // 2 / span length: dx/du

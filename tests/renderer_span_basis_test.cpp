@@ -87,6 +87,51 @@ TEST(SpanBasis, SameSpanAndBasisAsA22) {
         std::printf("degree %2d: max |N - N_A2.2| %.1e, max |dN - dN_A2.2| / max |dN| %.1e\n", p, worst_N[p], worst_dN[p]);
 }
 
+// Knot vectors of equal (or within 1 % equal) spans: the span of a parameter
+// is guessed from the mean span and corrected, instead of searched; the same
+// span and basis as A2.1-A2.2, at every breakpoint, the ends, beyond them and
+// in between.
+TEST(SpanBasis, UniformSpansFoundWithoutSearch) {
+    struct Uniform {
+        int n, p;
+        double origin, step, wobble;  // wobble: relative change of alternate spans
+    };
+    const Uniform cases[] = {{20, 3, 0, 1, 0},       {50, 2, 1000, 0.01, 0}, {9, 1, -3, 0.25, 0},
+                             {64, 3, 0, 0.1, 0.004}, {33, 5, 7, 2, 0.0049},  {12, 3, 0, 1, 0.2}};
+    std::mt19937 rng(3);
+    for (const Uniform& c : cases) {
+        SCOPED_TRACE("n=" + std::to_string(c.n) + " p=" + std::to_string(c.p) + " wobble=" + std::to_string(c.wobble));
+        std::vector<double> U(c.p + 1, c.origin);
+        double x = c.origin;
+        for (int i = 0; i < c.n - c.p; ++i) {
+            x += c.step * (1 + (i % 2 ? c.wobble : -c.wobble));
+            U.push_back(x);
+        }
+        for (int r = 0; r < c.p; ++r) U.push_back(x);
+        const KnotSpans spans(c.n, c.p, U);
+        ASSERT_TRUE(spans.usable());
+        const double lo = U[c.p], hi = U[c.n];
+        std::vector<double> ts = {lo, hi, lo - 1, hi + 1, 0.5 * (lo + hi)};
+        for (int k = c.p; k <= c.n; ++k) {  // every breakpoint and its neighbours in double
+            ts.push_back(U[k]);
+            ts.push_back(std::nextafter(U[k], -HUGE_VAL));
+            ts.push_back(std::nextafter(U[k], HUGE_VAL));
+        }
+        std::uniform_real_distribution<double> d(lo, hi);
+        for (int k = 0; k < 400; ++k) ts.push_back(d(rng));
+        for (const double t : ts) {
+            double N[kMaxTableDegree + 1], dN[kMaxTableDegree + 1], Nr[kMaxTableDegree + 1], dNr[kMaxTableDegree + 1];
+            int s = -1;
+            spans.basis(t, s, N, dN);
+            const double tc = std::clamp(t, lo, hi);
+            const int sr = find_span(c.n, c.p, tc, U.data());
+            basis_and_derivs(sr, c.p, tc, U.data(), Nr, dNr);
+            ASSERT_EQ(s, sr) << "t=" << t;
+            for (int r = 0; r <= c.p; ++r) EXPECT_NEAR(N[r], Nr[r], 1e-13) << "t=" << t << " r=" << r;
+        }
+    }
+}
+
 // Every way evaluate_d1 takes with the tables: both degrees unrolled (up to 3),
 // the v degree unrolled (up to 8), neither (above), rational or not.
 TEST(SpanBasis, SurfaceEvaluationMatches) {
