@@ -418,9 +418,10 @@ void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPo
     parallel_rows(c, true, [&](int j) {
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);
-            PixelHit h;
             if (!todo[k]) continue;
-            if (const uint8_t kind = rescue_pixel(c, solver, screen_points, i, j, b.hits, h)) rows[j].push_back({k, h, kind});
+            PixelHit h;
+            if (const uint8_t kind = rescue_pixel(c, solver, screen_points, i, j, b.hits, h))
+                rows[j].push_back({k, h, kind});
         }
     });
     throw_if_canceled(c.options);

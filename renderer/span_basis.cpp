@@ -106,9 +106,10 @@ size_t KnotSpans::locate(double t, double& x) const {
     // The span whose [start, next start) holds t; clamped at both ends like find_span.
     size_t k = 0;
     if (t > start_[0]) {  // false for NaN: the first span
-        // One span (a Bezier patch, a plane, a cylinder along its axis): no search.
+        // Uniform spans: the last span starting at or before t, as the search
+        // would find it, from a guess. One span (a Bezier patch, a plane, a
+        // cylinder along its axis): nothing to search.
         if (inv_span_ > 0) {
-            // The last span starting at or before t, as the search would find it.
             const double guess = (t - start_[0]) * inv_span_;
             k = guess < static_cast<double>(nspans) ? static_cast<size_t>(guess) : nspans - 1;
             while (k > 0 && start_[k] > t) --k;
@@ -175,7 +176,8 @@ SurfaceDerivs evaluate_fixed(const NurbsSurface& s, const SurfaceSpans& spans, d
     int su = 0, sv = 0;
     if constexpr (kP >= 0) spans.u.basis_fixed<kP>(u, su, Nu, dNu);
     else spans.u.basis(u, su, Nu, dNu);
-    spans.v.basis_fixed<kQ>(v, sv, Nv, dNv);
+    if constexpr (kQ >= 0) spans.v.basis_fixed<kQ>(v, sv, Nv, dNv);
+    else spans.v.basis(v, sv, Nv, dNv);
     const HomogDerivs h = tensor_product<1, kP, kQ>(s, su, sv, Nu, dNu, Nv, dNv);
     return {h.S, h.Su, h.Sv};
 }
@@ -217,12 +219,7 @@ SurfaceDerivs evaluate_d1(const NurbsSurface& s, const SurfaceSpans& spans, doub
     if (s.degree_u >= 1 && s.degree_u <= kMaxUnrolledBoth && s.degree_v >= 1 && s.degree_v <= kMaxUnrolledBoth)
         return dispatch_both<1, 1>(s, spans, u, v);
     if (s.degree_v >= 1 && s.degree_v <= kMaxUnrolledV) return dispatch_v<1>(s, spans, u, v);
-    double Nu[kM], dNu[kM], Nv[kM], dNv[kM];
-    int su = 0, sv = 0;
-    spans.u.basis(u, su, Nu, dNu);
-    spans.v.basis(v, sv, Nv, dNv);
-    const HomogDerivs h = tensor_product<1>(s, su, sv, Nu, dNu, Nv, dNv);
-    return {h.S, h.Su, h.Sv};
+    return evaluate_fixed<-1, -1>(s, spans, u, v);
 }
 
 CartesianDerivs cartesian_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
