@@ -41,6 +41,39 @@ struct Case {
     double origin, scale;
 };
 
+// The parameters a table is checked at: the knot range's ends, beyond them,
+// NaN, every breakpoint (with `neighbours`, also the doubles just below and
+// above it), and 400 random ones.
+std::vector<double> test_params(const std::vector<double>& U, int n, int p, bool neighbours, std::mt19937& rng) {
+    const double lo = U[p], hi = U[n];
+    std::vector<double> ts = {lo, hi, lo - 1, hi + 1, std::numeric_limits<double>::quiet_NaN()};
+    for (int k = p; k <= n; ++k) {
+        ts.push_back(U[k]);
+        if (neighbours) {
+            ts.push_back(std::nextafter(U[k], -HUGE_VAL));
+            ts.push_back(std::nextafter(U[k], HUGE_VAL));
+        }
+    }
+    std::uniform_real_distribution<double> d(lo, hi);
+    for (int k = 0; k < 400; ++k) ts.push_back(d(rng));
+    return ts;
+}
+
+// A table's span and basis at t, and A2.1-A2.2's at t clamped into the knot
+// range (NaN: its start), as find_span clamps.
+struct Compared {
+    int s = -1, sr = -1;
+    double N[kMaxTableDegree + 1], dN[kMaxTableDegree + 1], Nr[kMaxTableDegree + 1], dNr[kMaxTableDegree + 1];
+};
+Compared compare_with_a22(const KnotSpans& spans, int n, int p, const std::vector<double>& U, double t) {
+    Compared c;
+    spans.basis(t, c.s, c.N, c.dN);
+    const double tc = std::isnan(t) ? U[p] : std::clamp(t, U[p], U[n]);
+    c.sr = find_span(n, p, tc, U.data());
+    basis_and_derivs(c.sr, p, tc, U.data(), c.Nr, c.dNr);
+    return c;
+}
+
 TEST(SpanBasis, SameSpanAndBasisAsA22) {
     const Case cases[] = {{2, 1, 0, 1}, {4, 2, 0, 1}, {9, 3, 0, 1}, {12, 3, 1000, 0.01}, {7, 4, -5, 2},
                           {11, 5, 0, 1}, {10, 7, 0, 1}, {30, 3, 0, 1e-3}, {9, 8, 0, 1},
@@ -54,19 +87,10 @@ TEST(SpanBasis, SameSpanAndBasisAsA22) {
         const std::vector<double> U = knots_for(c.n, c.p, c.origin, c.scale);
         const KnotSpans spans(c.n, c.p, U);
         ASSERT_TRUE(spans.usable());
-        const double lo = U[c.p], hi = U[c.n];
-        std::vector<double> ts = {lo, hi, lo - 1, hi + 1, std::numeric_limits<double>::quiet_NaN()};
-        for (size_t k = c.p; k <= static_cast<size_t>(c.n); ++k) ts.push_back(U[k]);  // every breakpoint
-        std::uniform_real_distribution<double> d(lo, hi);
-        for (int k = 0; k < 400; ++k) ts.push_back(d(rng));
-        for (const double t : ts) {
-            double N[kMaxTableDegree + 1], dN[kMaxTableDegree + 1], Nr[kMaxTableDegree + 1], dNr[kMaxTableDegree + 1];
-            int s = -1;
-            spans.basis(t, s, N, dN);
-            const double tc = std::isnan(t) ? lo : std::clamp(t, lo, hi);
-            const int sr = find_span(c.n, c.p, tc, U.data());
-            basis_and_derivs(sr, c.p, tc, U.data(), Nr, dNr);
-            ASSERT_EQ(s, sr) << "t=" << t;
+        for (const double t : test_params(U, c.n, c.p, false, rng)) {
+            const Compared r = compare_with_a22(spans, c.n, c.p, U, t);
+            const double *N = r.N, *dN = r.dN, *Nr = r.Nr, *dNr = r.dNr;
+            ASSERT_EQ(r.s, r.sr) << "t=" << t;
             double dmax = 0;
             for (int r = 0; r <= c.p; ++r) dmax = std::max(dmax, std::abs(dNr[r]));
             for (int r = 0; r <= c.p; ++r) worst_N[c.p] = std::max(worst_N[c.p], std::abs(N[r] - Nr[r]));
@@ -110,24 +134,10 @@ TEST(SpanBasis, UniformSpansFoundWithoutSearch) {
         for (int r = 0; r < c.p; ++r) U.push_back(x);
         const KnotSpans spans(c.n, c.p, U);
         ASSERT_TRUE(spans.usable());
-        const double lo = U[c.p], hi = U[c.n];
-        std::vector<double> ts = {lo, hi, lo - 1, hi + 1, 0.5 * (lo + hi)};
-        for (int k = c.p; k <= c.n; ++k) {  // every breakpoint and its neighbours in double
-            ts.push_back(U[k]);
-            ts.push_back(std::nextafter(U[k], -HUGE_VAL));
-            ts.push_back(std::nextafter(U[k], HUGE_VAL));
-        }
-        std::uniform_real_distribution<double> d(lo, hi);
-        for (int k = 0; k < 400; ++k) ts.push_back(d(rng));
-        for (const double t : ts) {
-            double N[kMaxTableDegree + 1], dN[kMaxTableDegree + 1], Nr[kMaxTableDegree + 1], dNr[kMaxTableDegree + 1];
-            int s = -1;
-            spans.basis(t, s, N, dN);
-            const double tc = std::clamp(t, lo, hi);
-            const int sr = find_span(c.n, c.p, tc, U.data());
-            basis_and_derivs(sr, c.p, tc, U.data(), Nr, dNr);
-            ASSERT_EQ(s, sr) << "t=" << t;
-            for (int r = 0; r <= c.p; ++r) EXPECT_NEAR(N[r], Nr[r], 1e-13) << "t=" << t << " r=" << r;
+        for (const double t : test_params(U, c.n, c.p, true, rng)) {
+            const Compared r = compare_with_a22(spans, c.n, c.p, U, t);
+            ASSERT_EQ(r.s, r.sr) << "t=" << t;
+            for (int q = 0; q <= c.p; ++q) EXPECT_NEAR(r.N[q], r.Nr[q], 1e-13) << "t=" << t << " r=" << q;
         }
     }
 }
