@@ -212,7 +212,6 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
     // Triangles: a point inside one is at distance 0 (its depth decides between
     // several); else the nearest point of its edges.
     auto test_triangle = [&](uint32_t t) {
-        any_triangle = true;
         const uint32_t* idx = &mesh.triangles[3 * t];
         const Projected* q[3] = {&pts[idx[0]], &pts[idx[1]], &pts[idx[2]]};
         const Vec2 A = q[0]->s, B = q[1]->s, C = q[2]->s;
@@ -252,7 +251,10 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
     } else {
         const size_t ntri = mesh.triangles.size() / 3;
         for (size_t t = 0; t < ntri; ++t)
-            if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
+            if (usable_triangle(mesh, pts, t)) {
+                any_triangle = true;
+                test_triangle(static_cast<uint32_t>(t));
+            }
     }
     if (bounded && !best.found) {
         // The mesh lies farther than the bound (its vertices belong to its
