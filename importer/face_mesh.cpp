@@ -105,6 +105,76 @@ FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
     return m;
 }
 
+namespace {
+
+// BRepMesh can leave part of a face without triangles while the nodes of its
+// boundary are there (step/ec_turbine-A.stp face 2, a strip along an edge of a
+// plane; four faces of step/bug32596_abc_0_13.step), at any deflection and with
+// the Watson and the Delabella algorithm alike. The preliminary map then shows
+// no pixel of that part, and the rescue and nearer-sheet passes, which look
+// for faces through the map's meshes, miss a thin face in front there. Such a
+// mesh (nodes that no triangle uses) gets the triangles of a trimmed (u, v)
+// grid that lie inside the trim loops and outside all of its triangles, at
+// this many times the fallback grid's cells per side: the strips seen were a
+// few deflections wide, under one fallback cell.
+constexpr int kFillRefinement = 4;
+
+bool has_unused_nodes(const FaceMesh& m) {
+    std::vector<char> used(m.uv.size(), 0);
+    for (const uint32_t t : m.triangles) used[t] = 1;
+    return std::find(used.begin(), used.end(), 0) != used.end();
+}
+
+size_t fill_untriangulated(const ConvertedFace& cf, const UVBox& box, const std::vector<TrimLoop>& loops, int cells,
+                           FaceMesh& m) {
+    const double cu = (box.u1 - box.u0) / cells, cv = (box.v1 - box.v0) / cells;
+    if (!(cu > 0) || !(cv > 0)) return 0;
+    auto cell = [&](double x, double x0, double step) {
+        return std::clamp(static_cast<int>(std::floor((x - x0) / step)), 0, cells - 1);
+    };
+    // The mesh's triangles bucketed by the grid cells their (u, v) boxes overlap.
+    std::vector<std::vector<uint32_t>> bucket(static_cast<size_t>(cells) * cells);
+    const size_t ntri = m.triangles.size() / 3;
+    for (size_t t = 0; t < ntri; ++t) {
+        const Vec2 &a = m.uv[m.triangles[3 * t]], &b = m.uv[m.triangles[3 * t + 1]], &c = m.uv[m.triangles[3 * t + 2]];
+        const int i0 = cell(std::min({a.x, b.x, c.x}), box.u0, cu), i1 = cell(std::max({a.x, b.x, c.x}), box.u0, cu);
+        const int j0 = cell(std::min({a.y, b.y, c.y}), box.v0, cv), j1 = cell(std::max({a.y, b.y, c.y}), box.v0, cv);
+        for (int i = i0; i <= i1; ++i)
+            for (int j = j0; j <= j1; ++j) bucket[static_cast<size_t>(i) * cells + j].push_back(static_cast<uint32_t>(t));
+    }
+    auto covered = [&](Vec2 p) {
+        for (const uint32_t t : bucket[static_cast<size_t>(cell(p.x, box.u0, cu)) * cells + cell(p.y, box.v0, cv)]) {
+            const Vec2 &a = m.uv[m.triangles[3 * t]], &b = m.uv[m.triangles[3 * t + 1]], &c = m.uv[m.triangles[3 * t + 2]];
+            const double d0 = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+            const double d1 = (c.x - b.x) * (p.y - b.y) - (c.y - b.y) * (p.x - b.x);
+            const double d2 = (a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x);
+            if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0)) return true;
+        }
+        return false;
+    };
+    const FaceMesh grid = trimmed_grid_mesh(cf, box, loops, cells);
+    std::vector<int64_t> index(grid.uv.size(), -1);
+    size_t added = 0;
+    for (size_t t = 0; t + 2 < grid.triangles.size(); t += 3) {
+        const uint32_t* g = &grid.triangles[t];
+        const Vec2 centroid{(grid.uv[g[0]].x + grid.uv[g[1]].x + grid.uv[g[2]].x) / 3,
+                            (grid.uv[g[0]].y + grid.uv[g[1]].y + grid.uv[g[2]].y) / 3};
+        if (covered(centroid)) continue;
+        for (int k = 0; k < 3; ++k) {
+            if (index[g[k]] < 0) {
+                index[g[k]] = static_cast<int64_t>(m.uv.size());
+                m.uv.push_back(grid.uv[g[k]]);
+                m.xyz.push_back(grid.xyz[g[k]]);
+            }
+            m.triangles.push_back(static_cast<uint32_t>(index[g[k]]));
+        }
+        ++added;
+    }
+    return added;
+}
+
+}  // namespace
+
 void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
                 const std::vector<const std::vector<TrimLoop>*>& loops,
                 const std::vector<double>& face_sizes, const MeshParams& p,
@@ -122,6 +192,7 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
     enum Outcome : char { ok, failed, timed_out, skipped };
     std::vector<char> outcome(n, ok);
     std::vector<std::string> errors(n);
+    std::vector<size_t> filled(n, 0);
 
     tbb::parallel_for(size_t(0), n, [&](size_t i) {
         if (faces[i].face.IsNull() || faces[i].surface.IsNull()) {
@@ -153,6 +224,9 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
                 }
                 if (mesh_from_triangulation(faces[i], meshes[i])) {
                     outcome[i] = ok;
+                    if (has_unused_nodes(meshes[i]))
+                        filled[i] = fill_untriangulated(faces[i], boxes[i], *loops[i],
+                                                        kFillRefinement * p.grid_cells, meshes[i]);
                     break;
                 }
                 outcome[i] = failed;
@@ -165,8 +239,11 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
     });
 
     for (size_t i = 0; i < n; ++i) {
-        if (outcome[i] == ok) continue;
         const std::string face = "face " + std::to_string(i + 1);
+        if (filled[i])
+            warnings.push_back(face + ": BRepMesh left part of it without triangles; " + std::to_string(filled[i]) +
+                               " triangles of a trimmed (u,v) grid fill it");
+        if (outcome[i] == ok) continue;
         switch (outcome[i]) {
             case failed:
                 warnings.push_back(face + ": BRepMesh gave no triangulation" +
