@@ -31,6 +31,12 @@ constexpr double kNearerRelative = 1e-6;
 // opposite neighbour's, or than half the distance between the two neighbours'
 // (compared squared: 9): on one smooth sheet all three are about equal.
 constexpr double kUvJump2 = 9.0;
+// On one smooth sheet the pixel's (u, v) lies near the midpoint of its pair's;
+// off it by more than the pair's whole distance (twice half of it; squared: 4),
+// it lies on another sheet between two on one: a fold of the face, where the
+// steps to both neighbours are alike and kUvJump2 does not tell (a bearing's
+// fillet, seen where it turns away).
+constexpr double kUvOffPair2 = 4.0;
 // A neighbour nearer than the pixel by this many times the depth step to the
 // pair's other neighbour is on another sheet, whatever the (u, v) say: on one
 // smooth sheet the steps to both sides are about equal (a slope), differing by
@@ -112,12 +118,16 @@ public:
             // footprint is not on their smooth sheet either (on a slope it lies
             // between them, so grazing views cost no extra solves).
             const bool deep = p.t - std::max(a.t, b.t) > kSheetFootprints * c_.pixel_footprint(p.t);
+            const float mid_u = 0.5f * (a.u + b.u), mid_v = 0.5f * (a.v + b.v);
+            const double off_u = double(p.u) - mid_u, off_v = double(p.v) - mid_v;
+            const bool off_pair = a.face == p.face && b.face == p.face &&
+                                  off_u * off_u + off_v * off_v > kUvOffPair2 * half_pair2;
             bool from[2] = {false, false};
             for (int q = 0; q < 2; ++q) {
                 const PixelHit& n = q == 0 ? a : b;
                 const PixelHit& other = q == 0 ? b : a;
                 const bool step = p.t - n.t > kSheetStepRatio * std::fabs(p.t - other.t);
-                const bool jump = deep || step || n.face != p.face || other.face != p.face ||
+                const bool jump = deep || step || off_pair || n.face != p.face || other.face != p.face ||
                                   uv_dist2(n, p) > kUvJump2 * std::min(uv_dist2(other, p), half_pair2);
                 from[q] = jump && n.t < p.t - nearer_;
             }

@@ -33,6 +33,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kRootGrid = 16;
 // The rescue's robust solves may take this many steps (render.cpp's kRescueMinIterations).
 constexpr int kDiagnoseIterations = 16;
+// A root within this much of the diagonal of the reference's depth is the
+// reference's root (the check's settlement tolerance is far below it; distinct
+// roots of one face along one ray lie far apart at the scales where it matters).
+constexpr double kSameRootRelative = 1e-3;
 
 struct Checker {
     const Scene& scene;
@@ -143,7 +147,8 @@ struct Diagnoser {
                 in25 = true;
                 if (std::abs(di) <= 1 && std::abs(dj) <= 1) in8 = true;
             }
-        // The rescue's start: each 8-neighbour's converged (u, v) on F.
+        // The rescue's start: each 8-neighbour's converged (u, v) on F; ok counts
+        // the solves that reach the reference's root (not another root of F).
         int tried = 0, ok = 0;
         std::string first;
         for (int dj = -1; dj <= 1; ++dj)
@@ -152,7 +157,7 @@ struct Diagnoser {
                 if ((!di && !dj) || !c.hit(a, b) || c.im.face[c.idx(a, b)] != F) continue;
                 ++tried;
                 const NewtonResult r = solve(F, i, j, c.im.u[c.idx(a, b)], c.im.v[c.idx(a, b)], robust);
-                if (inside(F, r)) ++ok;
+                if (inside(F, r) && std::fabs(r.t - f.ref_t) < kSameRootRelative * c.diag) ++ok;
                 if (first.empty()) first = describe(F, r);
             }
         // Does F touch a face of the 5x5 (PreparedFace::adjacent: the rescue's C)?
@@ -169,7 +174,7 @@ struct Diagnoser {
             }
         o << " | face " << F << (in8 ? " in 3x3" : in25 ? " in 5x5 only" : " NOT within 5x5")
           << (touching.empty() ? ", touches no face of the 5x5" : ", touches face " + touching);
-        o << " | robust Newton from " << tried << " neighbour hits on it: " << ok << " inside";
+        o << " | robust Newton from " << tried << " neighbour hits on it: " << ok << " reach the reference root";
         if (!first.empty()) o << " (first: " << first << ")";
         // The nearest root on F from a grid of starts.
         const PreparedFace& pf = prepared.faces()[F - 1];
@@ -180,7 +185,7 @@ struct Diagnoser {
                 const double u0 = pf.box.u0 + (a + 0.5) / kRootGrid * (pf.box.u1 - pf.box.u0);
                 const double v0 = pf.box.v0 + (b + 0.5) / kRootGrid * (pf.box.v1 - pf.box.v0);
                 const NewtonResult r = solve(F, i, j, u0, v0, robust);
-                if (r.status == NewtonStatus::converged && std::fabs(r.t - f.ref_t) < 1e-3 * c.diag &&
+                if (r.status == NewtonStatus::converged && std::fabs(r.t - f.ref_t) < kSameRootRelative * c.diag &&
                     (!found || std::fabs(r.t - f.ref_t) < std::fabs(best.t - f.ref_t)))
                     best = r, found = true;
             }
