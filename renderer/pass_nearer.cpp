@@ -57,7 +57,7 @@ constexpr int kMaxPeelPasses = 32;
 constexpr double kSheetFootprints = 1.0;
 // Faces adjacent to a pit's 3x3 that are tried when none of the 3x3's faces
 // fills it; a thin face in front touches one of them. Bounds the cost at a
-// vertex where many faces meet.
+// vertex where many faces meet (per ring of adjacent_faces).
 constexpr int kMaxAdjacentFaces = 12;
 // ... and only those whose mesh comes within 2 pixels of the pit on screen (the
 // faces adjacent to a pit's are sorted nearest first, so the rest are farther).
@@ -225,9 +225,12 @@ private:
         });
     }
     // The faces adjacent to those of the 3x3 around pixel (i, j), hit or in the
-    // map (PreparedFace::adjacent), that none of them shows, from their mesh starts.
+    // map (PreparedFace::adjacent), that none of them shows, from their mesh
+    // starts; failing those, the faces adjacent to them in turn (a small face in
+    // front that only touches a thin one between it and the 3x3's: a Russian
+    // part's flange, step/bug31670_russian.stp). Both rings only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const {
-        uint32_t near[18];
+        uint32_t near[18 + kMaxAdjacentFaces];
         int nn = 0;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const size_t n = c_.map.index(ni, nj);
@@ -238,12 +241,17 @@ private:
         // A face in front of the pixel covers it on screen: its mesh comes within
         // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
         const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
-        MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-        const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
-        for (int q = 0; q < nf; ++q)
-            for (int k = 0; k < faces[q].nstarts; ++k)
-                consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
-                         static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
+        const PixelHit p = best;
+        for (int ring = 0; ring < 2 && best.face == p.face && best.t == p.t; ++ring) {
+            MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
+            const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
+            for (int q = 0; q < nf; ++q) {
+                for (int k = 0; k < faces[q].nstarts; ++k)
+                    consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                             static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
+                near[nn++] = faces[q].id;
+            }
+        }
     }
     const FrameContext& c_;
     const Solver& solver_;

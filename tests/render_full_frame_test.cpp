@@ -79,11 +79,10 @@ const Known kKnownRemaining[] = {
      "a farther root of the pixel's own face, at the face's silhouette next to the background; Newton from the "
      "neighbours' starts reaches the farther root too, the nearer one lies near the face's parameter border"},
     // With the map meshed from the analytic faces themselves (their surfaces
-    // converted alone, without re-fitted pcurves) these pixels land on defects
+    // converted alone, without re-fitted pcurves) this pixel lands on a defect
     // the B-spline faces' mesh did not expose; the mesh decides which pixels the
     // primary pass and the rescue get right (the old importer with a 10 % finer
     // deflection moved the speckles too, 8 -> 5 over all models).
-    {"step/bug31670_russian.stp", "iso", 0, 1, "a face in front not in the candidates (not within the 5x5)"},
     {"step/bug3883_xr2-ct-214_bolt.stp", "iso", 1, 0,
      "a silhouette pixel just outside a face's trim, within its tolerance band (the reference counts the "
      "edge tolerance); band hits are accepted in cracks only"},
