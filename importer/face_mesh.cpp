@@ -1,8 +1,11 @@
 // Coarse (u,v) meshes for the preliminary map: BRepMesh per face under a time
-// budget, and a trimmed regular grid wherever BRepMesh fails or runs out of time.
+// budget, and a trimmed regular grid wherever BRepMesh fails or runs out of time,
+// or fills the part of a face it left without triangles.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRep_Tool.hxx>

@@ -65,7 +65,9 @@ FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
                            const std::vector<TrimLoop>& loops, int cells_per_side);
 
 // Meshes every face (BRepMesh per face, in parallel, under the time limits);
-// faces without a usable triangulation get trimmed_grid_mesh (warning each).
+// faces without a usable triangulation get trimmed_grid_mesh (warning each), and
+// a triangulation that leaves part of its face uncovered (nodes no triangle
+// uses) is completed from a finer trimmed grid (warning each).
 // face_sizes[i]: 3D bounding-box diagonal of face i (caps its deflection).
 struct MeshParams {
     double deflection = 0.1;         // absolute linear deflection, model units
