@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "renderer/nurbs.h"
+
 namespace nurbsrt {
 
 namespace {
@@ -114,6 +116,12 @@ bool KeyLightShadows::own_face_first(int ci, int cj, uint32_t face, double u, do
            std::fabs(map_.v[c] - v) <= kOwnReachPixels * dv;
 }
 
+double KeyLightShadows::band_width(uint32_t id, const PixelHit& h) const {
+    const PreparedFace& f = ctx_.prepared.faces()[id - 1];
+    const CartesianDerivs c = cartesian_d1(ctx_.scene.faces[id - 1].surface, f.spans, h.u, h.v);
+    return f.near_uv * std::max(length(c.Pu), length(c.Pv));
+}
+
 bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v) const {
     const double cosine = dot(n, key_);
     if (!(cosine > 0)) return false;
@@ -146,7 +154,13 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // polyline or just beyond it). At a concave edge the adjacent face in
         // front of the point is crossed right beside it, within its trim band
         // (Solver's near hit: both trim loops are only within tolerance of the
-        // shared edge). Beyond contact a crossing in the trim band blocks only
+        // shared edge), and only that close: the ray leaves the point's surface
+        // at cos to its normal, so at distance d it stands d * cos above it, and
+        // a crossing of the adjacent face that high lies that far inside the
+        // face from the shared edge, unless within the band's width of it. A band
+        // crossing higher up passes outside the adjacent face, beyond its free
+        // edge or a face between (it cast false shadows in rows along a cone of
+        // step/t4mec.stp). Beyond contact a crossing in the trim band blocks only
         // beside another face's at the same depth (a crack between two faces of
         // an occluder): alone, the band would widen every occluder into a
         // phantom shadow line along its free edges. A stop on the parameter-box
@@ -157,7 +171,7 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         const bool contact = h.t > t_p - contact_, entering = dot(Vec3{h.nx, h.ny, h.nz}, key_) < 0;
         if (o == kConverged) return !contact || entering;
         if (on_box_border(ctx_.prepared.faces()[id - 1].box, h)) return false;
-        if (contact) return entering;
+        if (contact) return entering && (t_p - h.t) * std::max(cosine, kMinCosine) <= band_width(id, h);
         // A near crossing of another face at the same depth: the ray passes
         // through the crack between two faces of an occluder, which it blocks.
         for (int q = 0; q < nnear; ++q)

@@ -112,7 +112,9 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    (taken for a convex edge's own face).
 //  - false shadows (t4mec, trj5): a crossing of an adjacent face within its trim
 //    band and within a light-map pixel of the point, entering, where the exact
-//    face is not crossed (taken for a concave edge's contact).
+//    face is not crossed (taken for a concave edge's contact); the crossings
+//    higher above the point's surface than the band is wide are no longer taken
+//    (19 -> 17 and 20 -> 18), the rest lie within that height.
 struct KnownShadow {
     const char* model;
     const char* view;
@@ -122,7 +124,7 @@ const KnownShadow kKnownShadowDisagreements[] = {
     {"step/bug32596_abc_0_13.step", "iso", 0, 1},
     {"step/bug32596_abc_0_13.step", "front", 0, 1},
     {"step/ec_turbine-A.stp", "front", 8, 8},
-    {"step/t4mec.stp", "front", 19, 1},
+    {"step/t4mec.stp", "front", 17, 1},
     {"step/trj8_b1-ec-214.stp", "iso", 0, 5},
     {"step/trj8_b1-ec-214.stp", "front", 0, 1},
     {"iges/ship_part5.igs", "iso", 0, 5},
@@ -137,7 +139,7 @@ const KnownShadow kKnownShadowDisagreements[] = {
     {"step/r0901_ec.stp", "front", 0, 1},
     {"step/trj2_io1-ca-214.stp", "iso", 0, 2},
     {"step/trj2_io1-ca-214.stp", "front", 0, 3},
-    {"step/trj5_k1-ct-214.stp", "iso", 20, 0},
+    {"step/trj5_k1-ct-214.stp", "iso", 18, 0},
     {"iges/bearing.iges", "iso", 0, 1},
     {"iges/bearing.iges", "front", 0, 1},
     {"iges/hammer.iges", "iso", 1, 6},
