@@ -100,6 +100,9 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 // and 98 leaks over all models to 41 and 89, single entries by up to 6; meshing
 // the analytic faces themselves (instead of their B-spline conversions with
 // re-fitted pcurves) moved them to 51 and 90, raising 6 entries and lowering 6.
+// (Those moves were partly the sample's: an even stride over the shadowed and
+// lit pixels shifted every sample when one pixel changed. The sample is now a
+// fixed pseudo-random subset per pixel; re-counted with it: 47 and 88.)
 // Causes, diagnosed on
 // samples (trj8, cornetta, t4mec, trj5; the other models' disagreements were
 // not each traced):
@@ -121,35 +124,35 @@ struct KnownShadow {
     long false_shadows, leaks;
 };
 const KnownShadow kKnownShadowDisagreements[] = {
-    {"step/bug32596_abc_0_13.step", "iso", 0, 1},
-    {"step/bug32596_abc_0_13.step", "front", 0, 1},
-    {"step/ec_turbine-A.stp", "front", 8, 8},
-    {"step/t4mec.stp", "front", 17, 1},
-    {"step/trj8_b1-ec-214.stp", "iso", 0, 5},
-    {"step/trj8_b1-ec-214.stp", "front", 0, 1},
-    {"iges/ship_part5.igs", "iso", 0, 5},
-    {"duck/duck_from_glscene.stp", "iso", 0, 1},
     {"step/box_sides.STEP", "iso", 1, 4},
-    {"step/bug24595_281390.stp", "front", 0, 1},
     {"step/bug31670_russian.stp", "iso", 0, 6},
     {"step/bug31670_russian.stp", "front", 0, 3},
+    {"step/bug32596_abc_0_13.step", "iso", 0, 1},
+    {"step/bug32596_abc_0_13.step", "front", 0, 1},
     {"step/cylinder_block.stp", "iso", 0, 9},
     {"step/cylinder_block.stp", "front", 0, 10},
+    {"step/ec_turbine-A.stp", "iso", 0, 1},
+    {"step/ec_turbine-A.stp", "front", 8, 8},
+    {"step/linkrods.step", "iso", 1, 0},
     {"step/r0901_ec.stp", "iso", 0, 6},
     {"step/r0901_ec.stp", "front", 0, 1},
+    {"step/screw.step", "iso", 0, 1},
+    {"step/t4mec.stp", "front", 17, 1},
     {"step/trj2_io1-ca-214.stp", "iso", 0, 2},
     {"step/trj2_io1-ca-214.stp", "front", 0, 3},
     {"step/trj5_k1-ct-214.stp", "iso", 18, 0},
-    {"iges/bearing.iges", "iso", 0, 1},
-    {"iges/bearing.iges", "front", 0, 1},
-    {"iges/hammer.iges", "iso", 1, 6},
+    {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
+    {"step/trj8_b1-ec-214.stp", "front", 0, 1},
+    {"iges/bearing.iges", "iso", 0, 4},
+    {"iges/hammer.iges", "iso", 1, 4},
+    {"iges/heartValve.igs", "iso", 0, 1},
     {"iges/marsCapsule.igs", "iso", 0, 2},
     {"iges/marsCapsule.igs", "front", 1, 0},
-    {"iges/ship_kcs.igs", "iso", 0, 8},
+    {"iges/ship_kcs.igs", "iso", 0, 7},
+    {"iges/ship_kcs.igs", "front", 0, 1},
+    {"iges/ship_part5.igs", "iso", 0, 5},
     {"duck/duck_from_glscene.igs", "iso", 0, 1},
-    {"step/ec_turbine-A.stp", "iso", 0, 1},
-    {"step/linkrods.step", "iso", 1, 0},
-    {"step/screw.step", "iso", 0, 1},
+    {"duck/duck_from_glscene.stp", "iso", 0, 1},
 };
 
 const KnownShadow* known_shadow(const std::string& rel, const std::string& view) {

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <iomanip>
 #include <sstream>
 #include <vector>
@@ -26,6 +27,16 @@ constexpr double kFacingCosine = 0.05;
 // matters (a contact shadow narrower than 1e-5 of the model is invisible).
 constexpr double kStartOffsetRelative = 1e-5;
 constexpr size_t kMaxListed = 6;
+
+// A fixed pseudo-random number in [0, 1) per pixel index (SplitMix64's finalizer,
+// Steele et al. 2014): the same pixels are sampled in every run.
+double unit_hash(size_t k) {
+    uint64_t z = static_cast<uint64_t>(k) + 0x9e3779b97f4a7c15ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * 0x1p-53;
+}
 
 }  // namespace
 
@@ -79,11 +90,15 @@ ShadowCheckReport shadow_check(const Scene& scene, ReferenceIntersector& inter, 
             else
                 (im.shadow[k] ? shadowed : lit).push_back({i, j, others > 0});
         }
-    // Singles first, then even samples of the rest.
+    // Singles first, then samples of the rest: each pixel is taken when its own
+    // hash falls below cap / count, so whether a pixel is sampled does not depend
+    // on the others (an even stride over the list moved every sample when one
+    // pixel more was shadowed, and the counts jumped by chance).
     std::vector<Pick> picks(singles.begin(), singles.begin() + std::min(singles.size(), kMaxSingles));
     for (const auto& [all, cap] : {std::pair{&shadowed, kMaxShadowedSamples}, std::pair{&lit, kMaxLitSamples}}) {
-        const size_t stride = std::max<size_t>(1, (all->size() + cap - 1) / cap);
-        for (size_t q = 0; q < all->size(); q += stride) picks.push_back((*all)[q]);
+        const double fraction = static_cast<double>(cap) / static_cast<double>(std::max<size_t>(all->size(), 1));
+        for (const Pick& p : *all)
+            if (unit_hash(index(p.i, p.j)) < fraction) picks.push_back(p);
     }
     std::ostringstream detail;
     size_t listed = 0;

@@ -30,8 +30,9 @@ namespace nurbsrt::test {
 
 // How many pixels of a frame are re-cast, at most: every pixel whose flag
 // differs from all its neighbours' (a speckle if wrong) up to kMaxSingles, then
-// evenly spaced samples of the shadowed and of the lit pixels. Acne and leaks
-// that are not single pixels are patches or lines, which an even sample finds;
+// about this many samples of the shadowed and of the lit pixels, a fixed
+// pseudo-random subset. Acne and leaks that are not single pixels are patches
+// or lines, which such a sample finds;
 // all pixels would cost minutes per frame on the models whose reference rays
 // are slow (~1 ms). A fixed count, not a time budget, so that the counts a
 // test compares are the same on any machine.
