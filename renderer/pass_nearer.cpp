@@ -98,6 +98,17 @@ public:
             if (!c_.in_frame(q[0], q[1]) || !c_.in_frame(q[2], q[3])) continue;
             const PixelHit& a = hits_[c_.map.index(q[0], q[1])];
             const PixelHit& b = hits_[c_.map.index(q[2], q[3])];
+            if (!a.face != !b.face) {
+                // One side background: the pixel lies on a silhouette, next to a
+                // neighbour nearer by more than a footprint (another sheet), where a
+                // fold's near sheet reaches the silhouette over a run of far-sheet
+                // pixels that the pairs above peel down to here (a dense folded face
+                // seen edge-on, step/bug29715_slow.stp): solved from that neighbour.
+                const PixelHit& n = a.face ? a : b;
+                if (n.t < p.t - kSheetFootprints * c_.pixel_footprint(p.t))
+                    consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
+                continue;
+            }
             if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + spike_)) continue;
             // Only from a neighbour on another face, or on another sheet of the same
             // face: its (u, v) jumps. A smoothly curved concave sheet, where depth
@@ -268,8 +279,9 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     const int W = c.width;
     // The first pass examines every pixel; replacements are collected per row
     // (almost always none) and applied between passes, so no frame-sized buffer is
-    // needed for a handful of pixels. Later passes examine only the 4-neighbours of
-    // the pixels the last pass changed.
+    // needed for a handful of pixels. Later passes examine only the 8 neighbours of
+    // the pixels the last pass changed (a diagonal neighbour's new hit is a start
+    // too: fill_pit and other_sheet_starts solve from the whole 3x3).
     std::vector<std::vector<Update>> row_updates(c.height);
     std::vector<double> depth(c.pixels());
     for (size_t k = 0; k < depth.size(); ++k) depth[k] = b.hits[k].face ? b.hits[k].t : HUGE_VAL;
@@ -292,7 +304,7 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
             b.hits[u.k] = u.hit;
             const int i = static_cast<int>(u.k % W), j = static_cast<int>(u.k / W);
             for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
-                if ((ni == i) != (nj == j)) cand.push_back(c.map.index(ni, nj));  // the 4-neighbours
+                if (ni != i || nj != j) cand.push_back(c.map.index(ni, nj));
             });
         }
         replaced += updates.size();

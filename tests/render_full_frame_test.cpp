@@ -67,10 +67,6 @@ struct Known {
     const char* cause;
 };
 const Known kKnownRemaining[] = {
-    {"step/bug29715_slow.stp", "front", 0, 2,
-     "one dense folded face seen edge-on: two pixels between row and column neighbours on the same farther "
-     "sheet; the nearer root is reached from another neighbour's start only, which the nearer-sheet pass "
-     "does not try"},
     // At the fitted views' framing (5 % margin) these pixels land on defects the
     // old framing did not sample: a farther root of the pixel's own face, and on
     // the capsule a face in front not in the candidates.
