@@ -168,11 +168,13 @@ public:
 
 private:
     // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
-    void consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
-                  PixelHit& best) const {
+    // Returns the solve's outcome.
+    Outcome consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
+                     PixelHit& best) const {
         PixelHit h;
         const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h);
         if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
+        return o;
     }
     // A pit that the pair's own starts did not fill, tried further with the
     // robust Newton (clamp-and-continue at borders, backtracking), in order of
@@ -237,9 +239,10 @@ private:
     }
     // The faces adjacent to those of the 3x3 around pixel (i, j), hit or in the
     // map (PreparedFace::adjacent), that none of them shows, from their mesh
-    // starts; failing those, the faces adjacent to them in turn (a small face in
-    // front that only touches a thin one between it and the 3x3's: a Russian
-    // part's flange, step/bug31670_russian.stp). Both rings only within reach on screen.
+    // starts; failing those, the faces adjacent to those whose surface the ray
+    // crosses outside their trim (the ray passes beyond that face's edge, where a
+    // face joining it there may lie in front: a Russian part's flange behind a
+    // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const {
         uint32_t near[18 + kMaxAdjacentFaces];
         int nn = 0;
@@ -253,15 +256,25 @@ private:
         // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
         const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
         const PixelHit p = best;
-        for (int ring = 0; ring < 2 && best.face == p.face && best.t == p.t; ++ring) {
-            MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-            const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
-            for (int q = 0; q < nf; ++q) {
-                for (int k = 0; k < faces[q].nstarts; ++k)
-                    consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
-                             static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
-                near[nn++] = faces[q].id;
-            }
+        uint32_t crossed[kMaxAdjacentFaces];  // the first ring's faces crossed outside their trim
+        int nc = 0;
+        MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
+        const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
+        for (int q = 0; q < nf; ++q) {
+            bool outside = false;
+            for (int k = 0; k < faces[q].nstarts; ++k)
+                outside |= consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                                    static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best) == kTrimmed;
+            if (outside) crossed[nc++] = faces[q].id;
+            near[nn++] = faces[q].id;
+        }
+        if (!nc || best.face != p.face || best.t != p.t) return;
+        const int nf2 = screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach);
+        for (int q = 0; q < nf2; ++q) {
+            if (std::find(near, near + nn, faces[q].id) != near + nn) continue;  // tried already
+            for (int k = 0; k < faces[q].nstarts; ++k)
+                consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                         static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
         }
     }
     const FrameContext& c_;
@@ -279,9 +292,10 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     const int W = c.width;
     // The first pass examines every pixel; replacements are collected per row
     // (almost always none) and applied between passes, so no frame-sized buffer is
-    // needed for a handful of pixels. Later passes examine only the 8 neighbours of
-    // the pixels the last pass changed (a diagonal neighbour's new hit is a start
-    // too: fill_pit and other_sheet_starts solve from the whole 3x3).
+    // needed for a handful of pixels. Later passes examine only the 4-neighbours of
+    // the pixels the last pass changed. (All 8 would let a diagonal neighbour's new
+    // hit start fill_pit's solves too: one more dense-fold pixel of bug29715_slow
+    // right, for 7-19 % more solves in this pass, most of them repeats.)
     std::vector<std::vector<Update>> row_updates(c.height);
     std::vector<double> depth(c.pixels());
     for (size_t k = 0; k < depth.size(); ++k) depth[k] = b.hits[k].face ? b.hits[k].t : HUGE_VAL;
@@ -304,7 +318,7 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
             b.hits[u.k] = u.hit;
             const int i = static_cast<int>(u.k % W), j = static_cast<int>(u.k / W);
             for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
-                if (ni != i || nj != j) cand.push_back(c.map.index(ni, nj));
+                if ((ni == i) != (nj == j)) cand.push_back(c.map.index(ni, nj));  // the 4-neighbours
             });
         }
         replaced += updates.size();
