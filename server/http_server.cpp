@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdint>
 #include <cstring>
 #include <deque>
 #include <functional>
@@ -46,6 +47,14 @@ constexpr int kLingerIdleMs = 500;
 // Read buffer of a connection, as cpp-httplib's own SocketStream (its line
 // reader asks for one byte at a time).
 constexpr size_t kReadBufferBytes = 4096;
+// Admission follows the accept order (below); a connection whose turn does not
+// come within this time (its predecessor's thread never got to decide) is
+// decided anyway, so one lost turn cannot stall every later connection.
+constexpr auto kAdmissionTurnWait = std::chrono::seconds(2);
+
+// The accept order of the connection the current thread serves: cpp-httplib
+// accepts on one thread and hands each socket to the pool as one task.
+thread_local uint64_t t_accept_ticket = 0;
 
 // Threads grow with the open connections up to a cap and then stay (an idle
 // thread costs its stack's address space, a few KiB of memory): a connection
@@ -57,7 +66,7 @@ public:
 
     void enqueue(std::function<void()> fn) override {
         std::lock_guard lock(mutex_);
-        tasks_.push_back(std::move(fn));
+        tasks_.push_back({next_ticket_++, std::move(fn)});
         if (idle_ < tasks_.size() && threads_.size() < max_threads_) threads_.emplace_back([this] { work(); });
         cond_.notify_one();
     }
@@ -75,24 +84,30 @@ public:
 private:
     void work() {
         for (;;) {
-            std::function<void()> fn;
+            Task task;
             {
                 std::unique_lock lock(mutex_);
                 ++idle_;
                 cond_.wait(lock, [&] { return stopping_ || !tasks_.empty(); });
                 --idle_;
                 if (tasks_.empty()) return;  // stopping and nothing left
-                fn = std::move(tasks_.front());
+                task = std::move(tasks_.front());
                 tasks_.pop_front();
             }
-            fn();
+            t_accept_ticket = task.ticket;
+            task.fn();
         }
     }
 
     const size_t max_threads_;
     std::mutex mutex_;
     std::condition_variable cond_;
-    std::deque<std::function<void()>> tasks_;
+    struct Task {
+        uint64_t ticket = 0;
+        std::function<void()> fn;
+    };
+    std::deque<Task> tasks_;
+    uint64_t next_ticket_ = 0;
     std::vector<std::thread> threads_;
     size_t idle_ = 0;
     bool stopping_ = false;
@@ -289,6 +304,12 @@ struct GuardedServer::Tracker {
     std::mutex mutex;
     int total = 0;
     std::map<std::string, int> per_client;
+    // Connections are admitted in accept order: a client's fifth connection
+    // under a cap of four is the one refused, however the pool's threads are
+    // scheduled (a thread that starts late would otherwise let a later
+    // connection take its place).
+    std::condition_variable turn;
+    uint64_t next_turn = 0;
 };
 
 GuardedServer::GuardedServer(const ConnectionLimits& limits) : limits_(limits), tracker_(std::make_unique<Tracker>()) {
@@ -337,7 +358,11 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
 
     bool admitted = false;
     {
-        std::lock_guard lock(tracker_->mutex);
+        std::unique_lock lock(tracker_->mutex);
+        const uint64_t ticket = t_accept_ticket;
+        tracker_->turn.wait_for(lock, kAdmissionTurnWait, [&] { return tracker_->next_turn >= ticket; });
+        tracker_->next_turn = std::max(tracker_->next_turn, ticket + 1);
+        tracker_->turn.notify_all();
         int& mine = tracker_->per_client[client];
         if (tracker_->total < limits_.max_connections && mine < limits_.max_connections_per_client) {
             ++tracker_->total;
