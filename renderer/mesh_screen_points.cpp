@@ -49,7 +49,42 @@ double segment_distance2(Vec2 p, Vec2 a, Vec2 b, double& t) {
     return dx * dx + dy * dy;
 }
 
+// The parameters [s0, s1] of the part of segment ab within sqrt(r2) of p;
+// false if none: |a + s (b - a) - p|^2 <= r2, a quadratic in s, clipped to [0, 1].
+bool segment_in_disk(Vec2 a, Vec2 b, Vec2 p, double r2, double& s0, double& s1) {
+    const double ex = b.x - a.x, ey = b.y - a.y, fx = a.x - p.x, fy = a.y - p.y;
+    const double A = ex * ex + ey * ey, B = fx * ex + fy * ey, C = fx * fx + fy * fy - r2;
+    if (A == 0) {
+        s0 = s1 = 0;
+        return C <= 0;
+    }
+    const double disc = B * B - A * C;
+    if (disc < 0) return false;
+    const double root = std::sqrt(disc);
+    s0 = std::max((-B - root) / A, 0.0);
+    s1 = std::min((-B + root) / A, 1.0);
+    return s0 <= s1;
+}
+
 Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }
+
+// Barycentric coordinates l of p in the screen triangle ABC; false if p lies
+// outside it or the triangle is degenerate.
+bool inside_triangle(Vec2 p, Vec2 A, Vec2 B, Vec2 C, double l[3]) {
+    const double det = (B.y - C.y) * (A.x - C.x) + (C.x - B.x) * (A.y - C.y);
+    if (det == 0) return false;
+    l[0] = ((B.y - C.y) * (p.x - C.x) + (C.x - B.x) * (p.y - C.y)) / det;
+    l[1] = ((C.y - A.y) * (p.x - C.x) + (A.x - C.x) * (p.y - C.y)) / det;
+    l[2] = 1.0 - l[0] - l[1];
+    return l[0] >= 0 && l[1] >= 0 && l[2] >= 0;
+}
+
+// The depth and the (u, v) at barycentric coordinates l of a mesh triangle.
+double interpolated_depth(const double l[3], const double z[3]) { return l[0] * z[0] + l[1] * z[1] + l[2] * z[2]; }
+Vec2 interpolated_uv(const double l[3], const FaceMesh& mesh, const uint32_t* idx) {
+    const Vec2 &a = mesh.uv[idx[0]], &b = mesh.uv[idx[1]], &c = mesh.uv[idx[2]];
+    return {l[0] * a.x + l[1] * b.x + l[2] * c.x, l[0] * a.y + l[1] * b.y + l[2] * c.y};
+}
 
 // Squared distance from p to the box [x0, x1] x [y0, y1] (0 inside).
 double box_distance2(Vec2 p, double x0, double x1, double y0, double y1) {
@@ -219,17 +254,11 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
         if (box_distance2(p, std::min({A.x, B.x, C.x}), std::max({A.x, B.x, C.x}), std::min({A.y, B.y, C.y}),
                           std::max({A.y, B.y, C.y})) > best.d2)
             return;
-        const double det = (B.y - C.y) * (A.x - C.x) + (C.x - B.x) * (A.y - C.y);
-        if (det != 0) {  // barycentric coordinates of p
-            const double l0 = ((B.y - C.y) * (p.x - C.x) + (C.x - B.x) * (p.y - C.y)) / det;
-            const double l1 = ((C.y - A.y) * (p.x - C.x) + (A.x - C.x) * (p.y - C.y)) / det;
-            const double l2 = 1.0 - l0 - l1;
-            if (l0 >= 0 && l1 >= 0 && l2 >= 0) {
-                const Vec2 &ua = mesh.uv[idx[0]], &ub = mesh.uv[idx[1]], &uc = mesh.uv[idx[2]];
-                best.offer(0.0, l0 * q[0]->depth + l1 * q[1]->depth + l2 * q[2]->depth,
-                           {l0 * ua.x + l1 * ub.x + l2 * uc.x, l0 * ua.y + l1 * ub.y + l2 * uc.y}, 3 * uint64_t(t));
-                return;
-            }
+        double l[3];
+        const double z3[3] = {q[0]->depth, q[1]->depth, q[2]->depth};
+        if (inside_triangle(p, A, B, C, l)) {
+            best.offer(0.0, interpolated_depth(l, z3), interpolated_uv(l, mesh, idx), 3 * uint64_t(t));
+            return;
         }
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = idx[k], b = idx[(k + 1) % 3];
@@ -276,6 +305,140 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
         if (q->found && (n == 0 || out[0].x != q->uv.x || out[0].y != q->uv.y)) out[n++] = q->uv;
     if (n == 0) return none();
     if (screen_d2) *screen_d2 = best.found ? best.d2 : vertex.d2;
+    return n;
+}
+
+bool MeshScreenPoints::frontmost_point(uint32_t id, ScreenPoint sp, double max_d2, Vec2& uv, double& depth) const {
+    const Entry& e = projected(id);
+    const std::vector<Projected>& pts = e.pts;
+    const Vec2 p{sp.sx, sp.sy};
+    if (!(box_distance2(p, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2)) return false;
+    const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+    NearestPoint front;  // ordered by depth: offer(depth, 0, ...)
+    // Per triangle within reach: depth is linear over it, so its minimum over the
+    // triangle's part inside the disk of reach around p lies on that part's
+    // border: at an end of an edge's part inside the disk, or on the disk's rim
+    // at the point against the depth gradient, where that lies in the triangle.
+    const double r = std::sqrt(max_d2);
+    auto test_triangle = [&](uint32_t t) {
+        const uint32_t* idx = &mesh.triangles[3 * t];
+        const Projected* q[3] = {&pts[idx[0]], &pts[idx[1]], &pts[idx[2]]};
+        const Vec2 A = q[0]->s, B = q[1]->s, C = q[2]->s;
+        if (box_distance2(p, std::min({A.x, B.x, C.x}), std::max({A.x, B.x, C.x}), std::min({A.y, B.y, C.y}),
+                          std::max({A.y, B.y, C.y})) > max_d2)
+            return;
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = idx[k], b = idx[(k + 1) % 3];
+            double s0 = 0, s1 = 0;
+            if (!segment_in_disk(pts[a].s, pts[b].s, p, max_d2, s0, s1)) continue;
+            for (const double s : {s0, s1})
+                front.offer(pts[a].depth + s * (pts[b].depth - pts[a].depth), 0, lerp(mesh.uv[a], mesh.uv[b], s),
+                            4 * uint64_t(t) + k);
+        }
+        // The screen gradient g of depth: z(x) = z(A) + g . (x - A) at B and C.
+        const double bx = B.x - A.x, by = B.y - A.y, cx = C.x - A.x, cy = C.y - A.y, det = bx * cy - by * cx;
+        if (det == 0) return;
+        const double zb = q[1]->depth - q[0]->depth, zc = q[2]->depth - q[0]->depth;
+        const double gx = (zb * cy - zc * by) / det, gy = (zc * bx - zb * cx) / det, g = std::hypot(gx, gy);
+        const Vec2 rim = g > 0 ? Vec2{p.x - r * gx / g, p.y - r * gy / g} : p;
+        double l[3];
+        const double z3[3] = {q[0]->depth, q[1]->depth, q[2]->depth};
+        if (inside_triangle(rim, A, B, C, l))
+            front.offer(interpolated_depth(l, z3), 0, interpolated_uv(l, mesh, idx), 4 * uint64_t(t) + 3);
+    };
+    if (const Grid* g = grid(id)) {
+        for_near_cells(*g, p, [&] { return max_d2; }, [&](size_t cell) {
+            for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) test_triangle(g->tris[q]);
+        });
+    } else {
+        const size_t ntri = mesh.triangles.size() / 3;
+        for (size_t t = 0; t < ntri; ++t)
+            if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
+    }
+    if (!front.found) return false;
+    uv = front.uv;
+    depth = front.d2;
+    return true;
+}
+
+int MeshScreenPoints::starts_in_front(uint32_t id, ScreenPoint sp, double max_d2, double max_depth, Vec2* out,
+                                      int max_out) const {
+    const Entry& e = projected(id);
+    const std::vector<Projected>& pts = e.pts;
+    const Vec2 p{sp.sx, sp.sy};
+    if (!(box_distance2(p, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2) || max_out <= 0) return 0;
+    const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+    NearestPoint best;
+    best.d2 = std::nextafter(max_d2, HUGE_VAL);  // points at the bound still count
+    // The sheets covering sp: (depth, key, uv) of each triangle part that contains it.
+    struct Cover {
+        double z;
+        uint64_t key;
+        Vec2 uv;
+    };
+    std::vector<Cover> covers;
+    // A polygon vertex: screen position, depth, (u, v).
+    struct Corner {
+        Vec2 s;
+        double z;
+        Vec2 uv;
+    };
+    auto test_triangle = [&](uint32_t t) {
+        const uint32_t* idx = &mesh.triangles[3 * t];
+        const Vec2 A = pts[idx[0]].s, B = pts[idx[1]].s, C = pts[idx[2]].s;
+        if (box_distance2(p, std::min({A.x, B.x, C.x}), std::max({A.x, B.x, C.x}), std::min({A.y, B.y, C.y}),
+                          std::max({A.y, B.y, C.y})) > best.d2)
+            return;
+        // The triangle clipped to depth < max_depth (Sutherland & Hodgman 1974,
+        // one plane): depth is linear over it, so the part is a convex polygon.
+        Corner poly[4];
+        int n = 0;
+        for (int k = 0; k < 3; ++k) {
+            const Projected &a = pts[idx[k]], &b = pts[idx[(k + 1) % 3]];
+            const Vec2 &ua = mesh.uv[idx[k]], &ub = mesh.uv[idx[(k + 1) % 3]];
+            if (a.depth < max_depth) poly[n++] = {a.s, a.depth, ua};
+            if ((a.depth < max_depth) != (b.depth < max_depth)) {
+                const double w = (max_depth - a.depth) / (b.depth - a.depth);
+                poly[n++] = {lerp(a.s, b.s, w), max_depth, lerp(ua, ub, w)};
+            }
+        }
+        if (n == 0) return;
+        // p inside the polygon: the nearest point is p itself (a fan of triangles).
+        for (int k = 1; k + 1 < n; ++k) {
+            double l[3];
+            if (!inside_triangle(p, poly[0].s, poly[k].s, poly[k + 1].s, l)) continue;
+            const double z3[3] = {poly[0].z, poly[k].z, poly[k + 1].z};
+            const Vec2 uv3 = {l[0] * poly[0].uv.x + l[1] * poly[k].uv.x + l[2] * poly[k + 1].uv.x,
+                              l[0] * poly[0].uv.y + l[1] * poly[k].uv.y + l[2] * poly[k + 1].uv.y};
+            covers.push_back({interpolated_depth(l, z3), 4 * uint64_t(t), uv3});
+            best.offer(0.0, covers.back().z, uv3, 4 * uint64_t(t));
+            return;
+        }
+        for (int k = 0; k < n; ++k) {
+            const Corner &a = poly[k], &b = poly[(k + 1) % n];
+            double w = 0;
+            const double d2 = segment_distance2(p, a.s, b.s, w);
+            best.offer(d2, a.z + w * (b.z - a.z), lerp(a.uv, b.uv, w), 4 * uint64_t(t) + k);
+        }
+    };
+    if (const Grid* g = grid(id)) {
+        for_near_cells(*g, p, [&] { return best.d2; }, [&](size_t cell) {
+            for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) test_triangle(g->tris[q]);
+        });
+    } else {
+        const size_t ntri = mesh.triangles.size() / 3;
+        for (size_t t = 0; t < ntri; ++t)
+            if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
+    }
+    if (!best.found) return 0;
+    if (covers.empty()) {
+        out[0] = best.uv;
+        return 1;
+    }
+    std::sort(covers.begin(), covers.end(),
+              [](const Cover& x, const Cover& y) { return x.z < y.z || (x.z == y.z && x.key < y.key); });
+    const int n = std::min(static_cast<int>(covers.size()), max_out);
+    for (int k = 0; k < n; ++k) out[k] = covers[k].uv;
     return n;
 }
 

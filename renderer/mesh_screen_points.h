@@ -1,5 +1,6 @@
-// Starts (u, v) for a face that no pixel near a rescued one shows, from the
-// face's map mesh projected on screen (the rescue and nearer-sheet passes).
+// Starts (u, v) for a face that no pixel near a rescued one shows, or for a
+// sheet of a pixel's own face in front of its hit, from the face's map mesh
+// projected on screen (the rescue and nearer-sheet passes).
 #pragma once
 
 #include <atomic>
@@ -39,6 +40,19 @@ public:
     // starts where it lies farther, and the search skips what lies beyond.
     int nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2 = nullptr,
                        double max_d2 = HUGE_VAL) const;
+
+    // The (u, v) of the face's mesh point nearest to the eye (least depth along
+    // the view direction) among those within sqrt(max_d2) of sp on screen (max_d2
+    // finite), and its depth; false if there is none. Exact for the mesh's
+    // piecewise linear depth: a sheet in front of another of the same face (a
+    // fold, whose near sheet's mesh may stop short of a pixel its surface covers).
+    bool frontmost_point(uint32_t id, ScreenPoint sp, double max_d2, Vec2& uv, double& depth) const;
+
+    // Starts on the part of the face's mesh nearer to the eye than max_depth
+    // (the mesh clipped at that depth): the (u, v) of each of its sheets that
+    // covers sp, nearest to the eye first (at most max_out), or where none does,
+    // of its point nearest to sp on screen within sqrt(max_d2). Returns how many.
+    int starts_in_front(uint32_t id, ScreenPoint sp, double max_d2, double max_depth, Vec2* out, int max_out) const;
 
     // A face that no pixel near sp shows, with its nearest_starts.
     struct FarFace {

@@ -62,6 +62,11 @@ constexpr int kMaxAdjacentFaces = 12;
 // ... and only those whose mesh comes within 2 pixels of the pit on screen (the
 // faces adjacent to a pit's are sorted nearest first, so the rest are farther).
 constexpr double kPitFacePixels = 2.0;
+// Sheets of the pixel's own face in front of its hit that are tried, nearest
+// to the eye first: a face folded over itself many times (a dense spring or
+// coil seen edge-on) puts several there, and the map's front one may be a mesh
+// sheet the exact ray passes by.
+constexpr int kMaxSheetsInFront = 4;
 
 struct Update {
     size_t k;
@@ -182,7 +187,8 @@ private:
     // band here makes the pixel a pit for its neighbours in turn, and the
     // peeling passes would spread the band over the face behind, a pixel at a
     // time (it did, on a machine component, over 1.6 mm beyond a face's edge): from every 3x3 neighbour's converged
-    // (u, v), from the 3x3's map starts (the map may show the nearer face next to
+    // (u, v), from the pixel's own face's mesh in front of its hit (own_mesh_in_front),
+    // from the 3x3's map starts (the map may show the nearer face next to
     // the pixel while the neighbours' hits lie on others), then the faces adjacent
     // to these that none of them shows: a face too thin for the map to show any
     // pixel of it here (a fillet or blend strip seen edge-on) lies in front,
@@ -210,6 +216,7 @@ private:
                     consider(c_.map.face[n], i, j, c_.map.u[n], c_.map.v[n], solver_.robust, false, best);
             });
             if (kind == 0 && !found()) other_sheet_starts(i, j, best);
+            if (kind == 0 && !found()) own_mesh_in_front(i, j, best);
         }
         if (!found()) adjacent_faces(i, j, best);
     }
@@ -236,6 +243,34 @@ private:
             if (h.t < p.t - sheet) consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
             return best.face == p.face && best.t == p.t;  // on until found
         });
+    }
+    // Where no neighbour's hit starts Newton on the pixel's own face's nearer
+    // sheet (its neighbours show other faces, or the same far sheet), the face's
+    // mesh in front of the hit (by a footprint) may: at a fold seen near its
+    // silhouette the near sheet's mesh, a chord, stops short of pixels its
+    // surface covers, and the map shows the far sheet there; the near root then
+    // lies by that mesh's frontmost part within reach. A face folded many times
+    // puts several sheets in front, the map's front one possibly a mesh sheet
+    // the exact ray passes by: each sheet covering the pixel, front to back.
+    void own_mesh_in_front(int i, int j, PixelHit& best) const {
+        const PixelHit p = best;
+        const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+        const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
+        const double max_depth =
+            (p.t - kSheetFootprints * c_.pixel_footprint(p.t)) / c_.camera.hit_distance_from_depth(1.0, sp);
+        Vec2 start;
+        double depth = 0;
+        auto from = [&](Vec2 uv) {
+            consider(p.face, i, j, static_cast<float>(uv.x), static_cast<float>(uv.y), solver_.robust, false, best);
+            return best.face != p.face || best.t != p.t;
+        };
+        if (screen_points_.frontmost_point(p.face, sp, reach * reach, start, depth) && depth < max_depth &&
+            from(start))
+            return;
+        Vec2 starts[kMaxSheetsInFront];
+        const int n = screen_points_.starts_in_front(p.face, sp, reach * reach, max_depth, starts, kMaxSheetsInFront);
+        for (int k = 0; k < n; ++k)
+            if (from(starts[k])) return;
     }
     // The faces adjacent to those of the 3x3 around pixel (i, j), hit or in the
     // map (PreparedFace::adjacent), that none of them shows, from their mesh

@@ -74,9 +74,15 @@ const Known kKnownRemaining[] = {
     // old framing did not sample: a farther root of the pixel's own face, and on
     // the capsule a face in front not in the candidates.
     {"iges/marsCapsule.igs", "iso", 0, 1, "a face in front not in the candidates (not adjacent to the 3x3's)"},
-    {"iges/heartValve.igs", "iso", 0, 1,
-     "a farther root of the pixel's own face, at the face's silhouette next to the background; Newton from the "
-     "neighbours' starts reaches the farther root too, the nearer one lies near the face's parameter border"},
+    // The trim loops sampled to 1e-5 of the (u, v) box (was 1e-4) narrow the
+    // trim band; these pixels were covered by a band hit of a neighbouring face
+    // at about the right depth before, and show what lies behind that band now.
+    {"iges/heartValve.igs", "iso", 2, 0,
+     "a face seen through a real gap between two faces that do not touch (IGES, unsewn): it is not in the map "
+     "within 10 pixels (hidden behind the two), nor adjacent by mesh nodes to any face there"},
+    {"step/r0901_ec.stp", "iso", 0, 1,
+     "the map's face at the pixel diverges from the map's start, robust Newton too, and no neighbour is hit on "
+     "it; a farther face fills the pixel"},
     // With the map meshed from the analytic faces themselves (their surfaces
     // converted alone, without re-fitted pcurves) this pixel lands on a defect
     // the B-spline faces' mesh did not expose; the mesh decides which pixels the
@@ -102,6 +108,9 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 // (Those moves were partly the sample's: an even stride over the shadowed and
 // lit pixels shifted every sample when one pixel changed. The sample is now a
 // fixed pseudo-random subset per pixel; re-counted with it: 47 and 88.)
+// Trim loops sampled to 1e-5 of the (u, v) box instead of 1e-4 (their band, 2x
+// the trim uncertainty, was up to 200x the models' edge tolerance: t4mec 0.245
+// mm against 0.0012): 47 -> 4 false shadows, 88 -> 51 leaks.
 // Causes, diagnosed on
 // samples (trj8, cornetta, t4mec, trj5; the other models' disagreements were
 // not each traced):
@@ -116,7 +125,9 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    band and within a light-map pixel of the point, entering, where the exact
 //    face is not crossed (taken for a concave edge's contact); the crossings
 //    higher above the point's surface than the band is wide are no longer taken
-//    (19 -> 17 and 20 -> 18), the rest lie within that height.
+//    (19 -> 17 and 20 -> 18), the rest lay within that height: the band was
+//    wide because the trim loops were sampled coarsely (above; t4mec 17 -> 0,
+//    trj5 18 -> 2 with the finer loops).
 struct KnownShadow {
     const char* model;
     const char* view;
@@ -126,24 +137,17 @@ const KnownShadow kKnownShadowDisagreements[] = {
     {"step/box_sides.STEP", "iso", 1, 4},
     {"step/bug31670_russian.stp", "iso", 0, 6},
     {"step/bug31670_russian.stp", "front", 0, 3},
-    {"step/bug32596_abc_0_13.step", "iso", 0, 1},
-    {"step/bug32596_abc_0_13.step", "front", 0, 1},
-    {"step/cylinder_block.stp", "iso", 0, 9},
-    {"step/cylinder_block.stp", "front", 0, 10},
+    {"step/cylinder_block.stp", "front", 0, 1},
     {"step/ec_turbine-A.stp", "iso", 0, 1},
-    {"step/ec_turbine-A.stp", "front", 8, 8},
-    {"step/linkrods.step", "iso", 1, 0},
-    {"step/r0901_ec.stp", "iso", 0, 6},
+    {"step/ec_turbine-A.stp", "front", 0, 1},
+    {"step/r0901_ec.stp", "iso", 0, 2},
     {"step/r0901_ec.stp", "front", 0, 1},
-    {"step/screw.step", "iso", 0, 1},
-    {"step/t4mec.stp", "front", 17, 1},
-    {"step/trj2_io1-ca-214.stp", "iso", 0, 2},
-    {"step/trj2_io1-ca-214.stp", "front", 0, 3},
-    {"step/trj5_k1-ct-214.stp", "iso", 18, 0},
+    {"step/t4mec.stp", "front", 0, 1},
+    {"step/trj5_k1-ct-214.stp", "iso", 2, 0},
     {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
     {"step/trj8_b1-ec-214.stp", "front", 0, 1},
     {"iges/bearing.iges", "iso", 0, 4},
-    {"iges/hammer.iges", "iso", 1, 4},
+    {"iges/hammer.iges", "iso", 0, 4},
     {"iges/heartValve.igs", "iso", 0, 1},
     {"iges/marsCapsule.igs", "iso", 0, 2},
     {"iges/marsCapsule.igs", "front", 1, 0},
