@@ -7,6 +7,8 @@
 
 namespace nurbsrt {
 
+using namespace screen;
+
 namespace {
 
 // Triangles per grid cell aimed at: a query then tests a few cells' worth of
@@ -20,77 +22,6 @@ constexpr int kMaxCellsPerAxis = 128;
 // face asked about once or twice (most candidates of the nearer-sheet pass)
 // never pays for a grid; one along a long silhouette does after a few pixels.
 constexpr uint32_t kQueriesBeforeGrid = 4;
-// Slack on cell bounds, relative to the cell size: a point's cell comes from a
-// rounded division, so the cell's recomputed box may miss it by an ulp; the
-// slack keeps such a cell in the search (visiting one more cell costs nothing).
-constexpr double kCellSlack = 1e-9;
-
-// The nearest point to p found so far, with its depth and (u, v).
-struct NearestPoint {
-    double d2 = HUGE_VAL, depth = HUGE_VAL;
-    Vec2 uv;
-    uint64_t key = std::numeric_limits<uint64_t>::max();
-    bool found = false;
-    // Nearer on screen wins; at equal distance (p inside several triangles: a
-    // face folding over itself) the nearer to the eye, the sheet a ray meets
-    // first; at equal depth too, the lower key (the triangle or vertex order),
-    // whatever order the grid offers them in.
-    void offer(double dist2, double z, Vec2 at, uint64_t k) {
-        if (dist2 < d2 || (dist2 == d2 && (z < depth || (z == depth && k < key))))
-            d2 = dist2, depth = z, uv = at, key = k, found = true;
-    }
-};
-
-// Squared distance from p to segment ab, and the parameter t in [0, 1] of the nearest point.
-double segment_distance2(Vec2 p, Vec2 a, Vec2 b, double& t) {
-    const double ex = b.x - a.x, ey = b.y - a.y, len2 = ex * ex + ey * ey;
-    t = len2 > 0 ? std::clamp(((p.x - a.x) * ex + (p.y - a.y) * ey) / len2, 0.0, 1.0) : 0.0;
-    const double dx = a.x + t * ex - p.x, dy = a.y + t * ey - p.y;
-    return dx * dx + dy * dy;
-}
-
-// The parameters [s0, s1] of the part of segment ab within sqrt(r2) of p;
-// false if none: |a + s (b - a) - p|^2 <= r2, a quadratic in s, clipped to [0, 1].
-bool segment_in_disk(Vec2 a, Vec2 b, Vec2 p, double r2, double& s0, double& s1) {
-    const double ex = b.x - a.x, ey = b.y - a.y, fx = a.x - p.x, fy = a.y - p.y;
-    const double A = ex * ex + ey * ey, B = fx * ex + fy * ey, C = fx * fx + fy * fy - r2;
-    if (A == 0) {
-        s0 = s1 = 0;
-        return C <= 0;
-    }
-    const double disc = B * B - A * C;
-    if (disc < 0) return false;
-    const double root = std::sqrt(disc);
-    s0 = std::max((-B - root) / A, 0.0);
-    s1 = std::min((-B + root) / A, 1.0);
-    return s0 <= s1;
-}
-
-Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }
-
-// Barycentric coordinates l of p in the screen triangle ABC; false if p lies
-// outside it or the triangle is degenerate.
-bool inside_triangle(Vec2 p, Vec2 A, Vec2 B, Vec2 C, double l[3]) {
-    const double det = (B.y - C.y) * (A.x - C.x) + (C.x - B.x) * (A.y - C.y);
-    if (det == 0) return false;
-    l[0] = ((B.y - C.y) * (p.x - C.x) + (C.x - B.x) * (p.y - C.y)) / det;
-    l[1] = ((C.y - A.y) * (p.x - C.x) + (A.x - C.x) * (p.y - C.y)) / det;
-    l[2] = 1.0 - l[0] - l[1];
-    return l[0] >= 0 && l[1] >= 0 && l[2] >= 0;
-}
-
-// The depth and the (u, v) at barycentric coordinates l of a mesh triangle.
-double interpolated_depth(const double l[3], const double z[3]) { return l[0] * z[0] + l[1] * z[1] + l[2] * z[2]; }
-Vec2 interpolated_uv(const double l[3], const FaceMesh& mesh, const uint32_t* idx) {
-    const Vec2 &a = mesh.uv[idx[0]], &b = mesh.uv[idx[1]], &c = mesh.uv[idx[2]];
-    return {l[0] * a.x + l[1] * b.x + l[2] * c.x, l[0] * a.y + l[1] * b.y + l[2] * c.y};
-}
-
-// Squared distance from p to the box [x0, x1] x [y0, y1] (0 inside).
-double box_distance2(Vec2 p, double x0, double x1, double y0, double y1) {
-    const double bx = std::max({x0 - p.x, 0.0, p.x - x1}), by = std::max({y0 - p.y, 0.0, p.y - y1});
-    return bx * bx + by * by;
-}
 
 }  // namespace
 
@@ -108,38 +39,6 @@ int MeshScreenPoints::Grid::cell_x(double x) const {
 int MeshScreenPoints::Grid::cell_y(double y) const {
     return std::clamp(static_cast<int>(std::floor((y - y0) / ch)), 0, ny - 1);
 }
-
-namespace {
-
-// Calls fn(cell) for the cells of g in square rings around p's cell (p clamped
-// into the grid), each cell whose box lies within sqrt(bound()) of p, and stops
-// at the first ring that lies wholly farther: every cell of ring r is at least
-// r - 1 cells from p along one axis. bound() is read again as fn tightens it.
-template <class Grid, class Bound, class Fn>
-void for_near_cells(const Grid& g, Vec2 p, Bound&& bound, Fn&& fn) {
-    const int cx = g.cell_x(p.x), cy = g.cell_y(p.y);
-    const int reach_x = std::max(cx, g.nx - 1 - cx), reach_y = std::max(cy, g.ny - 1 - cy);
-    const double slack = kCellSlack * (g.cw + g.ch);
-    for (int r = 0; r <= std::max(reach_x, reach_y); ++r) {
-        if (r > 1) {
-            // Ring r reaches r cells away only along the axes the grid extends that far.
-            const double step = std::min(r <= reach_x ? g.cw : HUGE_VAL, r <= reach_y ? g.ch : HUGE_VAL);
-            const double gap = std::max((r - 1) * step - slack, 0.0);
-            if (gap * gap > bound()) return;
-        }
-        for (int y = std::max(cy - r, 0); y <= std::min(cy + r, g.ny - 1); ++y) {
-            const bool full_row = y == cy - r || y == cy + r;
-            for (int x = cx - r; x <= cx + r; x += full_row ? 1 : 2 * r) {
-                if (x < 0 || x >= g.nx) continue;
-                const double x0 = g.x0 + x * g.cw, y0 = g.y0 + y * g.ch;
-                if (box_distance2(p, x0 - slack, x0 + g.cw + slack, y0 - slack, y0 + g.ch + slack) > bound()) continue;
-                fn(y * g.nx + x);
-            }
-        }
-    }
-}
-
-}  // namespace
 
 const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
     Entry& e = faces_[id - 1];
@@ -308,138 +207,73 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
     return n;
 }
 
-bool MeshScreenPoints::frontmost_point(uint32_t id, ScreenPoint sp, double max_d2, Vec2& uv, double& depth) const {
-    const Entry& e = projected(id);
-    const std::vector<Projected>& pts = e.pts;
-    const Vec2 p{sp.sx, sp.sy};
-    if (!(box_distance2(p, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2)) return false;
-    const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-    NearestPoint front;  // ordered by depth: offer(depth, 0, ...)
-    // Per triangle within reach: depth is linear over it, so its minimum over the
-    // triangle's part inside the disk of reach around p lies on that part's
-    // border: at an end of an edge's part inside the disk, or on the disk's rim
-    // at the point against the depth gradient, where that lies in the triangle.
-    const double r = std::sqrt(max_d2);
-    auto test_triangle = [&](uint32_t t) {
-        const uint32_t* idx = &mesh.triangles[3 * t];
-        const Projected* q[3] = {&pts[idx[0]], &pts[idx[1]], &pts[idx[2]]};
-        const Vec2 A = q[0]->s, B = q[1]->s, C = q[2]->s;
-        if (box_distance2(p, std::min({A.x, B.x, C.x}), std::max({A.x, B.x, C.x}), std::min({A.y, B.y, C.y}),
-                          std::max({A.y, B.y, C.y})) > max_d2)
-            return;
-        for (int k = 0; k < 3; ++k) {
-            const uint32_t a = idx[k], b = idx[(k + 1) % 3];
-            double s0 = 0, s1 = 0;
-            if (!segment_in_disk(pts[a].s, pts[b].s, p, max_d2, s0, s1)) continue;
-            for (const double s : {s0, s1})
-                front.offer(pts[a].depth + s * (pts[b].depth - pts[a].depth), 0, lerp(mesh.uv[a], mesh.uv[b], s),
-                            4 * uint64_t(t) + k);
-        }
-        // The screen gradient g of depth: z(x) = z(A) + g . (x - A) at B and C.
-        const double bx = B.x - A.x, by = B.y - A.y, cx = C.x - A.x, cy = C.y - A.y, det = bx * cy - by * cx;
-        if (det == 0) return;
-        const double zb = q[1]->depth - q[0]->depth, zc = q[2]->depth - q[0]->depth;
-        const double gx = (zb * cy - zc * by) / det, gy = (zc * bx - zb * cx) / det, g = std::hypot(gx, gy);
-        const Vec2 rim = g > 0 ? Vec2{p.x - r * gx / g, p.y - r * gy / g} : p;
-        double l[3];
-        const double z3[3] = {q[0]->depth, q[1]->depth, q[2]->depth};
-        if (inside_triangle(rim, A, B, C, l))
-            front.offer(interpolated_depth(l, z3), 0, interpolated_uv(l, mesh, idx), 4 * uint64_t(t) + 3);
-    };
-    if (const Grid* g = grid(id)) {
-        for_near_cells(*g, p, [&] { return max_d2; }, [&](size_t cell) {
-            for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) test_triangle(g->tris[q]);
-        });
-    } else {
-        const size_t ntri = mesh.triangles.size() / 3;
-        for (size_t t = 0; t < ntri; ++t)
-            if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
-    }
-    if (!front.found) return false;
-    uv = front.uv;
-    depth = front.d2;
-    return true;
+namespace {
+
+// The max_out faces of `all` nearest on screen, written to out in that order
+// (ties by id, so the answer does not depend on the candidates' order); returns how many.
+int nearest_first(std::vector<MeshScreenPoints::FarFace>& all, MeshScreenPoints::FarFace* out, int max_out) {
+    using FarFace = MeshScreenPoints::FarFace;
+    const size_t n = std::min(all.size(), static_cast<size_t>(std::max(max_out, 0)));
+    std::partial_sort(all.begin(), all.begin() + n, all.end(),
+                      [](const FarFace& a, const FarFace& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); });
+    std::copy(all.begin(), all.begin() + n, out);
+    return static_cast<int>(n);
 }
 
-int MeshScreenPoints::starts_in_front(uint32_t id, ScreenPoint sp, double max_d2, double max_depth, Vec2* out,
-                                      int max_out) const {
-    const Entry& e = projected(id);
-    const std::vector<Projected>& pts = e.pts;
-    const Vec2 p{sp.sx, sp.sy};
-    if (!(box_distance2(p, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2) || max_out <= 0) return 0;
-    const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-    NearestPoint best;
-    best.d2 = std::nextafter(max_d2, HUGE_VAL);  // points at the bound still count
-    // The sheets covering sp: (depth, key, uv) of each triangle part that contains it.
-    struct Cover {
-        double z;
-        uint64_t key;
-        Vec2 uv;
-    };
-    std::vector<Cover> covers;
-    // A polygon vertex: screen position, depth, (u, v).
-    struct Corner {
-        Vec2 s;
-        double z;
-        Vec2 uv;
-    };
-    auto test_triangle = [&](uint32_t t) {
-        const uint32_t* idx = &mesh.triangles[3 * t];
-        const Vec2 A = pts[idx[0]].s, B = pts[idx[1]].s, C = pts[idx[2]].s;
-        if (box_distance2(p, std::min({A.x, B.x, C.x}), std::max({A.x, B.x, C.x}), std::min({A.y, B.y, C.y}),
-                          std::max({A.y, B.y, C.y})) > best.d2)
-            return;
-        // The triangle clipped to depth < max_depth (Sutherland & Hodgman 1974,
-        // one plane): depth is linear over it, so the part is a convex polygon.
-        Corner poly[4];
-        int n = 0;
-        for (int k = 0; k < 3; ++k) {
-            const Projected &a = pts[idx[k]], &b = pts[idx[(k + 1) % 3]];
-            const Vec2 &ua = mesh.uv[idx[k]], &ub = mesh.uv[idx[(k + 1) % 3]];
-            if (a.depth < max_depth) poly[n++] = {a.s, a.depth, ua};
-            if ((a.depth < max_depth) != (b.depth < max_depth)) {
-                const double w = (max_depth - a.depth) / (b.depth - a.depth);
-                poly[n++] = {lerp(a.s, b.s, w), max_depth, lerp(ua, ub, w)};
+}  // namespace
+
+const std::vector<MeshScreenPoints::ScreenBox>& MeshScreenPoints::screen_boxes() const {
+    std::call_once(boxes_once_, [&] {
+        boxes_.resize(c_.nfaces);
+        for (uint32_t id = 1; id <= c_.nfaces; ++id) {
+            const BBox& b = c_.prepared.faces()[id - 1].mesh_box;
+            ScreenBox& sb = boxes_[id - 1];
+            if (b.empty()) continue;
+            sb.empty = false;
+            for (int k = 0; k < 8; ++k) {
+                const Vec3 P{k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z};
+                const Vec4 ph = c_.camera.project_h(Vec4{P.x, P.y, P.z, 1.0});
+                const double depth = c_.camera.depth(ph);
+                if (!(depth > 0)) {
+                    sb.around = true;
+                    sb.near = 0;
+                    continue;
+                }
+                const Vec2 s{ph.x / ph.z, ph.y / ph.z};
+                sb.lo = {std::min(sb.lo.x, s.x), std::min(sb.lo.y, s.y)};
+                sb.hi = {std::max(sb.hi.x, s.x), std::max(sb.hi.y, s.y)};
+                sb.near = std::min(sb.near, depth);
             }
         }
-        if (n == 0) return;
-        // p inside the polygon: the nearest point is p itself (a fan of triangles).
-        for (int k = 1; k + 1 < n; ++k) {
-            double l[3];
-            if (!inside_triangle(p, poly[0].s, poly[k].s, poly[k + 1].s, l)) continue;
-            const double z3[3] = {poly[0].z, poly[k].z, poly[k + 1].z};
-            const Vec2 uv3 = {l[0] * poly[0].uv.x + l[1] * poly[k].uv.x + l[2] * poly[k + 1].uv.x,
-                              l[0] * poly[0].uv.y + l[1] * poly[k].uv.y + l[2] * poly[k + 1].uv.y};
-            covers.push_back({interpolated_depth(l, z3), 4 * uint64_t(t), uv3});
-            best.offer(0.0, covers.back().z, uv3, 4 * uint64_t(t));
-            return;
-        }
-        for (int k = 0; k < n; ++k) {
-            const Corner &a = poly[k], &b = poly[(k + 1) % n];
-            double w = 0;
-            const double d2 = segment_distance2(p, a.s, b.s, w);
-            best.offer(d2, a.z + w * (b.z - a.z), lerp(a.uv, b.uv, w), 4 * uint64_t(t) + k);
-        }
-    };
-    if (const Grid* g = grid(id)) {
-        for_near_cells(*g, p, [&] { return best.d2; }, [&](size_t cell) {
-            for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) test_triangle(g->tris[q]);
-        });
-    } else {
-        const size_t ntri = mesh.triangles.size() / 3;
-        for (size_t t = 0; t < ntri; ++t)
-            if (usable_triangle(mesh, pts, t)) test_triangle(static_cast<uint32_t>(t));
+    });
+    return boxes_;
+}
+
+int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out,
+                                 double max_d2) const {
+    // Faces whose box reaches sp, front first; only so many have their mesh
+    // searched (an O(triangles) scan or a grid each): bounds the cost where a
+    // point lies in the boxes of hundreds of faces of a large assembly.
+    constexpr size_t kMaxBoxCandidates = 16;
+    const std::vector<ScreenBox>& boxes = screen_boxes();
+    const Vec2 p{sp.sx, sp.sy};
+    std::vector<std::pair<double, uint32_t>> cand;
+    for (uint32_t id = 1; id <= c_.nfaces; ++id) {
+        const ScreenBox& b = boxes[id - 1];
+        if (b.empty || std::find(exclude, exclude + ne, id) != exclude + ne) continue;
+        if (!b.around && !(box_distance2(p, b.lo.x, b.hi.x, b.lo.y, b.hi.y) <= max_d2)) continue;
+        cand.push_back({b.near, id});
     }
-    if (!best.found) return 0;
-    if (covers.empty()) {
-        out[0] = best.uv;
-        return 1;
+    const size_t nc = std::min(cand.size(), kMaxBoxCandidates);
+    std::partial_sort(cand.begin(), cand.begin() + nc, cand.end());
+    std::vector<FarFace> all;
+    for (size_t q = 0; q < nc; ++q) {
+        FarFace f;
+        f.id = cand[q].second;
+        f.nstarts = nearest_starts(f.id, sp, f.starts, &f.d2, max_d2);
+        if (f.nstarts && f.d2 <= max_d2) all.push_back(f);
     }
-    std::sort(covers.begin(), covers.end(),
-              [](const Cover& x, const Cover& y) { return x.z < y.z || (x.z == y.z && x.key < y.key); });
-    const int n = std::min(static_cast<int>(covers.size()), max_out);
-    for (int k = 0; k < n; ++k) out[k] = covers[k].uv;
-    return n;
+    return nearest_first(all, out, max_out);
 }
 
 int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
@@ -463,11 +297,7 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
             f.nstarts = nearest_starts(id, sp, f.starts, &f.d2, max_d2);
             if (f.nstarts && f.d2 <= max_d2) all.push_back(f);
         }
-    const size_t n = std::min(all.size(), static_cast<size_t>(std::max(max_out, 0)));
-    std::partial_sort(all.begin(), all.begin() + n, all.end(),
-                      [](const FarFace& a, const FarFace& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); });
-    std::copy(all.begin(), all.begin() + n, out);
-    return static_cast<int>(n);
+    return nearest_first(all, out, max_out);
 }
 
 }  // namespace nurbsrt

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "renderer/frame.h"
+#include "renderer/screen_geometry.h"
 
 namespace nurbsrt {
 
@@ -71,7 +72,24 @@ public:
     int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
                            double max_d2 = HUGE_VAL) const;
 
+    // Any faces, not in exclude[0..ne), whose mesh lies within sqrt(max_d2) of
+    // sp on screen, nearest first (at most max_out; of the kMaxBoxCandidates
+    // whose mesh box reaches sp nearest to the eye): a face seen through a gap
+    // between faces that do not touch it, which neither the map nor adjacency
+    // offers. Returns the number written to out.
+    int faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out, double max_d2) const;
+
 private:
+    // A face's mesh box on screen (its 8 corners projected) and its least depth;
+    // `around` where a corner lies behind the eye (the box may cover any point).
+    struct ScreenBox {
+        Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};
+        double near = HUGE_VAL;
+        bool around = false, empty = true;
+    };
+    const std::vector<ScreenBox>& screen_boxes() const;
+    mutable std::once_flag boxes_once_;
+    mutable std::vector<ScreenBox> boxes_;
     struct Projected {
         Vec2 s;        // screen position (NaN behind the eye)
         double depth;  // along the view direction
@@ -101,6 +119,23 @@ private:
     // The face's grid, or null while a scan is cheaper (its first queries).
     const Grid* grid(uint32_t id) const;
     static bool usable_triangle(const FaceMesh& mesh, const std::vector<Projected>& pts, size_t t);
+    // fn(t) for the usable triangles of face id that may lie within
+    // sqrt(bound()) of p: those of the grid cells near p once the face has a
+    // grid, else all (bound() is read again as fn tightens it).
+    template <class Bound, class Fn>
+    void for_triangles_near(uint32_t id, Vec2 p, Bound&& bound, Fn&& fn) const {
+        if (const Grid* g = grid(id)) {
+            screen::for_near_cells(*g, p, bound, [&](size_t cell) {
+                for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) fn(g->tris[q]);
+            });
+            return;
+        }
+        const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+        const std::vector<Projected>& pts = faces_[id - 1].pts;
+        const size_t ntri = mesh.triangles.size() / 3;
+        for (size_t t = 0; t < ntri; ++t)
+            if (usable_triangle(mesh, pts, t)) fn(static_cast<uint32_t>(t));
+    }
     void build_grid(uint32_t id, Entry& e) const;
     const FrameContext& c_;
     const std::unique_ptr<Entry[]> faces_;

@@ -62,6 +62,9 @@ constexpr int kMaxAdjacentFaces = 12;
 // ... and only those whose mesh comes within 2 pixels of the pit on screen (the
 // faces adjacent to a pit's are sorted nearest first, so the rest are farther).
 constexpr double kPitFacePixels = 2.0;
+// Faces near on screen, touching none of those, tried last (faces_near): a few,
+// nearest first.
+constexpr int kMaxScreenFaces = 4;
 // Sheets of the pixel's own face in front of its hit that are tried, nearest
 // to the eye first: a face folded over itself many times (a dense spring or
 // coil seen edge-on) puts several there, and the map's front one may be a mesh
@@ -110,7 +113,7 @@ public:
                 // pixels that the pairs above peel down to here (a dense folded face
                 // seen edge-on, step/bug29715_slow.stp): solved from that neighbour.
                 const PixelHit& n = a.face ? a : b;
-                if (n.t < p.t - kSheetFootprints * c_.pixel_footprint(p.t))
+                if (n.t < p.t - sheet_gap(p.t))
                     consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
                 continue;
             }
@@ -133,7 +136,7 @@ public:
             // model units, a pixel deeper than both of its pair by more than its own
             // footprint is not on their smooth sheet either (on a slope it lies
             // between them, so grazing views cost no extra solves).
-            const bool deep = p.t - std::max(a.t, b.t) > kSheetFootprints * c_.pixel_footprint(p.t);
+            const bool deep = p.t - std::max(a.t, b.t) > sheet_gap(p.t);
             const float mid_u = 0.5f * (a.u + b.u), mid_v = 0.5f * (a.v + b.v);
             const double off_u = double(p.u) - mid_u, off_v = double(p.v) - mid_v;
             const bool off_pair = a.face == p.face && b.face == p.face &&
@@ -172,6 +175,13 @@ public:
     }
 
 private:
+    // How far in front of a hit at distance t another sheet must lie to count as one.
+    double sheet_gap(double t) const { return kSheetFootprints * c_.pixel_footprint(t); }
+    // The depth along the view direction (the mesh's measure, MeshScreenPoints)
+    // in front of which another sheet than a hit at distance t through sp lies.
+    double depth_in_front(double t, ScreenPoint sp) const {
+        return (t - sheet_gap(t)) / c_.camera.hit_distance_from_depth(1.0, sp);
+    }
     // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
     // Returns the solve's outcome.
     Outcome consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
@@ -231,7 +241,7 @@ private:
     // face has solved from already.
     void other_sheet_starts(int i, int j, PixelHit& best) const {
         const PixelHit p = best;
-        const double sheet = kSheetFootprints * c_.pixel_footprint(p.t);
+        const double sheet = sheet_gap(p.t);
         bool first = true;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
@@ -256,8 +266,7 @@ private:
         const PixelHit p = best;
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
         const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
-        const double max_depth =
-            (p.t - kSheetFootprints * c_.pixel_footprint(p.t)) / c_.camera.hit_distance_from_depth(1.0, sp);
+        const double max_depth = depth_in_front(p.t, sp);
         Vec2 start;
         double depth = 0;
         auto from = [&](Vec2 uv) {
@@ -279,7 +288,7 @@ private:
     // face joining it there may lie in front: a Russian part's flange behind a
     // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const {
-        uint32_t near[18 + kMaxAdjacentFaces];
+        uint32_t near[18 + 2 * kMaxAdjacentFaces];
         int nn = 0;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const size_t n = c_.map.index(ni, nj);
@@ -303,13 +312,33 @@ private:
             if (outside) crossed[nc++] = faces[q].id;
             near[nn++] = faces[q].id;
         }
-        if (!nc || best.face != p.face || best.t != p.t) return;
-        const int nf2 = screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach);
+        if (best.face != p.face || best.t != p.t) return;
+        const int nf2 =
+            nc ? screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach) : 0;
+        const int nn1 = nn;
         for (int q = 0; q < nf2; ++q) {
-            if (std::find(near, near + nn, faces[q].id) != near + nn) continue;  // tried already
+            if (std::find(near, near + nn1, faces[q].id) != near + nn1) continue;  // tried already
             for (int k = 0; k < faces[q].nstarts; ++k)
                 consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
                          static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
+            near[nn++] = faces[q].id;
+        }
+        if (best.face != p.face || best.t != p.t) return;
+        // Last, any face whose mesh comes within reach, touching none of these: a
+        // face in front seen where faces that do not meet it leave a gap, or
+        // whose mesh nodes are nowhere near the 3x3's faces' (unsewn faces).
+        MeshScreenPoints::FarFace any[kMaxScreenFaces];
+        const int na = screen_points_.faces_near(sp, near, nn, any, kMaxScreenFaces, reach * reach);
+        const double max_depth = depth_in_front(p.t, sp);
+        for (int q = 0; q < na; ++q) {
+            // Only a face with mesh in front of the hit within reach can be nearer.
+            Vec2 front;
+            double depth = 0;
+            if (!screen_points_.frontmost_point(any[q].id, sp, reach * reach, front, depth) || !(depth < max_depth))
+                continue;
+            for (int k = 0; k < any[q].nstarts; ++k)
+                consider(any[q].id, i, j, static_cast<float>(any[q].starts[k].x),
+                         static_cast<float>(any[q].starts[k].y), solver_.robust, false, best);
         }
     }
     const FrameContext& c_;

@@ -17,6 +17,10 @@
 //    nearest on screen first, from their mesh point and vertex nearest to the
 //    pixel and their box middle: a face too thin for the map to show lies between
 //    the faces it touches.
+//  D (any face near on screen): if C found nothing either and the pixel has hits
+//    on opposite sides within two pixels, the faces whose mesh comes within reach
+//    of it on screen, whatever they touch: a face seen through a gap between
+//    faces that do not meet it, which the map hides behind them.
 //  Crack pixels (hit on opposite sides, or on 3 of 4 sides) also accept a hit
 //    just outside a trim loop, within the face's tolerance band (Solver::solve).
 // All rescue solves use the robust Newton (newton.h); the nearest hit wins.
@@ -44,12 +48,17 @@ constexpr int kMaxAdjacentFaces = 12;
 // that covers it has its mesh within the deflection of its true extent, a pixel
 // or two at most; a face farther away cannot close a hole here.
 constexpr double kAdjacentReachPixels = 8.0;
+// D's faces: any face whose mesh comes within kAdjacentReachPixels of an
+// enclosed pixel that A, B and C left empty (MeshScreenPoints::faces_near), the
+// nearest few on screen: a face seen through a gap between faces that do not
+// touch it (unsewn faces of an IGES file), hidden in the map by the faces around.
+constexpr int kMaxScreenFaces = 4;
 // At most this many distinct starts (face, u, v) are solved per rescued pixel. A
 // needs at most 8 + 8 + 2 (each neighbour's hit and map start, the own map start
 // and one own converged start), B the rest of the first 64, C at most
-// kFarStartsPerFace x kMaxAdjacentFaces = 36 more. It bounds a pixel's cost where
+// kFarStartsPerFace x kMaxAdjacentFaces = 36 more, D 12. It bounds a pixel's cost where
 // many small faces meet, and sizes the stack array of tried starts.
-constexpr int kMaxStarts = 64 + kFarStartsPerFace * kMaxAdjacentFaces;
+constexpr int kMaxStarts = 64 + kFarStartsPerFace * (kMaxAdjacentFaces + kMaxScreenFaces);
 // A's neighbourhood: the 8 pixels around (a hit there is at most a pixel away).
 constexpr int kNeighbourRadius = 1;
 // B's neighbourhood: 5x5, one ring beyond A's, for the faces a pixel-wide sliver
@@ -175,6 +184,20 @@ public:
         const double reach = kAdjacentReachPixels * 2.0 / c_.height;  // screen units span 2 over the height
         MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
         const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
+        limit_ = kMaxStarts - kFarStartsPerFace * kMaxScreenFaces;
+        for (int q = 0; q < nf; ++q) far_starts(faces[q]);
+    }
+    // D: any faces whose mesh comes within reach of the pixel on screen, but
+    // those solved already.
+    void screen_starts(const MeshScreenPoints& screen_points) {
+        uint32_t solved_ids[kMaxStarts];
+        int ns = 0;
+        for (int q = 0; q < ntried_; ++q)
+            if (std::find(solved_ids, solved_ids + ns, tried_[q].id) == solved_ids + ns) solved_ids[ns++] = tried_[q].id;
+        const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
+        const double reach = kAdjacentReachPixels * 2.0 / c_.height;
+        MeshScreenPoints::FarFace faces[kMaxScreenFaces];
+        const int nf = screen_points.faces_near(sp, solved_ids, ns, faces, kMaxScreenFaces, reach * reach);
         limit_ = kMaxStarts;
         for (int q = 0; q < nf; ++q) far_starts(faces[q]);
     }
@@ -225,7 +248,8 @@ private:
     const bool crack_;
     Start tried_[kMaxStarts];
     int ntried_ = 0;
-    int limit_ = kMaxStarts - kFarStartsPerFace * kMaxAdjacentFaces;  // A's and B's share; C may use the rest
+    // A's and B's share; C and D may use the rest.
+    int limit_ = kMaxStarts - kFarStartsPerFace * (kMaxAdjacentFaces + kMaxScreenFaces);
 };
 
 // Whether both pixels of a row or column pair around (i, j) are hit nearer than
@@ -315,6 +339,7 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
         // opposite sides): not along every silhouette, where B already fails for good reason.
         if ((!pr.best.face && !pr.best_near.face && (own || enclosed)) || (pit && behind_pair(c, src, i, j, pr.best.t)))
             pr.adjacent_starts(screen_points);
+        if (!pr.best.face && !pr.best_near.face && enclosed) pr.screen_starts(screen_points);
     }
     // A hit inside a trim beats a near-trim one unless the latter is in front
     // (a crack in a front face must not show the face behind it).

@@ -32,6 +32,8 @@ struct PreparedFace {
     // ascending ids. The rescue and the nearer-sheet pass try them where a face
     // too thin for the map to rasterize lies between the pixel's neighbours' faces.
     std::vector<uint32_t> adjacent;
+    // Box of the face's map mesh (the rescue's screen search over all faces).
+    BBox mesh_box;
 };
 
 // The preliminary map's mesh: all faces' FaceMesh vertices that have a (u, v),

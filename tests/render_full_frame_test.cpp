@@ -70,16 +70,9 @@ const Known kKnownRemaining[] = {
     {"step/bug29715_slow.stp", "front", 0, 1,
      "one dense folded face seen edge-on: a pixel between neighbours on the same farther sheet; the nearer "
      "root is reached from a diagonal neighbour's final hit only, which the peeling passes do not revisit"},
-    // At the fitted views' framing (5 % margin) these pixels land on defects the
-    // old framing did not sample: a farther root of the pixel's own face, and on
-    // the capsule a face in front not in the candidates.
-    {"iges/marsCapsule.igs", "iso", 0, 1, "a face in front not in the candidates (not adjacent to the 3x3's)"},
     // The trim loops sampled to 1e-5 of the (u, v) box (was 1e-4) narrow the
-    // trim band; these pixels were covered by a band hit of a neighbouring face
-    // at about the right depth before, and show what lies behind that band now.
-    {"iges/heartValve.igs", "iso", 2, 0,
-     "a face seen through a real gap between two faces that do not touch (IGES, unsewn): it is not in the map "
-     "within 10 pixels (hidden behind the two), nor adjacent by mesh nodes to any face there"},
+    // trim band; this pixel was covered by a band hit of a neighbouring face at
+    // about the right depth before, and shows what lies behind that band now.
     {"step/r0901_ec.stp", "iso", 0, 1,
      "the map's face at the pixel diverges from the map's start, robust Newton too, and no neighbour is hit on "
      "it; a farther face fills the pixel"},

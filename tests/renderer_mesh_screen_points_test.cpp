@@ -218,3 +218,41 @@ TEST(MeshScreenPoints, StartsInFrontAreTheCoveringSheetsFrontToBack) {
     }
     EXPECT_GT(two_sheets, 50);
 }
+
+// faces_near: every face (not excluded) whose mesh comes within the bound of a
+// screen point, nearest first, whatever faces it touches: the same faces and
+// distances as nearest_starts asked face by face.
+TEST(MeshScreenPoints, FacesNearAreEveryFaceWithinTheBoundNearestFirst) {
+    const TestFrame f(test_scene());
+    const MeshScreenPoints points(f.c), each(f.c);
+    const double pixel = 2.0 / f.cam.height();
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<double> x(-1.8, 1.8), y(-1.2, 1.2);
+    int found = 0;
+    for (int k = 0; k < 400; ++k) {
+        const ScreenPoint sp{x(rng), y(rng)};
+        const double max_d2 = (8 * pixel) * (8 * pixel);
+        std::vector<std::pair<double, uint32_t>> expected;
+        for (uint32_t id = 1; id <= f.c.nfaces; ++id) {
+            Vec2 starts[2];
+            double d2 = 0;
+            if (each.nearest_starts(id, sp, starts, &d2, max_d2) > 0 && d2 <= max_d2) expected.push_back({d2, id});
+        }
+        std::sort(expected.begin(), expected.end());
+        MeshScreenPoints::FarFace out[4];
+        const int n = points.faces_near(sp, nullptr, 0, out, 4, max_d2);
+        ASSERT_EQ(n, static_cast<int>(expected.size()));
+        for (int q = 0; q < n; ++q) {
+            EXPECT_EQ(out[q].id, expected[q].second);
+            EXPECT_EQ(out[q].d2, expected[q].first);
+        }
+        found += n;
+        // An excluded face is left out, the others stay.
+        if (n > 0) {
+            const uint32_t skip = out[0].id;
+            EXPECT_EQ(points.faces_near(sp, &skip, 1, out, 4, max_d2), n - 1);
+            for (int q = 0; q < n - 1; ++q) EXPECT_NE(out[q].id, skip);
+        }
+    }
+    EXPECT_GT(found, 100);
+}
