@@ -197,7 +197,7 @@ private:
     // band here makes the pixel a pit for its neighbours in turn, and the
     // peeling passes would spread the band over the face behind, a pixel at a
     // time (it did, on a machine component, over 1.6 mm beyond a face's edge): from every 3x3 neighbour's converged
-    // (u, v), from the pixel's own face's mesh in front of its hit (own_mesh_in_front),
+    // (u, v), from the pixel's own face's mesh in front of its hit (mesh_in_front),
     // from the 3x3's map starts (the map may show the nearer face next to
     // the pixel while the neighbours' hits lie on others), then the faces adjacent
     // to these that none of them shows: a face too thin for the map to show any
@@ -226,8 +226,13 @@ private:
                     consider(c_.map.face[n], i, j, c_.map.u[n], c_.map.v[n], solver_.robust, false, best);
             });
             if (kind == 0 && !found()) other_sheet_starts(i, j, best);
-            if (kind == 0 && !found()) own_mesh_in_front(i, j, best);
+            if (kind == 0 && !found()) mesh_in_front(p.face, i, j, best);
         }
+        // The map's own face at the pixel, where it is another than the hit's:
+        // the primary solve from its map start failed; its mesh in front of the
+        // hit within reach may start Newton on its root.
+        const uint32_t own_map = c_.map.face[c_.map.index(i, j)];
+        if (!found() && own_map != p.face && once(own_map)) mesh_in_front(own_map, i, j, best);
         if (!found()) adjacent_faces(i, j, best);
     }
     // Where the pixel's hit is a farther root of the very face its neighbours
@@ -254,7 +259,8 @@ private:
             return best.face == p.face && best.t == p.t;  // on until found
         });
     }
-    // Where no neighbour's hit starts Newton on the pixel's own face's nearer
+    // Starts from the mesh of face id in front of the pixel's hit (by a
+    // footprint). Where no neighbour's hit starts Newton on the pixel's own face's nearer
     // sheet (its neighbours show other faces, or the same far sheet), the face's
     // mesh in front of the hit (by a footprint) may: at a fold seen near its
     // silhouette the near sheet's mesh, a chord, stops short of pixels its
@@ -262,7 +268,7 @@ private:
     // lies by that mesh's frontmost part within reach. A face folded many times
     // puts several sheets in front, the map's front one possibly a mesh sheet
     // the exact ray passes by: each sheet covering the pixel, front to back.
-    void own_mesh_in_front(int i, int j, PixelHit& best) const {
+    void mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const {
         const PixelHit p = best;
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
         const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
@@ -270,14 +276,14 @@ private:
         Vec2 start;
         double depth = 0;
         auto from = [&](Vec2 uv) {
-            consider(p.face, i, j, static_cast<float>(uv.x), static_cast<float>(uv.y), solver_.robust, false, best);
+            consider(id, i, j, static_cast<float>(uv.x), static_cast<float>(uv.y), solver_.robust, false, best);
             return best.face != p.face || best.t != p.t;
         };
-        if (screen_points_.frontmost_point(p.face, sp, reach * reach, start, depth) && depth < max_depth &&
+        if (screen_points_.frontmost_point(id, sp, reach * reach, start, depth) && depth < max_depth &&
             from(start))
             return;
         Vec2 starts[kMaxSheetsInFront];
-        const int n = screen_points_.starts_in_front(p.face, sp, reach * reach, max_depth, starts, kMaxSheetsInFront);
+        const int n = screen_points_.starts_in_front(id, sp, reach * reach, max_depth, starts, kMaxSheetsInFront);
         for (int k = 0; k < n; ++k)
             if (from(starts[k])) return;
     }

@@ -70,12 +70,6 @@ const Known kKnownRemaining[] = {
     {"step/bug29715_slow.stp", "front", 0, 1,
      "one dense folded face seen edge-on: a pixel between neighbours on the same farther sheet; the nearer "
      "root is reached from a diagonal neighbour's final hit only, which the peeling passes do not revisit"},
-    // The trim loops sampled to 1e-5 of the (u, v) box (was 1e-4) narrow the
-    // trim band; this pixel was covered by a band hit of a neighbouring face at
-    // about the right depth before, and shows what lies behind that band now.
-    {"step/r0901_ec.stp", "iso", 0, 1,
-     "the map's face at the pixel diverges from the map's start, robust Newton too, and no neighbour is hit on "
-     "it; a farther face fills the pixel"},
     // With the map meshed from the analytic faces themselves (their surfaces
     // converted alone, without re-fitted pcurves) this pixel lands on a defect
     // the B-spline faces' mesh did not expose; the mesh decides which pixels the
