@@ -62,9 +62,6 @@ constexpr int kMaxAdjacentFaces = 12;
 // ... and only those whose mesh comes within 2 pixels of the pit on screen (the
 // faces adjacent to a pit's are sorted nearest first, so the rest are farther).
 constexpr double kPitFacePixels = 2.0;
-// Faces near on screen, touching none of those, tried last (faces_near): a few,
-// nearest first.
-constexpr int kMaxScreenFaces = 4;
 // Sheets of the pixel's own face in front of its hit that are tried, nearest
 // to the eye first: a face folded over itself many times (a dense spring or
 // coil seen edge-on) puts several there, and the map's front one may be a mesh
@@ -294,7 +291,7 @@ private:
     // face joining it there may lie in front: a Russian part's flange behind a
     // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const {
-        uint32_t near[18 + 2 * kMaxAdjacentFaces];
+        uint32_t near[18 + kMaxAdjacentFaces];
         int nn = 0;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const size_t n = c_.map.index(ni, nj);
@@ -318,33 +315,13 @@ private:
             if (outside) crossed[nc++] = faces[q].id;
             near[nn++] = faces[q].id;
         }
-        if (best.face != p.face || best.t != p.t) return;
-        const int nf2 =
-            nc ? screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach) : 0;
-        const int nn1 = nn;
+        if (!nc || best.face != p.face || best.t != p.t) return;
+        const int nf2 = screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach);
         for (int q = 0; q < nf2; ++q) {
-            if (std::find(near, near + nn1, faces[q].id) != near + nn1) continue;  // tried already
+            if (std::find(near, near + nn, faces[q].id) != near + nn) continue;  // tried already
             for (int k = 0; k < faces[q].nstarts; ++k)
                 consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
                          static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
-            near[nn++] = faces[q].id;
-        }
-        if (best.face != p.face || best.t != p.t) return;
-        // Last, any face whose mesh comes within reach, touching none of these: a
-        // face in front seen where faces that do not meet it leave a gap, or
-        // whose mesh nodes are nowhere near the 3x3's faces' (unsewn faces).
-        MeshScreenPoints::FarFace any[kMaxScreenFaces];
-        const int na = screen_points_.faces_near(sp, near, nn, any, kMaxScreenFaces, reach * reach);
-        const double max_depth = depth_in_front(p.t, sp);
-        for (int q = 0; q < na; ++q) {
-            // Only a face with mesh in front of the hit within reach can be nearer.
-            Vec2 front;
-            double depth = 0;
-            if (!screen_points_.frontmost_point(any[q].id, sp, reach * reach, front, depth) || !(depth < max_depth))
-                continue;
-            for (int k = 0; k < any[q].nstarts; ++k)
-                consider(any[q].id, i, j, static_cast<float>(any[q].starts[k].x),
-                         static_cast<float>(any[q].starts[k].y), solver_.robust, false, best);
         }
     }
     const FrameContext& c_;
