@@ -90,6 +90,8 @@ struct FrameContext {
     // 2 over the height; depth along the view direction for orthographic views,
     // where it does not matter).
     double pixel_footprint(double t) const { return 2.0 * camera.image_to_model_scale(t) / height; }
+    // A distance of `pixels` in screen units (ScreenPoint), which span 2 over the height.
+    double screen_distance(double pixels) const { return 2.0 * pixels / height; }
 };
 
 // Frame-sized buffers are filled in blocks of this many bytes with a cancel check

@@ -256,10 +256,9 @@ private:
             return best.face == p.face && best.t == p.t;  // on until found
         });
     }
-    // Starts from the mesh of face id in front of the pixel's hit (by a
-    // footprint). Where no neighbour's hit starts Newton on the pixel's own face's nearer
-    // sheet (its neighbours show other faces, or the same far sheet), the face's
-    // mesh in front of the hit (by a footprint) may: at a fold seen near its
+    // Starts from the mesh of face id in front of the pixel's hit by a footprint.
+    // Where no neighbour's hit starts Newton on the pixel's own face's nearer
+    // sheet (its neighbours show other faces, or the same far sheet), that mesh may: at a fold seen near its
     // silhouette the near sheet's mesh, a chord, stops short of pixels its
     // surface covers, and the map shows the far sheet there; the near root then
     // lies by that mesh's frontmost part within reach. A face folded many times
@@ -268,7 +267,7 @@ private:
     void mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const {
         const PixelHit p = best;
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
-        const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
+        const double reach = c_.screen_distance(kPitFacePixels);
         const double max_depth = depth_in_front(p.t, sp);
         Vec2 start;
         double depth = 0;
@@ -301,7 +300,7 @@ private:
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
         // A face in front of the pixel covers it on screen: its mesh comes within
         // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
-        const double reach = kPitFacePixels * 2.0 / c_.height;  // screen units span 2 over the height
+        const double reach = c_.screen_distance(kPitFacePixels);
         const PixelHit p = best;
         uint32_t crossed[kMaxAdjacentFaces];  // the first ring's faces crossed outside their trim
         int nc = 0;

@@ -181,7 +181,7 @@ public:
         uint32_t near[kMaxGeneralFaces];
         const int nn = general_faces(near);
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
-        const double reach = kAdjacentReachPixels * 2.0 / c_.height;  // screen units span 2 over the height
+        const double reach = c_.screen_distance(kAdjacentReachPixels);
         MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
         const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
         limit_ = kMaxStarts - kFarStartsPerFace * kMaxScreenFaces;
@@ -195,7 +195,7 @@ public:
         for (int q = 0; q < ntried_; ++q)
             if (std::find(solved_ids, solved_ids + ns, tried_[q].id) == solved_ids + ns) solved_ids[ns++] = tried_[q].id;
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
-        const double reach = kAdjacentReachPixels * 2.0 / c_.height;
+        const double reach = c_.screen_distance(kAdjacentReachPixels);
         MeshScreenPoints::FarFace faces[kMaxScreenFaces];
         const int nf = screen_points.faces_near(sp, solved_ids, ns, faces, kMaxScreenFaces, reach * reach);
         limit_ = kMaxStarts;
