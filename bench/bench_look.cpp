@@ -1,6 +1,6 @@
 // The image options' cost: per Table-1 scene, the same prepared scene, camera
 // and size rendered three ways: `plain` (one ray per pixel, no feature lines,
-// no shadows), `aa_edges` (4 extra exact rays per edge pixel, the service's
+// no shadows), `aa_edges` (4 extra samples per edge pixel, the service's
 // PNG default, plus feature lines) and `shadows` (the key light's map and
 // Newton along light rays, no anti-aliasing). The variants are interleaved and
 // their order rotated from run to run (P A S, A S P, S P A, ...) as in Table 1,

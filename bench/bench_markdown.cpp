@@ -299,7 +299,7 @@ void look(std::string& o, const json& t) {
                              : " runs") +
          "), " + std::to_string(n(t, "width")) + "x" + std::to_string(n(t, "height")) + ", " +
          std::to_string(n(t, "threads")) + " thread(s): `plain` (one ray per pixel), `aa_edges` (" +
-         std::to_string(n(t, "antialias_rays")) + " extra exact rays per edge pixel and feature lines), `shadows` "
+         std::to_string(n(t, "antialias_rays")) + " extra samples per edge pixel, exact rays where an edge can cross them, and feature lines), `shadows` "
          "(the key light's map and Newton along light rays). Ratios to `plain` from the medians, in brackets from "
          "the minima (interference from other work only adds time); targets: aa_edges <= " +
          num(d(t, "target_aa_edges_over_plain"), 1) + "x, shadows <= " + num(d(t, "target_shadows_over_plain"), 1) +

@@ -200,7 +200,8 @@ void add_render_command(CLI::App& app) {
             description);
     };
     cmd->add_option("--antialias", a->antialias,
-                    "extra exact sub-pixel rays per edge pixel (silhouettes, face borders, creases); 0: off "
+                    "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
+                    "can cross them; 0: off "
                     "(default: " + std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
         ->check(shared_check([](const std::string& s) { server::parse_antialias(std::stod(s), "the value"); }, "N"));
     cmd->add_flag("--edges", a->edges, "draw feature lines: silhouettes, face borders and creases");

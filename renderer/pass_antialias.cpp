@@ -4,9 +4,12 @@
 // only where an edge crosses it. So only edge pixels (from the exact per-pixel
 // hits: hit/background, another face, a depth step, a crease in the normal)
 // across which the centre samples' colour is not smooth (kSmoothContrast) get
-// extra rays, and each extra ray is solved exactly like the centre one, by
-// Newton from the (face, u, v) of the pixel and its 8 neighbours: the hits there
-// lie within 1.5 pixels of any sub-pixel sample, on the same sheet. This is
+// extra samples. A sample between four centres that show the same thing is off
+// any edge and takes their interpolated colour (EdgeSampler::interpolated);
+// every other one is an exact ray, solved like the centre one by Newton (to
+// kSamplePixels) from the (face, u, v) of the pixel and its 8 neighbours: the
+// hits there lie within 1.5 pixels of any sub-pixel sample, on the same sheet.
+// This is
 // adaptive supersampling in the sense of Whitted 1980 (extra rays where adjacent
 // samples differ), with stratified sample positions (Mitchell 1987: jittered
 // strata make the edge error noise instead of a regular pattern). The AOVs keep
@@ -30,6 +33,23 @@ constexpr int kNeighbours = 9;
 // one colour meeting (a fillet's borders), or a crease both sides of which the
 // light hits alike.
 constexpr double kSmoothContrast = 1.0 / 255;
+
+// A sample's hit is found to within this fraction of a pixel in the image plane
+// (Newton's residual (12), in model units at the hit's depth), not to the
+// frame's tolerance (1e-8 of the scene, ~1e-5 of a pixel): a sample only decides
+// which side of an edge it falls on and the colour there, and an error of 1/256
+// pixel moves an edge within the pixel by that much, changing its coverage by
+// at most ~1/180 of the pixel's area per sample, below one 8-bit step of the
+// average. From a start at most 1.5 pixels away one Newton step mostly gets
+// there: the samples' steps fell from 2.1-2.3 to 1.2-1.3 per converged solve
+// (quadratic convergence: the second step only took 1e-5 pixel to 1e-10).
+constexpr double kSamplePixels = 1.0 / 256;
+
+// Two faces whose starts' depths differ by less than this many pixel footprints
+// per pixel between the starts count as one surface continuing (as a depth step
+// for the feature lines: 3 footprints per pixel is a surface seen ~20 degrees
+// from edge-on); see EdgeSampler::candidates.
+constexpr double kSameSurfaceFootprints = 3.0;
 
 // Van der Corput's radical inverse in base 2: the second coordinate of the
 // Hammersley point set, whose first coordinate is (s + 0.5) / n.
@@ -61,30 +81,35 @@ double wrap01(double x) { return x >= 1.0 ? x - 1.0 : x; }
 
 class EdgeSampler {
 public:
-    EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b)
-        : c_(c), solver_(solver), hits_(b.hits), shader_(shader) {}
+    // `centres`: the image's colours before this pass (the centre samples).
+    EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
+                const std::vector<uint8_t>& diff, const std::vector<float>& centres)
+        : c_(c), solver_(solver), hits_(b.hits), shader_(shader), diff_(diff), centres_(centres),
+          params_(solver.params), robust_(solver.robust) {}
 
 
     // The mean premultiplied colour of pixel (i, j)'s centre sample (`centre`,
     // straight alpha) and its n stratified sub-pixel samples, back in straight
-    // alpha. Returns the number of rays traced.
+    // alpha. Returns the number of rays traced (samples not interpolated).
     int resolve(int i, int j, int n, float* rgba) const {
-        collect_starts(i, j);
+        collected_ = false;  // the starts are collected for the first traced sample
+        ci_ = i, cj_ = j;
         double sum[4] = {rgba[0] * rgba[3], rgba[1] * rgba[3], rgba[2] * rgba[3], rgba[3]};
         const uint32_t rot = hash32(static_cast<uint32_t>(c_.map.index(i, j)));
         const double rx = (rot & 0xffffu) * 0x1p-16, ry = (rot >> 16) * 0x1p-16;
+        int traced = 0;
         for (int s = 0; s < n; ++s) {
             const double x = wrap01((s + 0.5) / n + rx);
             const double y = wrap01(radical_inverse2(static_cast<uint32_t>(s)) + ry);
             double sample[4];
-            trace(i + x, j + y, sample);
+            traced += trace(i + x, j + y, sample);
             for (int q = 0; q < 4; ++q) sum[q] += sample[q];
         }
         const double alpha = sum[3] / (n + 1);
         if (sum[3] > 0)
             for (int q = 0; q < 3; ++q) rgba[q] = static_cast<float>(sum[q] / sum[3]);
         rgba[3] = static_cast<float>(alpha);
-        return n;
+        return traced;
     }
 
 private:
@@ -95,38 +120,57 @@ private:
         int di, dj;  // the pixel it comes from, relative to the edge pixel
     };
     // The hits of the 3x3 around (i, j): every sample's candidate starts.
-    void collect_starts(int i, int j) const {
+    void collect_starts() const {
+        const int i = ci_, j = cj_;
+        collected_ = true;
         nstarts_ = 0;
-        ci_ = i, cj_ = j;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
             if (h.face) starts_[nstarts_++] = {h.face, h.u, h.v, h.t, ni - i, nj - j};
         });
-        std::fill(evaluated_, evaluated_ + kNeighbours, false);
-        // Front first: a sample's nearest hit is on the face that is in front
-        // around it, so the first hit inside a trim ends the sample's search.
-        // Insertion sort, stable (equal depths keep the walk's order): at most 9
+        // Front first (starts_[0] is the nearest hit, and equal keys in
+        // candidates keep this order). Insertion sort, stable (equal depths keep the walk's order): at most 9
         // entries, and std::stable_sort allocated a buffer per edge pixel.
         for (int q = 1; q < nstarts_; ++q)
             for (int r = q; r > 0 && starts_[r].t < starts_[r - 1].t; --r) std::swap(starts_[r], starts_[r - 1]);
         own_hit_ = hits_[c_.map.index(i, j)].face != 0;
+        // The samples' Newton tolerance: kSamplePixels at the nearest of these
+        // hits (a pixel's footprint grows with depth, so farther hits get a
+        // tighter one in pixels), never tighter than the frame's own.
+        if (nstarts_ > 0) {
+            const double eps = kSamplePixels * c_.pixel_footprint(starts_[0].t);
+            params_.eps = std::max(solver_.params.eps, eps);
+            robust_.eps = std::max(solver_.robust.eps, eps);
+        }
+        // Each start's face as an index among the distinct faces, for
+        // nearest_of_each_face.
+        nfaces_ = 0;
+        for (int q = 0; q < nstarts_; ++q) {
+            int g = 0;
+            while (g < nfaces_ && starts_[first_of_face_[g]].face != starts_[q].face) ++g;
+            if (g == nfaces_) first_of_face_[nfaces_++] = q;
+            face_of_start_[q] = static_cast<uint8_t>(g);
+        }
     }
-    // The premultiplied colour of the exact ray through pixel coordinates (px, py).
-    void trace(double px, double py, double out[4]) const {
+    // The premultiplied colour at pixel coordinates (px, py): interpolated
+    // where no edge can cross (interpolated), else the exact ray's (returns 1).
+    int trace(double px, double py, double out[4]) const {
+        if (interpolated(px, py, out)) return 0;
+        if (!collected_) collect_starts();
         const ScreenPoint sp = c_.camera.screen(px, py);
         PixelHit best, best_near;
-        // Per face, the start nearest to the sample (its pixel centre), front
-        // faces first; the robust Newton only where the plain one found nothing
-        // on any face and the pixel itself is hit (a sample of a background pixel
-        // that the plain solves from neighbours a pixel away miss is background:
-        // the robust retries there cost more than the rest of the pass).
-        for (const NewtonParams* p : {&solver_.params, &solver_.robust}) {
-            if (p == &solver_.robust && !own_hit_) break;
-            for (int q = 0; q < nstarts_ && !best.face; ++q) {
-                const Start& s = starts_[q];
-                if (!nearest_of_its_face(q, px, py)) continue;
+        int order[kNeighbours];
+        const int ncand = candidates(px, py, order);
+        // The robust Newton only where the plain one found nothing on any face
+        // and the pixel itself is hit (a sample of a background pixel that the
+        // plain solves from neighbours a pixel away miss is background: the
+        // robust retries there cost more than the rest of the pass).
+        for (const NewtonParams* p : {&params_, &robust_}) {
+            if (p == &robust_ && !own_hit_) break;
+            for (int m = 0; m < ncand && !best.face; ++m) {
+                const Start& s = starts_[order[m]];
                 PixelHit h;
-                const Outcome o = solver_.solve(s.face, sp, s.u, s.v, *p, true, h, &start_derivs(q));
+                const Outcome o = solver_.solve(s.face, sp, s.u, s.v, *p, true, h, &start_derivs(order[m]));
                 if (o == kConverged) best = h;
                 if (o == kNearTrim && h.t < best_near.t) best_near = h;
             }
@@ -140,45 +184,107 @@ private:
             out[1] = c_.options.background.g * a;
             out[2] = c_.options.background.b * a;
             out[3] = a;
-            return;
+            return 1;
         }
         Vec3 n;
         const Vec3 rgb = shader_.colour(best, c_.camera.ray(sp), n);
         out[0] = rgb.x, out[1] = rgb.y, out[2] = rgb.z, out[3] = 1.0;
+        return 1;
+    }
+    // A sample inside the square of four pixel centres around it where all four
+    // show the same thing (one face with no depth step or crease between any two
+    // of them, or all background: no difference bit between them) lies where, by
+    // the assumption that decides the edge pixels themselves (features are seen
+    // by the centre samples), no edge crosses: on that face's smooth shading, or
+    // on background. Its colour is the bilinear interpolation of the four centre
+    // colours, which differs from the exact ray's by the shading's second-order
+    // variation over a pixel, as a pixel centre's one sample differs from its
+    // pixel's mean everywhere off the edges. Only samples in squares an edge
+    // crosses are traced: about half of each edge pixel's samples, as an edge
+    // between two centres crosses one of the two pixels.
+    bool interpolated(double px, double py, double out[4]) const {
+        const double gx = px - 0.5, gy = py - 0.5;  // in the lattice of pixel centres
+        const int i0 = static_cast<int>(std::floor(gx)), j0 = static_cast<int>(std::floor(gy));
+        if (i0 < 0 || j0 < 0 || i0 + 1 >= c_.width || j0 + 1 >= c_.height) return false;
+        const size_t k00 = c_.map.index(i0, j0), k10 = c_.map.index(i0 + 1, j0);
+        const size_t k01 = c_.map.index(i0, j0 + 1), k11 = c_.map.index(i0 + 1, j0 + 1);
+        if ((diff_[k00] & (kDiffRight | kDiffDown | kDiffDownRight)) || (diff_[k10] & (kDiffDown | kDiffDownLeft)) ||
+            (diff_[k01] & kDiffRight))
+            return false;
+        const double fx = gx - i0, fy = gy - j0;
+        const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+        const size_t ks[4] = {k00, k10, k01, k11};
+        for (int q = 0; q < 4; ++q) out[q] = 0;
+        for (int m = 0; m < 4; ++m) {
+            const float* rgba = &centres_[4 * ks[m]];
+            for (int q = 0; q < 3; ++q) out[q] += w[m] * rgba[q] * rgba[3];
+            out[3] += w[m] * rgba[3];
+        }
+        return true;
     }
     // The surface's derivatives at start q, evaluated on first use: the pixel's
     // samples (n of them, and each both plainly and robustly) start from the same
     // few neighbour hits, and evaluating a start was a third of the pass's
     // surface evaluations. The samples' iterates stay the same numbers.
+    // Kept for the row (one EdgeSampler per row): the next edge pixels of the
+    // row share six of their nine neighbours, so each neighbour is evaluated
+    // once, not by each of up to three edge pixels of a run. A neighbour in row
+    // j + dj and column ni has slot [dj + 1][ni mod 4]: the columns of one 3x3
+    // never share a slot.
     const SurfaceDerivs& start_derivs(int q) const {
-        if (!evaluated_[q]) {
-            derivs_[q] = solver_.start_derivs(starts_[q].face, starts_[q].u, starts_[q].v);
-            evaluated_[q] = true;
+        const Start& s = starts_[q];
+        const int ni = ci_ + s.di, row = s.dj + 1, slot = ni & 3;
+        if (cached_column_[row][slot] != ni) {
+            derivs_[row][slot] = solver_.start_derivs(s.face, s.u, s.v);
+            cached_column_[row][slot] = ni;
         }
-        return derivs_[q];
+        return derivs_[row][slot];
     }
-    // Whether start q is its face's start nearest to (px, py) (ties: the first).
-    bool nearest_of_its_face(int q, double px, double py) const {
-        auto d2 = [&](const Start& s) {
-            const double dx = ci_ + s.di + 0.5 - px, dy = cj_ + s.dj + 0.5 - py;
-            return dx * dx + dy * dy;
-        };
-        const double dq = d2(starts_[q]);
-        for (int r = 0; r < nstarts_; ++r)
-            if (r != q && starts_[r].face == starts_[q].face && (d2(starts_[r]) < dq || (d2(starts_[r]) == dq && r < q)))
-                return false;
-        return true;
+    // The starts a sample at (px, py) is solved from, in order (returns how
+    // many): per face its start nearest to the sample (ties: the first), the
+    // face in front first (the first hit inside a trim ends the search), but of
+    // faces whose starts lie within about a depth step of each other (one
+    // surface continuing across the edge between two faces) the one nearer on
+    // screen, on whose side of the edge the sample more likely is: the order key
+    // is the start's depth plus kSameSurfaceFootprints pixel footprints per
+    // pixel of distance.
+    int candidates(double px, double py, int order[kNeighbours]) const {
+        double d2[kNeighbours], key[kNeighbours];
+        int best[kNeighbours];
+        std::fill(best, best + nfaces_, -1);
+        for (int q = 0; q < nstarts_; ++q) {
+            const double dx = ci_ + starts_[q].di + 0.5 - px, dy = cj_ + starts_[q].dj + 0.5 - py;
+            d2[q] = dx * dx + dy * dy;
+            int& b = best[face_of_start_[q]];
+            if (b < 0 || d2[q] < d2[b]) b = q;
+        }
+        for (int g = 0; g < nfaces_; ++g) {
+            const Start& s = starts_[best[g]];
+            key[g] = s.t + kSameSurfaceFootprints * c_.pixel_footprint(s.t) * std::sqrt(d2[best[g]]);
+            order[g] = best[g];
+            for (int m = g; m > 0 && key[m] < key[m - 1]; --m) {
+                std::swap(key[m], key[m - 1]);
+                std::swap(order[m], order[m - 1]);
+            }
+        }
+        return nfaces_;
     }
     const FrameContext& c_;
     const Solver& solver_;
     const std::vector<PixelHit>& hits_;
     const Shader& shader_;
+    const std::vector<uint8_t>& diff_;
+    const std::vector<float>& centres_;
     // Scratch of the pixel being resolved; one EdgeSampler per thread.
     mutable Start starts_[kNeighbours];
-    mutable SurfaceDerivs derivs_[kNeighbours];
-    mutable bool evaluated_[kNeighbours];
+    mutable SurfaceDerivs derivs_[3][4];
+    mutable int cached_column_[3][4] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
+    mutable uint8_t face_of_start_[kNeighbours];  // index of the start's face among the distinct faces
+    mutable int first_of_face_[kNeighbours];       // each distinct face's first start
+    mutable int nfaces_ = 0;
+    mutable NewtonParams params_, robust_;  // the solver's, with the samples' tolerance
     mutable int nstarts_ = 0, ci_ = 0, cj_ = 0;
-    mutable bool own_hit_ = false;
+    mutable bool own_hit_ = false, collected_ = false;
 };
 
 // Whether pixel (i, j) differs from one of its 8 neighbours in what it shows:
@@ -250,9 +356,10 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& s
         for (int i = 0; i < c.width; ++i)
             edge[c.map.index(i, j)] = is_edge(c, diff, i, j) && !is_smooth(c, img, i, j);
     });
+    const std::vector<float> centres = img.rgba;
     std::atomic<uint64_t> pixels{0}, rays{0};
     parallel_rows(c, true, [&](int j) {
-        const EdgeSampler sampler(c, solver, shader, b);
+        const EdgeSampler sampler(c, solver, shader, b, diff, centres);
         uint64_t p = 0, r = 0;
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);

@@ -26,17 +26,21 @@ constexpr double kCreaseCos = 0.866;
 // (slope 3) count as steps.
 constexpr double kDepthStepFootprints = 3.0;
 
-}  // namespace
-
-bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
-                   size_t n) {
-    const PixelHit &p = hits[k], &q = hits[n];
+// pixels_differ for hits p and q with AOV normals a and b; inline in the frame's
+// loop below (a call per pair was most of that loop's cost).
+inline bool hits_differ(const FrameContext& c, const PixelHit& p, const PixelHit& q, const float* a, const float* b) {
     if (!p.face && !q.face) return false;
     if (!p.face || !q.face || p.face != q.face) return true;  // silhouette, face border
     const double footprint = c.pixel_footprint(std::min(p.t, q.t));
     if (std::abs(p.t - q.t) > kDepthStepFootprints * footprint) return true;  // one face folding over itself
-    const float *a = &img.normal[3 * k], *b = &img.normal[3 * n];
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < kCreaseCos;
+}
+
+}  // namespace
+
+bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
+                   size_t n) {
+    return hits_differ(c, hits[k], hits[n], &img.normal[3 * k], &img.normal[3 * n]);
 }
 
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img) {
@@ -44,15 +48,21 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
     const bool diagonals = c.options.antialias > 0;  // only anti-aliasing reads them
     std::vector<uint8_t> diff;
     assign_cancelable(diff, c.pixels(), uint8_t(0), c);
+    const PixelHit* hits = b.hits.data();
+    const float* normal = img.normal.data();
     parallel_rows(c, false, [&](int j) {
+        const bool last_row = j + 1 == H;
         for (int i = 0; i < W; ++i) {
             const size_t k = c.map.index(i, j);
+            const PixelHit& p = hits[k];
+            const float* a = normal + 3 * k;
+            auto differs = [&](size_t n) { return hits_differ(c, p, hits[n], a, normal + 3 * n); };
             uint8_t bits = 0;
-            if (i + 1 < W && pixels_differ(c, b.hits, img, k, k + 1)) bits |= kDiffRight;
-            if (j + 1 < H) {
-                if (pixels_differ(c, b.hits, img, k, k + W)) bits |= kDiffDown;
-                if (diagonals && i + 1 < W && pixels_differ(c, b.hits, img, k, k + W + 1)) bits |= kDiffDownRight;
-                if (diagonals && i > 0 && pixels_differ(c, b.hits, img, k, k + W - 1)) bits |= kDiffDownLeft;
+            if (i + 1 < W && differs(k + 1)) bits |= kDiffRight;
+            if (!last_row) {
+                if (differs(k + W)) bits |= kDiffDown;
+                if (diagonals && i + 1 < W && differs(k + W + 1)) bits |= kDiffDownRight;
+                if (diagonals && i > 0 && differs(k + W - 1)) bits |= kDiffDownLeft;
             }
             diff[k] = bits;
         }
@@ -99,7 +109,8 @@ void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderI
             }
         }
         for (int i = 0; i < W; ++i)
-            coverage[c.map.index(i, j)] = static_cast<float>(std::clamp(half + 0.5 - std::sqrt(d2[i]), 0.0, 1.0));
+            if (d2[i] != HUGE_VAL)  // a boundary point within reach (most pixels have none)
+                coverage[c.map.index(i, j)] = static_cast<float>(std::clamp(half + 0.5 - std::sqrt(d2[i]), 0.0, 1.0));
     });
     throw_if_canceled(o);
     // "Over" the image (Porter & Duff 1984), in the image's straight alpha.

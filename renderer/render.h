@@ -34,8 +34,9 @@ struct RenderOptions {
     // process's one worker pool serves higher-priority arenas first (a service
     // puts cheap frames ahead of heavy ones).
     RenderPriority priority = RenderPriority::normal;
-    // Extra sub-pixel rays per edge pixel (silhouettes, face borders, depth steps,
-    // creases), each solved exactly (pass_antialias.cpp); 0: one ray per pixel.
+    // Extra sub-pixel samples per edge pixel (silhouettes, face borders, depth
+    // steps, creases), each an exact ray where an edge can cross it and the
+    // interpolated centre colours elsewhere (pass_antialias.cpp); 0: one ray per pixel.
     // The AOVs are the pixel-centre sample either way.
     int antialias = 0;
     // Feature lines over the shading (pass_edges.cpp): silhouettes, face borders
@@ -103,8 +104,8 @@ struct RenderStats {
     // over itself within the map mesh's deflection). Not part of `fallback`.
     uint64_t rescue_nearer = 0;
     uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
-    // Anti-aliasing: extra rays per edge pixel (RenderOptions::antialias), the
-    // edge pixels that got them, and the rays traced for them.
+    // Anti-aliasing: extra samples per edge pixel (RenderOptions::antialias), the
+    // edge pixels that got them, and the samples traced as exact rays.
     int antialias = 0;
     uint64_t antialias_pixels = 0, antialias_rays = 0;
     // Shadows (RenderOptions::shadows): the light map's size (square), the light

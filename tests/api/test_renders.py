@@ -210,7 +210,8 @@ def test_antialias_default_on_for_png_and_only_on_edge_pixels(url):
     assert stats_off["antialias"] == {"rays_per_edge_pixel": 0, "pixels": 0, "rays": 0}
     edge_pixels = stats_on["antialias"]["pixels"]
     assert 0 < edge_pixels < stats_on["pixels_hit"]
-    assert stats_on["antialias"]["rays"] == 4 * edge_pixels
+    # Samples off every edge (between four equal centres) are interpolated, not traced.
+    assert 0 < stats_on["antialias"]["rays"] <= 4 * edge_pixels
     assert "antialias" in stats_on["timings_ms"]
     changed = sum(a != b for a, b in zip(on, off))
     # Only edge pixels change, and most of them do (partly covered, blended).
@@ -220,7 +221,8 @@ def test_antialias_default_on_for_png_and_only_on_edge_pixels(url):
     assert all(p[3] in (0, 255) for p in off)
     # More rays: same edge pixels, 8 rays each.
     stats8, _ = render_png(url, step, antialias=8)
-    assert stats8["antialias"]["pixels"] == edge_pixels and stats8["antialias"]["rays"] == 8 * edge_pixels
+    assert stats8["antialias"]["pixels"] == edge_pixels
+    assert stats_on["antialias"]["rays"] < stats8["antialias"]["rays"] <= 8 * edge_pixels
 
 
 def test_antialias_off_by_default_for_exr_and_tiff(url):
