@@ -9,9 +9,8 @@
 // every other one is an exact ray, solved like the centre one by Newton (to
 // kSamplePixels) from the (face, u, v) of the pixel and its 8 neighbours: the
 // hits there lie within 1.5 pixels of any sub-pixel sample, on the same sheet.
-// This is
-// adaptive supersampling in the sense of Whitted 1980 (extra rays where adjacent
-// samples differ), with stratified sample positions (Mitchell 1987: jittered
+// This is adaptive supersampling in the sense of Whitted 1980 (extra rays where
+// adjacent samples differ), with stratified sample positions (Mitchell 1987: jittered
 // strata make the edge error noise instead of a regular pattern). The AOVs keep
 // the one exact sample at the pixel centre.
 #include <algorithm>
@@ -44,12 +43,6 @@ constexpr double kSmoothContrast = 1.0 / 255;
 // there: the samples' steps fell from 2.1-2.3 to 1.2-1.3 per converged solve
 // (quadratic convergence: the second step only took 1e-5 pixel to 1e-10).
 constexpr double kSamplePixels = 1.0 / 256;
-
-// Two faces whose starts' depths differ by less than this many pixel footprints
-// per pixel between the starts count as one surface continuing (as a depth step
-// for the feature lines: 3 footprints per pixel is a surface seen ~20 degrees
-// from edge-on); see EdgeSampler::candidates.
-constexpr double kSameSurfaceFootprints = 3.0;
 
 // The bits of s in reverse order.
 uint32_t reverse_bits(uint32_t s) {
@@ -161,13 +154,13 @@ private:
             params_.eps = std::max(solver_.params.eps, eps);
             robust_.eps = std::max(solver_.robust.eps, eps);
         }
-        // Each start's face as an index among the distinct faces, for
-        // nearest_of_each_face.
+        // Each start's face as an index among the distinct faces, for candidates.
+        int first_of_face[kNeighbours];  // each distinct face's first start
         nfaces_ = 0;
         for (int q = 0; q < nstarts_; ++q) {
             int g = 0;
-            while (g < nfaces_ && starts_[first_of_face_[g]].face != starts_[q].face) ++g;
-            if (g == nfaces_) first_of_face_[nfaces_++] = q;
+            while (g < nfaces_ && starts_[first_of_face[g]].face != starts_[q].face) ++g;
+            if (g == nfaces_) first_of_face[nfaces_++] = q;
             face_of_start_[q] = static_cast<uint8_t>(g);
         }
     }
@@ -241,15 +234,13 @@ private:
         }
         return true;
     }
-    // The surface's derivatives at start q, evaluated on first use: the pixel's
-    // samples (n of them, and each both plainly and robustly) start from the same
-    // few neighbour hits, and evaluating a start was a third of the pass's
-    // surface evaluations. The samples' iterates stay the same numbers.
-    // Kept for the row (one EdgeSampler per row): the next edge pixels of the
-    // row share six of their nine neighbours, so each neighbour is evaluated
-    // once, not by each of up to three edge pixels of a run. A neighbour in row
-    // j + dj and column ni has slot [dj + 1][ni mod 4]: the columns of one 3x3
-    // never share a slot.
+    // The surface's derivatives at start q, evaluated on first use and kept for
+    // the row (one EdgeSampler per row): a pixel's samples start from the same
+    // few neighbour hits, and the next edge pixels of a row share six of their
+    // nine neighbours (evaluating starts was a third of the pass's surface
+    // evaluations). The samples' iterates stay the same numbers. A neighbour in
+    // row j + dj and column ni has slot [dj + 1][ni mod 4]: the columns of one
+    // 3x3 never share a slot.
     const SurfaceDerivs& start_derivs(int q) const {
         const Start& s = starts_[q];
         const int ni = ci_ + s.di, row = s.dj + 1, slot = ni & 3;
@@ -265,8 +256,8 @@ private:
     // faces whose starts lie within about a depth step of each other (one
     // surface continuing across the edge between two faces) the one nearer on
     // screen, on whose side of the edge the sample more likely is: the order key
-    // is the start's depth plus kSameSurfaceFootprints pixel footprints per
-    // pixel of distance.
+    // is the start's depth plus kDepthStepFootprints (passes.h) pixel footprints
+    // per pixel of distance.
     int candidates(double px, double py, int order[kNeighbours]) const {
         double d2[kNeighbours], key[kNeighbours];
         int best[kNeighbours];
@@ -279,7 +270,7 @@ private:
         }
         for (int g = 0; g < nfaces_; ++g) {
             const Start& s = starts_[best[g]];
-            key[g] = s.t + kSameSurfaceFootprints * c_.pixel_footprint(s.t) * std::sqrt(d2[best[g]]);
+            key[g] = s.t + kDepthStepFootprints * c_.pixel_footprint(s.t) * std::sqrt(d2[best[g]]);
             order[g] = best[g];
             for (int m = g; m > 0 && key[m] < key[m - 1]; --m) {
                 std::swap(key[m], key[m - 1]);
@@ -299,7 +290,6 @@ private:
     mutable SurfaceDerivs derivs_[3][4];
     mutable int cached_column_[3][4] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
     mutable uint8_t face_of_start_[kNeighbours];  // index of the start's face among the distinct faces
-    mutable int first_of_face_[kNeighbours];       // each distinct face's first start
     mutable int nfaces_ = 0;
     mutable NewtonParams params_, robust_;  // the solver's, with the samples' tolerance
     mutable int nstarts_ = 0, ci_ = 0, cj_ = 0;

@@ -19,15 +19,9 @@ namespace {
 // degrees (cos 30 = 0.866). A smooth face turns by far less between pixels
 // except seen almost edge-on, where a silhouette is next anyway.
 constexpr double kCreaseCos = 0.866;
-// A depth step on one face (a fold occluding itself, or one sheet of a closed
-// face behind another): adjacent hits farther apart in depth than this many
-// pixel footprints. On one sheet, neighbouring depths differ by about one
-// footprint times the slope, so only sheets seen within ~20 degrees of edge-on
-// (slope 3) count as steps.
-constexpr double kDepthStepFootprints = 3.0;
-
-// pixels_differ for hits p and q with AOV normals a and b; inline in the frame's
-// loop below (a call per pair was most of that loop's cost).
+// Whether hits p and q, with AOV normals a and b, show different things (passes.h,
+// neighbour_differences); inline in the frame's loop (a call per pair was most of
+// that loop's cost).
 inline bool hits_differ(const FrameContext& c, const PixelHit& p, const PixelHit& q, const float* a, const float* b) {
     if (!p.face && !q.face) return false;
     if (!p.face || !q.face || p.face != q.face) return true;  // silhouette, face border
@@ -37,11 +31,6 @@ inline bool hits_differ(const FrameContext& c, const PixelHit& p, const PixelHit
 }
 
 }  // namespace
-
-bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
-                   size_t n) {
-    return hits_differ(c, hits[k], hits[n], &img.normal[3 * k], &img.normal[3 * n]);
-}
 
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img) {
     const int W = c.width, H = c.height;
@@ -102,7 +91,8 @@ void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderI
                 for (const int ni : is_down ? row_down[nj] : row_right[nj]) {
                     for (int i = std::max(ni - reach, 0); i <= std::min(ni + reach, W - 1); ++i) {
                         const double cx = ni - i;
-                        const double d = is_down ? cx * cx + (cy + 0.5) * (cy + 0.5) : (cx + 0.5) * (cx + 0.5) + cy * cy;
+                        const double d =
+                            is_down ? cx * cx + (cy + 0.5) * (cy + 0.5) : (cx + 0.5) * (cx + 0.5) + cy * cy;
                         d2[i] = std::min(d2[i], d);
                     }
                 }

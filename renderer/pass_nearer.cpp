@@ -258,12 +258,13 @@ private:
     }
     // Starts from the mesh of face id in front of the pixel's hit by a footprint.
     // Where no neighbour's hit starts Newton on the pixel's own face's nearer
-    // sheet (its neighbours show other faces, or the same far sheet), that mesh may: at a fold seen near its
-    // silhouette the near sheet's mesh, a chord, stops short of pixels its
-    // surface covers, and the map shows the far sheet there; the near root then
-    // lies by that mesh's frontmost part within reach. A face folded many times
-    // puts several sheets in front, the map's front one possibly a mesh sheet
-    // the exact ray passes by: each sheet covering the pixel, front to back.
+    // sheet (its neighbours show other faces, or the same far sheet), that mesh
+    // may: at a fold seen near its silhouette the near sheet's mesh, a chord,
+    // stops short of pixels its surface covers, and the map shows the far sheet
+    // there; the near root then lies by that mesh's frontmost part within
+    // reach. A face folded many times puts several sheets in front, the map's
+    // front one possibly a mesh sheet the exact ray passes by: each sheet
+    // covering the pixel, front to back.
     void mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const {
         const PixelHit p = best;
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);

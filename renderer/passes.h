@@ -57,13 +57,17 @@ private:
 // The image and AOVs from b.hits.
 void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers& b, RenderImage& img);
 
-// Whether adjacent pixels k and n show different things: background and a face,
-// two faces, a step in depth, or normals at a crease angle (pass_edges.cpp). The
-// edge pixels of anti-aliasing and the feature lines.
-bool pixels_differ(const FrameContext& c, const std::vector<PixelHit>& hits, const RenderImage& img, size_t k,
-                   size_t n);
+// A depth step on one face (a fold occluding itself, or one sheet of a closed
+// face behind another): adjacent hits farther apart in depth than this many
+// pixel footprints. On one sheet, neighbouring depths differ by about one
+// footprint times the slope, so only sheets seen within ~20 degrees of edge-on
+// (slope 3) count as steps.
+inline constexpr double kDepthStepFootprints = 3.0;
 
-// pixels_differ of each pixel and its four forward neighbours, once per frame
+// Whether adjacent pixels show different things: background and a face, two
+// faces, a step in depth, or normals at a crease angle (pass_edges.cpp). The
+// edge pixels of anti-aliasing and the feature lines. Of each pixel and its four
+// forward neighbours, once per frame
 // for both the anti-aliasing and the feature lines (it is symmetric, so the
 // other four directions are the neighbours' bits): per pixel, the bits below;
 // the diagonal ones only when anti-aliasing is on (the feature lines use the
@@ -72,9 +76,10 @@ enum NeighbourDiff : uint8_t { kDiffRight = 1, kDiffDown = 2, kDiffDownRight = 4
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img);
 
 // Anti-aliasing: pixels on silhouettes, face borders, depth steps and creases get
-// c.options.antialias extra sub-pixel rays, each solved exactly, and their colour
-// becomes the mean of all their samples; img's AOVs stay the pixel-centre sample.
-// Adds the pixels and rays to st.
+// c.options.antialias extra sub-pixel samples (exact rays where an edge can cross
+// them, the interpolated centre colours elsewhere), and their colour becomes the
+// mean of all their samples; img's AOVs stay the pixel-centre sample. Adds the
+// pixels and traced rays to st.
 // diff: neighbour_differences of the frame.
 void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
                     const std::vector<uint8_t>& diff, RenderImage& img, RenderStats& st);
