@@ -11,11 +11,17 @@
 // hits there lie within 1.5 pixels of any sub-pixel sample, on the same sheet.
 // This is adaptive supersampling in the sense of Whitted 1980 (extra rays where
 // adjacent samples differ), with stratified sample positions (Mitchell 1987: jittered
-// strata make the edge error noise instead of a regular pattern). The AOVs keep
-// the one exact sample at the pixel centre.
+// strata make the edge error noise instead of a regular pattern). Where the
+// samples show two things, the pixel's coverage by each is that of the straight
+// edge between them (edge_coverage.h), finer than the fraction of samples. The
+// AOVs keep the one exact sample at the pixel centre.
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 
+#include <tbb/enumerable_thread_specific.h>
+
+#include "renderer/edge_coverage.h"
 #include "renderer/passes.h"
 
 namespace nurbsrt {
@@ -43,6 +49,14 @@ constexpr double kSmoothContrast = 1.0 / 255;
 // there: the samples' steps fell from 2.1-2.3 to 1.2-1.3 per converged solve
 // (quadratic convergence: the second step only took 1e-5 pixel to 1e-10).
 constexpr double kSamplePixels = 1.0 / 256;
+
+// Whether the robust Newton (newton.h) can end otherwise than a plain solve that
+// ended in o. It differs only after a step that raises the residual (13),
+// leaves the box a second time or stays clamped, or past the plain iteration
+// limit: a plain solve that converged (inside the trim or not, or behind the
+// eye) or met a singular Jacobian (14) never got there, and the robust one
+// retraces it to the same end.
+bool retried(Outcome o) { return !(o == kTrimmed || o == kBehind || o == kSingular); }
 
 // The bits of s in reverse order.
 uint32_t reverse_bits(uint32_t s) {
@@ -91,39 +105,112 @@ void sample_position(int s, int n, uint32_t seed, double& x, double& y) {
     y = wrap01(reverse_bits(us) * 0x1p-32 + (seed >> 16) * 0x1p-16);
 }
 
+// The surface's derivatives at pixels' hits, the starts of the samples,
+// evaluated on first use: a pixel's samples start from the same few neighbour
+// hits, and the edge pixels around a hit (up to 3 rows, 3 columns) share it
+// (evaluating starts was a third of the pass's surface evaluations). One per
+// thread; rows j and j +- 1 have distinct slots (row mod 4), and an entry
+// remembers its pixel, so rows in any order stay correct. The samples' iterates
+// are the same numbers as without it.
+class StartCache {
+public:
+    explicit StartCache(int width) : width_(width), entries_(4 * static_cast<size_t>(width)) {}
+    const SurfaceDerivs& get(const Solver& solver, const PixelHit& h, int i, int j, size_t pixel) {
+        Entry& e = entries_[static_cast<size_t>(j & 3) * width_ + i];
+        if (e.pixel != pixel) {
+            e.derivs = solver.start_derivs(h.face, h.u, h.v);
+            e.pixel = pixel;
+        }
+        return e.derivs;
+    }
+
+private:
+    struct Entry {
+        size_t pixel = SIZE_MAX;
+        SurfaceDerivs derivs;
+    };
+    size_t width_;
+    std::vector<Entry> entries_;
+};
+
 class EdgeSampler {
 public:
     // `centres`: the image's colours before this pass (the centre samples).
     EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
-                const std::vector<uint8_t>& diff, const std::vector<float>& centres)
+                const std::vector<uint8_t>& diff, const std::vector<float>& centres, StartCache& starts)
         : c_(c), solver_(solver), hits_(b.hits), shader_(shader), diff_(diff), centres_(centres),
-          params_(solver.params), robust_(solver.robust) {}
+          start_cache_(starts), params_(solver.params), robust_(solver.robust) {}
 
 
-    // The mean premultiplied colour of pixel (i, j)'s centre sample (`centre`,
-    // straight alpha) and its n stratified sub-pixel samples, back in straight
-    // alpha. Returns the number of rays traced (samples not interpolated).
+    // Pixel (i, j)'s colour from its centre sample (`rgba`, straight alpha) and
+    // its n stratified sub-pixel samples: where they show two things (two faces,
+    // or a face and background) on either side of a straight edge, each side's
+    // mean colour weighted by the coverage of that side (straight_edge_coverage,
+    // with the 8 neighbours' centres as further samples); elsewhere the mean of
+    // all samples. Back in straight alpha. Returns the number of rays traced
+    // (samples not interpolated).
     int resolve(int i, int j, int n, float* rgba) const {
         collected_ = false;  // the starts are collected for the first traced sample
         ci_ = i, cj_ = j;
-        double sum[4] = {rgba[0] * rgba[3], rgba[1] * rgba[3], rgba[2] * rgba[3], rgba[3]};
+        samples_.resize(static_cast<size_t>(n) + 1);
+        samples_[0] = {0.5, 0.5, hits_[c_.map.index(i, j)].face,
+                       {rgba[0] * rgba[3], rgba[1] * rgba[3], rgba[2] * rgba[3], rgba[3]}};
         const uint32_t seed = hash32(static_cast<uint32_t>(c_.map.index(i, j)));
         int traced = 0;
-        for (int s = 0; s < n; ++s) {
-            double x, y;
-            sample_position(s, n, seed, x, y);
-            double sample[4];
-            traced += trace(i + x, j + y, sample);
-            for (int q = 0; q < 4; ++q) sum[q] += sample[q];
+        for (int s = 1; s <= n; ++s) {
+            Sample& q = samples_[s];
+            sample_position(s - 1, n, seed, q.x, q.y);
+            traced += trace(i + q.x, j + q.y, q.rgba, q.face);
         }
-        const double alpha = sum[3] / (n + 1);
-        if (sum[3] > 0)
-            for (int q = 0; q < 3; ++q) rgba[q] = static_cast<float>(sum[q] / sum[3]);
-        rgba[3] = static_cast<float>(alpha);
+        double mean[4];
+        if (!two_sided_mean(mean)) {
+            for (double& m : mean) m = 0;
+            for (const Sample& q : samples_)
+                for (int k = 0; k < 4; ++k) mean[k] += q.rgba[k] / (n + 1);
+        }
+        if (mean[3] > 0)
+            for (int q = 0; q < 3; ++q) rgba[q] = static_cast<float>(mean[q] / mean[3]);
+        rgba[3] = static_cast<float>(mean[3]);
         return traced;
     }
 
 private:
+    struct Sample {
+        double x, y;  // in the pixel, [0, 1)^2
+        uint32_t face;
+        double rgba[4];  // premultiplied
+    };
+    // The samples' mean colour as two sides of a straight edge (see resolve);
+    // false where the samples show one thing or more than two, or no straight
+    // line separates them.
+    bool two_sided_mean(double mean[4]) const {
+        const uint32_t a = samples_[0].face;
+        uint32_t b = a;
+        for (const Sample& q : samples_) {
+            if (q.face == a) continue;
+            if (b != a && q.face != b) return false;  // a third thing
+            b = q.face;
+        }
+        if (b == a) return false;
+        side_a_.clear(), side_b_.clear();
+        for (const Sample& q : samples_) (q.face == a ? side_a_ : side_b_).add(q.x, q.y);
+        for_each_neighbour(c_, ci_, cj_, 1, [&](int ni, int nj) {
+            const uint32_t f = hits_[c_.map.index(ni, nj)].face;
+            if ((ni != ci_ || nj != cj_) && (f == a || f == b))
+                (f == a ? side_a_ : side_b_).add(ni - ci_ + 0.5, nj - cj_ + 0.5);
+        });
+        const double cover = straight_edge_coverage(side_a_, side_b_);
+        if (std::isnan(cover)) return false;
+        double sum_a[4] = {0, 0, 0, 0}, sum_b[4] = {0, 0, 0, 0};
+        int n_a = 0, n_b = 0;
+        for (const Sample& q : samples_) {
+            double* sum = q.face == a ? sum_a : sum_b;
+            (q.face == a ? n_a : n_b)++;
+            for (int k = 0; k < 4; ++k) sum[k] += q.rgba[k];
+        }
+        for (int k = 0; k < 4; ++k) mean[k] = cover * sum_a[k] / n_a + (1 - cover) * sum_b[k] / n_b;
+        return true;
+    }
     struct Start {
         uint32_t face;
         float u, v;
@@ -164,10 +251,11 @@ private:
             face_of_start_[q] = static_cast<uint8_t>(g);
         }
     }
-    // The premultiplied colour at pixel coordinates (px, py): interpolated
-    // where no edge can cross (interpolated), else the exact ray's (returns 1).
-    int trace(double px, double py, double out[4]) const {
-        if (interpolated(px, py, out)) return 0;
+    // The premultiplied colour at pixel coordinates (px, py) and the face seen
+    // there (0: background): interpolated where no edge can cross
+    // (interpolated), else the exact ray's (returns 1).
+    int trace(double px, double py, double out[4], uint32_t& face) const {
+        if (interpolated(px, py, out, face)) return 0;
         if (!collected_) collect_starts();
         const ScreenPoint sp = c_.camera.screen(px, py);
         PixelHit best, best_near;
@@ -176,13 +264,17 @@ private:
         // The robust Newton only where the plain one found nothing on any face
         // and the pixel itself is hit (a sample of a background pixel that the
         // plain solves from neighbours a pixel away miss is background: the
-        // robust retries there cost more than the rest of the pass).
+        // robust retries there cost more than the rest of the pass), and only
+        // from starts whose plain solve it could change (retried).
+        Outcome plain[kNeighbours];
         for (const NewtonParams* p : {&params_, &robust_}) {
             if (p == &robust_ && !own_hit_) break;
             for (int m = 0; m < ncand && !best.face; ++m) {
+                if (p == &robust_ && !retried(plain[m])) continue;
                 const Start& s = starts_[order[m]];
                 PixelHit h;
                 const Outcome o = solver_.solve(s.face, sp, s.u, s.v, *p, true, h, &start_derivs(order[m]));
+                plain[m] = o;
                 if (o == kConverged) best = h;
                 if (o == kNearTrim && h.t < best_near.t) best_near = h;
             }
@@ -190,6 +282,7 @@ private:
         }
         // As in the rescue: inside the trim wins unless a near-trim hit is in front.
         if (best_near.face && best_near.t < best.t) best = best_near;
+        face = best.face;
         if (!best.face) {
             const float a = c_.options.background_alpha;
             out[0] = c_.options.background.r * a;
@@ -214,7 +307,7 @@ private:
     // pixel's mean everywhere off the edges. Only samples in squares an edge
     // crosses are traced: about half of each edge pixel's samples, as an edge
     // between two centres crosses one of the two pixels.
-    bool interpolated(double px, double py, double out[4]) const {
+    bool interpolated(double px, double py, double out[4], uint32_t& face) const {
         const double gx = px - 0.5, gy = py - 0.5;  // in the lattice of pixel centres
         const int i0 = static_cast<int>(std::floor(gx)), j0 = static_cast<int>(std::floor(gy));
         if (i0 < 0 || j0 < 0 || i0 + 1 >= c_.width || j0 + 1 >= c_.height) return false;
@@ -223,6 +316,7 @@ private:
         if ((diff_[k00] & (kDiffRight | kDiffDown | kDiffDownRight)) || (diff_[k10] & (kDiffDown | kDiffDownLeft)) ||
             (diff_[k01] & kDiffRight))
             return false;
+        face = hits_[k00].face;
         const double fx = gx - i0, fy = gy - j0;
         const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
         const size_t ks[4] = {k00, k10, k01, k11};
@@ -234,21 +328,11 @@ private:
         }
         return true;
     }
-    // The surface's derivatives at start q, evaluated on first use and kept for
-    // the row (one EdgeSampler per row): a pixel's samples start from the same
-    // few neighbour hits, and the next edge pixels of a row share six of their
-    // nine neighbours (evaluating starts was a third of the pass's surface
-    // evaluations). The samples' iterates stay the same numbers. A neighbour in
-    // row j + dj and column ni has slot [dj + 1][ni mod 4]: the columns of one
-    // 3x3 never share a slot.
     const SurfaceDerivs& start_derivs(int q) const {
         const Start& s = starts_[q];
-        const int ni = ci_ + s.di, row = s.dj + 1, slot = ni & 3;
-        if (cached_column_[row][slot] != ni) {
-            derivs_[row][slot] = solver_.start_derivs(s.face, s.u, s.v);
-            cached_column_[row][slot] = ni;
-        }
-        return derivs_[row][slot];
+        const int ni = ci_ + s.di, nj = cj_ + s.dj;
+        const size_t k = c_.map.index(ni, nj);
+        return start_cache_.get(solver_, hits_[k], ni, nj, k);
     }
     // The starts a sample at (px, py) is solved from, in order (returns how
     // many): per face its start nearest to the sample (ties: the first), the
@@ -285,10 +369,11 @@ private:
     const Shader& shader_;
     const std::vector<uint8_t>& diff_;
     const std::vector<float>& centres_;
+    StartCache& start_cache_;
     // Scratch of the pixel being resolved; one EdgeSampler per thread.
+    mutable std::vector<Sample> samples_;  // the pixel's: [0] the centre
+    mutable SidePoints side_a_, side_b_;  // the samples by the side they show
     mutable Start starts_[kNeighbours];
-    mutable SurfaceDerivs derivs_[3][4];
-    mutable int cached_column_[3][4] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
     mutable uint8_t face_of_start_[kNeighbours];  // index of the start's face among the distinct faces
     mutable int nfaces_ = 0;
     mutable NewtonParams params_, robust_;  // the solver's, with the samples' tolerance
@@ -367,8 +452,9 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& s
     });
     const std::vector<float> centres = img.rgba;
     std::atomic<uint64_t> pixels{0}, rays{0};
+    tbb::enumerable_thread_specific<StartCache> start_caches([&] { return StartCache(c.width); });
     parallel_rows(c, true, [&](int j) {
-        const EdgeSampler sampler(c, solver, shader, b, diff, centres);
+        const EdgeSampler sampler(c, solver, shader, b, diff, centres, start_caches.local());
         uint64_t p = 0, r = 0;
         for (int i = 0; i < c.width; ++i) {
             const size_t k = c.map.index(i, j);

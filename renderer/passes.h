@@ -77,9 +77,11 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
 
 // Anti-aliasing: pixels on silhouettes, face borders, depth steps and creases get
 // c.options.antialias extra sub-pixel samples (exact rays where an edge can cross
-// them, the interpolated centre colours elsewhere), and their colour becomes the
-// mean of all their samples; img's AOVs stay the pixel-centre sample. Adds the
-// pixels and traced rays to st.
+// them, the interpolated centre colours elsewhere), and their colour comes from
+// their samples: each side's mean weighted by its coverage where the samples show
+// two things either side of a straight edge (edge_coverage.h), the mean of all of
+// them elsewhere; img's AOVs stay the pixel-centre sample. Adds the pixels and
+// traced rays to st.
 // diff: neighbour_differences of the frame.
 void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
                     const std::vector<uint8_t>& diff, RenderImage& img, RenderStats& st);
