@@ -341,8 +341,9 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     // (almost always none) and applied between passes, so no frame-sized buffer is
     // needed for a handful of pixels. Later passes examine only the 4-neighbours of
     // the pixels the last pass changed. (All 8 would let a diagonal neighbour's new
-    // hit start fill_pit's solves too: one more dense-fold pixel of bug29715_slow
-    // right, for 7-19 % more solves in this pass, most of them repeats.)
+    // hit start fill_pit's solves too, for 7-19 % more solves in this pass, most
+    // of them repeats; it once set one dense-fold pixel of bug29715_slow right,
+    // but does not fix the one the full-frame test still finds there.)
     std::vector<std::vector<Update>> row_updates(c.height);
     std::vector<double> depth(c.pixels());
     for (size_t k = 0; k < depth.size(); ++k) depth[k] = b.hits[k].face ? b.hits[k].t : HUGE_VAL;

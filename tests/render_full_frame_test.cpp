@@ -68,8 +68,10 @@ struct Known {
 };
 const Known kKnownRemaining[] = {
     {"step/bug29715_slow.stp", "front", 0, 1,
-     "one dense folded face seen edge-on: a pixel between neighbours on the same farther sheet; the nearer "
-     "root is reached from a diagonal neighbour's final hit only, which the peeling passes do not revisit"},
+     "one dense folded face seen edge-on: a pixel between neighbours on the same farther sheet; no start "
+     "tried reaches the nearer root (v -164.4; the map's start -160.1 converges at -160.6): not the 3x3's "
+     "hits, also when the peeling passes revisit all 8 neighbours, nor up to 16 of the face's mesh sheets "
+     "in front"},
     {"iges/marsCapsule.igs", "iso", 0, 1,
      "a face in front not in the candidates (not adjacent by mesh nodes to the 3x3's faces); any face near on "
      "screen with mesh in front of the hit finds it, but searching those at every unfilled pit cost the "
