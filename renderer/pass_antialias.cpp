@@ -365,7 +365,7 @@ private:
     }
     const FrameContext& c_;
     const Solver& solver_;
-    const std::vector<PixelHit>& hits_;
+    const PixelArray<PixelHit>& hits_;
     const Shader& shader_;
     const std::vector<uint8_t>& diff_;
     const std::vector<float>& centres_;

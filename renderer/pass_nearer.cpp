@@ -76,7 +76,7 @@ struct Update {
 class NearerSheet {
 public:
     NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
-                const std::vector<PixelHit>& hits)
+                const PixelArray<PixelHit>& hits)
         : c_(c), solver_(solver), hits_(hits), screen_points_(screen_points) {
         const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
         spike_ = kSpikeRelative * diag;
@@ -326,7 +326,7 @@ private:
     }
     const FrameContext& c_;
     const Solver& solver_;
-    const std::vector<PixelHit>& hits_;
+    const PixelArray<PixelHit>& hits_;
     const MeshScreenPoints& screen_points_;
     double spike_ = 0, nearer_ = 0;
 };

@@ -85,7 +85,7 @@ constexpr int kMaxGrowthPasses = 64;
 // within its tolerance band.
 class PixelRescue {
 public:
-    PixelRescue(const FrameContext& c, const Solver& solver, const std::vector<PixelHit>& src, int i, int j, bool crack)
+    PixelRescue(const FrameContext& c, const Solver& solver, const PixelArray<PixelHit>& src, int i, int j, bool crack)
         : c_(c), solver_(solver), src_(src), i_(i), j_(j), crack_(crack) {}
 
     // Solves face id from (su, sv) unless tried before; true when it hit (inside
@@ -243,7 +243,7 @@ private:
     };
     const FrameContext& c_;
     const Solver& solver_;
-    const std::vector<PixelHit>& src_;
+    const PixelArray<PixelHit>& src_;
     const int i_, j_;
     const bool crack_;
     Start tried_[kMaxStarts];
@@ -254,7 +254,7 @@ private:
 
 // Whether both pixels of a row or column pair around (i, j) are hit nearer than
 // t by more than a pixel footprint at t.
-bool behind_pair(const FrameContext& c, const std::vector<PixelHit>& src, int i, int j, double t) {
+bool behind_pair(const FrameContext& c, const PixelArray<PixelHit>& src, int i, int j, double t) {
     const double margin = c.pixel_footprint(t);
     auto nearer = [&](int a, int b) {
         if (!c.in_frame(a, b)) return false;
@@ -289,7 +289,7 @@ bool may_share_crack(const FrameContext& c, const PixelHit& a, const PixelHit& b
 // Whether the background pixel (i, j) lies in a crack or pinhole: hit within
 // two pixels on both sides along a row or column, by hits that may border one
 // crack (may_share_crack).
-bool enclosed_in_crack(const FrameContext& c, const std::vector<PixelHit>& src, int i, int j) {
+bool enclosed_in_crack(const FrameContext& c, const PixelArray<PixelHit>& src, int i, int j) {
     static const PixelHit kNoHit;
     auto hit_at = [&](int a, int b) -> const PixelHit& { return c.in_frame(a, b) ? src[c.map.index(a, b)] : kNoHit; };
     for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}}) {
@@ -304,7 +304,7 @@ bool enclosed_in_crack(const FrameContext& c, const std::vector<PixelHit>& src, 
 
 // One pixel's rescue from the hits `src` (and the map); returns its kind, or kNoRescue.
 uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, int i,
-                     int j, const std::vector<PixelHit>& src, PixelHit& out) {
+                     int j, const PixelArray<PixelHit>& src, PixelHit& out) {
     const size_t k = c.map.index(i, j);
     auto hit_at = [&](int a, int b) { return c.in_frame(a, b) && src[c.map.index(a, b)].face != 0; };
     const uint32_t own = c.map.face[k] <= c.nfaces ? c.map.face[k] : 0;
@@ -407,7 +407,7 @@ namespace {
 // of the background (most of a frame) is skipped on one byte instead of nine
 // hits' worth of memory. A 3x3 dilation of the hit mask, separable: along rows,
 // then along columns.
-std::vector<uint8_t> rescue_candidates(const FrameContext& c, const std::vector<PixelHit>& hits) {
+std::vector<uint8_t> rescue_candidates(const FrameContext& c, const PixelArray<PixelHit>& hits) {
     const int W = c.width, H = c.height;
     std::vector<uint8_t> hit(c.pixels()), row(c.pixels()), out(c.pixels());
     for (size_t k = 0; k < c.pixels(); ++k) hit[k] = hits[k].face != 0;
