@@ -265,8 +265,9 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
     EXPECT_LE(changed, b.stats.antialias_pixels);
 }
 
-// The second shape: a cylinder with a hole (a trim loop on a curved,
-// rational face; through the hole, the face's far side or background).
+// A cylinder with a hole: a trim loop on a curved, rational face (through the
+// hole, the face's far side or background), where the edges are curves in the
+// image, unlike the plane's straight border.
 TEST(RendererAntialias, AlphaApproachesTheExactCoverageOnAHoledCylinder) {
     AnalyticPatch cylinder;
     const Scene scene = holed_cylinder(cylinder);
@@ -291,7 +292,9 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOnAHoledCylinder) {
                 e1.partial, e1.mean, e4.mean, e16.mean);
     ASSERT_GT(e1.partial, 150);  // the silhouette, the ends and the hole
     EXPECT_LT(e4.mean, 0.07);  // measured 0.062 (0.058 on the sphere and plane)
-    EXPECT_LE(e16.mean, 0.03);  // the goal
+    // 0.03: under 8 of 255 output steps per edge pixel on average, well below
+    // the box average of 17 samples (0.030 on the sphere and plane is its level).
+    EXPECT_LE(e16.mean, 0.03);
     EXPECT_LT(e16.mean, e4.mean);
     EXPECT_LT(e4.worse, e1.partial / 100);
     EXPECT_LT(e16.worse, e1.partial / 100);
