@@ -110,23 +110,24 @@ void sample_position(int s, int n, uint32_t seed, double& x, double& y) {
 // hits, and the edge pixels around a hit (up to 3 rows, 3 columns) share it
 // (evaluating starts was a third of the pass's surface evaluations). One per
 // thread; rows j and j +- 1 have distinct slots (row mod 4), and an entry
-// remembers its pixel, so rows in any order stay correct. The samples' iterates
+// remembers its row, so rows in any order stay correct. The samples' iterates
 // are the same numbers as without it.
 class StartCache {
 public:
     explicit StartCache(int width) : width_(width), entries_(4 * static_cast<size_t>(width)) {}
-    const SurfaceDerivs& get(const Solver& solver, const PixelHit& h, int i, int j, size_t pixel) {
+    // The derivatives at h, the hit of pixel (i, j).
+    const SurfaceDerivs& get(const Solver& solver, const PixelHit& h, int i, int j) {
         Entry& e = entries_[static_cast<size_t>(j & 3) * width_ + i];
-        if (e.pixel != pixel) {
+        if (e.row != j) {
             e.derivs = solver.start_derivs(h.face, h.u, h.v);
-            e.pixel = pixel;
+            e.row = j;
         }
         return e.derivs;
     }
 
 private:
     struct Entry {
-        size_t pixel = SIZE_MAX;
+        int row = -1;
         SurfaceDerivs derivs;
     };
     size_t width_;
@@ -193,7 +194,13 @@ private:
         }
         if (b == a) return false;
         side_a_.clear(), side_b_.clear();
-        for (const Sample& q : samples_) (q.face == a ? side_a_ : side_b_).add(q.x, q.y);
+        double sum_a[4] = {0, 0, 0, 0}, sum_b[4] = {0, 0, 0, 0};
+        for (const Sample& q : samples_) {
+            (q.face == a ? side_a_ : side_b_).add(q.x, q.y);
+            double* sum = q.face == a ? sum_a : sum_b;
+            for (int k = 0; k < 4; ++k) sum[k] += q.rgba[k];
+        }
+        const int n_a = side_a_.size(), n_b = side_b_.size();  // the pixel's own samples
         for_each_neighbour(c_, ci_, cj_, 1, [&](int ni, int nj) {
             const uint32_t f = hits_[c_.map.index(ni, nj)].face;
             if ((ni != ci_ || nj != cj_) && (f == a || f == b))
@@ -201,13 +208,6 @@ private:
         });
         const double cover = straight_edge_coverage(side_a_, side_b_);
         if (std::isnan(cover)) return false;
-        double sum_a[4] = {0, 0, 0, 0}, sum_b[4] = {0, 0, 0, 0};
-        int n_a = 0, n_b = 0;
-        for (const Sample& q : samples_) {
-            double* sum = q.face == a ? sum_a : sum_b;
-            (q.face == a ? n_a : n_b)++;
-            for (int k = 0; k < 4; ++k) sum[k] += q.rgba[k];
-        }
         for (int k = 0; k < 4; ++k) mean[k] = cover * sum_a[k] / n_a + (1 - cover) * sum_b[k] / n_b;
         return true;
     }
@@ -331,8 +331,7 @@ private:
     const SurfaceDerivs& start_derivs(int q) const {
         const Start& s = starts_[q];
         const int ni = ci_ + s.di, nj = cj_ + s.dj;
-        const size_t k = c_.map.index(ni, nj);
-        return start_cache_.get(solver_, hits_[k], ni, nj, k);
+        return start_cache_.get(solver_, hits_[c_.map.index(ni, nj)], ni, nj);
     }
     // The starts a sample at (px, py) is solved from, in order (returns how
     // many): per face its start nearest to the sample (ties: the first), the
