@@ -10,7 +10,7 @@
 // with BRepExtrema. None may be a hole (the exact ray hits a face, we show
 // background) or a speckle (the exact ray has a nearer hit than ours), except the
 // few still open that kKnownRemaining lists with their cause: their counts may
-// not rise.
+// not rise. And no hit pixel may show a point that is off its ray (every pixel).
 //
 // Runs on generated fixtures always (filleted boxes whose vertex blends meet edge
 // fillets, a fan of thin twisted blades) and on every good model of
@@ -127,6 +127,10 @@ struct KnownShadow {
     long false_shadows, leaks;
 };
 const KnownShadow kKnownShadowDisagreements[] = {
+    // The as1 motor's 2 leaks lie on faces the frame shows since the phantom
+    // strips of stops on face borders in front of them (5,129 pixels of this
+    // view) are gone; not traced further.
+    {"step/as1_motor.step", "iso", 0, 2},
     {"step/box_sides.STEP", "iso", 1, 4},
     {"step/bug31670_russian.stp", "iso", 0, 6},
     {"step/bug31670_russian.stp", "front", 0, 3},
@@ -227,6 +231,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
                   << std::flush;
         RecordProperty(std::string(view.name) + "_holes", static_cast<int>(rep.holes));
         RecordProperty(std::string(view.name) + "_speckles", static_cast<int>(rep.speckles));
+        RecordProperty(std::string(view.name) + "_off_ray", static_cast<int>(rep.off_ray));
         RecordProperty(std::string(view.name) + "_candidates", static_cast<int>(rep.enclosed + rep.spikes));
         RecordProperty(std::string(view.name) + "_unchecked", static_cast<int>(rep.unchecked));
         const Known* known = known_remaining(c.rel.empty() ? c.fixture : c.rel, view.name);
@@ -240,6 +245,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
             << label << ": background pixels where the exact ray hits a face";
         EXPECT_LE(rep.speckles, known ? known->speckles : 0)
             << label << ": pixels showing a farther sheet than the exact nearest hit";
+        EXPECT_EQ(rep.off_ray, 0) << label << ": pixels showing a point of their face that is not on their ray";
         // A blank frame must not pass trivially.
         EXPECT_GT(rep.pixels_hit, 100) << label << ": too few hits to judge";
         const T::ShadowCheckReport shadows = T::shadow_check(scene, inter, camera, r.image);

@@ -4,6 +4,11 @@
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRep_Tool.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <TColStd_Array2OfReal.hxx>
+#include <TColgp_Array2OfPnt.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Vertex.hxx>
@@ -14,6 +19,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "importer/occt_shape.h"
@@ -37,6 +43,40 @@ constexpr int kDiagnoseIterations = 16;
 // reference's root (the check's settlement tolerance is far below it; distinct
 // roots of one face along one ray lie far apart at the scales where it matters).
 constexpr double kSameRootRelative = 1e-3;
+
+// OCCT's surface of a face's NURBS (the renderer's (u, v)): an evaluation of our
+// data independent of the renderer's evaluator. Clamped knot vectors become
+// OCCT's distinct knots with multiplicities; homogeneous points, poles and weights.
+Handle(Geom_BSplineSurface) occt_surface(const NurbsSurface& s) {
+    struct Knots {
+        TColStd_Array1OfReal values;
+        TColStd_Array1OfInteger mults;
+    };
+    auto knots = [](const std::vector<double>& k) {
+        std::vector<double> v;
+        std::vector<int> m;
+        for (const double x : k) {
+            if (!v.empty() && x == v.back()) ++m.back();
+            else v.push_back(x), m.push_back(1);
+        }
+        Knots out{TColStd_Array1OfReal(1, static_cast<int>(v.size())), TColStd_Array1OfInteger(1, static_cast<int>(v.size()))};
+        for (size_t q = 0; q < v.size(); ++q) {
+            out.values.SetValue(static_cast<int>(q + 1), v[q]);
+            out.mults.SetValue(static_cast<int>(q + 1), m[q]);
+        }
+        return out;
+    };
+    const Knots u = knots(s.knots_u), v = knots(s.knots_v);
+    TColgp_Array2OfPnt poles(1, s.num_u, 1, s.num_v);
+    TColStd_Array2OfReal weights(1, s.num_u, 1, s.num_v);
+    for (int i = 0; i < s.num_u; ++i)
+        for (int j = 0; j < s.num_v; ++j) {
+            const Vec4& c = s.at(i, j);
+            poles.SetValue(i + 1, j + 1, gp_Pnt(c.x / c.w, c.y / c.w, c.z / c.w));
+            weights.SetValue(i + 1, j + 1, c.w);
+        }
+    return new Geom_BSplineSurface(poles, weights, u.values, v.values, u.mults, v.mults, s.degree_u, s.degree_v);
+}
 
 struct Checker {
     const Scene& scene;
@@ -202,7 +242,44 @@ struct Diagnoser {
     }
 };
 
-std::string label_of(FullFrameFinding::Kind k) { return k == FullFrameFinding::Kind::hole ? "hole" : "speckle"; }
+std::string label_of(FullFrameFinding::Kind k) {
+    switch (k) {
+        case FullFrameFinding::Kind::hole: return "hole";
+        case FullFrameFinding::Kind::speckle: return "speckle";
+        case FullFrameFinding::Kind::off_ray: return "off-ray hit";
+    }
+    return "";
+}
+
+// Every hit pixel: the point its (face, u, v) AOVs name, evaluated by OCCT, lies
+// on the pixel's ray (full_frame_check.h, off-ray hit).
+void check_off_ray(const Checker& c, FullFrameReport& rep) {
+    std::map<uint32_t, Handle(Geom_BSplineSurface)> surfaces;
+    for (int j = 0; j < c.im.height; ++j)
+        for (int i = 0; i < c.im.width; ++i) {
+            const size_t k = c.idx(i, j);
+            const uint32_t id = c.im.face[k];
+            if (!id) continue;
+            Handle(Geom_BSplineSurface)& s = surfaces[id];
+            if (s.IsNull()) s = occt_surface(c.scene.faces[id - 1].surface);
+            const gp_Pnt p = s->Value(c.im.u[k], c.im.v[k]);
+            const Ray ray = c.camera.pixel_ray(i, j);
+            const Vec3 q = Vec3{p.X(), p.Y(), p.Z()} - ray.origin;
+            const double off = length(q - dot(q, ray.dir) * ray.dir);
+            const double footprint = 2.0 * c.camera.image_to_model_scale(c.im.z[k]) / c.im.height;
+            if (off <= std::max(kOffRayPixels * footprint, c.on_face_tol(static_cast<int>(id)))) continue;
+            FullFrameFinding f;
+            f.kind = FullFrameFinding::Kind::off_ray;
+            f.i = i;
+            f.j = j;
+            f.face = id;
+            f.t = c.im.z[k];
+            f.ref_t = off;
+            f.ref_on_face = off / footprint;
+            ++rep.off_ray;
+            rep.findings.push_back(f);
+        }
+}
 
 }  // namespace
 
@@ -285,6 +362,7 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
         const Diagnoser dg(c, prepared, map);
         for (size_t q = 0; q < rep.findings.size() && q < max_diagnosed; ++q) dg.run(rep.findings[q]);
     }
+    check_off_ray(c, rep);
     rep.check_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return rep;
 }
@@ -293,7 +371,7 @@ std::string FullFrameReport::text(size_t max_listed) const {
     std::ostringstream o;
     o << "[ full-frame ] " << label << " " << width << "x" << height << ": hit " << pixels_hit << " px; candidates "
       << enclosed << " enclosed background + " << spikes << " depth spikes; HOLES " << holes << ", SPECKLES "
-      << speckles << "; reference threw " << ref_errors << ", reference off its face " << ref_spurious
+      << speckles << ", OFF-RAY HITS " << off_ray << "; reference threw " << ref_errors << ", reference off its face " << ref_spurious
       << (unchecked ? "; UNCHECKED (time budget) " + std::to_string(unchecked) : std::string()) << "; check "
       << std::fixed << std::setprecision(2) << check_s << " s" << std::defaultfloat << "\n";
     for (size_t q = 0; q < findings.size() && q < max_listed; ++q) {
@@ -301,6 +379,11 @@ std::string FullFrameReport::text(size_t max_listed) const {
         o << "   " << label_of(f.kind) << " px(" << f.i << "," << f.j << ") ours: ";
         if (f.face) o << "face " << f.face << " t=" << std::setprecision(10) << f.t;
         else o << "background";
+        if (f.kind == FullFrameFinding::Kind::off_ray) {
+            o << " | the point at its (u, v) lies " << std::setprecision(3) << f.ref_t << " from the ray ("
+              << f.ref_on_face << " pixel footprints)\n";
+            continue;
+        }
         o << " | reference: face " << f.ref_face << " t=" << std::setprecision(10) << f.ref_t
           << " (on its face within " << std::setprecision(3) << f.ref_on_face << ")";
         if (!f.cause.empty()) o << "\n      cause: " << f.cause << "\n      why: " << f.detail;

@@ -9,6 +9,13 @@
 //  * wrong-sheet speckle: a pixel whose hit is farther than a hit the exact ray
 //    has. Candidates: depth spikes, hits farther than BOTH neighbours of a row or
 //    column pair by more than the depth noise floor (kDepthNoiseRelative).
+//  * off-ray hit: a pixel showing a point of its face that does not lie on the
+//    pixel's ray (a phantom: a face drawn where the ray passes it by). Checked on
+//    EVERY hit pixel, without the intersector: the point at the pixel's (face, u,
+//    v) AOVs, evaluated by OCCT (Geom_BSplineSurface of the face's NURBS), must
+//    lie within kOffRayPixels pixel footprints (or the face's tolerance) of the
+//    ray. A crack filled within the model's tolerance passes; a Newton iterate
+//    stuck on a face's border pixels short of the ray does not.
 //
 // Every candidate is re-cast as the SAME contract pixel ray (Camera::pixel_ray)
 // against the original OCCT shape. Disputes are settled as in
@@ -60,15 +67,24 @@ constexpr double kOnFaceTolFactor = 4.0;
 // .cpp) are counted as unchecked and reported, never silently dropped.
 constexpr double kCheckBudgetSeconds = 40.0;
 
+// An off-ray hit lies farther than this many pixel footprints from its ray
+// (and farther than the face's tolerance, kOnFaceTolFactor x): the point is
+// drawn in another pixel than its own. A true hit lies within the Newton
+// tolerance (1e-8 of the diagonal) plus the rounding of the float (u, v) and
+// depth AOVs, orders of magnitude below; a crack filled by a stop on a face's
+// border (the renderer's border-gap hit) within half a footprint.
+constexpr double kOffRayPixels = 1.0;
+
 struct FullFrameFinding {
-    enum class Kind { hole, speckle };
+    enum class Kind { hole, speckle, off_ray };
     Kind kind = Kind::hole;
     int i = 0, j = 0;
     uint32_t face = 0;  // ours (0: background)
     double t = 0;       // ours
-    int ref_face = 0;
-    double ref_t = 0;
-    double ref_on_face = 0;  // BRepExtrema distance of the reference hit to its face
+    int ref_face = 0;        // off_ray: unused
+    double ref_t = 0;        // off_ray: the shown point's distance from the ray
+    double ref_on_face = 0;  // BRepExtrema distance of the reference hit to its face;
+                             // off_ray: the distance from the ray in pixel footprints
     std::string cause;       // short classification (see diagnose in the .cpp)
     std::string detail;      // the evidence
 };
@@ -80,10 +96,11 @@ struct FullFrameReport {
     long enclosed = 0;           // hole candidates (enclosed background pixels)
     long spikes = 0;             // speckle candidates (depth spikes)
     long holes = 0, speckles = 0;
+    long off_ray = 0;            // hit pixels showing a point off their ray (every hit pixel checked)
     long ref_errors = 0;         // candidates the intersector threw on (no reference)
     long ref_spurious = 0;       // reference hits settled as not on their face
     long unchecked = 0;          // candidates left when kCheckBudgetSeconds ran out
-    std::vector<FullFrameFinding> findings;  // every hole and speckle, holes first
+    std::vector<FullFrameFinding> findings;  // every hole, speckle and off-ray hit, in that order
     double check_s = 0;          // time of the reference rays and settlements
 
     // Counts, then up to max_listed findings with their diagnosis.
