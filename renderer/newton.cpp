@@ -170,10 +170,9 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
             return res;
         }
         auto sn = sys.eval(un, vn);
-        // (13); robust: backtrack along the (clamped) step before giving up. Four
-        // halvings shrink the step to 1/16: enough to get back under an overshoot
-        // near a silhouette, few enough that a true divergence is declared quickly.
-        for (int half = 0; params.robust && !(sn.r <= s.r) && half < 4; ++half) {
+        // (13); robust: backtrack along the (clamped) step before giving up
+        // (NewtonParams::backtracks halvings).
+        for (int half = 0; params.robust && !(sn.r <= s.r) && half < params.backtracks; ++half) {
             un = 0.5 * (u + un);
             vn = 0.5 * (v + vn);
             sn = sys.eval(un, vn);

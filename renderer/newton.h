@@ -89,6 +89,10 @@ struct NewtonParams {
     double eps_det = 1e-12;   // (14), relative
     int max_iterations = 8;
     bool robust = false;      // clamp-and-continue at the box, backtracking on (13); see above
+    // robust: halvings of a step that raises the residual before (13) declares
+    // divergence. Four shrink the step to 1/16: enough to get back under an
+    // overshoot near a silhouette (a light ray grazing an occluder needs them).
+    int backtracks = 4;
 };
 
 // The renderer's default (12) tolerance: 1e-8 x the scene's bounding-box diagonal.

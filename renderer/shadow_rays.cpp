@@ -40,6 +40,15 @@ constexpr double kMaxStepSpread = 4;
 constexpr int kFirstRing = 9;
 constexpr int kRingOrder[kFirstRing][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
 
+// The view's robust Newton with the default backtracking (NewtonParams::backtracks):
+// a light ray has one start per face, and one grazing an occluder converges only
+// through its deeper halvings (with the view rescue's two, 3 models leaked).
+NewtonParams light_ray_params(const NewtonParams& view_robust) {
+    NewtonParams p = view_robust;
+    p.backtracks = NewtonParams{}.backtracks;
+    return p;
+}
+
 // Whether a hit lies on its face's parameter-box border (PixelHit keeps (u, v) as
 // floats: the clamped border value rounds the same way).
 bool on_box_border(const UvBox& b, const PixelHit& h) {
@@ -78,7 +87,7 @@ KeyLightShadows::KeyLightShadows(const FrameContext& view, const Solver& view_so
       progress_(no_progress_, 1),
       ctx_{view.prepared, view.scene, camera_, map_, view.options, view.arena, progress_, size_, size_, view.nfaces},
       projected_(view.options.method == NewtonMethod::proposed ? view.scene.faces.size() : 0),
-      solver_{ctx_, projected_, view_solver.robust, view_solver.robust},
+      solver_{ctx_, projected_, light_ray_params(view_solver.robust), light_ray_params(view_solver.robust)},
       contact_(camera_.spec().ortho_height / size_) {
     view.arena.execute([&] {
         tbb::parallel_for(size_t(0), projected_.size(),
