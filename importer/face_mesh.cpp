@@ -180,7 +180,7 @@ size_t fill_untriangulated(const ConvertedFace& cf, const UVBox& box, const std:
 
 void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
                 const std::vector<const std::vector<TrimLoop>*>& loops,
-                const std::vector<double>& face_sizes, const MeshParams& p,
+                const std::vector<double>& face_sizes, const std::vector<uint32_t>& numbers, const MeshParams& p,
                 std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings) {
     const size_t n = faces.size();
     meshes.assign(n, FaceMesh{});
@@ -242,7 +242,7 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
     });
 
     for (size_t i = 0; i < n; ++i) {
-        const std::string face = "face " + std::to_string(i + 1);
+        const std::string face = "face " + std::to_string(numbers[i]);
         if (filled[i])
             warnings.push_back(face + ": BRepMesh left part of it without triangles; " + std::to_string(filled[i]) +
                                " triangles of a trimmed (u,v) grid fill it");

@@ -1,6 +1,7 @@
 // import_file: read -> convert every face (surface, box, trim loops) -> mesh -> Scene.
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include <BRepBndLib.hxx>
 #include <Bnd_Box.hxx>
@@ -53,6 +54,46 @@ struct FaceWork {
     std::string error;
 };
 
+// For each face, the first face that is the same face placed elsewhere (the same
+// TShape and orientation under another location: a part an assembly uses more
+// than once; CAx-IF as1: 160 faces, 53 distinct), or itself. Such a face's
+// surface, (u,v) box, trim loops and mesh are its first one's moved by the
+// relative placement (instance_work, instance_mesh), not converted, sampled
+// and meshed again: a placement moves the surface and keeps its parameters.
+std::vector<size_t> first_instances(const std::vector<TopoDS_Face>& faces) {
+    std::map<std::pair<const TopoDS_TShape*, int>, size_t> first;
+    std::vector<size_t> out(faces.size());
+    for (size_t i = 0; i < faces.size(); ++i)
+        out[i] = first.try_emplace({faces[i].TShape().get(), static_cast<int>(faces[i].Orientation())}, i)
+                     .first->second;
+    return out;
+}
+
+// The placement of face `to` relative to face `from` (the same TShape).
+gp_Trsf relative_placement(const TopoDS_Face& to, const TopoDS_Face& from) {
+    return to.Location().Transformation() * from.Location().Transformation().Inverted();
+}
+
+// Face `to`'s conversion from that of `from`, its first instance: the same box,
+// loops and (u,v) map; the surface moved (Geom_Geometry::Transformed, a copy).
+FaceWork instance_work(const FaceWork& from, const gp_Trsf& move) {
+    FaceWork w = from;
+    if (!from.cf.surface.IsNull())
+        w.cf.surface = Handle(Geom_BSplineSurface)::DownCast(from.cf.surface->Transformed(move));
+    return w;
+}
+
+// Likewise its mesh: the same (u,v), the points moved.
+FaceMesh instance_mesh(const FaceMesh& from, const gp_Trsf& move) {
+    FaceMesh m = from;
+    for (Vec3& p : m.xyz) {
+        gp_Pnt q(p.x, p.y, p.z);
+        q.Transform(move);
+        p = {q.X(), q.Y(), q.Z()};
+    }
+    return m;
+}
+
 }  // namespace
 
 Scene import_file(const std::string& path, const ImportOptions& options) {
@@ -79,7 +120,9 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
         // NURBS conversion and geometry queries are thread-safe (STACK.md);
         // every result lands in its own slot, so the outcome is deterministic.
         std::vector<FaceWork> work(static_cast<size_t>(n));
+        const std::vector<size_t> first = first_instances(faces);
         tbb::parallel_for(size_t(0), faces.size(), [&](size_t i) {
+            if (first[i] != i) return;
             FaceWork& w = work[i];
             try {
                 w.cf = occt::convert_face(faces[i]);
@@ -93,6 +136,8 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
                 w.cf = {};
             }
         });
+        for (size_t i = 0; i < work.size(); ++i)
+            if (first[i] != i) work[i] = instance_work(work[first[i]], relative_placement(faces[i], faces[first[i]]));
         scene.timings.nurbs_convert_ms = occt::ms_since(t_convert);
 
         // Faces only: wireframe entities (unbounded lines, huge construction
@@ -109,22 +154,31 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
         const BBox geometric = to_bbox(faces_box);
         const double diag = geometric.diagonal();
 
-        std::vector<occt::ConvertedFace> cfs(static_cast<size_t>(n));
-        std::vector<occt::UVBox> boxes(static_cast<size_t>(n));
-        std::vector<const std::vector<TrimLoop>*> loops(static_cast<size_t>(n));
+        // First instances only (first_instances); the others take their mesh.
+        std::vector<occt::ConvertedFace> cfs;
+        std::vector<occt::UVBox> boxes;
+        std::vector<const std::vector<TrimLoop>*> loops;
+        std::vector<double> first_sizes;
+        std::vector<uint32_t> numbers;
         for (size_t i = 0; i < work.size(); ++i) {
-            cfs[i] = work[i].cf;
-            boxes[i] = work[i].box;
-            loops[i] = &work[i].trim.loops;
+            if (first[i] != i) continue;
+            cfs.push_back(work[i].cf);
+            boxes.push_back(work[i].box);
+            loops.push_back(&work[i].trim.loops);
+            first_sizes.push_back(face_sizes[i]);
+            numbers.push_back(static_cast<uint32_t>(i + 1));
         }
         occt::MeshParams mp;
         mp.deflection = diag > 0 && std::isfinite(diag) ? options.mesh_relative_deflection * diag : 1e-3;
         mp.angle = options.mesh_angular_deflection;
         mp.time_limit_s = options.mesh_time_limit_s;
         mp.face_time_limit_s = std::max(1.0, 0.25 * options.mesh_time_limit_s);
-        std::vector<FaceMesh> meshes;
+        std::vector<FaceMesh> first_meshes, meshes(work.size());
         std::vector<std::string> mesh_warnings;
-        occt::mesh_faces(cfs, boxes, loops, face_sizes, mp, meshes, mesh_warnings);
+        occt::mesh_faces(cfs, boxes, loops, first_sizes, numbers, mp, first_meshes, mesh_warnings);
+        for (size_t q = 0; q < numbers.size(); ++q) meshes[numbers[q] - 1] = std::move(first_meshes[q]);
+        for (size_t i = 0; i < work.size(); ++i)
+            if (first[i] != i) meshes[i] = instance_mesh(meshes[first[i]], relative_placement(faces[i], faces[first[i]]));
         scene.timings.mesh_ms = occt::ms_since(t_mesh);
         // Assembling the Scene's patches from the converted faces ends the conversion.
         const auto t_assemble = Clock::now();

@@ -68,7 +68,8 @@ FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
 // faces without a usable triangulation get trimmed_grid_mesh (warning each), and
 // a triangulation that leaves part of its face uncovered (nodes no triangle
 // uses) is completed from a finer trimmed grid (warning each).
-// face_sizes[i]: 3D bounding-box diagonal of face i (caps its deflection).
+// face_sizes[i]: 3D bounding-box diagonal of face i (caps its deflection);
+// numbers[i]: its face number in the scene (the warnings name it).
 struct MeshParams {
     double deflection = 0.1;         // absolute linear deflection, model units
     double angle = 0.35;             // angular deflection, radians
@@ -78,7 +79,7 @@ struct MeshParams {
 };
 void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
                 const std::vector<const std::vector<TrimLoop>*>& loops,
-                const std::vector<double>& face_sizes, const MeshParams& p,
+                const std::vector<double>& face_sizes, const std::vector<uint32_t>& numbers, const MeshParams& p,
                 std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings);
 
 // Closes an XDE document (registered with the process-wide application until
