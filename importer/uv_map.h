@@ -16,6 +16,7 @@
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Curve.hxx>
@@ -50,8 +51,13 @@ private:
         bool active = false;
         Handle(Geom_Curve) face_iso, surface_iso;
         double face0 = 0, face1 = 1, surface0 = 0, surface1 = 1;  // the box in each parametrization
+        // to_surface's seeds: s and ds/dt at evenly spaced t over [face0, face1]
+        // (cubic Hermite between them); empty: the linear map.
+        std::vector<double> table_s, table_ds;
         double to_surface(double t) const;
         double to_face(double s) const;
+        void tabulate();
+        double seed(double t) const;
     };
     Axis u_, v_;
 };
