@@ -48,17 +48,18 @@ Vec2 at(const MappedCurve& m, double t) {
 // Appends points of (t0, t1] so that the chord of every piece deviates from the
 // curve by at most `tol`. The deviation is probed at 1/4, 1/2, 3/4 of each piece,
 // which catches S-shaped pieces whose midpoint happens to lie on the chord.
+// `mid`: the point at the middle of (t0, t1] when known (a halved piece's quarter
+// point is its half's middle: passed down, not evaluated again).
 void refine(const MappedCurve& c, double t0, Vec2 p0, double t1, Vec2 p1, double tol,
-            int depth, std::vector<Vec2>& out) {
+            int depth, std::vector<Vec2>& out, const Vec2* mid = nullptr) {
     if (depth < kMaxDepth && out.size() < kMaxPointsPerEdge) {
         const double tm = 0.5 * (t0 + t1);
-        const Vec2 pm = at(c, tm);
-        const double err = std::max({dist_to_chord(pm, p0, p1),
-                                     dist_to_chord(at(c, 0.5 * (t0 + tm)), p0, p1),
-                                     dist_to_chord(at(c, 0.5 * (tm + t1)), p0, p1)});
+        const Vec2 pm = mid ? *mid : at(c, tm);
+        const Vec2 q0 = at(c, 0.5 * (t0 + tm)), q1 = at(c, 0.5 * (tm + t1));
+        const double err = std::max({dist_to_chord(pm, p0, p1), dist_to_chord(q0, p0, p1), dist_to_chord(q1, p0, p1)});
         if (err > tol) {
-            refine(c, t0, p0, tm, pm, tol, depth + 1, out);
-            refine(c, tm, pm, t1, p1, tol, depth + 1, out);
+            refine(c, t0, p0, tm, pm, tol, depth + 1, out, &q0);
+            refine(c, tm, pm, t1, p1, tol, depth + 1, out, &q1);
             return;
         }
     }
