@@ -70,6 +70,7 @@ BenchScene load_bench_scene(const std::string& key, const std::string& title, co
         options.mesh_relative_deflection *= ratio;
         const auto t1 = Clock::now();
         one = import_file(file, options);
+        s.import_options = options;
         s.import_ms = ms_since(t1);
         s.convert_and_map_mesh_ms = one.timings.nurbs_convert_ms + one.timings.mesh_ms;
         s.scene = grid_of(one, s.placements);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bench/bench.h"
+#include "importer/importer.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
 #include "renderer/scene.h"
@@ -36,6 +37,7 @@ struct BenchScene {
     Scene scene;             // imported, copies placed
     double import_ms = 0;    // import_file (read + convert + map mesh) of the one file
     double convert_and_map_mesh_ms = 0;  // the part of the import a renderer of a loaded model needs
+    ImportOptions import_options;        // those the scene was imported with (a grid: scaled deflection)
     // The exact frame the peers are compared with: `proposed`, float map, ctx.size,
     // ctx.opt.threads threads; and its whole-frame times (Table 1's runs, or its own).
     std::shared_ptr<const RenderResult> exact;
