@@ -274,8 +274,8 @@ void check_off_ray(const Checker& c, FullFrameReport& rep) {
             f.j = j;
             f.face = id;
             f.t = c.im.z[k];
-            f.ref_t = off;
-            f.ref_on_face = off / footprint;
+            f.off_distance = off;
+            f.off_footprints = off / footprint;
             ++rep.off_ray;
             rep.findings.push_back(f);
         }
@@ -380,8 +380,8 @@ std::string FullFrameReport::text(size_t max_listed) const {
         if (f.face) o << "face " << f.face << " t=" << std::setprecision(10) << f.t;
         else o << "background";
         if (f.kind == FullFrameFinding::Kind::off_ray) {
-            o << " | the point at its (u, v) lies " << std::setprecision(3) << f.ref_t << " from the ray ("
-              << f.ref_on_face << " pixel footprints)\n";
+            o << " | the point at its (u, v) lies " << std::setprecision(3) << f.off_distance << " from the ray ("
+              << f.off_footprints << " pixel footprints)\n";
             continue;
         }
         o << " | reference: face " << f.ref_face << " t=" << std::setprecision(10) << f.ref_t

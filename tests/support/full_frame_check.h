@@ -81,10 +81,12 @@ struct FullFrameFinding {
     int i = 0, j = 0;
     uint32_t face = 0;  // ours (0: background)
     double t = 0;       // ours
-    int ref_face = 0;        // off_ray: unused
-    double ref_t = 0;        // off_ray: the shown point's distance from the ray
-    double ref_on_face = 0;  // BRepExtrema distance of the reference hit to its face;
-                             // off_ray: the distance from the ray in pixel footprints
+    int ref_face = 0;
+    double ref_t = 0;
+    double ref_on_face = 0;  // BRepExtrema distance of the reference hit to its face
+    // off_ray: the shown point's distance from the ray, in model units and in
+    // pixel footprints (the reference fields above stay unset).
+    double off_distance = 0, off_footprints = 0;
     std::string cause;       // short classification (see diagnose in the .cpp)
     std::string detail;      // the evidence
 };
