@@ -12,8 +12,14 @@ using namespace screen;
 namespace {
 
 // Triangles per grid cell aimed at: a query then tests a few cells' worth of
-// triangles instead of the face's thousands, and the grid stays small.
-constexpr double kTrianglesPerCell = 4.0;
+// triangles instead of the face's thousands, and the grid stays small. A
+// triangle is listed in every cell its screen box overlaps, ~5 at 4 per cell:
+// building the grids was a tenth of the 27 ducks' frame. At 16 the rescue and
+// nearer-sheet passes took 15 % less time there (68 -> 58 ms, 1 thread), the
+// same within noise on the cylinder block, trj8, bug29715_slow and
+// bug31670_russian (64 per cell: 5-10 % more on bug29715_slow's dense face),
+// and every frame stayed the same.
+constexpr double kTrianglesPerCell = 16.0;
 // Cells per axis at the most: bounds a grid's memory where a face has very many
 // triangles or a very long screen box (a face crossing the eye plane).
 constexpr int kMaxCellsPerAxis = 128;

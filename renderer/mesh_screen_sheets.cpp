@@ -125,6 +125,10 @@ int MeshScreenPoints::starts_in_front(uint32_t id, ScreenPoint sp, double max_d2
     }
     std::sort(covers.begin(), covers.end(),
               [](const Cover& x, const Cover& y) { return x.z < y.z || (x.z == y.z && x.key < y.key); });
+    // A triangle listed in several grid cells that the search visits (sp on a
+    // cell border) covers sp once: one start per sheet, whatever the grid.
+    covers.erase(std::unique(covers.begin(), covers.end(), [](const Cover& x, const Cover& y) { return x.key == y.key; }),
+                 covers.end());
     const int n = std::min(static_cast<int>(covers.size()), max_out);
     for (int k = 0; k < n; ++k) out[k] = covers[k].uv;
     return n;
