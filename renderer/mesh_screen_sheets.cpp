@@ -31,6 +31,10 @@ bool MeshScreenPoints::frontmost_point(uint32_t id, ScreenPoint sp, double max_d
         if (box_distance2(p, std::min({A.x, B.x, C.x}), std::max({A.x, B.x, C.x}), std::min({A.y, B.y, C.y}),
                           std::max({A.y, B.y, C.y})) > max_d2)
             return;
+        // Depth is linear over the triangle: no part of it lies in front of its
+        // nearest corner, so a triangle wholly behind the frontmost point so
+        // far cannot improve on it (ties still go on, to the key).
+        if (std::min({q[0]->depth, q[1]->depth, q[2]->depth}) > front.d2) return;
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = idx[k], b = idx[(k + 1) % 3];
             double s0 = 0, s1 = 0;
