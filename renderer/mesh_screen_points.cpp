@@ -80,23 +80,11 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
     const std::vector<Projected>& pts = e.pts;
     const size_t ntri = mesh.triangles.size() / 3;
-    // Each usable triangle's screen box, once: sizes the grid, then gives the cells.
-    struct Box {
-        uint32_t t;
-        double x0, x1, y0, y1;
-    };
-    std::vector<Box> boxes;
-    boxes.reserve(ntri);
-    for (size_t t = 0; t < ntri; ++t) {
-        if (!usable_triangle(mesh, pts, t)) continue;
-        const uint32_t* idx = &mesh.triangles[3 * t];
-        const Vec2 a = pts[idx[0]].s, b = pts[idx[1]].s, c = pts[idx[2]].s;
-        boxes.push_back({static_cast<uint32_t>(t), std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}),
-                         std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y})});
-    }
     Grid& g = e.grid;
+    // Sized by all the triangles (the usable ones are not counted first: the
+    // answers do not depend on the grid, only the time).
     const double w = e.hi.x - e.lo.x, h = e.hi.y - e.lo.y;
-    const double cells = std::max(1.0, static_cast<double>(boxes.size()) / kTrianglesPerCell);
+    const double cells = std::max(1.0, static_cast<double>(ntri) / kTrianglesPerCell);
     const double side = w > 0 && h > 0 ? std::sqrt(w * h / cells) : std::max(w, h) / cells;
     auto axis_cells = [&](double extent) {
         return side > 0 ? std::clamp(static_cast<int>(std::ceil(extent / side)), 1, kMaxCellsPerAxis) : 1;
@@ -111,6 +99,25 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
     g.ch = h > 0 ? h / g.ny : 1.0;
     const size_t ncells = static_cast<size_t>(g.nx) * g.ny;
 
+    // Each usable triangle's range of cells (its screen box's), computed once
+    // for both passes below; kMaxCellsPerAxis fits a byte.
+    static_assert(kMaxCellsPerAxis <= 256);
+    struct Cells {
+        uint32_t t;
+        uint8_t x0, x1, y0, y1;
+    };
+    std::vector<Cells> ranges;
+    ranges.reserve(ntri);
+    for (size_t t = 0; t < ntri; ++t) {
+        if (!usable_triangle(mesh, pts, t)) continue;
+        const uint32_t* idx = &mesh.triangles[3 * t];
+        const Vec2 a = pts[idx[0]].s, b = pts[idx[1]].s, c = pts[idx[2]].s;
+        ranges.push_back({static_cast<uint32_t>(t), static_cast<uint8_t>(g.cell_x(std::min({a.x, b.x, c.x}))),
+                          static_cast<uint8_t>(g.cell_x(std::max({a.x, b.x, c.x}))),
+                          static_cast<uint8_t>(g.cell_y(std::min({a.y, b.y, c.y}))),
+                          static_cast<uint8_t>(g.cell_y(std::max({a.y, b.y, c.y})))});
+    }
+
     // Compressed rows in two passes (count, then fill), entries ascending per cell.
     auto fill = [&](std::vector<uint32_t>& begin, std::vector<uint32_t>& items, size_t count, auto&& cells_of) {
         begin.assign(ncells + 1, 0);
@@ -120,11 +127,10 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
         std::vector<uint32_t> next(begin.begin(), begin.end() - 1);
         for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t item) { items[next[cell]++] = item; });
     };
-    fill(g.tri_begin, g.tris, boxes.size(), [&](size_t q, auto&& add) {
-        const Box& b = boxes[q];
-        const int x0 = g.cell_x(b.x0), x1 = g.cell_x(b.x1), y0 = g.cell_y(b.y0), y1 = g.cell_y(b.y1);
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) add(static_cast<size_t>(y) * g.nx + x, b.t);
+    fill(g.tri_begin, g.tris, ranges.size(), [&](size_t q, auto&& add) {
+        const Cells& r = ranges[q];
+        for (int y = r.y0; y <= r.y1; ++y)
+            for (int x = r.x0; x <= r.x1; ++x) add(static_cast<size_t>(y) * g.nx + x, r.t);
     });
     fill(g.vtx_begin, g.vtxs, pts.size(), [&](size_t m, auto&& add) {
         if (!std::isnan(pts[m].s.x))
