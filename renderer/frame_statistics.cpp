@@ -10,32 +10,32 @@ void frame_statistics(const FrameContext& c, const FrameBuffers& b, const Render
                       RenderStats& st) {
     st.iteration_limit = max_iterations;
     st.iteration_histogram.assign(static_cast<size_t>(max_iterations) + 1, 0);
-    uint64_t solves = 0, its = 0;
+    // One pass over the per-pixel bytes, counting by value (no branch per
+    // pixel); the hits read from the image's face AOV (4 bytes a pixel, equal
+    // to the hits' faces) rather than the 40-byte hits themselves.
+    uint64_t by_rescue[256] = {}, by_outcome[256] = {};
+    uint64_t its = 0;
+    const size_t last_bin = st.iteration_histogram.size() - 1;
     for (size_t k = 0; k < c.pixels(); ++k) {
-        if (b.hits[k].face) ++st.pixels_hit;
-        switch (b.rescued[k]) {
-            case kRescueNeighbour: ++st.rescue_neighbour; break;
-            case kRescueSilhouette: ++st.rescue_silhouette; break;
-            case kRescueGeneral: ++st.rescue_general; break;
-            case kRescueTrimTol: ++st.rescue_trim_tolerance; break;
-            default: break;
-        }
+        st.pixels_hit += img.face[k] != 0;
+        ++by_rescue[b.rescued[k]];
+        ++by_outcome[b.outcome[k]];
         if (b.outcome[k] == kNone) continue;
-        ++solves;
         its += b.iterations[k];
-        const size_t bin = std::min<size_t>(b.iterations[k], st.iteration_histogram.size() - 1);
-        ++st.iteration_histogram[bin];
-        switch (b.outcome[k]) {
-            case kConverged: ++st.converged; break;
-            case kDiverged: ++st.diverged; break;
-            case kSingular: ++st.singular; break;
-            case kMaxIter: ++st.max_iterations; break;
-            case kLeftDomain: ++st.left_domain; break;
-            case kBehind: ++st.behind_eye; break;
-            case kTrimmed: ++st.trimmed; break;
-            default: break;
-        }
+        ++st.iteration_histogram[std::min<size_t>(b.iterations[k], last_bin)];
     }
+    st.rescue_neighbour = by_rescue[kRescueNeighbour];
+    st.rescue_silhouette = by_rescue[kRescueSilhouette];
+    st.rescue_general = by_rescue[kRescueGeneral];
+    st.rescue_trim_tolerance = by_rescue[kRescueTrimTol];
+    st.converged = by_outcome[kConverged];
+    st.diverged = by_outcome[kDiverged];
+    st.singular = by_outcome[kSingular];
+    st.max_iterations = by_outcome[kMaxIter];
+    st.left_domain = by_outcome[kLeftDomain];
+    st.behind_eye = by_outcome[kBehind];
+    st.trimmed = by_outcome[kTrimmed];
+    const uint64_t solves = c.pixels() - by_outcome[kNone];
     st.fallback = st.rescue_neighbour + st.rescue_silhouette + st.rescue_general + st.rescue_trim_tolerance;
     st.solves = solves;
     st.mean_iterations = solves ? double(its) / solves : 0.0;
