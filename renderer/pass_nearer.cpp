@@ -83,14 +83,16 @@ public:
         nearer_ = kNearerRelative * diag;
     }
     // Whether find(i, j) can find anything: the pixel is a spike against one of
-    // its pairs, the first test of find, on `depth` (the hits' t, +inf where no
-    // hit), which the first pass reads instead of three hits per pair.
-    bool maybe_spike(const std::vector<double>& depth, int i, int j) const {
+    // its pairs, the first test of find, on the hits' depths alone (t, +inf
+    // where no hit), which the first pass reads for every pixel.
+    bool maybe_spike(int i, int j) const {
         const size_t k = c_.map.index(i, j);
-        if (!(depth[k] < HUGE_VAL)) return false;
+        auto depth = [&](size_t n) { return hits_[n].face ? hits_[n].t : HUGE_VAL; };
+        const double d = depth(k);
+        if (!(d < HUGE_VAL)) return false;
         const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
-        return (row && depth[k] > 0.5 * (depth[k - 1] + depth[k + 1]) + spike_) ||
-               (column && depth[k] > 0.5 * (depth[k - c_.width] + depth[k + c_.width]) + spike_);
+        return (row && d > 0.5 * (depth(k - 1) + depth(k + 1)) + spike_) ||
+               (column && d > 0.5 * (depth(k - c_.width) + depth(k + c_.width)) + spike_);
     }
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const {
@@ -345,12 +347,10 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     // of them repeats; it once set one dense-fold pixel of bug29715_slow right,
     // but does not fix the one the full-frame test still finds there.)
     std::vector<std::vector<Update>> row_updates(c.height);
-    std::vector<double> depth(c.pixels());
-    for (size_t k = 0; k < depth.size(); ++k) depth[k] = b.hits[k].face ? b.hits[k].t : HUGE_VAL;
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
             PixelHit h;
-            if (nearer.maybe_spike(depth, i, j) && nearer.find(i, j, h)) row_updates[j].push_back({c.map.index(i, j), h});
+            if (nearer.maybe_spike(i, j) && nearer.find(i, j, h)) row_updates[j].push_back({c.map.index(i, j), h});
         }
     });
     std::vector<Update> updates;
