@@ -29,6 +29,8 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <utility>
+#include <vector>
 
 #include "renderer/mesh_screen_points.h"
 #include "renderer/passes.h"
@@ -357,12 +359,11 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
 // several pixels outside the map's. Repeat the rescue on the background pixels
 // next to the last pass's new hits until none is added; each pass reads only the
 // previous state, so the result stays thread-independent.
+// `fresh`: the pixels the rescue filled, ascending.
 void grow_silhouettes(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
-                      FrameBuffers& b) {
+                      std::vector<size_t> fresh, FrameBuffers& b) {
     const int W = c.width;
-    std::vector<size_t> fresh, cand;
-    for (size_t k = 0; k < c.pixels(); ++k)
-        if (b.rescued[k]) fresh.push_back(k);
+    std::vector<size_t> cand;
     std::vector<uint8_t> queued(c.pixels(), 0);
     for (int pass = 0; pass < kMaxGrowthPasses && !fresh.empty(); ++pass) {
         throw_if_canceled(c.options);
@@ -450,12 +451,14 @@ void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPo
         }
     });
     throw_if_canceled(c.options);
+    std::vector<size_t> fresh;  // rows in order, each ascending: ascending
     for (const std::vector<Rescued>& row : rows)
         for (const Rescued& r : row) {
             b.hits[r.k] = r.hit;
             b.rescued[r.k] = r.kind;
+            fresh.push_back(r.k);
         }
-    grow_silhouettes(c, solver, screen_points, b);
+    grow_silhouettes(c, solver, screen_points, std::move(fresh), b);
 }
 
 }  // namespace nurbsrt
