@@ -10,9 +10,10 @@ void frame_statistics(const FrameContext& c, const FrameBuffers& b, const Render
                       RenderStats& st) {
     st.iteration_limit = max_iterations;
     st.iteration_histogram.assign(static_cast<size_t>(max_iterations) + 1, 0);
-    // One pass over the per-pixel bytes, counting by value (no branch per
-    // pixel); the hits read from the image's face AOV (4 bytes a pixel, equal
-    // to the hits' faces) rather than the 40-byte hits themselves.
+    // One pass over the per-pixel bytes, the outcomes and rescue kinds counted
+    // by value (an array indexed by the byte, no switch); the hits read from
+    // the image's face AOV (4 bytes a pixel, equal to the hits' faces) rather
+    // than the 40-byte hits themselves.
     uint64_t by_rescue[256] = {}, by_outcome[256] = {};
     uint64_t its = 0;
     const size_t last_bin = st.iteration_histogram.size() - 1;

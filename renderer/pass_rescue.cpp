@@ -451,7 +451,7 @@ void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPo
         }
     });
     throw_if_canceled(c.options);
-    std::vector<size_t> fresh;  // rows in order, each ascending: ascending
+    std::vector<size_t> fresh;  // ascending: the rows in order, each row's pixels in order
     for (const std::vector<Rescued>& row : rows)
         for (const Rescued& r : row) {
             b.hits[r.k] = r.hit;
