@@ -142,15 +142,18 @@ TEST(SpanBasis, UniformSpansFoundWithoutSearch) {
     }
 }
 
-// Every way evaluate_d1 takes with the tables: both degrees unrolled (up to 3),
-// the v degree unrolled (up to 8), neither (above), rational or not.
+// Every way evaluate_d1 takes with the tables: both degrees unrolled (up to 3;
+// one of them 1 and the other up to 11; equal up to 11), the v degree unrolled
+// (up to 11), neither (above), rational or not.
 TEST(SpanBasis, SurfaceEvaluationMatches) {
     const struct {
         int p, q;
         bool rational;
     } degrees[] = {{1, 1, false}, {1, 2, true}, {2, 1, true}, {2, 2, true}, {3, 2, true}, {2, 3, true},
                    {3, 3, false}, {1, 3, false}, {3, 1, true},  {5, 5, false}, {5, 1, false}, {1, 8, false},
-                   {8, 1, false}, {4, 7, true},  {8, 11, false}, {11, 3, true}, {12, 12, false}};
+                   {8, 1, false}, {4, 7, true},  {8, 11, false}, {11, 3, true}, {12, 12, false},
+                   {1, 11, true}, {11, 1, false}, {7, 7, true},  {11, 11, false}, {1, 12, false}, {12, 1, true},
+                   {12, 5, false}};
     std::mt19937 rng(11);
     for (const auto& d : degrees) {
         SCOPED_TRACE("degrees " + std::to_string(d.p) + " x " + std::to_string(d.q));
