@@ -195,11 +195,13 @@ struct ProposedSystem {
     const Camera& camera;
     ScreenPoint s;
     const SurfaceSpans* spans;
+    const SurfacePatches* patches;
     struct State {
         SurfaceDerivs d;
         double r;
     };
     State eval(double u, double v) const {
+        if (patches) return at(evaluate_d1(*patches, *spans, u, v));
         return at(spans ? evaluate_d1(projected, *spans, u, v) : evaluate_d1(projected, u, v));
     }
     State at(const SurfaceDerivs& d) const { return {d, proposed_residual(d.S, camera, s)}; }
@@ -217,11 +219,13 @@ struct MartinSystem {
     const Ray& ray;
     RayPlanes pl;
     const SurfaceSpans* spans;
+    const SurfacePatches* patches;
     struct State {
         CartesianDerivs c;
         double f1, f2, r;
     };
     State eval(double u, double v) const {
+        if (patches) return at(cartesian_from(evaluate_d1(*patches, *spans, u, v)));
         return at(spans ? cartesian_d1(surface, *spans, u, v) : cartesian_d1(surface, u, v));
     }
     // cartesian_d1 is cartesian_from(evaluate_d1) on either path: the same numbers.
@@ -251,14 +255,16 @@ struct MartinSystem {
 
 NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
                              double u0, double v0, const UvBox& box, const NewtonParams& params,
-                             const SurfaceSpans* spans, const SurfaceDerivs* start) {
-    return newton_iterate(ProposedSystem{projected, camera, s, spans}, u0, v0, box, params, start);
+                             const SurfaceSpans* spans, const SurfaceDerivs* start, const SurfacePatches* patches) {
+    if (!spans || (patches && !patches->usable())) patches = nullptr;
+    return newton_iterate(ProposedSystem{projected, camera, s, spans, patches}, u0, v0, box, params, start);
 }
 
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
                            const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans,
-                           const SurfaceDerivs* start) {
-    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray), spans}, u0, v0, box, params, start);
+                           const SurfaceDerivs* start, const SurfacePatches* patches) {
+    if (!spans || (patches && !patches->usable())) patches = nullptr;
+    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray), spans, patches}, u0, v0, box, params, start);
 }
 
 }  // namespace nurbsrt

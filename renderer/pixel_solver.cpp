@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include "renderer/nurbs.h"
 #include "renderer/span_basis.h"
 
@@ -34,22 +37,51 @@ void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, 
 
 }  // namespace
 
+ProjectedFaces project_faces(const FrameContext& ctx) {
+    ProjectedFaces p;
+    if (ctx.options.method != NewtonMethod::proposed) return p;
+    const size_t n = ctx.scene.faces.size();
+    p.patches.resize(n);
+    p.surfaces.resize(n);
+    ctx.arena.execute([&] {
+        tbb::parallel_for(size_t(0), n, [&](size_t k) {
+            const SurfacePatches& model = ctx.prepared.faces()[k].patches;
+            if (model.usable())
+                p.patches[k] = project_patches(ctx.camera, model);
+            else
+                p.surfaces[k] = project_surface(ctx.camera, ctx.scene.faces[k].surface);
+        });
+    });
+    return p;
+}
+
 const NurbsSurface& Solver::iterated_surface(uint32_t id) const {
-    return ctx.options.method == NewtonMethod::proposed ? projected[id - 1] : ctx.scene.faces[id - 1].surface;
+    const bool proposed = ctx.options.method == NewtonMethod::proposed;
+    return proposed ? projected.surfaces[id - 1] : ctx.scene.faces[id - 1].surface;
+}
+
+const SurfacePatches* Solver::iterated_patches(uint32_t id) const {
+    const bool proposed = ctx.options.method == NewtonMethod::proposed;
+    const SurfacePatches& p = proposed ? projected.patches[id - 1] : ctx.prepared.faces()[id - 1].patches;
+    return p.usable() ? &p : nullptr;
 }
 
 SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
-    return evaluate_d1(iterated_surface(id), ctx.prepared.faces()[id - 1].spans, u0, v0);
+    const SurfaceSpans& spans = ctx.prepared.faces()[id - 1].spans;
+    if (const SurfacePatches* p = iterated_patches(id)) return evaluate_d1(*p, spans, u0, v0);
+    return evaluate_d1(iterated_surface(id), spans, u0, v0);
 }
 
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
                       PixelHit& hit, const SurfaceDerivs* start) const {
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const Camera& camera = ctx.camera;
+    const NurbsSurface& surface = iterated_surface(id);
+    const SurfacePatches* patches = iterated_patches(id);
     const NewtonResult r =
         ctx.options.method == NewtonMethod::proposed
-            ? newton_proposed(iterated_surface(id), camera, sp, u0, v0, ff.box, p, &ff.spans, start)
-            : newton_martin(iterated_surface(id), camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start);
+            ? newton_proposed(surface, camera, sp, u0, v0, ff.box, p, &ff.spans, start, patches)
+            : newton_martin(surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start, patches);
     hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
     if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
         border_gap_hit(id, sp, r, hit))

@@ -10,9 +10,19 @@
 
 namespace nurbsrt {
 
+// proposed: the paper's projection of every face to R^2 (project_surface), made
+// per frame; empty for martin. Of a face with power-form patches, only those
+// are projected (project_patches: all its Newton steps evaluate); of one
+// without, the control points.
+struct ProjectedFaces {
+    std::vector<SurfacePatches> patches;
+    std::vector<NurbsSurface> surfaces;
+};
+ProjectedFaces project_faces(const FrameContext& ctx);
+
 struct Solver {
     const FrameContext& ctx;
-    const std::vector<NurbsSurface>& projected;  // proposed: the paper's projection to R^2, per frame
+    const ProjectedFaces& projected;
     NewtonParams params;                         // the primary solves (the paper's criteria)
     NewtonParams robust;                         // the rescue's solves (NewtonParams::robust)
 
@@ -41,6 +51,8 @@ private:
     // The surface the method's Newton iterates on: the frame's projection of
     // face id (proposed) or its model surface (martin).
     const NurbsSurface& iterated_surface(uint32_t id) const;
+    // Its power-form patches, or null where it has none.
+    const SurfacePatches* iterated_patches(uint32_t id) const;
     bool border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const;
 };
 

@@ -43,6 +43,7 @@ PreparedFace prepare_face(const Face& f, double seam_tol) {
     PreparedFace pf;
     pf.trim = TrimTester(f.loops);
     pf.spans = make_surface_spans(f.surface);
+    pf.patches = make_surface_patches(f.surface, pf.spans);
     pf.box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, seam_tol);
     const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
     pf.near_uv = std::max(kTrimBandPerTolerance * f.trim_tolerance_uv, kMinTrimBandRelative * diag);
@@ -155,7 +156,7 @@ size_t PreparedScene::memory_bytes() const {
     size_t n = sizeof(PreparedScene) + faces_.capacity() * sizeof(PreparedFace);
     for (const PreparedFace& f : faces_)
         n += f.trim.memory_bytes() + f.adjacent.capacity() * sizeof(uint32_t) + f.spans.u.memory_bytes() +
-             f.spans.v.memory_bytes();
+             f.spans.v.memory_bytes() + f.patches.memory_bytes();
     n += map_.xyz.capacity() * sizeof(Vec3) + map_.uv.capacity() * sizeof(float) +
          map_.face.capacity() * sizeof(uint32_t) + map_.indices.capacity() * sizeof(uint32_t);
     return n;

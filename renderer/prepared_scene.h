@@ -6,7 +6,7 @@
 // map: every face's map mesh merged into one indexed triangle list with its
 // per-vertex (u, v) and face id (a frame only transforms the positions).
 //
-// What stays per frame (render.cpp): the projection of the control points
+// What stays per frame (render.cpp): the projection of the patches' coefficients
 // (proposed), the preliminary map itself, the screen positions of mesh vertices
 // for the rescue's start search: all depend on the camera.
 #pragma once
@@ -26,6 +26,7 @@ namespace nurbsrt {
 struct PreparedFace {
     TrimTester trim;
     SurfaceSpans spans;    // per-span basis tables of the face's surface (span_basis.h)
+    SurfacePatches patches;  // its power-form patches over them (surface_patches.h)
     UvBox box;             // parameter box with seams (face_uv_box)
     double near_uv = 0;    // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
     // Faces that touch this one (their map meshes share a vertex, see prepare()),

@@ -2,7 +2,6 @@
 // in order, with the stage timings (see render.h).
 #include "renderer/render.h"
 
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -105,11 +104,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of
     // the control points (the rest was done once by prepare()).
-    std::vector<NurbsSurface> projected(options.method == NewtonMethod::proposed ? scene.faces.size() : 0);
-    arena.execute([&] {
-        tbb::parallel_for(size_t(0), projected.size(),
-                          [&](size_t k) { projected[k] = project_surface(camera, scene.faces[k].surface); });
-    });
+    const ProjectedFaces projected = project_faces(ctx);
     Solver solver{ctx, projected, options.newton, {}};
     if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(scene.bbox);
     st.tolerance = solver.params.eps;

@@ -86,14 +86,9 @@ KeyLightShadows::KeyLightShadows(const FrameContext& view, const Solver& view_so
       map_(render_preliminary_map(view.prepared, camera_, MapPrecision::float32, {0, view.options.cancel.get()})),
       progress_(no_progress_, 1),
       ctx_{view.prepared, view.scene, camera_, map_, view.options, view.arena, progress_, size_, size_, view.nfaces},
-      projected_(view.options.method == NewtonMethod::proposed ? view.scene.faces.size() : 0),
+      projected_(project_faces(ctx_)),
       solver_{ctx_, projected_, light_ray_params(view_solver.robust), light_ray_params(view_solver.robust)},
-      contact_(camera_.spec().ortho_height / size_) {
-    view.arena.execute([&] {
-        tbb::parallel_for(size_t(0), projected_.size(),
-                          [&](size_t k) { projected_[k] = project_surface(camera_, view.scene.faces[k].surface); });
-    });
-}
+      contact_(camera_.spec().ortho_height / size_) {}
 
 bool KeyLightShadows::own_face_first(int ci, int cj, uint32_t face, double u, double v) const {
     // The (u, v) step of one map pixel on this face here: the largest difference

@@ -59,7 +59,7 @@ private:
     std::function<void(double)> no_progress_;
     Progress progress_;
     FrameContext ctx_;
-    std::vector<NurbsSurface> projected_;
+    ProjectedFaces projected_;
     Solver solver_;
     double contact_;  // one light-map pixel, model units
     mutable std::atomic<uint64_t> rays_{0};

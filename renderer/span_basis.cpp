@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 
+#include "renderer/degree_dispatch.h"
+
 namespace nurbsrt {
 namespace {
 
@@ -182,56 +184,18 @@ SurfaceDerivs evaluate_fixed(const NurbsSurface& s, const SurfaceSpans& spans, d
     return {h.S, h.Su, h.Sv};
 }
 
-// Degrees up to this in both directions get a fully unrolled evaluation (CAD
-// surfaces are mostly of degree 1-3: planes, cylinders, cones, bicubic
-// free-form). So do, up to kMaxUnrolledV: degree 1 in one direction (NURBS
-// conversion of extrusions and ruled faces gives 1 x 5-11 and 5-11 x 1; on a
-// machine component 1 x 8, 1 x 11 and 8 x 1 are 40 % of the hit pixels), and
-// equal degrees (free-form faces approximated to 5 x 5 or 7 x 7). Otherwise the
-// v degree alone (the contiguous inner loop of the tensor product) up to
-// kMaxUnrolledV. Each unrolled pair took 12-40 % fewer instructions than the
-// loops (callgrind, the machine component's frame: evaluation 235 -> 206 M).
-constexpr int kMaxUnrolledBoth = 3;
-constexpr int kMaxUnrolledV = 11;
-
-template <int kP, int kQ>
-SurfaceDerivs dispatch_both(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
-    if constexpr (kQ > kMaxUnrolledBoth) {
-        return dispatch_both<kP + 1, 1>(s, spans, u, v);
-    } else if constexpr (kP > kMaxUnrolledBoth) {
-        return SurfaceDerivs{};  // unreachable: the caller checked the degrees
-    } else {
-        if (s.degree_u == kP && s.degree_v == kQ) return evaluate_fixed<kP, kQ>(s, spans, u, v);
-        return dispatch_both<kP, kQ + 1>(s, spans, u, v);
+struct TableEvaluation {
+    template <int kP, int kQ>
+    static SurfaceDerivs run(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
+        return evaluate_fixed<kP, kQ>(s, spans, u, v);
     }
-}
-
-// Which degree dispatch_one unrolls besides the one it searches (kD).
-enum class Unrolled { u_linear, v_linear, square, v_only };
-
-template <Unrolled kMode, int kD>
-SurfaceDerivs dispatch_one(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
-    if constexpr (kD > kMaxUnrolledV) {
-        return SurfaceDerivs{};  // unreachable: the caller checked the degree
-    } else {
-        constexpr int kP = kMode == Unrolled::u_linear ? 1 : kMode == Unrolled::v_only ? -1 : kD;
-        constexpr int kQ = kMode == Unrolled::v_linear ? 1 : kD;
-        if ((kMode == Unrolled::v_linear ? s.degree_u : s.degree_v) == kD) return evaluate_fixed<kP, kQ>(s, spans, u, v);
-        return dispatch_one<kMode, kD + 1>(s, spans, u, v);
-    }
-}
+};
 
 }  // namespace
 
 SurfaceDerivs evaluate_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {
     if (!spans.usable()) return evaluate_d1(s, u, v);
-    const int p = s.degree_u, q = s.degree_v;
-    if (p >= 1 && p <= kMaxUnrolledBoth && q >= 1 && q <= kMaxUnrolledBoth) return dispatch_both<1, 1>(s, spans, u, v);
-    if (p == 1 && q >= 1 && q <= kMaxUnrolledV) return dispatch_one<Unrolled::u_linear, 1>(s, spans, u, v);
-    if (q == 1 && p >= 1 && p <= kMaxUnrolledV) return dispatch_one<Unrolled::v_linear, 1>(s, spans, u, v);
-    if (p == q && q <= kMaxUnrolledV) return dispatch_one<Unrolled::square, kMaxUnrolledBoth + 1>(s, spans, u, v);
-    if (q >= 1 && q <= kMaxUnrolledV) return dispatch_one<Unrolled::v_only, 1>(s, spans, u, v);
-    return evaluate_fixed<-1, -1>(s, spans, u, v);
+    return degree_dispatch::with_degrees<TableEvaluation>(s.degree_u, s.degree_v, s, spans, u, v);
 }
 
 CartesianDerivs cartesian_d1(const NurbsSurface& s, const SurfaceSpans& spans, double u, double v) {

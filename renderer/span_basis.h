@@ -53,15 +53,22 @@ public:
     // so that the loops unroll; kP = -1: the table's degree at run time.
     template <int kP>
     void basis_fixed(double t, int& s, double* N, double* dN) const;
+    // The non-empty spans, each span k's knot index s (its p+1 basis functions
+    // are N_{s-p..s}), its coefficients c[r][k] ((p+1) x (p+1), row r for
+    // N_{s-p+r}) in the local parameter x, and dx/dt there.
+    size_t spans() const { return span_.size(); }
+    int knot_index(size_t k) const { return span_[k]; }
+    const double* coefficients(size_t k) const { return coef_.data() + k * static_cast<size_t>((p_ + 1) * (p_ + 1)); }
+    double inv_half(size_t k) const { return inv_half_[k]; }
+    // The non-empty span holding t (clamped like find_span) and t's local
+    // parameter x in [-1, 1] there.
+    size_t locate(double t, double& x) const;
     size_t memory_bytes() const {
         return (start_.capacity() + mid_.capacity() + inv_half_.capacity() + coef_.capacity()) * sizeof(double) +
                span_.capacity() * sizeof(int);
     }
 
 private:
-    // The non-empty span holding t (clamped like find_span) and t's local
-    // parameter x in [-1, 1] there.
-    size_t locate(double t, double& x) const;
     int p_ = 0;
     std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
     double inv_span_ = 0;        // spans per parameter unit where they are uniform, else 0

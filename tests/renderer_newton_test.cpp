@@ -333,6 +333,54 @@ TEST(RendererNewton, StepAcrossSeamWraps) {
     EXPECT_NE(newton_martin(s, ray, 0.99, 0.5, clamped, params).status, NewtonStatus::converged);
 }
 
+// Newton on the power-form patches (surface_patches.h; the renderer's hot path)
+// reaches the roots it reaches on the basis tables: the same outcome and
+// steps, and the same root to far below the tolerance (the evaluations differ
+// only in rounding). Proposed iterates on the projected coefficients
+// (project_patches), Martin on the model's.
+TEST(RendererNewton, PatchesGiveTheSameRoots) {
+    int solves = 0, converged = 0;
+    for (const AnalyticPatch& p : all_patches()) {
+        const Camera cam(p.view);
+        const NurbsSurface proj = project_surface(cam, p.surface);
+        const SurfaceSpans spans = make_surface_spans(p.surface);
+        const SurfacePatches patches = make_surface_patches(p.surface, spans);
+        const SurfacePatches projected = project_patches(cam, patches);
+        ASSERT_TRUE(patches.usable()) << p.name;
+        const GridStart grid(p.surface);
+        const UvBox box = full_box(p.surface);
+        NewtonParams params;
+        params.eps = default_newton_eps(p.box);
+        for (int j = 0; j < cam.height(); j += 2)
+            for (int i = 0; i < cam.width(); i += 2) {
+                const Ray ray = cam.pixel_ray(i, j);
+                const std::optional<double> ta = p.hit(cam.pixel_ray(i + 1, j));
+                if (!ta) continue;
+                const Ray next = cam.pixel_ray(i + 1, j);
+                const Vec2 st = grid.nearest(next.origin + *ta * next.dir);
+                const NewtonResult pairs[2][2] = {
+                    {newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, box, params, &spans),
+                     newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, box, params, &spans, nullptr,
+                                     &projected)},
+                    {newton_martin(p.surface, ray, st.x, st.y, box, params, &spans),
+                     newton_martin(p.surface, ray, st.x, st.y, box, params, &spans, nullptr, &patches)}};
+                for (const auto& r : pairs) {
+                    ++solves;
+                    converged += r[0].status == NewtonStatus::converged;
+                    EXPECT_EQ(r[0].status, r[1].status) << p.name;
+                    if (r[0].status != NewtonStatus::converged || r[1].status != NewtonStatus::converged) continue;
+                    EXPECT_EQ(r[0].iterations, r[1].iterations) << p.name;
+                    EXPECT_NEAR(r[0].u, r[1].u, 1e-9) << p.name;
+                    EXPECT_NEAR(r[0].v, r[1].v, 1e-9) << p.name;
+                    EXPECT_NEAR(r[0].t, r[1].t, 1e-3 * params.eps) << p.name;
+                }
+            }
+    }
+    std::printf("   %d solves on the patches and on the basis tables, %d converged\n", solves, converged);
+    EXPECT_GT(solves, 1000);
+    EXPECT_GT(converged, solves / 2);
+}
+
 // A start's derivatives handed in (`start`, as anti-aliasing does for the
 // sub-pixel samples it solves from one neighbour's hit) give the very iterates
 // of the solve that evaluates them itself: both methods, robust or not, from

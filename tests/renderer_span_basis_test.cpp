@@ -11,6 +11,7 @@
 
 #include "renderer/nurbs.h"
 #include "renderer/span_basis.h"
+#include "renderer/surface_patches.h"
 
 namespace {
 
@@ -142,9 +143,10 @@ TEST(SpanBasis, UniformSpansFoundWithoutSearch) {
     }
 }
 
-// Every way evaluate_d1 takes with the tables: both degrees unrolled (up to 3;
-// one of them 1 and the other up to 11; equal up to 11), the v degree unrolled
-// (up to 11), neither (above), rational or not.
+// Every way evaluate_d1 takes with the tables, and with the power-form patches
+// made over them: both degrees unrolled (up to 3; one of them 1 and the other
+// up to 11; equal up to 11), the v degree unrolled (up to 11), neither (above),
+// rational or not.
 TEST(SpanBasis, SurfaceEvaluationMatches) {
     const struct {
         int p, q;
@@ -172,12 +174,16 @@ TEST(SpanBasis, SurfaceEvaluationMatches) {
         }
         const SurfaceSpans spans = make_surface_spans(s);
         ASSERT_TRUE(spans.usable());
+        const SurfacePatches patches = make_surface_patches(s, spans);
+        ASSERT_TRUE(patches.usable());
         std::uniform_real_distribution<double> uu(s.u_begin(), s.u_end()), vv(s.v_begin(), s.v_end());
         const double scale = 100 * 2 * std::max(s.num_u, s.num_v);  // control-point size times a derivative's p / h
         for (int k = 0; k < 500; ++k) {
             const double u = uu(rng), v = vv(rng);
             const SurfaceDerivs a = evaluate_d1(s, spans, u, v), b = evaluate_d1(s, u, v);
-            for (const auto& [x, y] : {std::pair{a.S, b.S}, std::pair{a.Su, b.Su}, std::pair{a.Sv, b.Sv}}) {
+            const SurfaceDerivs c = evaluate_d1(patches, spans, u, v);
+            for (const auto& [x, y] : {std::pair{a.S, b.S}, std::pair{a.Su, b.Su}, std::pair{a.Sv, b.Sv},
+                                       std::pair{c.S, b.S}, std::pair{c.Su, b.Su}, std::pair{c.Sv, b.Sv}}) {
                 EXPECT_NEAR(x.x, y.x, 1e-12 * scale);
                 EXPECT_NEAR(x.y, y.y, 1e-12 * scale);
                 EXPECT_NEAR(x.z, y.z, 1e-12 * scale);
@@ -188,6 +194,23 @@ TEST(SpanBasis, SurfaceEvaluationMatches) {
             EXPECT_NEAR(length(ca.Pu - cb.Pu), 0, 1e-10 * scale);
         }
     }
+}
+
+// A face whose patches would hold more coefficients than the cap (a hostile
+// file's one face of very many spans) gets none; the basis tables still serve.
+TEST(SpanBasis, PatchesAreCappedPerFace) {
+    NurbsSurface s;
+    s.degree_u = s.degree_v = 3;
+    s.num_u = s.num_v = 200;  // 197 x 197 spans, 16 coefficients each: 621k
+    s.knots_u = s.knots_v = knots_for(s.num_u, s.degree_u, 0, 1);
+    s.cp.assign(static_cast<size_t>(s.num_u) * s.num_v, Vec4{1, 2, 3, 1});
+    const SurfaceSpans spans = make_surface_spans(s);
+    ASSERT_TRUE(spans.usable());
+    EXPECT_FALSE(make_surface_patches(s, spans).usable());
+    s.num_u = 20;  // 17 x 197 spans: 54k
+    s.knots_u = knots_for(s.num_u, s.degree_u, 0, 1);
+    s.cp.resize(static_cast<size_t>(s.num_u) * s.num_v);
+    EXPECT_TRUE(make_surface_patches(s, make_surface_spans(s)).usable());
 }
 
 TEST(SpanBasis, HighDegreesAndBadKnotsFallBack) {
