@@ -333,6 +333,19 @@ TEST(RendererNewton, StepAcrossSeamWraps) {
     EXPECT_NE(newton_martin(s, ray, 0.99, 0.5, clamped, params).status, NewtonStatus::converged);
 }
 
+// Every `stride`-th pixel (i, j) of the view whose right neighbour's ray hits
+// the patch, with its ray and the start a pixel off: the (u, v) of that
+// neighbour's exact hit (where the solves take several steps, some backtrack or fail).
+template <class F>
+void for_each_start_one_pixel_off(const AnalyticPatch& p, const Camera& cam, const GridStart& grid, int stride, F&& f) {
+    for (int j = 0; j < cam.height(); j += stride)
+        for (int i = 0; i < cam.width(); i += stride) {
+            const Ray next = cam.pixel_ray(i + 1, j);
+            const std::optional<double> ta = p.hit(next);
+            if (ta) f(i, j, cam.pixel_ray(i, j), grid.nearest(next.origin + *ta * next.dir));
+        }
+}
+
 // Newton on the power-form patches (surface_patches.h; the renderer's hot path)
 // reaches the roots it reaches on the basis tables: the same outcome and
 // steps, and the same root to far below the tolerance (the evaluations differ
@@ -347,34 +360,27 @@ TEST(RendererNewton, PatchesGiveTheSameRoots) {
         const SurfacePatches patches = make_surface_patches(p.surface, spans);
         const SurfacePatches projected = project_patches(cam, patches);
         ASSERT_TRUE(patches.usable()) << p.name;
-        const GridStart grid(p.surface);
         const UvBox box = full_box(p.surface);
         NewtonParams params;
         params.eps = default_newton_eps(p.box);
-        for (int j = 0; j < cam.height(); j += 2)
-            for (int i = 0; i < cam.width(); i += 2) {
-                const Ray ray = cam.pixel_ray(i, j);
-                const std::optional<double> ta = p.hit(cam.pixel_ray(i + 1, j));
-                if (!ta) continue;
-                const Ray next = cam.pixel_ray(i + 1, j);
-                const Vec2 st = grid.nearest(next.origin + *ta * next.dir);
-                const NewtonResult pairs[2][2] = {
-                    {newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, box, params, &spans),
-                     newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, box, params, &spans, nullptr,
-                                     &projected)},
-                    {newton_martin(p.surface, ray, st.x, st.y, box, params, &spans),
-                     newton_martin(p.surface, ray, st.x, st.y, box, params, &spans, nullptr, &patches)}};
-                for (const auto& r : pairs) {
-                    ++solves;
-                    converged += r[0].status == NewtonStatus::converged;
-                    EXPECT_EQ(r[0].status, r[1].status) << p.name;
-                    if (r[0].status != NewtonStatus::converged || r[1].status != NewtonStatus::converged) continue;
-                    EXPECT_EQ(r[0].iterations, r[1].iterations) << p.name;
-                    EXPECT_NEAR(r[0].u, r[1].u, 1e-9) << p.name;
-                    EXPECT_NEAR(r[0].v, r[1].v, 1e-9) << p.name;
-                    EXPECT_NEAR(r[0].t, r[1].t, 1e-3 * params.eps) << p.name;
-                }
+        for_each_start_one_pixel_off(p, cam, GridStart(p.surface), 2, [&](int i, int j, const Ray& ray, Vec2 st) {
+            const ScreenPoint sp = cam.pixel_screen(i, j);
+            const NewtonResult pairs[2][2] = {
+                {newton_proposed(proj, cam, sp, st.x, st.y, box, params, &spans),
+                 newton_proposed(proj, cam, sp, st.x, st.y, box, params, &spans, nullptr, &projected)},
+                {newton_martin(p.surface, ray, st.x, st.y, box, params, &spans),
+                 newton_martin(p.surface, ray, st.x, st.y, box, params, &spans, nullptr, &patches)}};
+            for (const auto& r : pairs) {
+                ++solves;
+                converged += r[0].status == NewtonStatus::converged;
+                EXPECT_EQ(r[0].status, r[1].status) << p.name;
+                if (r[0].status != NewtonStatus::converged || r[1].status != NewtonStatus::converged) continue;
+                EXPECT_EQ(r[0].iterations, r[1].iterations) << p.name;
+                EXPECT_NEAR(r[0].u, r[1].u, 1e-9) << p.name;
+                EXPECT_NEAR(r[0].v, r[1].v, 1e-9) << p.name;
+                EXPECT_NEAR(r[0].t, r[1].t, 1e-3 * params.eps) << p.name;
             }
+        });
     }
     std::printf("   %d solves on the patches and on the basis tables, %d converged\n", solves, converged);
     EXPECT_GT(solves, 1000);
@@ -384,46 +390,40 @@ TEST(RendererNewton, PatchesGiveTheSameRoots) {
 // A start's derivatives handed in (`start`, as anti-aliasing does for the
 // sub-pixel samples it solves from one neighbour's hit) give the very iterates
 // of the solve that evaluates them itself: both methods, robust or not, from
-// starts one pixel off (where the solves take several steps, some backtrack or fail).
+// starts one pixel off.
 TEST(RendererNewton, GivenStartDerivativesChangeNothing) {
     int solves = 0, converged = 0;
     for (const AnalyticPatch& p : all_patches()) {
         const Camera cam(p.view);
         const NurbsSurface proj = project_surface(cam, p.surface);
         const SurfaceSpans spans = make_surface_spans(p.surface);
-        const GridStart grid(p.surface);
         const UvBox box = full_box(p.surface);
         for (const bool robust : {false, true}) {
             NewtonParams params;
             params.eps = default_newton_eps(p.box);
             params.robust = robust;
-            for (int j = 0; j < cam.height(); j += 3)
-                for (int i = 0; i < cam.width(); i += 3) {
-                    const Ray ray = cam.pixel_ray(i, j);
-                    const std::optional<double> ta = p.hit(cam.pixel_ray(i + 1, j));
-                    if (!ta) continue;
-                    const Ray next = cam.pixel_ray(i + 1, j);
-                    const Vec2 st = grid.nearest(next.origin + *ta * next.dir);
-                    const SurfaceDerivs dp = evaluate_d1(proj, spans, st.x, st.y);
-                    const SurfaceDerivs dm = evaluate_d1(p.surface, spans, st.x, st.y);
-                    const NewtonResult pairs[2][2] = {
-                        {newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, box, params, &spans),
-                         newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, box, params, &spans, &dp)},
-                        {newton_martin(p.surface, ray, st.x, st.y, box, params, &spans),
-                         newton_martin(p.surface, ray, st.x, st.y, box, params, &spans, &dm)}};
-                    for (const auto& r : pairs) {
-                        ++solves;
-                        converged += r[0].status == NewtonStatus::converged;
-                        EXPECT_EQ(r[0].status, r[1].status) << p.name;
-                        EXPECT_EQ(r[0].iterations, r[1].iterations) << p.name;
-                        EXPECT_EQ(r[0].u, r[1].u) << p.name;
-                        EXPECT_EQ(r[0].v, r[1].v) << p.name;
-                        EXPECT_EQ(r[0].residual, r[1].residual) << p.name;
-                        if (r[0].status == NewtonStatus::converged) {
-                            EXPECT_EQ(r[0].t, r[1].t) << p.name;
-                        }
+            for_each_start_one_pixel_off(p, cam, GridStart(p.surface), 3, [&](int i, int j, const Ray& ray, Vec2 st) {
+                const SurfaceDerivs dp = evaluate_d1(proj, spans, st.x, st.y);
+                const SurfaceDerivs dm = evaluate_d1(p.surface, spans, st.x, st.y);
+                const ScreenPoint sp = cam.pixel_screen(i, j);
+                const NewtonResult pairs[2][2] = {
+                    {newton_proposed(proj, cam, sp, st.x, st.y, box, params, &spans),
+                     newton_proposed(proj, cam, sp, st.x, st.y, box, params, &spans, &dp)},
+                    {newton_martin(p.surface, ray, st.x, st.y, box, params, &spans),
+                     newton_martin(p.surface, ray, st.x, st.y, box, params, &spans, &dm)}};
+                for (const auto& r : pairs) {
+                    ++solves;
+                    converged += r[0].status == NewtonStatus::converged;
+                    EXPECT_EQ(r[0].status, r[1].status) << p.name;
+                    EXPECT_EQ(r[0].iterations, r[1].iterations) << p.name;
+                    EXPECT_EQ(r[0].u, r[1].u) << p.name;
+                    EXPECT_EQ(r[0].v, r[1].v) << p.name;
+                    EXPECT_EQ(r[0].residual, r[1].residual) << p.name;
+                    if (r[0].status == NewtonStatus::converged) {
+                        EXPECT_EQ(r[0].t, r[1].t) << p.name;
                     }
                 }
+            });
         }
     }
     std::printf("   %d solves with and without the start's derivatives given, %d converged\n", solves, converged);
