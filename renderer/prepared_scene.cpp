@@ -43,7 +43,6 @@ PreparedFace prepare_face(const Face& f, double seam_tol) {
     PreparedFace pf;
     pf.trim = TrimTester(f.loops);
     pf.spans = make_surface_spans(f.surface);
-    pf.patches = make_surface_patches(f.surface, pf.spans);
     pf.box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, seam_tol);
     const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
     pf.near_uv = std::max(kTrimBandPerTolerance * f.trim_tolerance_uv, kMinTrimBandRelative * diag);
@@ -125,6 +124,37 @@ void link_adjacent_faces(const Scene& scene, std::vector<PreparedFace>& faces) {
     }
 }
 
+// Power-form patches of a whole scene: at most this many coefficients (64 MB).
+// They hold up to (p+1)(q+1) coefficients per knot-span pair where the control
+// points hold about one, so a large upload of dense bicubic faces could
+// multiply its memory by ~16 (the models of ../shared/models: at most 70k, 10x
+// their control points). Beyond the budget the largest faces keep only the
+// basis tables, which give the same hits to rounding, more slowly.
+constexpr size_t kMaxScenePatchCoefficients = size_t(1) << 21;
+
+// Which faces get power-form patches: all, unless their coefficients exceed
+// kMaxScenePatchCoefficients; then all but the largest (decided before any is
+// made, so a large upload never holds them all at once).
+std::vector<uint8_t> faces_with_patches(const Scene& scene, const std::vector<PreparedFace>& faces) {
+    std::vector<size_t> size(faces.size());
+    size_t total = 0;
+    for (size_t k = 0; k < faces.size(); ++k) {
+        size[k] = patch_coefficients(scene.faces[k].surface, faces[k].spans);
+        total += size[k];
+    }
+    std::vector<uint8_t> with(faces.size(), 1);
+    if (total <= kMaxScenePatchCoefficients) return with;
+    std::vector<size_t> order(faces.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return size[a] > size[b]; });
+    for (const size_t k : order) {
+        if (total <= kMaxScenePatchCoefficients) break;
+        total -= size[k];
+        with[k] = 0;
+    }
+    return with;
+}
+
 }  // namespace
 
 struct PreparedSceneBuilder {
@@ -144,6 +174,13 @@ struct PreparedSceneBuilder {
         arena.execute([&] {
             tbb::parallel_for(size_t(0), scene.faces.size(),
                               [&](size_t k) { ps.faces_[k] = prepare_face(scene.faces[k], seam_tol); });
+        });
+        const std::vector<uint8_t> with_patches = faces_with_patches(scene, ps.faces_);
+        arena.execute([&] {
+            tbb::parallel_for(size_t(0), scene.faces.size(), [&](size_t k) {
+                PreparedFace& pf = ps.faces_[k];
+                if (with_patches[k]) pf.patches = make_surface_patches(scene.faces[k].surface, pf.spans);
+            });
         });
         arena.execute([&] { link_adjacent_faces(scene, ps.faces_); });
         ps.map_ = merge_map_meshes(scene);

@@ -46,12 +46,18 @@ struct PatchEvaluation {
 
 }  // namespace
 
+size_t patch_coefficients(const NurbsSurface& s, const SurfaceSpans& spans) {
+    if (!spans.usable()) return 0;
+    const size_t nk = spans.u.spans(), nl = spans.v.spans();
+    const size_t size = static_cast<size_t>((s.degree_u + 1) * (s.degree_v + 1));
+    return nk * nl > kMaxPatchCoefficients / size ? 0 : nk * nl * size;
+}
+
 SurfacePatches make_surface_patches(const NurbsSurface& s, const SurfaceSpans& spans) {
     SurfacePatches t;
-    if (!spans.usable()) return t;
+    if (!patch_coefficients(s, spans)) return t;
     const int p = s.degree_u, q = s.degree_v;
     const size_t nk = spans.u.spans(), nl = spans.v.spans(), size = static_cast<size_t>((p + 1) * (q + 1));
-    if (nk * nl > kMaxPatchCoefficients / size) return t;
     t.degree_u = p;
     t.degree_v = q;
     t.spans_v = nl;
@@ -74,7 +80,8 @@ SurfacePatches make_surface_patches(const NurbsSurface& s, const SurfaceSpans& s
             for (int a = 0; a <= p; ++a)
                 for (int b = 0; b <= q; ++b) {
                     Vec4 sum{};
-                    for (int i = 0; i <= p; ++i) sum += cu[i * (p + 1) + a] * rows[static_cast<size_t>(i * (q + 1) + b)];
+                    for (int i = 0; i <= p; ++i)
+                        sum += cu[i * (p + 1) + a] * rows[static_cast<size_t>(i * (q + 1) + b)];
                     c[a * (q + 1) + b] = sum;
                 }
         }

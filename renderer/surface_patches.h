@@ -35,6 +35,8 @@ struct SurfacePatches {
 // are not, or where they would hold more than kMaxPatchCoefficients (the basis
 // tables then serve: evaluate_d1 in span_basis.h).
 SurfacePatches make_surface_patches(const NurbsSurface& s, const SurfaceSpans& spans);
+// The number of coefficients make_surface_patches would make (0: none).
+size_t patch_coefficients(const NurbsSurface& s, const SurfaceSpans& spans);
 
 // evaluate_d1 (nurbs.h) from the patches: the same point and partials to
 // rounding. spans: those the patches were made over (any surface with the same

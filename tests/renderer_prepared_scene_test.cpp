@@ -113,3 +113,58 @@ TEST(PreparedScene, ChecksFaceNumbering) {
     EXPECT_THROW(prepare(s), Error);
     EXPECT_THROW(prepare(std::shared_ptr<const Scene>()), Error);
 }
+
+// A flat bicubic face of n x n control points on a grid of the plane z = 0
+// (uniform knots), over [x0, x0 + 1] x [0, 1].
+AnalyticPatch dense_flat_patch(int n, double x0) {
+    AnalyticPatch p;
+    p.name = "dense flat";
+    NurbsSurface& s = p.surface;
+    s.degree_u = s.degree_v = 3;
+    s.num_u = s.num_v = n;
+    std::vector<double> interior;
+    for (int k = 1; k < n - 3; ++k) interior.push_back(double(k) / (n - 3));
+    s.knots_u = s.knots_v = clamped_knots(3, interior);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) s.cp.push_back(hpt({x0 + double(i) / (n - 1), double(j) / (n - 1), 0}, 1));
+    return p;
+}
+
+// The power-form patches of a whole scene stay within their budget (2^21
+// coefficients): 12 faces of 117 x 117 bicubic spans would hold 2.6 M; the
+// largest keep only their basis tables, and every face still renders exactly.
+TEST(PreparedScene, PatchMemoryIsBoundedPerScene) {
+    constexpr int kFaces = 12;
+    Scene s;
+    for (int k = 0; k < kFaces; ++k) {
+        s.faces.push_back(make_face(dense_flat_patch(120, 1.1 * k), k + 1, 4));
+        s.bbox.extend(Vec3{1.1 * k, 0, 0});
+        s.bbox.extend(Vec3{1.1 * k + 1, 1, 0});
+    }
+    const PreparedScene p = prepare(s);
+    size_t total = 0;
+    int with = 0;
+    for (const PreparedFace& f : p.faces()) {
+        total += f.patches.coef.size();
+        with += f.patches.usable();
+    }
+    EXPECT_LE(total, size_t(1) << 21);
+    EXPECT_GT(with, 0);
+    EXPECT_LT(with, kFaces);
+    CameraSpec base;
+    base.width = 240;
+    base.height = 60;
+    const Camera cam(named_view("top", s.bbox, base));
+    const RenderResult r = render(p, cam, RenderOptions{});
+    std::vector<int> pixels(kFaces + 1, 0);
+    for (int j = 0; j < cam.height(); ++j)
+        for (int i = 0; i < cam.width(); ++i) {
+            const size_t k = static_cast<size_t>(j) * cam.width() + i;
+            const uint32_t face = r.image.face[k];
+            if (!face) continue;
+            ++pixels[face];
+            const Ray ray = cam.pixel_ray(i, j);
+            EXPECT_NEAR((ray.origin + double(r.image.z[k]) * ray.dir).z, 0.0, 1e-5);
+        }
+    for (int f = 1; f <= kFaces; ++f) EXPECT_GT(pixels[f], 100) << "face " << f;
+}
