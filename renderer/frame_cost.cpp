@@ -71,7 +71,11 @@ FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int heig
         const double w = f.index < weight.size() ? weight[f.index] + 1.0 : 1.0;
         weighted += w * eval;
         total_weight += w;
-        projected_bytes += double(s.cp.size()) * sizeof(Vec4) + double(s.knots_u.size() + s.knots_v.size()) * sizeof(double);
+        // proposed projects a face's patches where it has them, else its control points.
+        const SurfacePatches& patches = prepared.faces()[f.index - 1].patches;
+        projected_bytes += patches.usable() ? double(patches.coef.size()) * sizeof(Vec4)
+                                            : double(s.cp.size()) * sizeof(Vec4) +
+                                                  double(s.knots_u.size() + s.knots_v.size()) * sizeof(double);
     }
     const double eval_cost = total_weight > 0 ? weighted / total_weight : kBicubicEvalCost;
 

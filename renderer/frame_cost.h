@@ -7,7 +7,7 @@
 // Memory: every per-pixel buffer of the frame (the preliminary map and its GL
 // framebuffer, the solve buffers, the rescue's worst-case candidate lists, the
 // output image with its AOVs, the encoder's 8-bit copy), the per-frame
-// projection of the control points and the map vertices' clip positions.
+// projection of the patches (or control points) and the map vertices' clip positions.
 // Calibrated against the measured peak RSS of real frames (bench/fairness.sh
 // prints estimate / measured); meant to be >= the truth, within ~2x (often 1.5-2.5x: the rescue lists rarely fill).
 //

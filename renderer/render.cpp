@@ -103,7 +103,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     FrameBuffers buf(ctx);
     st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of
-    // the control points (the rest was done once by prepare()).
+    // the faces' patches (the rest was done once by prepare()).
     const ProjectedFaces projected = project_faces(ctx);
     Solver solver{ctx, projected, options.newton, {}};
     if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(scene.bbox);
