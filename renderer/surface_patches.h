@@ -3,16 +3,16 @@
 // patch, S(x, y) = sum_{a <= p, b <= q} C_ab x^a y^b in the spans' local
 // parameters x, y in [-1, 1] (span_basis.h). Its coefficients are the span
 // tables' basis coefficients contracted with the control points once, by
-// prepare(): C_ab = sum_i sum_j c_u[i][a] c_v[j][b] P_ij. A Newton step then
-// evaluates the point and both partials by Horner's rule on C alone (nested in
-// x and y), with no basis functions at all: per evaluation (p+1) q + p Vec4
-// multiply-adds for S_v, as many for S and S_u, against the basis tables'
-// 2 (p+1)^2 + 2 (q+1)^2 scalar ones before the same tensor product (the
-// evaluation of Bezier/B-spline patches in power basis: Piegl & Tiller, The
-// NURBS Book, sec. 1.4 and 6.6 on converting to piecewise power basis).
-// The projection of a frame (Camera::project_h) is linear in homogeneous
-// coordinates, so the projected surface's patches are the projected
-// coefficients (project_patches, camera.h).
+// prepare(): C_ab = sum_i sum_j c_u[i][a] c_v[j][b] P_ij (the conversion to
+// piecewise power form of Piegl & Tiller, The NURBS Book, sec. 6.6). A Newton
+// step then evaluates the point and both partials by Horner's rule (A1.1) on C
+// alone, nested in y and x: about 2 (p+1) q + 3 p Vec4 multiply-adds, where the
+// basis tables take 2 (p+1)^2 + 2 (q+1)^2 scalar ones for the basis and then
+// 3 (p+1)(q+1) Vec4 ones for the tensor product. Callgrind, one frame of a
+// machine component (degrees 1 x 8, 1 x 11, 5 x 5): evaluation 204 -> 83 M
+// instructions. The projection of a frame (Camera::project_h) is linear in
+// homogeneous coordinates, so the projected surface's patches are the
+// projected coefficients (project_patches below).
 #pragma once
 
 #include <cstddef>
