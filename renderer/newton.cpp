@@ -188,22 +188,29 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
     }
 }
 
+// A surface's homogeneous point and partials by the cheapest way it offers:
+// its power-form patches, else its span tables, else the knot search and A2.2.
+struct SurfaceEvaluation {
+    const NurbsSurface& surface;
+    const SurfaceSpans* spans;
+    const SurfacePatches* patches;  // used only with spans
+    SurfaceDerivs d1(double u, double v) const {
+        if (patches) return evaluate_d1(*patches, *spans, u, v);
+        return spans ? evaluate_d1(surface, *spans, u, v) : evaluate_d1(surface, u, v);
+    }
+};
+
 // Sisojevs & Glazs 2010: the patch projected into the image plane, homogeneous
 // (non-rational) derivatives, the step of eq. (9)-(11).
 struct ProposedSystem {
-    const NurbsSurface& projected;
+    SurfaceEvaluation projected;
     const Camera& camera;
     ScreenPoint s;
-    const SurfaceSpans* spans;
-    const SurfacePatches* patches;
     struct State {
         SurfaceDerivs d;
         double r;
     };
-    State eval(double u, double v) const {
-        if (patches) return at(evaluate_d1(*patches, *spans, u, v));
-        return at(spans ? evaluate_d1(projected, *spans, u, v) : evaluate_d1(projected, u, v));
-    }
+    State eval(double u, double v) const { return at(projected.d1(u, v)); }
     State at(const SurfaceDerivs& d) const { return {d, proposed_residual(d.S, camera, s)}; }
     bool step(const State& st, double eps_det, Step& out) const { return proposed_step(st.d, s, eps_det, out); }
     void finish(const State& st, NewtonResult& res) const {
@@ -215,20 +222,16 @@ struct ProposedSystem {
 // Martin et al. 2000: the Cartesian surface and its rational partials, the ray
 // as two planes; F = the point's signed distances from the planes.
 struct MartinSystem {
-    const NurbsSurface& surface;
+    SurfaceEvaluation surface;
     const Ray& ray;
     RayPlanes pl;
-    const SurfaceSpans* spans;
-    const SurfacePatches* patches;
     struct State {
         CartesianDerivs c;
         double f1, f2, r;
     };
-    State eval(double u, double v) const {
-        if (patches) return at(cartesian_from(evaluate_d1(*patches, *spans, u, v)));
-        return at(spans ? cartesian_d1(surface, *spans, u, v) : cartesian_d1(surface, u, v));
-    }
-    // cartesian_d1 is cartesian_from(evaluate_d1) on either path: the same numbers.
+    // cartesian_d1 (nurbs.h, span_basis.h) is cartesian_from(evaluate_d1) on
+    // every path: the same numbers.
+    State eval(double u, double v) const { return at(surface.d1(u, v)); }
     State at(const SurfaceDerivs& d) const { return at(cartesian_from(d)); }
     State at(const CartesianDerivs& c) const {
         const double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
@@ -257,14 +260,14 @@ NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera
                              double u0, double v0, const UvBox& box, const NewtonParams& params,
                              const SurfaceSpans* spans, const SurfaceDerivs* start, const SurfacePatches* patches) {
     if (!spans || (patches && !patches->usable())) patches = nullptr;
-    return newton_iterate(ProposedSystem{projected, camera, s, spans, patches}, u0, v0, box, params, start);
+    return newton_iterate(ProposedSystem{{projected, spans, patches}, camera, s}, u0, v0, box, params, start);
 }
 
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
                            const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans,
                            const SurfaceDerivs* start, const SurfacePatches* patches) {
     if (!spans || (patches && !patches->usable())) patches = nullptr;
-    return newton_iterate(MartinSystem{surface, ray, ray_planes(ray), spans, patches}, u0, v0, box, params, start);
+    return newton_iterate(MartinSystem{{surface, spans, patches}, ray, ray_planes(ray)}, u0, v0, box, params, start);
 }
 
 }  // namespace nurbsrt
