@@ -188,18 +188,6 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
     }
 }
 
-// A surface's homogeneous point and partials by the cheapest way it offers:
-// its power-form patches, else its span tables, else the knot search and A2.2.
-struct SurfaceEvaluation {
-    const NurbsSurface& surface;
-    const SurfaceSpans* spans;
-    const SurfacePatches* patches;  // used only with spans
-    SurfaceDerivs d1(double u, double v) const {
-        if (patches) return evaluate_d1(*patches, *spans, u, v);
-        return spans ? evaluate_d1(surface, *spans, u, v) : evaluate_d1(surface, u, v);
-    }
-};
-
 // Sisojevs & Glazs 2010: the patch projected into the image plane, homogeneous
 // (non-rational) derivatives, the step of eq. (9)-(11).
 struct ProposedSystem {
@@ -259,14 +247,12 @@ struct MartinSystem {
 NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
                              double u0, double v0, const UvBox& box, const NewtonParams& params,
                              const SurfaceSpans* spans, const SurfaceDerivs* start, const SurfacePatches* patches) {
-    if (!spans || (patches && !patches->usable())) patches = nullptr;
     return newton_iterate(ProposedSystem{{projected, spans, patches}, camera, s}, u0, v0, box, params, start);
 }
 
 NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
                            const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans,
                            const SurfaceDerivs* start, const SurfacePatches* patches) {
-    if (!spans || (patches && !patches->usable())) patches = nullptr;
     return newton_iterate(MartinSystem{{surface, spans, patches}, ray, ray_planes(ray)}, u0, v0, box, params, start);
 }
 

@@ -67,9 +67,8 @@ const SurfacePatches* Solver::iterated_patches(uint32_t id) const {
 }
 
 SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
-    const SurfaceSpans& spans = ctx.prepared.faces()[id - 1].spans;
-    if (const SurfacePatches* p = iterated_patches(id)) return evaluate_d1(*p, spans, u0, v0);
-    return evaluate_d1(iterated_surface(id), spans, u0, v0);
+    return SurfaceEvaluation(iterated_surface(id), &ctx.prepared.faces()[id - 1].spans, iterated_patches(id))
+        .d1(u0, v0);
 }
 
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,

@@ -55,13 +55,14 @@ size_t patch_coefficients(const NurbsSurface& s, const SurfaceSpans& spans) {
 
 SurfacePatches make_surface_patches(const NurbsSurface& s, const SurfaceSpans& spans) {
     SurfacePatches t;
-    if (!patch_coefficients(s, spans)) return t;
+    const size_t n = patch_coefficients(s, spans);
+    if (!n) return t;
     const int p = s.degree_u, q = s.degree_v;
     const size_t nk = spans.u.spans(), nl = spans.v.spans(), size = static_cast<size_t>((p + 1) * (q + 1));
     t.degree_u = p;
     t.degree_v = q;
     t.spans_v = nl;
-    t.coef.resize(nk * nl * size);
+    t.coef.resize(n);
     std::vector<Vec4> rows(static_cast<size_t>(p + 1) * (q + 1));  // T_ib = sum_j c_v[j][b] P_ij
     for (size_t k = 0; k < nk; ++k) {
         const double* cu = spans.u.coefficients(k);

@@ -43,6 +43,22 @@ size_t patch_coefficients(const NurbsSurface& s, const SurfaceSpans& spans);
 // knots and degrees: the model surface's serve its projection's patches).
 SurfaceDerivs evaluate_d1(const SurfacePatches& patches, const SurfaceSpans& spans, double u, double v);
 
+// A surface's homogeneous point and partials by the cheapest way it offers:
+// its power-form patches, else its span tables, else the knot search and A2.2
+// (nurbs.h). The one place that chooses among them.
+struct SurfaceEvaluation {
+    const NurbsSurface& surface;
+    const SurfaceSpans* spans;
+    const SurfacePatches* patches;
+    // Either pointer may be null; patches count only when usable and with spans.
+    SurfaceEvaluation(const NurbsSurface& s, const SurfaceSpans* sp, const SurfacePatches* pa)
+        : surface(s), spans(sp), patches(sp && pa && pa->usable() ? pa : nullptr) {}
+    SurfaceDerivs d1(double u, double v) const {
+        if (patches) return evaluate_d1(*patches, *spans, u, v);
+        return spans ? evaluate_d1(surface, *spans, u, v) : evaluate_d1(surface, u, v);
+    }
+};
+
 // The patches of project_surface(camera, s) from those of s, made once per frame.
 SurfacePatches project_patches(const Camera& camera, const SurfacePatches& patches);
 
