@@ -1,4 +1,4 @@
-// write_image through the image writer module (see image_module.h).
+// write_image and encode_image through the image writer module (see image_module.h).
 #include "renderer/image_module.h"
 
 #include <dlfcn.h>
@@ -17,24 +17,45 @@ namespace nurbsrt {
 namespace {
 
 using WriteFn = decltype(&nurbsrt_write_image_v1);
+using EncodeFn = decltype(&nurbsrt_encode_image_v1);
+
+// The module's entry points.
+struct ImageModule {
+    WriteFn write = nullptr;
+    EncodeFn encode = nullptr;
+};
 
 // Loads the module once per process (beside the executable first, then the
 // library search path) and never unloads it. RTLD_LOCAL: its libraries' symbols
 // stay out of the global scope the rest of the program resolves against.
-WriteFn load_writer() {
+const ImageModule& load_writer() {
     static std::mutex m;
-    static WriteFn fn = nullptr;
+    static ImageModule module;
     std::lock_guard<std::mutex> lock(m);
-    if (fn) return fn;
+    if (module.write) return module;
     const std::string beside = beside_executable(kImageModuleFile);
     void* handle = dlopen(beside.c_str(), RTLD_LAZY | RTLD_LOCAL);
     std::string why = handle ? "" : dlerror();
     if (!handle) handle = dlopen(kImageModuleFile, RTLD_LAZY | RTLD_LOCAL);
     if (!handle)
         throw Error(ErrorCode::internal, std::string("cannot load the image writer module: ") + why + "; " + dlerror());
-    fn = reinterpret_cast<WriteFn>(dlsym(handle, kImageWriteSymbol));
-    if (!fn) throw Error(ErrorCode::internal, std::string("image writer module without ") + kImageWriteSymbol);
-    return fn;
+    ImageModule found;
+    found.write = reinterpret_cast<WriteFn>(dlsym(handle, kImageWriteSymbol));
+    found.encode = reinterpret_cast<EncodeFn>(dlsym(handle, kImageEncodeSymbol));
+    if (!found.write || !found.encode)
+        throw Error(ErrorCode::internal, std::string("image writer module without ") +
+                                             (found.write ? kImageEncodeSymbol : kImageWriteSymbol));
+    module = found;
+    return module;
+}
+
+// An entry point's status as write_image and encode_image answer it.
+void check_status(int status, const char* message) {
+    switch (status) {
+        case kImageWritten: return;
+        case kImageFormatUnsupported: throw Error(ErrorCode::unsupported_format, message);
+        default: throw Error(ErrorCode::io, message);
+    }
 }
 
 }  // namespace
@@ -59,11 +80,17 @@ void preload_image_writer() {
 
 void write_image(const RenderImage& image, const std::string& path) {
     char message[1024];
-    switch (load_writer()(&image, path.c_str(), message, sizeof message)) {
-        case kImageWritten: return;
-        case kImageFormatUnsupported: throw Error(ErrorCode::unsupported_format, message);
-        default: throw Error(ErrorCode::io, message);
-    }
+    check_status(load_writer().write(&image, path.c_str(), message, sizeof message), message);
+}
+
+std::string encode_image(const RenderImage& image, const std::string& format_name) {
+    char message[1024];
+    std::string bytes;
+    const auto sink = [](void* context, const void* data, size_t size) {
+        static_cast<std::string*>(context)->assign(static_cast<const char*>(data), size);
+    };
+    check_status(load_writer().encode(&image, format_name.c_str(), sink, &bytes, message, sizeof message), message);
+    return bytes;
 }
 
 }  // namespace nurbsrt

@@ -22,6 +22,7 @@ enum ImageWriteStatus : int { kImageWritten = 0, kImageFormatUnsupported = 1, kI
 // version suffix changes with the entry point's signature or RenderImage's layout.
 inline constexpr const char* kImageModuleFile = "libnurbsrt_image.so";
 inline constexpr const char* kImageWriteSymbol = "nurbsrt_write_image_v1";
+inline constexpr const char* kImageEncodeSymbol = "nurbsrt_encode_image_v1";
 
 // Starts loading the module on a thread of its own and returns: a program that
 // will write an image calls it early, so that the loading overlaps its other
@@ -34,3 +35,9 @@ void preload_image_writer();
 // NUL-terminated message of at most message_size bytes. Never throws.
 extern "C" int nurbsrt_write_image_v1(const nurbsrt::RenderImage* image, const char* path, char* message,
                                       size_t message_size);
+// Encodes `image` as a file of format `format_name` (an extension: png, tif, ...)
+// would hold it, and hands the bytes to `sink` once; on failure sink is not
+// called and the message is set as above. Never throws.
+extern "C" int nurbsrt_encode_image_v1(const nurbsrt::RenderImage* image, const char* format_name,
+                                       void (*sink)(void* context, const void* bytes, size_t size), void* context,
+                                       char* message, size_t message_size);

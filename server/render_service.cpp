@@ -217,11 +217,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     add_frame_stages(result.stats, stages);
     stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
 
-    {
-        const TempFile file = ctx.scratch.create("render", r.format.extension.c_str());
-        write_image(result.image, file.path());
-        out.bytes = read_file_bytes(file.path());
-    }
+    out.bytes = encode_image(result.image, r.format.extension.substr(1));  // the extension without its dot
     out.aovs = aov_buffers(result.image, r.aovs);
     ticket.reset();
     stages.mark("encode");

@@ -8,8 +8,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <vector>
 
+#include "renderer/error.h"
 #include "renderer/render.h"
 
 namespace {
@@ -62,6 +65,60 @@ TEST(ImageWrite, SrgbCodesAreRoundedTransferFunction) {
         EXPECT_EQ(px[4 * k + 3], 64) << "alpha 0.25 stays linear: round(63.75)";
     }
     EXPECT_LE(off_by_one, 255 * 2) << "only the points placed at boundaries may round the other way";
+}
+
+// Every channel of every pixel of an image file, as float.
+std::vector<float> read_pixels(const std::string& path, int& channels) {
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) return {};
+    channels = in->spec().nchannels;
+    std::vector<float> px(static_cast<size_t>(in->spec().width) * in->spec().height * channels);
+    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data())) return {};
+    return px;
+}
+
+// encode_image (the service's answers, made in memory) holds what write_image
+// writes to a file: the same pixels in every format, read back by OpenImageIO.
+TEST(ImageWrite, EncodedBytesDecodeAsTheWrittenFile) {
+    nurbsrt::RenderImage img;
+    img.width = 37;  // not a multiple of a TIFF strip's or a JPEG block's size
+    img.height = 21;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const float a = x % 5 == 0 ? 0.0f : 1.0f - 0.02f * y;
+            img.rgba.insert(img.rgba.end(), {x / 36.0f, y / 20.0f, 0.3f, a});
+            img.z.push_back(a > 0 ? 1.0f + x : INFINITY);
+            img.face.push_back(a > 0 ? static_cast<uint32_t>(y) : 0u);
+        }
+    const auto dir = std::filesystem::temp_directory_path();
+    for (const std::string format : {"png", "jpg", "tif", "exr"}) {
+        SCOPED_TRACE(format);
+        const std::string written = (dir / ("nurbsrt-encode-test-w." + format)).string();
+        const std::string encoded = (dir / ("nurbsrt-encode-test-e." + format)).string();
+        nurbsrt::write_image(img, written);
+        const std::string bytes = nurbsrt::encode_image(img, format);
+        ASSERT_GT(bytes.size(), 64u);
+        {
+            std::ofstream f(encoded, std::ios::binary);
+            f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        }
+        int cw = 0, ce = 0;
+        const std::vector<float> pw = read_pixels(written, cw), pe = read_pixels(encoded, ce);
+        std::filesystem::remove(written);
+        std::filesystem::remove(encoded);
+        ASSERT_EQ(pw.size(), static_cast<size_t>(img.width) * img.height * cw);
+        EXPECT_EQ(ce, cw);
+        EXPECT_EQ(pe, pw);
+        EXPECT_EQ(cw, format == "exr" ? 12 : format == "jpg" ? 3 : 4);
+    }
+    try {
+        nurbsrt::encode_image(img, "bmpx");
+        ADD_FAILURE() << "an unknown format encoded";
+    } catch (const nurbsrt::Error& e) {
+        EXPECT_EQ(e.code(), nurbsrt::ErrorCode::unsupported_format) << e.what();
+    }
 }
 
 }  // namespace
