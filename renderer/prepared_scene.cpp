@@ -46,6 +46,7 @@ PreparedFace prepare_face(const Face& f, double seam_tol) {
     pf.box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, seam_tol);
     const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
     pf.near_uv = std::max(kTrimBandPerTolerance * f.trim_tolerance_uv, kMinTrimBandRelative * diag);
+    pf.trim_uv = pf.near_uv / kTrimBandPerTolerance;
     for (const Vec3& p : f.mesh.xyz)
         if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) pf.mesh_box.extend(p);
     return pf;

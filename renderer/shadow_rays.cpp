@@ -174,8 +174,16 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         if (!(h.t < t_p - self)) return false;
         const bool contact = h.t > t_p - contact_, entering = dot(Vec3{h.nx, h.ny, h.nz}, key_) < 0;
         if (o == kConverged) return !contact || entering;
-        if (on_box_border(ctx_.prepared.faces()[id - 1].box, h)) return false;
-        if (contact) return entering && (t_p - h.t) * std::max(cosine, kMinCosine) <= band_width(id, h);
+        const PreparedFace& f = ctx_.prepared.faces()[id - 1];
+        if (on_box_border(f.box, h)) return false;
+        // The concave edge's crossing lies on the exact face, which ends within
+        // its trim uncertainty of the loops (trim_uv, half the band: the band
+        // allows for two faces' loops around a crack); farther outside, the ray
+        // passes beside the face (it shadowed grazing-lit walls under a ledge of
+        // step/trj5_k1-ct-214.stp, 1.6x that outside the ledge's loop).
+        if (contact)
+            return entering && (t_p - h.t) * std::max(cosine, kMinCosine) <= band_width(id, h) &&
+                   std::isfinite(f.trim.boundary_distance({h.u, h.v}, f.trim_uv));
         // A near crossing of another face at the same depth: the ray passes
         // through the crack between two faces of an occluder, which it blocks.
         for (int q = 0; q < nnear; ++q)

@@ -120,7 +120,18 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    higher above the point's surface than the band is wide are no longer taken
 //    (19 -> 17 and 20 -> 18), the rest lay within that height: the band was
 //    wide because the trim loops were sampled coarsely (above; t4mec 17 -> 0,
-//    trj5 18 -> 2 with the finer loops).
+//    trj5 18 -> 2 with the finer loops). Such a contact crossing must now also
+//    lie within the face's trim uncertainty of its loops (trim_uv, not the
+//    two-face band): trj5 2 -> 1; the one left is 0.0012 outside the ledge's
+//    loop, inside its uncertainty 0.0016 (the edges' 3D tolerance seen in (u, v)).
+//  - box_sides: a grazing-lit hole wall (cosine 0.09) shadowed through the
+//    sliver of the hole that the plate's inscribed loop leaves inside the plate
+//    (the crossing 4e-4 outside the exact plate); taking such crossings for
+//    slivers where they leave a solid on a face adjacent to the point's let the
+//    light leak where the point's own face shadows itself (2 models), so not.
+//  - marsCapsule front's false shadow was the reference's: its light ray crosses
+//    face 15's interior (BRepExtrema: 1e-10 from it) and the intersector reports
+//    no hit; shadow_check now settles such disputes (reference misses).
 struct KnownShadow {
     const char* model;
     const char* view;
@@ -140,14 +151,13 @@ const KnownShadow kKnownShadowDisagreements[] = {
     {"step/r0901_ec.stp", "iso", 0, 2},
     {"step/r0901_ec.stp", "front", 0, 1},
     {"step/t4mec.stp", "front", 0, 1},
-    {"step/trj5_k1-ct-214.stp", "iso", 2, 0},
+    {"step/trj5_k1-ct-214.stp", "iso", 1, 0},
     {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
     {"step/trj8_b1-ec-214.stp", "front", 0, 1},
     {"iges/bearing.iges", "iso", 0, 4},
     {"iges/hammer.iges", "iso", 0, 4},
     {"iges/heartValve.igs", "iso", 0, 1},
     {"iges/marsCapsule.igs", "iso", 0, 2},
-    {"iges/marsCapsule.igs", "front", 1, 0},
     {"iges/ship_kcs.igs", "iso", 0, 7},
     {"iges/ship_kcs.igs", "front", 0, 1},
     {"iges/ship_part5.igs", "iso", 0, 5},
@@ -248,7 +258,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         EXPECT_EQ(rep.off_ray, 0) << label << ": pixels showing a point of their face that is not on their ray";
         // A blank frame must not pass trivially.
         EXPECT_GT(rep.pixels_hit, 100) << label << ": too few hits to judge";
-        const T::ShadowCheckReport shadows = T::shadow_check(scene, inter, camera, r.image);
+        const T::ShadowCheckReport shadows = T::shadow_check(scene, model, inter, camera, r.image);
         std::cout << shadows.text(label) << std::flush;
         RecordProperty(std::string(view.name) + "_shadow_checked", static_cast<int>(shadows.checked));
         const KnownShadow* ks = known_shadow(c.rel.empty() ? c.fixture : c.rel, view.name);
