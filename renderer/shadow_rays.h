@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "renderer/frame.h"
+#include "renderer/mesh_screen_points.h"
 #include "renderer/pixel_solver.h"
 
 namespace nurbsrt {
@@ -36,6 +37,8 @@ public:
     // view (its pixels then cover about as much of the model as the view's).
     // The solves use the view's method and tolerances.
     KeyLightShadows(const FrameContext& view, const Solver& view_solver, Vec3 key);
+    KeyLightShadows(const KeyLightShadows&) = delete;  // its members refer to each other
+    KeyLightShadows& operator=(const KeyLightShadows&) = delete;
 
     // Whether a face blocks the key light at surface point p, at (u, v) of
     // face `face`, with shading normal n. False where the point faces away from
@@ -61,6 +64,7 @@ private:
     FrameContext ctx_;
     ProjectedFaces projected_;
     Solver solver_;
+    MeshScreenPoints screen_points_;  // the map mesh in the light's view: starts on faces no map pixel shows
     double contact_;  // one light-map pixel, model units
     mutable std::atomic<uint64_t> rays_{0};
 };

@@ -108,9 +108,15 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 // samples (trj8, cornetta, t4mec, trj5; the other models' disagreements were
 // not each traced):
 //  - leaks: the light ray crosses an occluder that the light's map does not show
-//    in the 3x3 around the point (trj8: thin faces 398/403/405 behind faces the
-//    map shows), or crosses it at grazing incidence where Newton from the map's
-//    starts does not converge (the sphere of the analytic test: rays inside its
+//    in the 3x3 around the point, hidden behind a face the map shows there that
+//    the ray passes by (box_sides: faces 51 and 291 behind 53 and 242). Trying
+//    the faces adjacent to those (shadow_rays.cpp, where the map shows another
+//    face at the point's own pixel) took the leaks over all models 53 -> 28
+//    (8 entries gone, box_sides 4 -> 0, ship_part5 5 -> 4). Left: thin faces
+//    whose crossing lies in their trim band (trj8: faces 398/403/405 reached
+//    outside their loops, within the band, which beyond contact blocks only
+//    beside another face's crossing), or crossings at grazing incidence where
+//    Newton from the map's starts does not converge (the sphere of the analytic test: rays inside its
 //    silhouette by under 1 % of its radius); and on trj8 a crossing just beside
 //    a point at an edge, outside the occluder's trim, through its outward side
 //    (taken for a convex edge's own face).
@@ -138,29 +144,18 @@ struct KnownShadow {
     long false_shadows, leaks;
 };
 const KnownShadow kKnownShadowDisagreements[] = {
-    // The as1 motor's 2 leaks lie on faces the frame shows since the phantom
-    // strips of stops on face borders in front of them (5,129 pixels of this
-    // view) are gone; not traced further.
-    {"step/as1_motor.step", "iso", 0, 2},
-    {"step/box_sides.STEP", "iso", 1, 4},
-    {"step/bug31670_russian.stp", "iso", 0, 6},
-    {"step/bug31670_russian.stp", "front", 0, 3},
-    {"step/cylinder_block.stp", "front", 0, 1},
+    {"step/box_sides.STEP", "iso", 1, 0},
     {"step/ec_turbine-A.stp", "iso", 0, 1},
     {"step/ec_turbine-A.stp", "front", 0, 1},
-    {"step/r0901_ec.stp", "iso", 0, 2},
-    {"step/r0901_ec.stp", "front", 0, 1},
     {"step/t4mec.stp", "front", 0, 1},
     {"step/trj5_k1-ct-214.stp", "iso", 1, 0},
     {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
     {"step/trj8_b1-ec-214.stp", "front", 0, 1},
     {"iges/bearing.iges", "iso", 0, 4},
-    {"iges/hammer.iges", "iso", 0, 4},
     {"iges/heartValve.igs", "iso", 0, 1},
     {"iges/marsCapsule.igs", "iso", 0, 2},
     {"iges/ship_kcs.igs", "iso", 0, 7},
-    {"iges/ship_kcs.igs", "front", 0, 1},
-    {"iges/ship_part5.igs", "iso", 0, 5},
+    {"iges/ship_part5.igs", "iso", 0, 4},
     {"duck/duck_from_glscene.igs", "iso", 0, 1},
     {"duck/duck_from_glscene.stp", "iso", 0, 1},
 };
