@@ -147,10 +147,15 @@ StoredContent FileStore::open(const std::string& id) const {
     };
     std::optional<StoredFile> f = get(id);
     if (!f) throw missing();
-    std::ifstream in(content_path(id), std::ios::binary);
+    std::ifstream in(content_path(id), std::ios::binary | std::ios::ate);
     if (!in) throw missing();  // removed just now
-    auto bytes = std::make_shared<const std::string>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    return {std::move(*f), std::move(bytes)};
+    // Sized once and read in one call: through istreambuf_iterator a byte at a
+    // time, a 1.9 MB file took 5-10 ms of every render by file_id.
+    std::string bytes(static_cast<size_t>(in.tellg()), '\0');
+    in.seekg(0);
+    if (!in.read(bytes.data(), static_cast<std::streamsize>(bytes.size())))
+        throw Error(ErrorCode::io, "cannot read stored file '" + id + "'");
+    return {std::move(*f), std::make_shared<const std::string>(std::move(bytes))};
 }
 
 bool FileStore::remove(const std::string& id) {

@@ -17,6 +17,7 @@
 #include "server/stage_timings.h"
 #include "server/work.h"
 #include "server/service_error.h"
+#include "server/sha256.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -142,7 +143,9 @@ std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const st
                                                     StageClock& stages) {
     const ImportOptions options;
     SceneCache::Source source = SceneCache::Source::loaded;
-    const std::string key = scene_cache_key(bytes, options);  // a hash of every byte: a stage of its own
+    // A hash of every byte, unless the caller knows it: a stage of its own.
+    const std::string key =
+        scene_cache_key(control.content_sha256.empty() ? sha256_hex(bytes) : control.content_sha256, options);
     stages.mark("cache");
     auto scene = ctx.cache.get_or_load(
         key,

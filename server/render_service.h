@@ -51,6 +51,10 @@ struct RenderControl {
     std::optional<std::chrono::steady_clock::time_point> start;
     // Accepted batch work: waits for admission as long as it takes (see AdmissionWait).
     bool patient = false;
+    // The SHA-256 (hex) of the CAD bytes when the caller knows it (a stored
+    // file's id): the scene cache's key is made from it, without hashing the
+    // bytes again. Empty: hashed here.
+    std::string content_sha256;
 };
 
 // The imported and prepared scene of `cad_bytes` (STEP/IGES, checked by

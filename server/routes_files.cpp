@@ -173,6 +173,7 @@ void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Res
 
     RenderControl control;
     control.should_stop = GuardedServer::client_gone_check();  // a gone client's import stops waiting
+    control.content_sha256 = file.id;
     bool cache_hit = false;
     StageClock stages;  // not reported: a stored file's answer carries no timings
     const auto prepared = imported_scene(ctx, bytes, control, cache_hit, stages);

@@ -64,6 +64,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
 
     RenderControl control;
     control.start = t0;
+    control.content_sha256 = stored.file.id;  // a stored file's id is its bytes' SHA-256 (empty for an upload)
     control.should_stop = GuardedServer::client_gone_check();  // a gone client's render stops
     RenderedImage rendered = render_upload(ctx, bytes, r, control);
     StageClock& stages = rendered.timings;

@@ -6,11 +6,11 @@
 
 namespace nurbsrt::server {
 
-std::string scene_cache_key(const std::string& bytes, const ImportOptions& options) {
+std::string scene_cache_key(const std::string& content_sha256, const ImportOptions& options) {
     std::string opts;
     for (const std::string& a : import_options_to_args(options)) opts += a + '\n';
     Sha256 h;
-    h.update(bytes);
+    h.update(content_sha256);
     h.update("\0options\n", 9);
     h.update(opts);
     return h.hex();

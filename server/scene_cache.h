@@ -20,8 +20,11 @@
 
 namespace nurbsrt::server {
 
-// SHA-256 (hex) of the bytes followed by the import options' canonical text.
-std::string scene_cache_key(const std::string& bytes, const ImportOptions& options);
+// The cache's key of a file's scene: the SHA-256 (hex) of the file's SHA-256
+// (hex, content_sha256) followed by the import options' canonical text. From the
+// file's digest, not its bytes, so that a stored file (whose id is that digest)
+// is looked up without hashing its bytes again.
+std::string scene_cache_key(const std::string& content_sha256, const ImportOptions& options);
 
 // Approximate memory held by a scene (its vectors' payloads), for the bound.
 size_t scene_memory_bytes(const Scene& scene);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "renderer/error.h"
+#include "server/sha256.h"
 #include "server/scene_cache.h"
 
 using namespace nurbsrt;
@@ -33,10 +34,11 @@ std::shared_ptr<const PreparedScene> scene_with_faces(size_t n) {
 TEST(SceneCache, KeyDependsOnBytesAndOptions) {
     ImportOptions a, b;
     b.mesh_relative_deflection *= 2;
-    EXPECT_EQ(scene_cache_key("abc", a), scene_cache_key("abc", a));
-    EXPECT_NE(scene_cache_key("abc", a), scene_cache_key("abd", a));
-    EXPECT_NE(scene_cache_key("abc", a), scene_cache_key("abc", b));
-    EXPECT_EQ(scene_cache_key("abc", a).size(), 64u);  // SHA-256 hex
+    const std::string abc = sha256_hex("abc"), abd = sha256_hex("abd");
+    EXPECT_EQ(scene_cache_key(abc, a), scene_cache_key(abc, a));
+    EXPECT_NE(scene_cache_key(abc, a), scene_cache_key(abd, a));
+    EXPECT_NE(scene_cache_key(abc, a), scene_cache_key(abc, b));
+    EXPECT_EQ(scene_cache_key(abc, a).size(), 64u);  // SHA-256 hex
 }
 
 TEST(SceneCache, EvictsLeastRecentlyUsedBeyondCapacity) {

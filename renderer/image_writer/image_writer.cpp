@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "renderer/image_module.h"
@@ -67,6 +68,19 @@ constexpr int kPngFilterNone = 8;  // libpng's PNG_FILTER_NONE
 // PNG 5.3 ms / 19.8 KB at level 6, 2.7 ms / 27.3 KB at 3, 2.4 ms / 31.0 KB at 1;
 // TIFF alike). Level 1 saves little more and loses more size.
 constexpr int kZlibLevel = 3;
+
+// OpenImageIO compresses a TIFF's strips in parallel only when its thread pool
+// has two workers or more (TIFFOutput::write_scanlines), and it sizes the pool
+// one below its "threads" (the calling thread takes part): on 2 cores, never.
+// One more thread than cores gives the pool a worker per core: a 512x512 TIFF
+// 2.6 -> 1.5 ms on 2 cores (PNG, one zlib stream, stays serial).
+void size_thread_pool() {
+    static const bool sized = [] {
+        OIIO::attribute("threads", static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) + 1);
+        return true;
+    }();
+    (void)sized;
+}
 
 // The lower-cased extension of a file name ("" without one).
 std::string extension_of(const std::string& name) {
@@ -149,6 +163,7 @@ Encodable display_pixels(const RenderImage& img, const std::string& ext) {
 // Writes `img` as the format of extension `ext`, to the file `path` or, when
 // `proxy` is set, into it (OpenImageIO then takes `path` only for its format).
 int encode(const RenderImage& img, const std::string& path, Filesystem::IOProxy* proxy, std::string& message) {
+    size_thread_pool();
     const std::string ext = extension_of(path);
     auto out = ImageOutput::create(path, proxy);
     if (!out || (proxy && !out->supports("ioproxy"))) {
