@@ -155,9 +155,12 @@ public:
             // tolerance band, counts (as for the rescue's cracks), so that the crack
             // does not show the face behind. Never at a mere step in depth: there the
             // band would spread a face past its edge pixel by pixel.
+            // Where each neighbour's surface meets the pixel's ray (NaN: no
+            // convergence), for telling a concave corner from a crack below.
+            double crossing[2] = {NAN, NAN};
             for (int q = 0; q < 2; ++q) {
                 const PixelHit& n = q == 0 ? a : b;
-                if (from[q]) consider(n.face, i, j, n.u, n.v, solver_.params, jumps == 2, best);
+                if (from[q]) consider(n.face, i, j, n.u, n.v, solver_.params, jumps == 2, best, &crossing[q]);
             }
             // A pit between two nearer neighbours on one face: the middle of their
             // (u, v) starts next to the root between them, where Newton from either
@@ -165,7 +168,15 @@ public:
             // roots lie close together).
             if (jumps == 2 && a.face == b.face)
                 consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, true, best);
-            if (jumps == 2) pit = true;
+            // A pit whose two neighbours' surfaces both meet the ray at or behind
+            // the pixel's hit is a concave corner (a groove, a fillet's foot seen
+            // from outside: every concave edge's pixels), not a crack: a crack's
+            // front surface continues over the gap, so at least one of them meets
+            // the ray in front, outside its trim. Searching further there found
+            // nothing (1 nearer hit in 1,757 such pits per frame of the cylinder
+            // block, 12,890 solves) and cost a quarter of its frame.
+            const bool corner = crossing[0] >= p.t - nearer_ && crossing[1] >= p.t - nearer_;
+            if (jumps == 2 && !corner) pit = true;
         }
         if (pit && best.face == p.face && best.t == p.t) fill_pit(i, j, best);
         if (best.face == p.face && best.t == p.t) return false;
@@ -183,10 +194,11 @@ private:
     }
     // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
     // Returns the solve's outcome.
+    // `crossing`: as Solver::solve's.
     Outcome consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
-                     PixelHit& best) const {
+                     PixelHit& best, double* crossing = nullptr) const {
         PixelHit h;
-        const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h);
+        const Outcome o = solver_.solve(id, c_.camera.pixel_screen(i, j), u0, v0, params, near, h, nullptr, crossing);
         if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
         return o;
     }

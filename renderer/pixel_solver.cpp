@@ -72,7 +72,7 @@ SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
 }
 
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
-                      PixelHit& hit, const SurfaceDerivs* start) const {
+                      PixelHit& hit, const SurfaceDerivs* start, double* crossing) const {
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const Camera& camera = ctx.camera;
     const NurbsSurface& surface = iterated_surface(id);
@@ -93,6 +93,7 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
         case NewtonStatus::left_domain: return kLeftDomain;
         case NewtonStatus::behind_eye: return kBehind;
     }
+    if (crossing) *crossing = r.t;
     Outcome o = kConverged;
     if (!ff.trim.inside({r.u, r.v})) {
         if (!near || !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return kTrimmed;

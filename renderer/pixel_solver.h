@@ -40,8 +40,10 @@ struct Solver {
     }
     // The same for the ray through any screen point (a sub-pixel sample).
     // `start`: start_derivs(id, u0, v0), when several rays are solved from that start.
+    // `crossing`: where Newton converged, inside the trim or not, the distance
+    // along the ray at which it meets the surface (else left as it is).
     Outcome solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
-                  PixelHit& hit, const SurfaceDerivs* start = nullptr) const;
+                  PixelHit& hit, const SurfaceDerivs* start = nullptr, double* crossing = nullptr) const;
     // The derivatives the method's Newton iteration evaluates first when it
     // starts face id at (u0, v0) (newton.h, `start`): of the frame's projected
     // surface for proposed, of the model surface for martin.
