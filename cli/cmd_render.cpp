@@ -71,10 +71,8 @@ struct Args {
 };
 
 // "jpeg" for .jpg/.jpeg, else the extension without its dot (checked by the -o validator).
-std::string output_format_name(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".jpg" || ext == ".jpeg" ? "jpeg" : ext.empty() ? "" : ext.substr(1);
+server::ImageFormat output_format(const std::string& path) {
+    return server::image_format_of_extension(std::filesystem::path(path).extension().string());
 }
 
 CameraSpec base_camera(const Args& a) {
@@ -253,7 +251,7 @@ void add_render_command(CLI::App& app) {
         options.threads = a->threads;
         options.newton.eps = a->tolerance * std::max(scene.bbox.diagonal(), 1e-300);
         const server::Background bg = a->background.empty()
-                                          ? server::default_background(output_format_name(a->output))
+                                          ? server::default_background(output_format(a->output))
                                           : server::parse_background(a->background, "--background");
         options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
         options.background_alpha = static_cast<float>(bg.alpha);
@@ -263,7 +261,7 @@ void add_render_command(CLI::App& app) {
         if (!a->edge_color.empty()) look.edge_color = server::parse_rgb(a->edge_color, "--edge-color");
         look.edge_width = a->edge_width;
         look.shadows = a->shadows;
-        server::apply_look(look, output_format_name(a->output), options);
+        server::apply_look(look, output_format(a->output), options);
         say("rendering %dx%d with %s", camera.width(), camera.height(), a->method.c_str());
         // Progress on stderr: live on a terminal; otherwise a line per 10% once the
         // render has taken over a second (logs of long renders, quiet for short ones).

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -231,11 +232,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
         } else if (key == "map_precision") {
             r.map_precision = *parse_map_precision(one_of(v, key, {"float", "rgb8"}));
         } else if (key == "format") {
-            const std::string f = one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"});
-            if (f == "png") r.format = {"png", ".png", "image/png"};
-            else if (f == "jpeg" || f == "jpg") r.format = {"jpeg", ".jpg", "image/jpeg"};
-            else if (f == "tiff" || f == "tif") r.format = {"tiff", ".tif", "image/tiff"};
-            else r.format = {"exr", ".exr", "image/x-exr"};
+            r.format = output_format(image_format_of_extension(one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"})));
         } else if (key == "background") {
             r.background = background(v, key);
         } else if (key == "aovs") {
@@ -292,8 +289,27 @@ Background parse_background(const std::string& s, const std::string& what) {
     return {{c[0], c[1], c[2]}, c[3]};
 }
 
-int default_antialias(const std::string& format_name) {
-    return format_name == "png" || format_name == "jpeg" ? kDefaultAntialias : 0;
+ImageFormat image_format_of_extension(std::string ext) {
+    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
+    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext == "png") return ImageFormat::png;
+    if (ext == "jpg" || ext == "jpeg") return ImageFormat::jpeg;
+    if (ext == "tif" || ext == "tiff") return ImageFormat::tiff;
+    if (ext == "exr") return ImageFormat::exr;
+    return ImageFormat::other;
+}
+
+OutputFormat output_format(ImageFormat kind) {
+    switch (kind) {
+        case ImageFormat::jpeg: return {kind, "jpeg", ".jpg", "image/jpeg"};
+        case ImageFormat::tiff: return {kind, "tiff", ".tif", "image/tiff"};
+        case ImageFormat::exr: return {kind, "exr", ".exr", "image/x-exr"};
+        default: return {ImageFormat::png, "png", ".png", "image/png"};
+    }
+}
+
+int default_antialias(ImageFormat format) {
+    return format == ImageFormat::png || format == ImageFormat::jpeg ? kDefaultAntialias : 0;
 }
 
 int parse_antialias(double n, const std::string& what) {
@@ -324,16 +340,16 @@ Color parse_rgb(const std::string& s, const std::string& what) {
     return {static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])};
 }
 
-void apply_look(const ImageLook& look, const std::string& format_name, RenderOptions& options) {
-    options.antialias = look.antialias.value_or(default_antialias(format_name));
+void apply_look(const ImageLook& look, ImageFormat format, RenderOptions& options) {
+    options.antialias = look.antialias.value_or(default_antialias(format));
     options.edges = look.edges;
     options.edge_color = look.edge_color;
     options.edge_width = static_cast<float>(look.edge_width);
     options.shadows = look.shadows;
 }
 
-Background default_background(const std::string& format_name) {
-    if (format_name == "jpeg") return {{1, 1, 1}, 1};
+Background default_background(ImageFormat format) {
+    if (format == ImageFormat::jpeg) return {{1, 1, 1}, 1};
     return {};
 }
 

@@ -3,6 +3,7 @@
 // method, map precision, output format, background, anti-aliasing, feature lines.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -13,11 +14,20 @@
 
 namespace nurbsrt::server {
 
+// The image formats, decided once from the API's `format` or the CLI's file
+// extension; `other`: a file extension the CLI hands to OpenImageIO as it is.
+enum class ImageFormat : uint8_t { png, jpeg, tiff, exr, other };
+// By extension, with or without its dot, any case: png, jpg/jpeg, tif/tiff, exr.
+ImageFormat image_format_of_extension(std::string extension);
+
 struct OutputFormat {
+    ImageFormat kind = ImageFormat::png;
     std::string name;          // png, jpeg, tiff, exr
     std::string extension;     // .png, .jpg, .tif, .exr
     std::string content_type;  // image/png, ...
 };
+// The API's output format of each kind (not `other`).
+OutputFormat output_format(ImageFormat kind);
 
 // The background of the image: colour and alpha (0 transparent, 1 opaque).
 struct Background {
@@ -31,7 +41,7 @@ struct Background {
 Background parse_background(const std::string& text, const std::string& what);
 // A format's default: transparent where it has alpha (PNG, TIFF, EXR), opaque
 // white for JPEG, which cannot carry "no background".
-Background default_background(const std::string& format_name);
+Background default_background(ImageFormat format);
 
 // Anti-aliasing and feature lines, the same options on the API and the CLI.
 // Extra rays per edge pixel: 4 make 5 samples, an edge pixel's coverage within
@@ -49,12 +59,12 @@ struct ImageLook {
 };
 // On for PNG and JPEG, pictures for people; off for TIFF and EXR, which carry
 // exact per-pixel values into other tools (one centre sample per pixel).
-int default_antialias(const std::string& format_name);
+int default_antialias(ImageFormat format);
 // Each throws Error(invalid_argument) naming `what`.
 int parse_antialias(double n, const std::string& what);
 double parse_edge_width(double w, const std::string& what);
 Color parse_rgb(const std::string& text, const std::string& what);  // "r,g,b" in [0, 1]
-void apply_look(const ImageLook& look, const std::string& format_name, RenderOptions& options);
+void apply_look(const ImageLook& look, ImageFormat format, RenderOptions& options);
 
 // The default image size of the API and the CLI; given one side only, the
 // other keeps the default aspect (width 640 alone: 640x480).
@@ -78,7 +88,7 @@ struct RenderRequest {
     double fit_margin = kDefaultFitMargin;  // of the frame, each side (named views, and an eye alone)
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
-    OutputFormat format{"png", ".png", "image/png"};
+    OutputFormat format = output_format(ImageFormat::png);
     std::optional<Background> background;  // unset: default_background(format)
     unsigned aovs = 0;                      // aov_bit() of each AOV asked for
     ImageLook look;
