@@ -70,7 +70,7 @@ struct Args {
     bool quiet = false;
 };
 
-// "jpeg" for .jpg/.jpeg, else the extension without its dot (checked by the -o validator).
+// The output's format by its extension (checked by the -o validator).
 server::ImageFormat output_format(const std::string& path) {
     return server::image_format_of_extension(std::filesystem::path(path).extension().string());
 }

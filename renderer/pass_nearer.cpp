@@ -198,7 +198,7 @@ private:
     Outcome consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
                      PixelHit& best, double* crossing = nullptr) const {
         PixelHit h;
-        const Outcome o = solver_.solve(id, c_.camera.pixel_screen(i, j), u0, v0, params, near, h, nullptr, crossing);
+        const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h, crossing);
         if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
         return o;
     }

@@ -31,9 +31,10 @@ struct Solver {
     // face's trim-tolerance band is also returned (as kNearTrim): the sampled loops of
     // two faces sharing an edge are each only within that tolerance of the true edge,
     // so a ray through the sliver between the two polylines is rejected by both (a crack).
+    // `crossing`: as below.
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
-                  PixelHit& hit) const {
-        return solve(id, ctx.camera.pixel_screen(i, j), u0, v0, p, near, hit);
+                  PixelHit& hit, double* crossing = nullptr) const {
+        return solve(id, ctx.camera.pixel_screen(i, j), u0, v0, p, near, hit, nullptr, crossing);
     }
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
         return solve(id, i, j, u0, v0, params, false, hit);

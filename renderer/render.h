@@ -150,7 +150,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
 // image writer module (image_module.h) cannot be loaded.
 void write_image(const RenderImage& image, const std::string& path);
 // The bytes write_image would write to a file of extension `format_name` (png,
-// jpg, tif, exr), made in memory. Throws as write_image.
+// jpg or jpeg, tif or tiff, exr), made in memory. Throws as write_image.
 std::string encode_image(const RenderImage& image, const std::string& format_name);
 
 }  // namespace nurbsrt

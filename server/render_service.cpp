@@ -220,7 +220,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     add_frame_stages(result.stats, stages);
     stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
 
-    out.bytes = encode_image(result.image, r.format.extension.substr(1));  // the extension without its dot
+    out.bytes = encode_image(result.image, r.format.name);
     out.aovs = aov_buffers(result.image, r.aovs);
     ticket.reset();
     stages.mark("encode");

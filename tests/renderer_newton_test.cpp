@@ -346,6 +346,22 @@ void for_each_start_one_pixel_off(const AnalyticPatch& p, const Camera& cam, con
         }
 }
 
+// What both methods' solves on one analytic patch need: its view, the
+// projected surface (proposed), the span tables, the whole parameter box, and
+// the default tolerance.
+struct SolveSetup {
+    Camera cam;
+    NurbsSurface proj;
+    SurfaceSpans spans;
+    UvBox box;
+    NewtonParams params;
+    explicit SolveSetup(const AnalyticPatch& p)
+        : cam(p.view), proj(project_surface(cam, p.surface)), spans(make_surface_spans(p.surface)),
+          box(full_box(p.surface)) {
+        params.eps = default_newton_eps(p.box);
+    }
+};
+
 // Newton on the power-form patches (surface_patches.h; the renderer's hot path)
 // reaches the roots it reaches on the basis tables: the same outcome and
 // steps, and the same root to far below the tolerance (the evaluations differ
@@ -354,15 +370,11 @@ void for_each_start_one_pixel_off(const AnalyticPatch& p, const Camera& cam, con
 TEST(RendererNewton, PatchesGiveTheSameRoots) {
     int solves = 0, converged = 0;
     for (const AnalyticPatch& p : all_patches()) {
-        const Camera cam(p.view);
-        const NurbsSurface proj = project_surface(cam, p.surface);
-        const SurfaceSpans spans = make_surface_spans(p.surface);
+        const SolveSetup s(p);
+        const auto& [cam, proj, spans, box, params] = s;
         const SurfacePatches patches = make_surface_patches(p.surface, spans);
         const SurfacePatches projected = project_patches(cam, patches);
         ASSERT_TRUE(patches.usable()) << p.name;
-        const UvBox box = full_box(p.surface);
-        NewtonParams params;
-        params.eps = default_newton_eps(p.box);
         for_each_start_one_pixel_off(p, cam, GridStart(p.surface), 2, [&](int i, int j, const Ray& ray, Vec2 st) {
             const ScreenPoint sp = cam.pixel_screen(i, j);
             const NewtonResult pairs[2][2] = {
@@ -394,13 +406,10 @@ TEST(RendererNewton, PatchesGiveTheSameRoots) {
 TEST(RendererNewton, GivenStartDerivativesChangeNothing) {
     int solves = 0, converged = 0;
     for (const AnalyticPatch& p : all_patches()) {
-        const Camera cam(p.view);
-        const NurbsSurface proj = project_surface(cam, p.surface);
-        const SurfaceSpans spans = make_surface_spans(p.surface);
-        const UvBox box = full_box(p.surface);
+        const SolveSetup s(p);
+        const auto& [cam, proj, spans, box, defaults] = s;
         for (const bool robust : {false, true}) {
-            NewtonParams params;
-            params.eps = default_newton_eps(p.box);
+            NewtonParams params = defaults;
             params.robust = robust;
             for_each_start_one_pixel_off(p, cam, GridStart(p.surface), 3, [&](int i, int j, const Ray& ray, Vec2 st) {
                 const SurfaceDerivs dp = evaluate_d1(proj, spans, st.x, st.y);
