@@ -752,8 +752,8 @@ TEST_P(Trim, EvenOddOverLoopsMatchesBRepClass) {
         const double diag = std::hypot(du, dv);
         // Band around our polyline where the two classifications may legitimately
         // differ: the importer's polyline deviates from the pcurves by up to
-        // trim_tolerance_uv (it samples them to trim_relative_tolerance = 1e-5 of the
-        // box diagonal), and pcurves of real files do not meet exactly at vertices.
+        // trim_tolerance_uv (it samples them to ImportOptions::trim_relative_tolerance
+        // of the box diagonal), and pcurves of real files do not meet exactly at vertices.
         // 3x the stated tolerance keeps clear of both; the 1e-6 floor only matters
         // should an importer report a zero tolerance. Measured: ~0.2-0.5% of the
         // samples fall in the band on the fixtures, ~10-20% on models with many

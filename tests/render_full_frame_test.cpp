@@ -76,14 +76,9 @@ const Known kKnownRemaining[] = {
      "a face in front not in the candidates (not adjacent by mesh nodes to the 3x3's faces); any face near on "
      "screen with mesh in front of the hit finds it, but searching those at every unfilled pit cost the "
      "cylinder block's Newton stage about 50 %, so the nearer-sheet pass does not"},
-    // With the map meshed from the analytic faces themselves (their surfaces
-    // converted alone, without re-fitted pcurves) this pixel lands on a defect
-    // the B-spline faces' mesh did not expose; the mesh decides which pixels the
-    // primary pass and the rescue get right (the old importer with a 10 % finer
-    // deflection moved the speckles too, 8 -> 5 over all models).
-    {"step/bug3883_xr2-ct-214_bolt.stp", "iso", 1, 0,
-     "a silhouette pixel just outside a face's trim, within its tolerance band (the reference counts the "
-     "edge tolerance); band hits are accepted in cracks only"},
+    // (The bolt's iso hole, a silhouette pixel 4e-5 outside a convex loop's
+    // polyline where the exact face covers it, went with the trim loops sampled
+    // to 3e-6 instead of 1e-5 of their box: ImportOptions::trim_relative_tolerance.)
 };
 
 // Models the reference cannot check in CI time: IntCurvesFace_ShapeIntersector
@@ -134,7 +129,9 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    sliver of the hole that the plate's inscribed loop leaves inside the plate
 //    (the crossing 4e-4 outside the exact plate); taking such crossings for
 //    slivers where they leave a solid on a face adjacent to the point's let the
-//    light leak where the point's own face shadows itself (2 models), so not.
+//    light leak where the point's own face shadows itself (2 models), so not;
+//    loops sampled to 3e-6 of their box instead of 1e-5 leave no such sliver
+//    there (2 -> 1 false shadows over all models).
 //  - marsCapsule front's false shadow was the reference's: its light ray crosses
 //    face 15's interior (BRepExtrema: 1e-10 from it) and the intersector reports
 //    no hit; shadow_check now settles such disputes (reference misses).
@@ -144,7 +141,6 @@ struct KnownShadow {
     long false_shadows, leaks;
 };
 const KnownShadow kKnownShadowDisagreements[] = {
-    {"step/box_sides.STEP", "iso", 1, 0},
     {"step/ec_turbine-A.stp", "iso", 0, 1},
     {"step/ec_turbine-A.stp", "front", 0, 1},
     {"step/t4mec.stp", "front", 0, 1},
