@@ -262,7 +262,7 @@ const std::vector<MeshScreenPoints::ScreenBox>& MeshScreenPoints::screen_boxes()
 }
 
 int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out,
-                                 double max_d2) const {
+                                 double max_d2, double max_depth) const {
     // Faces whose box reaches sp, front first; only so many have their mesh
     // searched (an O(triangles) scan or a grid each): bounds the cost where a
     // point lies in the boxes of hundreds of faces of a large assembly.
@@ -272,7 +272,7 @@ int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne
     std::vector<std::pair<double, uint32_t>> cand;
     for (uint32_t id = 1; id <= c_.nfaces; ++id) {
         const ScreenBox& b = boxes[id - 1];
-        if (b.empty || std::find(exclude, exclude + ne, id) != exclude + ne) continue;
+        if (b.empty || !(b.near < max_depth) || std::find(exclude, exclude + ne, id) != exclude + ne) continue;
         if (!b.around && !(box_distance2(p, b.lo.x, b.hi.x, b.lo.y, b.hi.y) <= max_d2)) continue;
         cand.push_back({b.near, id});
     }

@@ -76,8 +76,10 @@ public:
     // sp on screen, nearest first (at most max_out; of the kMaxBoxCandidates
     // whose mesh box reaches sp nearest to the eye): a face seen through a gap
     // between faces that do not touch it, which neither the map nor adjacency
-    // offers. Returns the number written to out.
-    int faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out, double max_d2) const;
+    // offers. Only faces whose mesh box comes nearer to the eye than max_depth
+    // (the depth of frontmost_point) are considered. Returns the number written to out.
+    int faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out, double max_d2,
+                   double max_depth = HUGE_VAL) const;
 
 private:
     // A face's mesh box on screen (its 8 corners projected) and its least depth;

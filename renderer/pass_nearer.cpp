@@ -67,6 +67,9 @@ constexpr int kMaxAdjacentFaces = 12;
 // ... and only those whose mesh comes within 2 pixels of the pit on screen (the
 // faces adjacent to a pit's are sorted nearest first, so the rest are farther).
 constexpr double kPitFacePixels = 2.0;
+// Faces near on screen (screen_faces) tried at a pit nothing else filled, the
+// nearest first: as many as the rescue's last resort tries at a hole.
+constexpr int kMaxScreenFaces = 4;
 // Sheets of the pixel's own face in front of its hit that are tried, nearest
 // to the eye first: a face folded over itself many times (a dense spring or
 // coil seen edge-on) puts several there, and the map's front one may be a mesh
@@ -243,7 +246,8 @@ private:
     // the pixel while the neighbours' hits lie on others), then the faces adjacent
     // to these that none of them shows: a face too thin for the map to show any
     // pixel of it here (a fillet or blend strip seen edge-on) lies in front,
-    // between the faces it touches.
+    // between the faces it touches; last, any face near on screen in front of
+    // the hit (screen_faces).
     // One start per face (the first in for_each_neighbour's order): the 3x3's
     // starts of one face lie on one sheet within a pixel or two and end at one
     // root; except on the pixel's own face (other_sheet_starts).
@@ -284,6 +288,33 @@ private:
         const uint32_t own_map = c_.map.face[c_.map.index(i, j)];
         if (!found() && own_map != p.face && once(own_map)) mesh_in_front(own_map, i, j, best);
         if (!found()) adjacent_faces(i, j, best);
+        if (!found() && !edge_of_other_face) screen_faces(i, j, best);
+    }
+    // Any faces whose mesh comes within reach of pixel (i, j) on screen and
+    // nearer to the eye than its hit, but those of the 3x3 (hit or in the map):
+    // a face seen through a gap between faces that do not touch it, which the
+    // map hides behind them and adjacency does not offer (a capsule's panel in
+    // front of a pit whose 3x3 shows only the faces behind it, iges/marsCapsule.igs).
+    // The last resort of a pit, as the rescue's D is of a hole: by the time the
+    // pits of occluders' edges (edge_of_other_face) and concave corners are left
+    // out, some 150 pixels of a cylinder block's frame get here, for ~1 ms.
+    void screen_faces(int i, int j, PixelHit& best) const {
+        uint32_t near[18];
+        int nn = 0;
+        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+            const size_t n = c_.map.index(ni, nj);
+            for (const uint32_t id : {hits_[n].face, c_.map.face[n]})
+                if (id && id <= c_.nfaces && std::find(near, near + nn, id) == near + nn) near[nn++] = id;
+        });
+        const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+        const double reach = c_.screen_distance(kPitFacePixels);
+        MeshScreenPoints::FarFace faces[kMaxScreenFaces];
+        const int nf = screen_points_.faces_near(sp, near, nn, faces, kMaxScreenFaces, reach * reach,
+                                                 depth_in_front(best.t, sp));
+        for (int q = 0; q < nf; ++q)
+            for (int k = 0; k < faces[q].nstarts; ++k)
+                consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                         static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
     }
     // Where the pixel's hit is a farther root of the very face its neighbours
     // show in front (a closed or folded face: the duck's body seen through its
