@@ -263,7 +263,7 @@ private:
     void fill_pit(int i, int j, bool edge_of_other_face, PixelHit& best) const {
         const PixelHit p = best;
         auto found = [&] { return best.face != p.face || best.t != p.t; };
-        uint32_t tried[2 * 9];
+        uint32_t tried[kFaces3x3];
         int ntried = 0;
         auto once = [&](uint32_t id) {
             if (!id || id > c_.nfaces || std::find(tried, tried + ntried, id) != tried + ntried) return false;
@@ -290,6 +290,18 @@ private:
         if (!found()) adjacent_faces(i, j, best);
         if (!found() && !edge_of_other_face) screen_faces(i, j, best);
     }
+    // The distinct faces of the 3x3 around pixel (i, j), hit or in the map, into
+    // out (room for kFaces3x3); returns how many.
+    static constexpr int kFaces3x3 = 2 * 9;
+    int faces_3x3(int i, int j, uint32_t* out) const {
+        int n = 0;
+        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+            const size_t k = c_.map.index(ni, nj);
+            for (const uint32_t id : {hits_[k].face, c_.map.face[k]})
+                if (id && id <= c_.nfaces && std::find(out, out + n, id) == out + n) out[n++] = id;
+        });
+        return n;
+    }
     // Any faces whose mesh comes within reach of pixel (i, j) on screen and
     // nearer to the eye than its hit, but those of the 3x3 (hit or in the map):
     // a face seen through a gap between faces that do not touch it, which the
@@ -299,13 +311,8 @@ private:
     // pits of occluders' edges (edge_of_other_face) and concave corners are left
     // out, some 150 pixels of a cylinder block's frame get here, for ~1 ms.
     void screen_faces(int i, int j, PixelHit& best) const {
-        uint32_t near[18];
-        int nn = 0;
-        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
-            const size_t n = c_.map.index(ni, nj);
-            for (const uint32_t id : {hits_[n].face, c_.map.face[n]})
-                if (id && id <= c_.nfaces && std::find(near, near + nn, id) == near + nn) near[nn++] = id;
-        });
+        uint32_t near[kFaces3x3];
+        const int nn = faces_3x3(i, j, near);
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
         const double reach = c_.screen_distance(kPitFacePixels);
         MeshScreenPoints::FarFace faces[kMaxScreenFaces];
@@ -375,13 +382,8 @@ private:
     // face joining it there may lie in front: a Russian part's flange behind a
     // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const {
-        uint32_t near[18 + kMaxAdjacentFaces];
-        int nn = 0;
-        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
-            const size_t n = c_.map.index(ni, nj);
-            for (const uint32_t id : {hits_[n].face, c_.map.face[n]})
-                if (id && id <= c_.nfaces && std::find(near, near + nn, id) == near + nn) near[nn++] = id;
-        });
+        uint32_t near[kFaces3x3 + kMaxAdjacentFaces];
+        int nn = faces_3x3(i, j, near);
         const ScreenPoint sp = c_.camera.pixel_screen(i, j);
         // A face in front of the pixel covers it on screen: its mesh comes within
         // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
