@@ -52,6 +52,10 @@ struct PixelHit {
 // within the face's trim-tolerance band (kNearTrim, rescue only).
 enum Outcome : uint8_t { kNone, kConverged, kDiverged, kSingular, kMaxIter, kLeftDomain, kBehind, kTrimmed, kNearTrim };
 
+// Newton found no point of the surface (as opposed to one behind the eye or
+// outside the trim): another start may still find one.
+inline bool newton_failed(Outcome o) { return o == kDiverged || o == kSingular || o == kMaxIter || o == kLeftDomain; }
+
 // Which rescue gave a pixel its hit (RenderStats::rescue_*).
 enum RescueKind : uint8_t { kNoRescue, kRescueNeighbour, kRescueSilhouette, kRescueGeneral, kRescueTrimTol };
 

@@ -108,12 +108,19 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    the ray passes by (box_sides: faces 51 and 291 behind 53 and 242). Trying
 //    the faces adjacent to those (shadow_rays.cpp, where the map shows another
 //    face at the point's own pixel) took the leaks over all models 53 -> 28
-//    (8 entries gone, box_sides 4 -> 0, ship_part5 5 -> 4). Left: thin faces
+//    (8 entries gone, box_sides 4 -> 0, ship_part5 5 -> 4). A face of the 3x3
+//    whose solve from the map's start found no point at all (diverged, off its
+//    box: the start on another part of a strongly curved face) is retried from
+//    its mesh where the ray pierces it: 28 -> 22 (ec_turbine iso, t4mec front,
+//    ship_part5 4 -> 1, bearing 4 -> 3; from the nearest mesh point also where
+//    the ray passes beside the mesh, ship_part5 -> 0 at 12x the retries). Left: thin faces
 //    whose crossing lies in their trim band (trj8: faces 398/403/405 reached
 //    outside their loops, within the band, which beyond contact blocks only
 //    beside another face's crossing), or crossings at grazing incidence where
-//    Newton from the map's starts does not converge (the sphere of the analytic test: rays inside its
-//    silhouette by under 1 % of its radius); and on trj8 a crossing just beside
+//    Newton from the map's starts does not converge (the sphere of the analytic
+//    test: rays inside its silhouette by under 1 % of its radius); IGES faces
+//    whose orientation the entering test cannot trust (bearing: a contact
+//    crossing 7e-6 from the point taken for leaving); and on trj8 a crossing just beside
 //    a point at an edge, outside the occluder's trim, through its outward side
 //    (taken for a convex edge's own face).
 //  - false shadows (t4mec, trj5): a crossing of an adjacent face within its trim
@@ -142,17 +149,15 @@ struct KnownShadow {
     long false_shadows, leaks;
 };
 const KnownShadow kKnownShadowDisagreements[] = {
-    {"step/ec_turbine-A.stp", "iso", 0, 1},
     {"step/ec_turbine-A.stp", "front", 0, 1},
-    {"step/t4mec.stp", "front", 0, 1},
     {"step/trj5_k1-ct-214.stp", "iso", 1, 0},
     {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
     {"step/trj8_b1-ec-214.stp", "front", 0, 1},
-    {"iges/bearing.iges", "iso", 0, 4},
+    {"iges/bearing.iges", "iso", 0, 3},
     {"iges/heartValve.igs", "iso", 0, 1},
     {"iges/marsCapsule.igs", "iso", 0, 2},
     {"iges/ship_kcs.igs", "iso", 0, 7},
-    {"iges/ship_part5.igs", "iso", 0, 4},
+    {"iges/ship_part5.igs", "iso", 0, 1},
     {"duck/duck_from_glscene.igs", "iso", 0, 1},
     {"duck/duck_from_glscene.stp", "iso", 0, 1},
 };
