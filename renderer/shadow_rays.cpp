@@ -133,10 +133,10 @@ bool KeyLightShadows::own_face_first(int ci, int cj, uint32_t face, double u, do
            std::fabs(map_.v[c] - v) <= kOwnReachPixels * dv;
 }
 
-double KeyLightShadows::band_width(uint32_t id, const PixelHit& h) const {
+double KeyLightShadows::speed(uint32_t id, const PixelHit& h) const {
     const PreparedFace& f = ctx_.prepared.faces()[id - 1];
     const CartesianDerivs c = cartesian_d1(ctx_.scene.faces[id - 1].surface, f.spans, h.u, h.v);
-    return f.near_uv * std::max(length(c.Pu), length(c.Pv));
+    return std::max(length(c.Pu), length(c.Pv));
 }
 
 bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v) const {
@@ -175,10 +175,9 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // shared edge), and only that close: the ray leaves the point's surface
         // at cos to its normal, so at distance d it stands d * cos above it, and
         // a crossing of the adjacent face that high lies that far inside the
-        // face from the shared edge, unless within the band's width of it. A band
-        // crossing higher up passes outside the adjacent face, beyond its free
-        // edge or a face between (it cast false shadows in rows along a cone of
-        // step/t4mec.stp). Beyond contact a crossing in the trim band blocks only
+        // face from the shared edge (below). A band crossing higher up passes
+        // outside the adjacent face, beyond its free edge or a face between (it
+        // cast false shadows in rows along a cone of step/t4mec.stp). Beyond contact a crossing in the trim band blocks only
         // beside another face's at the same depth (a crack between two faces of
         // an occluder): alone, the band would widen every occluder into a
         // phantom shadow line along its free edges. A stop on the parameter-box
@@ -190,14 +189,21 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         if (o == kConverged) return !contact || entering;
         const PreparedFace& f = ctx_.prepared.faces()[id - 1];
         if (on_box_border(f.box, h)) return false;
-        // The concave edge's crossing lies on the exact face, which ends within
-        // its trim uncertainty of the loops (trim_uv, half the band: the band
-        // allows for two faces' loops around a crack); farther outside, the ray
-        // passes beside the face (it shadowed grazing-lit walls under a ledge of
-        // step/trj5_k1-ct-214.stp, 1.6x that outside the ledge's loop).
-        if (contact)
-            return entering && (t_p - h.t) * std::max(cosine, kMinCosine) <= band_width(id, h) &&
-                   std::isfinite(f.trim.boundary_distance({h.u, h.v}, f.trim_uv));
+        // The concave edge's crossing lies on the exact face, at least its
+        // height above the point's surface inside it from the shared edge (more
+        // where the faces meet at other than a right angle), and the exact face
+        // ends within its trim uncertainty of the loops (trim_uv, half the band:
+        // the band allows for two faces' loops around a crack). So the crossing
+        // lies at most trim_uv less that height (in (u, v): over the surface's
+        // faster speed, the least (u, v) a model distance can be) outside the
+        // loops; farther out, the ray passes beside the face (it shadowed
+        // grazing-lit walls under a ledge of step/trj5_k1-ct-214.stp: 1.6x
+        // trim_uv outside the ledge's loop, and one 0.9x trim_uv outside at a
+        // height of 0.55x trim_uv, where the reference's ray misses the ledge).
+        if (contact) {
+            const double reach = f.trim_uv - (t_p - h.t) * std::max(cosine, kMinCosine) / speed(id, h);
+            return entering && reach >= 0 && std::isfinite(f.trim.boundary_distance({h.u, h.v}, reach));
+        }
         // A near crossing of another face at the same depth: the ray passes
         // through the crack between two faces of an occluder, which it blocks.
         for (int q = 0; q < nnear; ++q)

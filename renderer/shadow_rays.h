@@ -52,9 +52,9 @@ private:
     static CameraSpec light_view(const Scene& scene, Vec3 key, int size);
     // Whether the map's pixel (ci, cj) shows face `face` at (u, v) itself (see the .cpp).
     bool own_face_first(int ci, int cj, uint32_t face, double u, double v) const;
-    // The width in model units of face id's trim band at hit h (the band in
-    // (u, v) times the surface's faster speed there).
-    double band_width(uint32_t id, const PixelHit& h) const;
+    // Model units per unit of (u, v) on face id at hit h: the surface's faster
+    // speed there (the larger of |Pu| and |Pv|).
+    double speed(uint32_t id, const PixelHit& h) const;
     Vec3 key_;
     int size_;
     Camera camera_;
