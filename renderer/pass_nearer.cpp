@@ -76,6 +76,12 @@ constexpr int kMaxScreenFaces = 4;
 // sheet the exact ray passes by.
 constexpr int kMaxSheetsInFront = 4;
 
+// The squared distance between two hits' (u, v).
+double uv_dist2(const PixelHit& x, const PixelHit& y) {
+    const double du = double(x.u) - y.u, dv = double(x.v) - y.v;
+    return du * du + dv * dv;
+}
+
 struct Update {
     size_t k;
     PixelHit hit;
@@ -91,16 +97,17 @@ public:
         nearer_ = kNearerRelative * diag;
     }
     // Whether find(i, j) can find anything: the pixel is a spike against one of
-    // its pairs, the first test of find, on the hits' depths alone (t, +inf
-    // where no hit), which the first pass reads for every pixel.
+    // its pairs (on the hits' depths alone, t, +inf where no hit) or a fold's
+    // edge, the first tests of find, which the first pass reads for every pixel.
     bool maybe_spike(int i, int j) const {
         const size_t k = c_.map.index(i, j);
         auto depth = [&](size_t n) { return hits_[n].face ? hits_[n].t : HUGE_VAL; };
         const double d = depth(k);
         if (!(d < HUGE_VAL)) return false;
         const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
-        return (row && d > 0.5 * (depth(k - 1) + depth(k + 1)) + spike_) ||
-               (column && d > 0.5 * (depth(k - c_.width) + depth(k + c_.width)) + spike_);
+        return (row && (d > 0.5 * (depth(k - 1) + depth(k + 1)) + spike_ || fold_edge(k, k - 1, k + 1))) ||
+               (column && (d > 0.5 * (depth(k - c_.width) + depth(k + c_.width)) + spike_ ||
+                           fold_edge(k, k - c_.width, k + c_.width)));
     }
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const {
@@ -127,6 +134,13 @@ public:
                     consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
                 continue;
             }
+            // Beyond a fold's silhouette, the near sheet's root (solved from where
+            // the sheet's (u, v) steps lead past the pixel, see fold_edge).
+            for (int q = 0; q < 2; ++q) {
+                const PixelHit& n = q == 0 ? a : b;
+                if (fold_edge(p, n, q == 0 ? b : a))
+                    consider(p.face, i, j, 2 * p.u - n.u, 2 * p.v - n.v, solver_.robust, false, best);
+            }
             if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + spike_)) continue;
             // Only from a neighbour on another face, or on another sheet of the same
             // face: its (u, v) jumps. A smoothly curved concave sheet, where depth
@@ -136,10 +150,6 @@ public:
             // while the other is near (the pixel sits at the edge of a run of
             // far-sheet pixels), or both are far compared with their own distance
             // (an isolated far-sheet pixel between two near-sheet ones).
-            auto uv_dist2 = [](const PixelHit& x, const PixelHit& y) {
-                const double du = double(x.u) - y.u, dv = double(x.v) - y.v;
-                return du * du + dv * dv;
-            };
             const double half_pair2 = 0.25 * uv_dist2(a, b);
             // (u, v) distances mislead where a face's parametrization is very
             // anisotropic (two sheets a tenth of a pixel's v-step apart in u); in
@@ -201,6 +211,21 @@ public:
     }
 
 private:
+    // Whether hit p, with neighbour n on its face, has the pair's other
+    // neighbour a sheet gap behind on the same face, (u, v) jumping (kUvJump2:
+    // a steep smooth sheet steps more in depth, but evenly): the silhouette of
+    // a face folded over itself (step/bug29715_slow.stp seen edge-on). There
+    // the ray can cross the near sheet twice and the map's start lead to the
+    // farther root; the nearer lies past p's (u, v), on along n's step to it.
+    // (With any face behind, i.e. at every silhouette, it cost 5-70 % of the
+    // frame on 10 models and changed pixels only of that file.)
+    bool fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit& behind) const {
+        return p.face && n.face == p.face && behind.face == p.face && behind.t > p.t + sheet_gap(p.t) &&
+               uv_dist2(behind, p) > kUvJump2 * uv_dist2(n, p);
+    }
+    bool fold_edge(size_t k, size_t a, size_t b) const {
+        return fold_edge(hits_[k], hits_[a], hits_[b]) || fold_edge(hits_[k], hits_[b], hits_[a]);
+    }
     // Whether the pixel's hit p continues the sheet of its neighbour n's hit
     // and of the hit beyond n, pixel (fi, fj): all three on one face, with p
     // where n and the next pixel extrapolate it, in (u, v) and in depth. Such
@@ -424,12 +449,9 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     const NearerSheet nearer(c, solver, screen_points, b.hits);
     const int W = c.width;
     // The first pass examines every pixel; replacements are collected per row
-    // (almost always none) and applied between passes, so no frame-sized buffer is
-    // needed for a handful of pixels. Later passes examine only the 4-neighbours of
-    // the pixels the last pass changed. (All 8 would let a diagonal neighbour's new
-    // hit start fill_pit's solves too, for 7-19 % more solves in this pass, most
-    // of them repeats; it once set one dense-fold pixel of bug29715_slow right,
-    // but does not fix the one the full-frame test still finds there.)
+    // (almost always none) and applied between passes: no frame-sized buffer for
+    // a handful of pixels. Later passes examine only the 4-neighbours of those the
+    // last pass changed (all 8: 7-19 % more solves here, most of them repeats).
     std::vector<std::vector<Update>> row_updates(c.height);
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
