@@ -117,7 +117,11 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    box: the start on another part of a strongly curved face) is retried from
 //    its mesh where the ray pierces it: 28 -> 22 (ec_turbine iso, t4mec front,
 //    ship_part5 4 -> 1, bearing 4 -> 3; from the nearest mesh point also where
-//    the ray passes beside the mesh, ship_part5 -> 0 at 12x the retries). Left: thin faces
+//    the ray passes beside the mesh, ship_part5 -> 0 at 12x the retries). A
+//    point's own face solved to the point itself, lit at a grazing angle, is
+//    retried from the face's mesh sheets in front of it (a hull crossed again
+//    nearer the light): 22 -> 16 (ship_kcs iso 7 -> 3, both ducks 1 -> 0; light
+//    rays +6 % on the phone, +8 % trj8, +10 % ducks; at any angle +28-41 %). Left: thin faces
 //    whose crossing lies in their trim band (trj8: faces 398/403/405 reached
 //    outside their loops, within the band, which beyond contact blocks only
 //    beside another face's crossing), or crossings at grazing incidence where
@@ -162,10 +166,8 @@ const KnownShadow kKnownShadowDisagreements[] = {
     {"iges/bearing.iges", "iso", 0, 3},
     {"iges/heartValve.igs", "iso", 0, 1},
     {"iges/marsCapsule.igs", "iso", 0, 2},
-    {"iges/ship_kcs.igs", "iso", 0, 7},
+    {"iges/ship_kcs.igs", "iso", 0, 3},
     {"iges/ship_part5.igs", "iso", 0, 1},
-    {"duck/duck_from_glscene.igs", "iso", 0, 1},
-    {"duck/duck_from_glscene.stp", "iso", 0, 1},
 };
 
 const KnownShadow* known_shadow(const std::string& rel, const std::string& view) {
