@@ -230,13 +230,14 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // start the light map shows elsewhere on it: a ray leaving the face at
         // a grazing angle can cross it again nearer the light (a hull lit
         // almost along it, iges/ship_kcs.igs), a root Newton ran past. Retried
-        // from the face's mesh sheets in front of the point (the light is
-        // orthographic: depth along it is the ray's t).
+        // from the face's mesh sheets more than a light-map pixel in front of
+        // the point (nearer, the mesh's chords around the point itself; the
+        // light is orthographic: depth along it is the ray's t).
         if (id == face && cosine < kGrazingCosine && (last == kConverged || last == kNearTrim) &&
             !(last_t < t_p - self)) {
             Vec2 sheets[kMaxOwnSheets];
             const double reach = ctx_.screen_distance(kOwnSheetReachPixels);
-            const int ns = screen_points_.starts_in_front(face, sp, reach * reach, t_p - self, sheets, kMaxOwnSheets);
+            const int ns = screen_points_.starts_in_front(face, sp, reach * reach, t_p - contact_, sheets, kMaxOwnSheets);
             for (int q = 0; q < ns; ++q)
                 if (occludes_from(face, sheets[q].x, sheets[q].y)) return true;
             return false;
