@@ -259,4 +259,29 @@ Vec3 surface_normal(const NurbsSurface& s, double u, double v, bool reversed) {
     return {0.0, 0.0, sign_orient};  // fully degenerate (a point): any unit vector
 }
 
+bool planar_control_net(const NurbsSurface& s, double relative) {
+    if (s.cp.empty()) return true;
+    std::vector<Vec3> p(s.cp.size());
+    for (size_t k = 0; k < p.size(); ++k) {
+        const Vec4& c = s.cp[k];
+        p[k] = Vec3{c.x, c.y, c.z} * (1.0 / c.w);
+    }
+    // A plane through p[0], the point farthest from it and the point farthest
+    // from that line: the best-conditioned of the net's own triangles.
+    size_t a = 0;
+    for (size_t k = 1; k < p.size(); ++k)
+        if (length(p[k] - p[0]) > length(p[a] - p[0])) a = k;
+    const double extent = length(p[a] - p[0]);
+    Vec3 n{0, 0, 0};
+    for (size_t k = 1; k < p.size(); ++k) {
+        const Vec3 c = cross(p[a] - p[0], p[k] - p[0]);
+        if (length(c) > length(n)) n = c;
+    }
+    if (!(length(n) > relative * extent * extent)) return true;  // all on a line (or a point)
+    n = n * (1.0 / length(n));
+    for (const Vec3& q : p)
+        if (std::fabs(dot(q - p[0], n)) > relative * extent) return false;
+    return true;
+}
+
 }  // namespace nurbsrt

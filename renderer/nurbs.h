@@ -88,4 +88,10 @@ Vec3 surface_normal(const NurbsSurface& s, double u, double v, bool reversed);
 // edge, a fold): then surface_normal must take its limits.
 bool normal_from_partials(const NurbsSurface& s, Vec3 Cu, Vec3 Cv, bool reversed, Vec3& n);
 
+// Whether every control point lies within `relative` times the control net's
+// extent of one plane: then so does the surface (the convex hull property of
+// B-splines, Piegl & Tiller 3.4 and 4.4: also for rational ones, weights > 0).
+// A line or a point counts as planar.
+bool planar_control_net(const NurbsSurface& s, double relative);
+
 }  // namespace nurbsrt

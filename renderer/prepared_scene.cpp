@@ -37,6 +37,11 @@ constexpr double kMinTrimBandRelative = 1e-9;
 // faces' nodes merely close) only costs a few extra solves where one is tried.
 constexpr double kAdjacencyCellRelative = 1e-3;
 
+// A face is planar when its control points lie within this fraction of the net's
+// extent of one plane: CAD planes converted to B-splines are planar to rounding
+// (~1e-15); a face curved enough to shadow itself deviates by far more.
+constexpr double kPlanarRelative = 1e-9;
+
 std::atomic<uint64_t> next_prepared_id{1};
 
 PreparedFace prepare_face(const Face& f, double seam_tol) {
@@ -47,6 +52,7 @@ PreparedFace prepare_face(const Face& f, double seam_tol) {
     const double diag = std::hypot(f.u_max - f.u_min, f.v_max - f.v_min);
     pf.near_uv = std::max(kTrimBandPerTolerance * f.trim_tolerance_uv, kMinTrimBandRelative * diag);
     pf.trim_uv = pf.near_uv / kTrimBandPerTolerance;
+    pf.planar = planar_control_net(f.surface, kPlanarRelative);
     for (const Vec3& p : f.mesh.xyz)
         if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) pf.mesh_box.extend(p);
     return pf;

@@ -36,6 +36,9 @@ struct PreparedFace {
     std::vector<uint32_t> adjacent;
     // Box of the face's map mesh (the rescue's screen search over all faces).
     BBox mesh_box;
+    // The face lies in one plane (planar_control_net): a light ray leaving it
+    // cannot cross it again (the shadow rays' own-face retry).
+    bool planar = false;
 };
 
 // The preliminary map's mesh: all faces' FaceMesh vertices that have a (u, v),

@@ -57,7 +57,8 @@ constexpr double kPiercedOnly = 0.0;
 // only where the light grazes the point: the leaks this fixed were all lit at
 // cosines 0.05-0.12 (the ray stays near the surface, and Newton from a start
 // on the part in front can run on to the point's root); at any angle it cost
-// 28-41 % more light rays on the look benchmark's scenes, at < 0.2 6-10 %.
+// 28-41 % more light rays on the look benchmark's scenes, at < 0.2 6-10 %,
+// and leaving out planar faces (which cannot shadow themselves) 0.5-10 %.
 constexpr int kMaxOwnSheets = 2;
 constexpr double kOwnSheetReachPixels = 2.0;
 constexpr double kGrazingCosine = 0.2;
@@ -229,11 +230,12 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // The point's own face, solved to the point itself (or beyond) from a
         // start the light map shows elsewhere on it: a ray leaving the face at
         // a grazing angle can cross it again nearer the light (a hull lit
-        // almost along it, iges/ship_kcs.igs), a root Newton ran past. Retried
+        // almost along it, iges/ship_kcs.igs; never a plane), a root Newton ran past. Retried
         // from the face's mesh sheets more than a light-map pixel in front of
         // the point (nearer, the mesh's chords around the point itself; the
         // light is orthographic: depth along it is the ray's t).
-        if (id == face && cosine < kGrazingCosine && (last == kConverged || last == kNearTrim) &&
+        if (id == face && cosine < kGrazingCosine && !ctx_.prepared.faces()[face - 1].planar &&
+            (last == kConverged || last == kNearTrim) &&
             !(last_t < t_p - self)) {
             Vec2 sheets[kMaxOwnSheets];
             const double reach = ctx_.screen_distance(kOwnSheetReachPixels);

@@ -258,6 +258,28 @@ TEST(Surface, PiecewiseLinearPlane) {
     EXPECT_LT(dist(surface_normal(s, 0.3, 0.2, true), Vec3{0, 0, -1}), 1e-15);
 }
 
+TEST(Surface, PlanarControlNet) {
+    // A plane tilted out of every axis, piecewise linear with interior knots: planar.
+    std::vector<Vec3> pts;
+    for (double x : {0.0, 1.0, 3.0, 6.0})
+        for (double y : {0.0, 2.0}) pts.push_back({x, y, 0.5 * x - 0.25 * y + 7});
+    const NurbsSurface plane = make_surface(1, 1, {0, 0, 0.25, 0.5, 1, 1}, {0, 0, 1, 1}, pts);
+    EXPECT_TRUE(planar_control_net(plane, 1e-9));
+    // One control point lifted off that plane by 1e-6 of the net's extent: not planar.
+    NurbsSurface bent = plane;
+    bent.cp[3].z += 1e-6 * 6.5;
+    EXPECT_FALSE(planar_control_net(bent, 1e-9));
+    EXPECT_TRUE(planar_control_net(bent, 1e-5));
+    // Rational: a quarter cylinder (weights != 1) and a sphere are curved.
+    const std::vector<Vec3> cyl = {{1, 0, 0}, {1, 0, 2}, {1, 1, 0}, {1, 1, 2}, {0, 1, 0}, {0, 1, 2}};
+    EXPECT_FALSE(planar_control_net(make_surface(2, 1, {0, 0, 0, 1, 1, 1}, {0, 0, 1, 1}, cyl, {1, 1, kS, kS, 1, 1}),
+                                    1e-9));
+    EXPECT_FALSE(planar_control_net(make_sphere(2.0, Vec3{0, 0, 0}), 1e-9));
+    // A degenerate net (all points on one line) counts as planar.
+    const NurbsSurface line = make_surface(1, 1, {0, 0, 1, 1}, {0, 0, 1, 1}, {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}});
+    EXPECT_TRUE(planar_control_net(line, 1e-9));
+}
+
 TEST(Surface, RationalQuarterCylinder) {
     // u: exact quarter circle of radius 1 (weights 1, sqrt(2)/2, 1); v: height 0..2.
     const std::vector<Vec3> pts = {{1, 0, 0}, {1, 0, 2}, {1, 1, 0}, {1, 1, 2}, {0, 1, 0}, {0, 1, 2}};

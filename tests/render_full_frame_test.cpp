@@ -120,8 +120,9 @@ const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
 //    the ray passes beside the mesh, ship_part5 -> 0 at 12x the retries). A
 //    point's own face solved to the point itself, lit at a grazing angle, is
 //    retried from the face's mesh sheets in front of it (a hull crossed again
-//    nearer the light): 22 -> 16 (ship_kcs iso 7 -> 3, both ducks 1 -> 0; light
-//    rays +6 % on the phone, +8 % trj8, +10 % ducks; at any angle +28-41 %). Left: thin faces
+//    nearer the light; never a plane): 22 -> 16 (ship_kcs iso 7 -> 3, both ducks
+//    1 -> 0; light rays +0.5 % on the phone, +4 % trj8, +10 % ducks; at any
+//    angle and on planes too +28-41 %). Left: thin faces
 //    whose crossing lies in their trim band (trj8: faces 398/403/405 reached
 //    outside their loops, within the band, which beyond contact blocks only
 //    beside another face's crossing), or crossings at grazing incidence where
