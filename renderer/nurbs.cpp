@@ -268,15 +268,14 @@ bool planar_control_net(const NurbsSurface& s, double relative) {
     }
     // A plane through p[0], the point farthest from it and the point farthest
     // from that line: the best-conditioned of the net's own triangles.
-    size_t a = 0;
-    for (size_t k = 1; k < p.size(); ++k)
-        if (length(p[k] - p[0]) > length(p[a] - p[0])) a = k;
-    const double extent = length(p[a] - p[0]);
-    Vec3 n{0, 0, 0};
-    for (size_t k = 1; k < p.size(); ++k) {
-        const Vec3 c = cross(p[a] - p[0], p[k] - p[0]);
-        if (length(c) > length(n)) n = c;
+    Vec3 far{0, 0, 0}, n{0, 0, 0};
+    for (const Vec3& q : p)
+        if (dot(q - p[0], q - p[0]) > dot(far, far)) far = q - p[0];
+    for (const Vec3& q : p) {
+        const Vec3 c = cross(far, q - p[0]);
+        if (dot(c, c) > dot(n, n)) n = c;
     }
+    const double extent = length(far);
     if (!(length(n) > relative * extent * extent)) return true;  // all on a line (or a point)
     n = n * (1.0 / length(n));
     for (const Vec3& q : p)

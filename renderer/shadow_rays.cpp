@@ -189,10 +189,11 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // a crossing of the adjacent face that high lies that far inside the
         // face from the shared edge (below). A band crossing higher up passes
         // outside the adjacent face, beyond its free edge or a face between (it
-        // cast false shadows in rows along a cone of step/t4mec.stp). Beyond contact a crossing in the trim band blocks only
-        // beside another face's at the same depth (a crack between two faces of
-        // an occluder): alone, the band would widen every occluder into a
-        // phantom shadow line along its free edges. A stop on the parameter-box
+        // cast false shadows in rows along a cone of step/t4mec.stp). Beyond
+        // contact a crossing in the trim band blocks only beside another face's
+        // at the same depth (a crack between two faces of an occluder): alone,
+        // the band would widen every occluder into a phantom shadow line along
+        // its free edges. A stop on the parameter-box
         // border near the ray (Solver's border-gap hit) is no crossing at all.
         const Outcome o = last = solver_.solve(id, sp, u0, v0, solver_.robust, true, h);
         last_t = h.t;
@@ -224,25 +225,28 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         if (nnear < kFirstRing) near_face[nnear] = id, near_t[nnear++] = h.t;
         return false;
     };
+    auto occludes_from_any = [&](uint32_t id, const Vec2* starts, int n) {
+        for (int q = 0; q < n; ++q)
+            if (occludes_from(id, starts[q].x, starts[q].y)) return true;
+        return false;
+    };
     auto occludes = [&](int i, int j, uint32_t id) {
         const size_t k = map_.index(i, j);
         if (occludes_from(id, map_.u[k], map_.v[k])) return true;
         // The point's own face, solved to the point itself (or beyond) from a
         // start the light map shows elsewhere on it: a ray leaving the face at
         // a grazing angle can cross it again nearer the light (a hull lit
-        // almost along it, iges/ship_kcs.igs; never a plane), a root Newton ran past. Retried
-        // from the face's mesh sheets more than a light-map pixel in front of
-        // the point (nearer, the mesh's chords around the point itself; the
-        // light is orthographic: depth along it is the ray's t).
-        if (id == face && cosine < kGrazingCosine && !ctx_.prepared.faces()[face - 1].planar &&
-            (last == kConverged || last == kNearTrim) &&
-            !(last_t < t_p - self)) {
+        // almost along it, iges/ship_kcs.igs; never a plane), a root Newton
+        // ran past. Retried from the face's mesh sheets more than a light-map
+        // pixel in front of the point (nearer, the mesh's chords around the
+        // point itself; the light is orthographic: depth along it is the ray's t).
+        const bool found_itself = (last == kConverged || last == kNearTrim) && !(last_t < t_p - self);
+        if (id == face && found_itself && cosine < kGrazingCosine && !ctx_.prepared.faces()[face - 1].planar) {
             Vec2 sheets[kMaxOwnSheets];
             const double reach = ctx_.screen_distance(kOwnSheetReachPixels);
-            const int ns = screen_points_.starts_in_front(face, sp, reach * reach, t_p - contact_, sheets, kMaxOwnSheets);
-            for (int q = 0; q < ns; ++q)
-                if (occludes_from(face, sheets[q].x, sheets[q].y)) return true;
-            return false;
+            const int ns =
+                screen_points_.starts_in_front(face, sp, reach * reach, t_p - contact_, sheets, kMaxOwnSheets);
+            return occludes_from_any(face, sheets, ns);
         }
         // A solve that found no point at all (it diverged or ran off the
         // parameter box, unlike one that ended outside the trim or behind) set
@@ -256,10 +260,7 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // pierces the mesh, which 31k retries cover.
         if (!newton_failed(last)) return false;
         Vec2 starts[2];
-        const int ns = screen_points_.nearest_starts(id, sp, starts, nullptr, kPiercedOnly);
-        for (int q = 0; q < ns; ++q)
-            if (occludes_from(id, starts[q].x, starts[q].y)) return true;
-        return false;
+        return occludes_from_any(id, starts, screen_points_.nearest_starts(id, sp, starts, nullptr, kPiercedOnly));
     };
     // Where the light map shows the point's own face at the point itself, the
     // face's solve would only find the point: skipped (most solves of a frame).
@@ -286,8 +287,7 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
     const int nfar = screen_points_.adjacent_far_faces(passed, npassed, sp, far, kMaxAdjacentFaces, reach * reach);
     for (int q = 0; q < nfar; ++q) {
         if (far[q].id == face || std::find(tried, tried + ntried, far[q].id) != tried + ntried) continue;
-        for (int s = 0; s < far[q].nstarts; ++s)
-            if (occludes_from(far[q].id, far[q].starts[s].x, far[q].starts[s].y)) return true;
+        if (occludes_from_any(far[q].id, far[q].starts, far[q].nstarts)) return true;
     }
     return false;
 }

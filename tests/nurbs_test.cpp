@@ -276,8 +276,8 @@ TEST(Surface, PlanarControlNet) {
                                     1e-9));
     EXPECT_FALSE(planar_control_net(make_sphere(2.0, Vec3{0, 0, 0}), 1e-9));
     // A degenerate net (all points on one line) counts as planar.
-    const NurbsSurface line = make_surface(1, 1, {0, 0, 1, 1}, {0, 0, 1, 1}, {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}});
-    EXPECT_TRUE(planar_control_net(line, 1e-9));
+    const std::vector<Vec3> diagonal = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}};
+    EXPECT_TRUE(planar_control_net(make_surface(1, 1, {0, 0, 1, 1}, {0, 0, 1, 1}, diagonal), 1e-9));
 }
 
 TEST(Surface, RationalQuarterCylinder) {
