@@ -48,7 +48,7 @@ int MeshScreenPoints::Grid::cell_y(double y) const {
 
 const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
     Entry& e = faces_[id - 1];
-    std::call_once(e.once, [&] {
+    e.once.call(e.m, [&] {
         const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
         const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
         e.pts.resize(n);
@@ -71,7 +71,7 @@ const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
 const MeshScreenPoints::Grid* MeshScreenPoints::grid(uint32_t id) const {
     Entry& e = faces_[id - 1];  // projected(id) has run: nearest_starts asks for it first
     if (e.queries.fetch_add(1, std::memory_order_relaxed) + 1 < kQueriesBeforeGrid) return nullptr;
-    std::call_once(e.grid_once, [&] { build_grid(id, e); });
+    e.grid_once.call(e.m, [&] { build_grid(id, e); });
     return &e.grid;
 }
 
@@ -294,6 +294,8 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
     // the cost where a near face has very many neighbours; the near faces' own
     // lists are in face order, so which ones are cut off is still deterministic.
     constexpr size_t kMaxCandidates = 64;
+    const std::vector<ScreenBox>& boxes = screen_boxes();
+    const Vec2 p{sp.sx, sp.sy};
     std::vector<FarFace> all;
     for (int q = 0; q < nn && all.size() < kMaxCandidates; ++q)
         for (const uint32_t id : c_.prepared.faces()[near[q] - 1].adjacent) {
@@ -301,9 +303,15 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
             if (std::find(near, near + nn, id) != near + nn ||
                 std::any_of(all.begin(), all.end(), [&](const FarFace& f) { return f.id == id; }))
                 continue;
+            // The mesh box's corners on screen bound its points' (all in front
+            // of the eye when the corners are): most adjacent faces lie farther
+            // and are left without projecting their mesh (its projection, one
+            // per face and frame, was a fifth of the rescue's time on trj8).
+            const ScreenBox& sb = boxes[id - 1];
+            if (sb.empty || (!sb.around && !(box_distance2(p, sb.lo.x, sb.hi.x, sb.lo.y, sb.hi.y) <= max_d2))) continue;
             const Entry& e = projected(id);
             // Also drops a face wholly behind the eye (empty box: infinite distance).
-            if (!(box_distance2({sp.sx, sp.sy}, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2)) continue;
+            if (!(box_distance2(p, e.lo.x, e.hi.x, e.lo.y, e.hi.y) <= max_d2)) continue;
             FarFace f;
             f.id = id;
             f.nstarts = nearest_starts(id, sp, f.starts, &f.d2, max_d2);

@@ -110,8 +110,30 @@ private:
     // face asked about, the grid only for faces searched a few times (a scan of
     // the triangles answers the first queries; adjacent_far_faces rejects most
     // candidates by their box alone).
+    // std::call_once's work without its cost here: glibc's pthread_once ends
+    // every first call with a futex wake system call, waiters or not, and the
+    // frame's first use of each face's projection and grid made some 400 of
+    // them a frame on trj8 (a tenth of the rescue's and the nearer-sheet
+    // pass's time on this virtual machine). The flag is read with acquire
+    // order; only a first use takes the entry's mutex (uncontended: no system
+    // call). As with call_once, an init that throws leaves it undone.
+    class Once {
+    public:
+        template <class F>
+        void call(std::mutex& m, F&& init) {
+            if (done_.load(std::memory_order_acquire)) return;
+            const std::lock_guard<std::mutex> lock(m);
+            if (done_.load(std::memory_order_relaxed)) return;
+            init();
+            done_.store(true, std::memory_order_release);
+        }
+
+    private:
+        std::atomic<bool> done_{false};
+    };
     struct Entry {
-        std::once_flag once, grid_once;
+        std::mutex m;
+        Once once, grid_once;
         std::atomic<uint32_t> queries{0};
         std::vector<Projected> pts;
         Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye

@@ -90,8 +90,8 @@ struct Update {
 class NearerSheet {
 public:
     NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
-                const PixelArray<PixelHit>& hits)
-        : c_(c), solver_(solver), hits_(hits), screen_points_(screen_points) {
+                const FrameBuffers& b)
+        : c_(c), solver_(solver), hits_(b.hits), depth_(b.depth), screen_points_(screen_points) {
         const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
         spike_ = kSpikeRelative * diag;
         nearer_ = kNearerRelative * diag;
@@ -99,15 +99,19 @@ public:
     // Whether find(i, j) can find anything: the pixel is a spike against one of
     // its pairs (on the hits' depths alone, t, +inf where no hit) or a fold's
     // edge, the first tests of find, which the first pass reads for every pixel.
+    // The hits are read only where the depths allow a fold's edge (one of the
+    // pair a sheet gap behind).
     bool maybe_spike(int i, int j) const {
         const size_t k = c_.map.index(i, j);
-        auto depth = [&](size_t n) { return hits_[n].face ? hits_[n].t : HUGE_VAL; };
-        const double d = depth(k);
+        const double d = depth_[k];
         if (!(d < HUGE_VAL)) return false;
+        const double behind = d + sheet_gap(d);
+        auto spike_or_fold = [&](size_t a, size_t b) {
+            return d > 0.5 * (depth_[a] + depth_[b]) + spike_ ||
+                   (std::max(depth_[a], depth_[b]) > behind && fold_edge(k, a, b));
+        };
         const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
-        return (row && (d > 0.5 * (depth(k - 1) + depth(k + 1)) + spike_ || fold_edge(k, k - 1, k + 1))) ||
-               (column && (d > 0.5 * (depth(k - c_.width) + depth(k + c_.width)) + spike_ ||
-                           fold_edge(k, k - c_.width, k + c_.width)));
+        return (row && spike_or_fold(k - 1, k + 1)) || (column && spike_or_fold(k - c_.width, k + c_.width));
     }
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const {
@@ -438,6 +442,7 @@ private:
     const FrameContext& c_;
     const Solver& solver_;
     const PixelArray<PixelHit>& hits_;
+    const PixelArray<double>& depth_;
     const MeshScreenPoints& screen_points_;
     double spike_ = 0, nearer_ = 0;
 };
@@ -446,7 +451,7 @@ private:
 
 uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                            FrameBuffers& b) {
-    const NearerSheet nearer(c, solver, screen_points, b.hits);
+    const NearerSheet nearer(c, solver, screen_points, b);
     const int W = c.width;
     // The first pass examines every pixel; replacements are collected per row
     // (almost always none) and applied between passes: no frame-sized buffer for
@@ -469,7 +474,7 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
         throw_if_canceled(c.options);
         cand.clear();
         for (const Update& u : updates) {
-            b.hits[u.k] = u.hit;
+            b.set(u.k, u.hit);
             const int i = static_cast<int>(u.k % W), j = static_cast<int>(u.k / W);
             for_each_neighbour(c, i, j, 1, [&](int ni, int nj) {
                 if ((ni == i) != (nj == j)) cand.push_back(c.map.index(ni, nj));  // the 4-neighbours
@@ -492,7 +497,7 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     }
     // The last pass's finds are nearer hits on their own rays like any other:
     // kept, though their neighbours are not examined again.
-    for (const Update& u : updates) b.hits[u.k] = u.hit;
+    for (const Update& u : updates) b.set(u.k, u.hit);
     return replaced + updates.size();
 }
 

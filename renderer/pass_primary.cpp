@@ -10,10 +10,14 @@ void primary_pass(const FrameContext& c, const Solver& solver, FrameBuffers& b) 
         for (int i = 0; i < c.width; ++i) {
             const size_t k = map.index(i, j);
             const uint32_t id = map.face[k];
-            b.hits[k] = PixelHit{};  // the first write of the frame's hits (FrameBuffers)
-            if (id == 0 || id > c.nfaces) continue;
-            b.outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], b.hits[k]);
-            b.iterations[k] = b.hits[k].iterations;
+            // The first write of the frame's hits and depths (FrameBuffers).
+            PixelHit& h = b.hits[k];
+            h = PixelHit{};
+            if (id != 0 && id <= c.nfaces) {
+                b.outcome[k] = solver.solve(id, i, j, map.u[k], map.v[k], h);
+                b.iterations[k] = h.iterations;
+            }
+            b.update_depth(k);
         }
     });
     throw_if_canceled(c.options);

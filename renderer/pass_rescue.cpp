@@ -391,7 +391,7 @@ void grow_silhouettes(const FrameContext& c, const Solver& solver, const MeshScr
         for (size_t q = 0; q < cand.size(); ++q) {
             queued[cand[q]] = 0;
             if (!kinds[q]) continue;
-            b.hits[cand[q]] = got[q];
+            b.set(cand[q], got[q]);
             b.rescued[cand[q]] = kinds[q];
             fresh.push_back(cand[q]);
         }
@@ -403,15 +403,17 @@ void grow_silhouettes(const FrameContext& c, const Solver& solver, const MeshScr
 
 namespace {
 
-// Per pixel: 1 where the pixel has no hit in `hits` but a face in the map or a hit
+// Per pixel: 1 where the pixel has no primary hit but a face in the map or a hit
 // among its 8 neighbours, i.e. where rescue_pixel has something to try; the rest
 // of the background (most of a frame) is skipped on one byte instead of nine
 // hits' worth of memory. A 3x3 dilation of the hit mask, separable: along rows,
-// then along columns.
-std::vector<uint8_t> rescue_candidates(const FrameContext& c, const PixelArray<PixelHit>& hits) {
+// then along columns. The mask comes from the primary outcomes, a byte per
+// pixel (a primary solve hits exactly when it converged inside the trim),
+// not from the 40-byte hits: reading those was a millisecond of trj8's frame.
+std::vector<uint8_t> rescue_candidates(const FrameContext& c, const std::vector<uint8_t>& outcome) {
     const int W = c.width, H = c.height;
     std::vector<uint8_t> hit(c.pixels()), row(c.pixels()), out(c.pixels());
-    for (size_t k = 0; k < c.pixels(); ++k) hit[k] = hits[k].face != 0;
+    for (size_t k = 0; k < c.pixels(); ++k) hit[k] = outcome[k] == kConverged;
     for (int j = 0; j < H; ++j)
         for (int i = 0; i < W; ++i) {
             const size_t k = c.map.index(i, j);
@@ -431,7 +433,7 @@ std::vector<uint8_t> rescue_candidates(const FrameContext& c, const PixelArray<P
 
 void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                  FrameBuffers& b) {
-    const std::vector<uint8_t> todo = rescue_candidates(c, b.hits);
+    const std::vector<uint8_t> todo = rescue_candidates(c, b.outcome);
     // Every pixel reads the primary hits: the rescued ones are collected per row
     // and written after the pass, so the result does not depend on the order
     // (or the thread count).
@@ -454,7 +456,7 @@ void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPo
     std::vector<size_t> fresh;  // ascending: the rows in order, each row's pixels in order
     for (const std::vector<Rescued>& row : rows)
         for (const Rescued& r : row) {
-            b.hits[r.k] = r.hit;
+            b.set(r.k, r.hit);
             b.rescued[r.k] = r.kind;
             fresh.push_back(r.k);
         }
