@@ -3,7 +3,8 @@
 //                      (Sisojevs & Glazs 2010, section 2; the solves the paper's statistics describe)
 //   rescue_pass        pixels without a primary hit, from their neighbours' faces
 //                      and starts; then silhouette growth (pass_rescue.cpp)
-//   nearer_sheet_pass  depth spikes re-solved from their neighbours (pass_nearer.cpp)
+//   nearer_sheet_pass  depth spikes, steps and silhouette pixels a sheet behind
+//                      re-solved from their neighbours (pass_nearer.cpp, nearer_sheet.h)
 //   shade_pass         shading from the exact normal (lighting.h), exact shadows
 //                      of the key light (shadow_rays.h), AOVs
 //   antialias_pass     extra exact sub-pixel rays on edge pixels (pass_antialias.cpp)

@@ -5,7 +5,8 @@
 // faces, a pixel showing a farther sheet. This test renders each model at 512 x 512
 // in two named views, as a user does (import_file -> fit_view -> render), and runs
 // the full-frame check (tests/support/full_frame_check.h) over every pixel: every
-// background pixel enclosed by hits and every depth spike is re-cast against
+// background pixel enclosed by hits, every depth spike and the far side of every
+// depth step between sheets is re-cast against
 // OCCT's IntCurvesFace_ShapeIntersector on the original shape, disputes settled
 // with BRepExtrema. None may be a hole (the exact ray hits a face, we show
 // background) or a speckle (the exact ray has a nearer hit than ours), except the
@@ -66,8 +67,50 @@ struct Known {
     long holes, speckles;
     const char* cause;
 };
-// None left today (a vector: an empty array is ill-formed).
+// Since the check also re-casts the far side of every depth step (2026-12-05;
+// before, only spikes: runs of far-sheet pixels went unseen) it found 482
+// wrong-sheet pixels over the models and fixtures; the renderer then fixed 359
+// of them (silhouette pixels a sheet behind their neighbour: 14 on a filleted
+// box, 26 on the torus, sphere rims; steps filled from diagonal neighbours'
+// and map faces, and from the faces beyond the edge of the face in front).
+// What is left, by kind of cause (the check's diagnosis):
+//  - kThinRing: a face narrower than a pixel running diagonally in front of a
+//    level face, its map pixels sparse: most pixels along it see only the face
+//    behind, level all around, no depth spike or step to start a search.
+//  - kRescuedFarRoot: silhouette pixels the map shows as background, filled by
+//    the rescue (silhouette growth) with the farther of a curved face's two
+//    roots near its rim; their neighbours lie on the same far sheet.
+//  - kOtherRoot: the map's start leads Newton to the farther root of the same
+//    face, and no neighbour's start on it reaches the nearer one.
+//  - kFaceInFront: a face in front that neither the 3x3 nor its adjacency shows
+//    (its nearest map pixels 2 or more pixels away).
+//  - kNotTaken: a neighbour's start on the nearer face reaches the root, but the
+//    pixel's depths do not make it a spike, a step or a pit the pass searches.
+constexpr const char* kThinRing = "a face narrower than a pixel in front of a level face (see above)";
+constexpr const char* kRescuedFarRoot = "rescued silhouette pixels on the farther root of a curved face (see above)";
+constexpr const char* kOtherRoot = "the farther root of the same face from the map's start (see above)";
+constexpr const char* kFaceInFront = "a face in front outside the 3x3 and its adjacency (see above)";
+constexpr const char* kNotTaken = "a neighbour's start reaches the root, the pixel is no candidate (see above)";
 const std::vector<Known> kKnownRemaining = {
+    {"iges/marsCapsule.igs", "front", 0, 68, kThinRing},
+    {"iges/marsCapsule.igs", "iso", 0, 2, kNotTaken},
+    {"step/bug29715_slow.stp", "front", 0, 14, kNotTaken},  // a dense face folded over itself, edge-on
+    {"step/r0901_ec.stp", "iso", 0, 4, kNotTaken},
+    {"step/trj8_b1-ec-214.stp", "iso", 0, 4, kOtherRoot},  // rescued: the map's face 50 trimmed there
+    {"step/trj3_s1-al-214.stp", "iso", 0, 3, kRescuedFarRoot},
+    {"step/ec_turbine-A.stp", "front", 0, 4, kFaceInFront},
+    {"step/ec_turbine-A.stp", "iso", 0, 1, kNotTaken},
+    {"iges/heartValve.igs", "iso", 0, 4, kRescuedFarRoot},
+    {"iges/ship_part5.igs", "iso", 0, 4, kRescuedFarRoot},
+    {"iges/sunglasses_lens.igs", "iso", 0, 2, kRescuedFarRoot},
+    {"iges/BUC50025.igs", "iso", 0, 2, kOtherRoot},
+    {"duck/duck_from_glscene.igs", "front", 0, 2, kOtherRoot},
+    {"duck/duck_from_glscene.stp", "front", 0, 2, kOtherRoot},
+    {"step/eight_cyl.stp", "iso", 0, 1, kOtherRoot},
+    {"iges/bearing.iges", "front", 0, 2, kFaceInFront},
+    {"iges/bearing.iges", "iso", 0, 1, kFaceInFront},
+    {"step/as1_motor.step", "iso", 0, 2, kFaceInFront},
+    {"step/cylinder_block.stp", "front", 0, 1, kFaceInFront},
     // (bug29715_slow front's speckle, a dense folded face seen edge-on, whose
     // pixel by the fold's silhouette reached the farther of two roots close
     // together (v -160.6; the nearer at -164.4) from every start tried (the
@@ -248,14 +291,14 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         RecordProperty(std::string(view.name) + "_holes", static_cast<int>(rep.holes));
         RecordProperty(std::string(view.name) + "_speckles", static_cast<int>(rep.speckles));
         RecordProperty(std::string(view.name) + "_off_ray", static_cast<int>(rep.off_ray));
-        RecordProperty(std::string(view.name) + "_candidates", static_cast<int>(rep.enclosed + rep.spikes));
+        RecordProperty(std::string(view.name) + "_candidates", static_cast<int>(rep.enclosed + rep.spikes + rep.steps));
         RecordProperty(std::string(view.name) + "_unchecked", static_cast<int>(rep.unchecked));
         const Known* known = known_remaining(c.rel.empty() ? c.fixture : c.rel, view.name);
         if (known)
             std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles
                       << " speckles (" << known->cause << ")\n";
         if (rep.unchecked)
-            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes not checked within "
+            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within "
                       << T::kCheckBudgetSeconds << " s\n";
         EXPECT_LE(rep.holes, known ? known->holes : 0)
             << label << ": background pixels where the exact ray hits a face";

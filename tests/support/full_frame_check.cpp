@@ -122,6 +122,24 @@ struct Checker {
     }
     // Farther than both neighbours of a row or column pair beyond the noise floor.
     bool spike(int i, int j) const { return spike_depth(i, j) > kDepthNoiseRelative * diag; }
+    // How much farther the pixel is than a 4-neighbour on another sheet (0:
+    // none): at least kStepFootprints pixel footprints at its depth farther,
+    // while the neighbour opposite (continuing the pixel's own sheet) differs
+    // from it by under 1/kStepAsymmetry of that, or is background. A smooth
+    // slope, however steep, steps alike to both sides.
+    double step_depth(int i, int j) const {
+        const double t = im.z[idx(i, j)];
+        const double footprint = 2.0 * camera.image_to_model_scale(t) / im.height;
+        double depth = 0;
+        for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+            if (!hit(i + di, j + dj)) continue;
+            const double gap = t - im.z[idx(i + di, j + dj)];
+            if (!(gap > kStepFootprints * footprint)) continue;
+            if (hit(i - di, j - dj) && !(kStepAsymmetry * std::abs(t - im.z[idx(i - di, j - dj)]) < gap)) continue;
+            depth = std::max(depth, gap);
+        }
+        return depth;
+    }
 };
 
 // ---- diagnosis: why did the renderer not find the reference's face there? ----
@@ -296,9 +314,10 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
     rep.label = label;
     rep.width = im.width;
     rep.height = im.height;
-    // Candidates: every enclosed background pixel, then the depth spikes, deepest
-    // first (relative to the pixel's own depth), so that a time budget cut leaves
-    // only the shallowest spikes unchecked: those of smooth concave sheets.
+    // Candidates: every enclosed background pixel, then the depth spikes and
+    // steps, deepest first (relative to the pixel's own depth), so that a time
+    // budget cut leaves only the shallowest unchecked: those of smooth concave
+    // sheets.
     struct Candidate {
         int i, j;
         double score;  // -1 for a hole candidate
@@ -310,7 +329,12 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
             const bool ours = im.face[k] != 0;
             rep.pixels_hit += ours;
             if (!ours && c.enclosed(i, j)) cand.push_back({i, j, -1.0}), ++rep.enclosed;
-            if (ours && c.spike(i, j)) cand.push_back({i, j, c.spike_depth(i, j) / im.z[k]}), ++rep.spikes;
+            if (ours && c.spike(i, j)) {
+                cand.push_back({i, j, c.spike_depth(i, j) / im.z[k]}), ++rep.spikes;
+            } else if (ours) {
+                const double step = c.step_depth(i, j);
+                if (step > 0) cand.push_back({i, j, step / im.z[k]}), ++rep.steps;
+            }
         }
     std::stable_sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) {
         return (a.score < 0) != (b.score < 0) ? a.score < 0 : a.score > b.score;
@@ -370,7 +394,8 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
 std::string FullFrameReport::text(size_t max_listed) const {
     std::ostringstream o;
     o << "[ full-frame ] " << label << " " << width << "x" << height << ": hit " << pixels_hit << " px; candidates "
-      << enclosed << " enclosed background + " << spikes << " depth spikes; HOLES " << holes << ", SPECKLES "
+      << enclosed << " enclosed background + " << spikes << " depth spikes + " << steps << " depth steps; HOLES " << holes
+      << ", SPECKLES "
       << speckles << ", OFF-RAY HITS " << off_ray << "; reference threw " << ref_errors << ", reference off its face " << ref_spurious
       << (unchecked ? "; UNCHECKED (time budget) " + std::to_string(unchecked) : std::string()) << "; check "
       << std::fixed << std::setprecision(2) << check_s << " s" << std::defaultfloat << "\n";

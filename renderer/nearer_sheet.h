@@ -1,0 +1,157 @@
+// The nearer-sheet pass's search for a nearer hit of one pixel (passes.h,
+// nearer_sheet_pass): the spike, step and silhouette tests and the solves from
+// the neighbours' starts (pass_nearer.cpp), and the searches for a face in front
+// that no neighbour's start reaches (nearer_sheet_search.cpp). Internal to the
+// renderer.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "renderer/frame.h"
+#include "renderer/pixel_solver.h"
+
+namespace nurbsrt {
+
+class MeshScreenPoints;
+
+// A pixel deeper than this many pixel footprints behind both of its pair is off
+// their sheet: on one smooth sheet the second difference of depth is about a
+// footprint squared over the curvature radius, far below one footprint except
+// where the sheet is seen almost edge-on (a wasted re-solve there, never a wrong hit).
+constexpr double kSheetFootprints = 1.0;
+
+class NearerSheet {
+public:
+    NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
+                const FrameBuffers& b);
+    // Whether find(i, j) can find anything: the pixel is a spike against one of
+    // its pairs (on the hits' depths alone, t, +inf where no hit), a fold's
+    // edge, or on a silhouette a sheet gap behind the pair's other pixel, the
+    // first tests of find, which the first pass reads for every pixel. The
+    // hits are read only where the depths allow a fold's edge (one of the pair
+    // a sheet gap behind).
+    bool maybe_spike(int i, int j) const;
+    // A nearer hit for pixel (i, j) than its current one, if any.
+    bool find(int i, int j, PixelHit& out) const;
+
+private:
+    // At a step that its 4-neighbours' faces did not fill: the faces that only
+    // diagonal neighbours show in front of the hit (a sheet gap nearer), from
+    // their hits, then the 3x3's map faces not tried yet, from the map's
+    // starts, robustly. A strip narrower than a pixel between the face in front
+    // and the pixel's touches the pixel's ray while its map pixels run
+    // diagonally past it (a thin ring of unsewn IGES panels,
+    // iges/marsCapsule.igs front), or while its own solves there failed and the
+    // hits show the faces around it (a fillet strip, step/r0901_ec.stp iso).
+    void diagonal_faces(int i, int j, PixelHit& best) const;
+    // Whether hit p, with neighbour n on its face, has the pair's other
+    // neighbour a sheet gap behind on the same face, (u, v) jumping (kUvJump2:
+    // a steep smooth sheet steps more in depth, but evenly): the silhouette of
+    // a face folded over itself (step/bug29715_slow.stp seen edge-on). There
+    // the ray can cross the near sheet twice and the map's start lead to the
+    // farther root; the nearer lies past p's (u, v), on along n's step to it.
+    // (With any face behind, i.e. at every silhouette, it cost 5-70 % of the
+    // frame on 10 models and changed pixels only of that file.)
+    bool fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit& behind) const;
+    bool fold_edge(size_t k, size_t a, size_t b) const;
+    // Whether the pixel's hit p continues the sheet of its neighbour n's hit
+    // and of the hit beyond n, pixel (fi, fj): all three on one face, with p
+    // where n and the next pixel extrapolate it, in (u, v) and in depth. Such
+    // a pixel is a pit because of its other side: most often the edge of an
+    // occluder in front of a face that slopes towards the eye (three quarters
+    // of a cylinder block's pits). Two sheets of one face closer than a pixel
+    // footprint still pass (a fold of the duck), so a solve from n is kept.
+    bool continues(const PixelHit& p, const PixelHit& n, int fi, int fj) const;
+    // How far in front of a hit at distance t another sheet must lie to count as one.
+    double sheet_gap(double t) const { return kSheetFootprints * c_.pixel_footprint(t); }
+    // The depth along the view direction (the mesh's measure, MeshScreenPoints)
+    // in front of which another sheet than a hit at distance t through sp lies.
+    double depth_in_front(double t, ScreenPoint sp) const;
+    // Solves face id at (i, j) from (u0, v0); keeps the hit if it is nearer than best.
+    // Returns the solve's outcome.
+    // `crossing`: as Solver::solve's.
+    Outcome consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
+                     PixelHit& best, double* crossing = nullptr) const;
+    // A pit that the pair's own starts did not fill, tried further with the
+    // robust Newton (clamp-and-continue at borders, backtracking), in order of
+    // cost until a nearer hit turns up, inside a trim only: a hit in the trim
+    // band here makes the pixel a pit for its neighbours in turn, and the
+    // peeling passes would spread the band over the face behind, a pixel at a
+    // time (it did, on a machine component, over 1.6 mm beyond a face's edge): from every 3x3 neighbour's converged
+    // (u, v), from the pixel's own face's mesh in front of its hit (mesh_in_front),
+    // from the 3x3's map starts (the map may show the nearer face next to
+    // the pixel while the neighbours' hits lie on others), then the faces adjacent
+    // to these that none of them shows: a face too thin for the map to show any
+    // pixel of it here (a fillet or blend strip seen edge-on) lies in front,
+    // between the faces it touches; last, any face near on screen in front of
+    // the hit (screen_faces).
+    // One start per face (the first in for_each_neighbour's order): the 3x3's
+    // starts of one face lie on one sheet within a pixel or two and end at one
+    // root; except on the pixel's own face (other_sheet_starts).
+    // `edge_of_other_face`: the pixel is a pit only because its hit continues
+    // one neighbour's sheet (continues()) while the other neighbour shows
+    // another face, and no neighbour shows another sheet of the pixel's face:
+    // the pixel lies by the edge of a face in front, and its own face's mesh
+    // in front of the hit (mesh_in_front) is not searched. Where a neighbour
+    // does show another sheet of it (a closed face seen through its near side:
+    // the duck), it is. 3.5 of the 17 ms of the cylinder block's nearer-sheet
+    // pass, with the same frames on 10 models x 2 views and the same full-frame
+    // test results.
+    void fill_pit(int i, int j, bool edge_of_other_face, PixelHit& best) const;
+    // The distinct faces of the 3x3 around pixel (i, j), hit or in the map, into
+    // out (room for kFaces3x3); returns how many.
+    static constexpr int kFaces3x3 = 2 * 9;
+    int faces_3x3(int i, int j, uint32_t* out) const;
+    // Any faces whose mesh comes within reach of pixel (i, j) on screen and
+    // nearer to the eye than its hit, but those of the 3x3 (hit or in the map):
+    // a face seen through a gap between faces that do not touch it, which the
+    // map hides behind them and adjacency does not offer (a capsule's panel in
+    // front of a pit whose 3x3 shows only the faces behind it, iges/marsCapsule.igs).
+    // The last resort of a pit, as the rescue's D is of a hole: by the time the
+    // pits of occluders' edges (edge_of_other_face) and concave corners are left
+    // out, some 150 pixels of a cylinder block's frame get here, for ~1 ms.
+    void screen_faces(int i, int j, PixelHit& best) const;
+    // Where the pixel's hit is a farther root of the very face its neighbours
+    // show in front (a closed or folded face: the duck's body seen through its
+    // near side; a dense face folded over itself), the pixel lies near that
+    // sheet's silhouette, where Newton from one start runs over the fold to the
+    // far root and from the next one stays on the near sheet: every neighbour
+    // hit on the pixel's face that lies on another sheet (nearer by a pixel
+    // footprint, as in find) is a robust start, until one gives a nearer root;
+    // but the first hit on the face, which fill_pit's round of one start per
+    // face has solved from already.
+    void other_sheet_starts(int i, int j, PixelHit& best) const;
+    // Starts from the mesh of face id in front of the pixel's hit by a footprint.
+    // Where no neighbour's hit starts Newton on the pixel's own face's nearer
+    // sheet (its neighbours show other faces, or the same far sheet), that mesh
+    // may: at a fold seen near its silhouette the near sheet's mesh, a chord,
+    // stops short of pixels its surface covers, and the map shows the far sheet
+    // there; the near root then lies by that mesh's frontmost part within
+    // reach. A face folded many times puts several sheets in front, the map's
+    // front one possibly a mesh sheet the exact ray passes by: each sheet
+    // covering the pixel, front to back.
+    void mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const;
+    // The faces adjacent to those of the 3x3 around pixel (i, j), hit or in the
+    // map (PreparedFace::adjacent), that none of them shows, from their mesh
+    // starts; failing those, the faces adjacent to those whose surface the ray
+    // crosses outside their trim (the ray passes beyond that face's edge, where a
+    // face joining it there may lie in front: a Russian part's flange behind a
+    // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
+    void adjacent_faces(int i, int j, PixelHit& best) const;
+    // The faces adjacent to crossed[0..nc), faces whose surface the pixel's ray
+    // crosses outside their trim (it passes beyond their edge, where a face
+    // joining them may lie in front: a fillet strip too thin for the map along
+    // the edge of a face in front, step/bug27693_cornetta-step.stp iso), within
+    // reach on screen, but those in `tried`; from their mesh starts, robustly.
+    void beyond_edges(int i, int j, const uint32_t* crossed, int nc, std::span<const uint32_t> tried,
+                      PixelHit& best) const;
+    const FrameContext& c_;
+    const Solver& solver_;
+    const PixelArray<PixelHit>& hits_;
+    const PixelArray<double>& depth_;
+    const MeshScreenPoints& screen_points_;
+    double spike_ = 0, nearer_ = 0;
+};
+
+}  // namespace nurbsrt

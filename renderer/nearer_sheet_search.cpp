@@ -1,0 +1,194 @@
+// The nearer-sheet pass's searches for a face in front of a pixel's hit that
+// none of its neighbours' starts reaches (nearer_sheet.h): at a pit, the 3x3's
+// faces robustly, the pixel's own face's mesh in front, adjacent faces and faces
+// near on screen; at a step, the diagonal neighbours' faces and the faces beyond
+// the edge of the face in front.
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "renderer/mesh_screen_points.h"
+#include "renderer/nearer_sheet.h"
+
+namespace nurbsrt {
+
+namespace {
+
+// Faces adjacent to a pit's 3x3 that are tried when none of the 3x3's faces
+// fills it; a thin face in front touches one of them. Bounds the cost at a
+// vertex where many faces meet (per ring of adjacent_faces).
+constexpr int kMaxAdjacentFaces = 12;
+// ... and only those whose mesh comes within 2 pixels of the pit on screen (the
+// faces adjacent to a pit's are sorted nearest first, so the rest are farther).
+constexpr double kPitFacePixels = 2.0;
+// Faces near on screen (screen_faces) tried at a pit nothing else filled, the
+// nearest first: as many as the rescue's last resort tries at a hole.
+constexpr int kMaxScreenFaces = 4;
+// Sheets of the pixel's own face in front of its hit that are tried, nearest
+// to the eye first: a face folded over itself many times (a dense spring or
+// coil seen edge-on) puts several there, and the map's front one may be a mesh
+// sheet the exact ray passes by.
+constexpr int kMaxSheetsInFront = 4;
+// The faces a step tries at the most: its 4 neighbours' (tried by the pair
+// tests), its 4 diagonal neighbours' and its 3x3's map faces (beyond these
+// the rest are solved without being remembered, a repeat at worst).
+constexpr int kStepFaces = 12;
+
+}  // namespace
+
+void NearerSheet::diagonal_faces(int i, int j, PixelHit& best) const {
+    const PixelHit p = best;
+    uint32_t tried[kStepFaces];
+    int ntried = 0;
+    for (const auto& [di, dj] : {std::pair{-1, 0}, std::pair{1, 0}, std::pair{0, -1}, std::pair{0, 1}})
+        if (c_.in_frame(i + di, j + dj)) tried[ntried++] = hits_[c_.map.index(i + di, j + dj)].face;
+    for (const auto& [di, dj] : {std::pair{-1, -1}, std::pair{1, -1}, std::pair{-1, 1}, std::pair{1, 1}}) {
+        if (!c_.in_frame(i + di, j + dj)) continue;
+        const PixelHit& h = hits_[c_.map.index(i + di, j + dj)];
+        if (!h.face || h.face == p.face || std::find(tried, tried + ntried, h.face) != tried + ntried ||
+            !(h.t < p.t - sheet_gap(p.t)))
+            continue;
+        tried[ntried++] = h.face;
+        consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+        if (best.face != p.face || best.t != p.t) return;
+    }
+    for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+        const size_t n = c_.map.index(ni, nj);
+        const uint32_t id = c_.map.face[n];
+        if (!id || id > c_.nfaces || id == p.face || std::find(tried, tried + ntried, id) != tried + ntried)
+            return true;
+        if (ntried < kStepFaces) tried[ntried++] = id;
+        consider(id, i, j, c_.map.u[n], c_.map.v[n], solver_.robust, false, best);
+        return best.face == p.face && best.t == p.t;
+    });
+}
+
+void NearerSheet::fill_pit(int i, int j, bool edge_of_other_face, PixelHit& best) const {
+    const PixelHit p = best;
+    auto found = [&] { return best.face != p.face || best.t != p.t; };
+    uint32_t tried[kFaces3x3];
+    int ntried = 0;
+    auto once = [&](uint32_t id) {
+        if (!id || id > c_.nfaces || std::find(tried, tried + ntried, id) != tried + ntried) return false;
+        tried[ntried++] = id;
+        return true;
+    };
+    for (int kind = 0; kind < 2 && !found(); ++kind) {
+        for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+            const size_t n = c_.map.index(ni, nj);
+            if (ni == i && nj == j) return;
+            if (kind == 0 && once(hits_[n].face))
+                consider(hits_[n].face, i, j, hits_[n].u, hits_[n].v, solver_.robust, false, best);
+            if (kind == 1 && once(c_.map.face[n]))
+                consider(c_.map.face[n], i, j, c_.map.u[n], c_.map.v[n], solver_.robust, false, best);
+        });
+        if (kind == 0 && !found()) other_sheet_starts(i, j, best);
+        if (kind == 0 && !edge_of_other_face && !found()) mesh_in_front(p.face, i, j, best);
+    }
+    // The map's own face at the pixel, where it is another than the hit's:
+    // the primary solve from its map start failed; its mesh in front of the
+    // hit within reach may start Newton on its root.
+    const uint32_t own_map = c_.map.face[c_.map.index(i, j)];
+    if (!found() && own_map != p.face && once(own_map)) mesh_in_front(own_map, i, j, best);
+    if (!found()) adjacent_faces(i, j, best);
+    if (!found() && !edge_of_other_face) screen_faces(i, j, best);
+}
+
+int NearerSheet::faces_3x3(int i, int j, uint32_t* out) const {
+    int n = 0;
+    for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+        const size_t k = c_.map.index(ni, nj);
+        for (const uint32_t id : {hits_[k].face, c_.map.face[k]})
+            if (id && id <= c_.nfaces && std::find(out, out + n, id) == out + n) out[n++] = id;
+    });
+    return n;
+}
+
+void NearerSheet::screen_faces(int i, int j, PixelHit& best) const {
+    uint32_t near[kFaces3x3];
+    const int nn = faces_3x3(i, j, near);
+    const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+    const double reach = c_.screen_distance(kPitFacePixels);
+    MeshScreenPoints::FarFace faces[kMaxScreenFaces];
+    const int nf = screen_points_.faces_near(sp, near, nn, faces, kMaxScreenFaces, reach * reach,
+                                             depth_in_front(best.t, sp));
+    for (int q = 0; q < nf; ++q)
+        for (int k = 0; k < faces[q].nstarts; ++k)
+            consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                     static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
+}
+
+void NearerSheet::other_sheet_starts(int i, int j, PixelHit& best) const {
+    const PixelHit p = best;
+    const double sheet = sheet_gap(p.t);
+    bool first = true;
+    for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+        const PixelHit& h = hits_[c_.map.index(ni, nj)];
+        if ((ni == i && nj == j) || h.face != p.face) return true;
+        if (first) {
+            first = false;
+            return true;
+        }
+        if (h.t < p.t - sheet) consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+        return best.face == p.face && best.t == p.t;  // on until found
+    });
+}
+
+void NearerSheet::mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const {
+    const PixelHit p = best;
+    const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+    const double reach = c_.screen_distance(kPitFacePixels);
+    const double max_depth = depth_in_front(p.t, sp);
+    Vec2 start;
+    double depth = 0;
+    auto from = [&](Vec2 uv) {
+        consider(id, i, j, static_cast<float>(uv.x), static_cast<float>(uv.y), solver_.robust, false, best);
+        return best.face != p.face || best.t != p.t;
+    };
+    if (screen_points_.frontmost_point(id, sp, reach * reach, start, depth) && depth < max_depth &&
+        from(start))
+        return;
+    Vec2 starts[kMaxSheetsInFront];
+    const int n = screen_points_.starts_in_front(id, sp, reach * reach, max_depth, starts, kMaxSheetsInFront);
+    for (int k = 0; k < n; ++k)
+        if (from(starts[k])) return;
+}
+
+void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
+    uint32_t near[kFaces3x3 + kMaxAdjacentFaces];
+    int nn = faces_3x3(i, j, near);
+    const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+    // A face in front of the pixel covers it on screen: its mesh comes within
+    // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
+    const double reach = c_.screen_distance(kPitFacePixels);
+    const PixelHit p = best;
+    uint32_t crossed[kMaxAdjacentFaces];  // the first ring's faces crossed outside their trim
+    int nc = 0;
+    MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
+    const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
+    for (int q = 0; q < nf; ++q) {
+        bool outside = false;
+        for (int k = 0; k < faces[q].nstarts; ++k)
+            outside |= consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                                static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best) == kTrimmed;
+        if (outside) crossed[nc++] = faces[q].id;
+        near[nn++] = faces[q].id;
+    }
+    if (nc && best.face == p.face && best.t == p.t) beyond_edges(i, j, crossed, nc, {near, near + nn}, best);
+}
+
+void NearerSheet::beyond_edges(int i, int j, const uint32_t* crossed, int nc, std::span<const uint32_t> tried,
+                               PixelHit& best) const {
+    const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+    const double reach = c_.screen_distance(kPitFacePixels);
+    MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
+    const int nf = screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach);
+    for (int q = 0; q < nf; ++q) {
+        if (std::find(tried.begin(), tried.end(), faces[q].id) != tried.end()) continue;
+        for (int k = 0; k < faces[q].nstarts; ++k)
+            consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
+                     static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
+    }
+}
+
+}  // namespace nurbsrt
