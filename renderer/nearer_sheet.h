@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "renderer/frame.h"
 #include "renderer/pixel_solver.h"
@@ -150,6 +151,7 @@ private:
     const Solver& solver_;
     const PixelArray<PixelHit>& hits_;
     const PixelArray<double>& depth_;
+    const std::vector<uint8_t>& rescued_;
     const MeshScreenPoints& screen_points_;
     double spike_ = 0, nearer_ = 0;
 };

@@ -75,7 +75,7 @@ struct Update {
 
 NearerSheet::NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                          const FrameBuffers& b)
-    : c_(c), solver_(solver), hits_(b.hits), depth_(b.depth), screen_points_(screen_points) {
+    : c_(c), solver_(solver), hits_(b.hits), depth_(b.depth), rescued_(b.rescued), screen_points_(screen_points) {
     const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
     spike_ = kSpikeRelative * diag;
     nearer_ = kNearerRelative * diag;
@@ -125,8 +125,18 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             const bool a_side = a.face != 0;
             const PixelHit& n = a_side ? a : b;
             const int ni = a_side ? pq[0] : pq[2], nj = a_side ? pq[1] : pq[3];
-            if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j))
+            if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j)) {
                 consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
+                // Beside another face in front, a rescued pixel's own face may
+                // have a nearer sheet that no neighbour shows (a rim face whose
+                // pixels the rescue all filled from its farther root, started
+                // from each other's (u, v)): its mesh in front. Not a primary
+                // hit's (the map's start there lies on the mesh's front sheet),
+                // never a plane's (a ray crosses it once).
+                if (n.face != p.face && best.face == p.face && best.t == p.t && rescued_[c_.map.index(i, j)] &&
+                    !c_.prepared.faces()[p.face - 1].planar)
+                    mesh_in_front(p.face, i, j, best);
+            }
             continue;
         }
         // Beyond a fold's silhouette, the near sheet's root (solved from where
