@@ -30,8 +30,8 @@ public:
     // its pairs (on the hits' depths alone, t, +inf where no hit), a fold's
     // edge, or on a silhouette a sheet gap behind the pair's other pixel, the
     // first tests of find, which the first pass reads for every pixel. The
-    // hits are read only where the depths allow a fold's edge (one of the pair
-    // a sheet gap behind).
+    // hits are read only where the depths allow a fold's edge (both of the pair
+    // hit, one a sheet gap behind).
     bool maybe_spike(int i, int j) const;
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const;

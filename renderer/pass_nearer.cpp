@@ -89,7 +89,7 @@ bool NearerSheet::maybe_spike(int i, int j) const {
     auto spike_or_fold = [&](size_t a, size_t b) {
         const double near = std::min(depth_[a], depth_[b]), far = std::max(depth_[a], depth_[b]);
         return d > 0.5 * (near + far) + spike_ || (far == HUGE_VAL && near < d - gap) ||
-               (far > behind && fold_edge(k, a, b));
+               (far > behind && far < HUGE_VAL && fold_edge(k, a, b));
     };
     const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
     return (row && spike_or_fold(k - 1, k + 1)) || (column && spike_or_fold(k - c_.width, k + c_.width));
