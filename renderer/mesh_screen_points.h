@@ -106,10 +106,6 @@ private:
         int cell_x(double x) const;
         int cell_y(double y) const;
     };
-    // Built on first use, in two steps: the projection (and screen box) for any
-    // face asked about, the grid only for faces searched a few times (a scan of
-    // the triangles answers the first queries; adjacent_far_faces rejects most
-    // candidates by their box alone).
     // std::call_once's work without its cost here: glibc's pthread_once ends
     // every first call with a futex wake system call, waiters or not, and the
     // frame's first use of each face's projection and grid made some 400 of
@@ -131,6 +127,10 @@ private:
     private:
         std::atomic<bool> done_{false};
     };
+    // Built on first use, in two steps: the projection (and screen box) for any
+    // face asked about, the grid only for faces searched a few times (a scan of
+    // the triangles answers the first queries; adjacent_far_faces rejects most
+    // candidates by their box alone).
     struct Entry {
         std::mutex m;
         Once once, grid_once;

@@ -10,11 +10,10 @@
 #include <vector>
 
 #include "renderer/frame.h"
+#include "renderer/mesh_screen_points.h"
 #include "renderer/pixel_solver.h"
 
 namespace nurbsrt {
-
-class MeshScreenPoints;
 
 // A pixel deeper than this many pixel footprints behind both of its pair is off
 // their sheet: on one smooth sheet the second difference of depth is about a
@@ -140,13 +139,16 @@ private:
     // face joining it there may lie in front: a Russian part's flange behind a
     // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const;
-    // The faces adjacent to crossed[0..nc), faces whose surface the pixel's ray
+    // The faces adjacent to `crossed`, faces whose surface the pixel's ray
     // crosses outside their trim (it passes beyond their edge, where a face
     // joining them may lie in front: a fillet strip too thin for the map along
     // the edge of a face in front, step/bug27693_cornetta-step.stp iso), within
     // reach on screen, but those in `tried`; from their mesh starts, robustly.
-    void beyond_edges(int i, int j, const uint32_t* crossed, int nc, std::span<const uint32_t> tried,
+    void beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,
                       PixelHit& best) const;
+    // Solves face f.id from each of its mesh starts (robustly, keeping the
+    // nearest hit in best); whether any ended outside its trim.
+    bool from_mesh_starts(const MeshScreenPoints::FarFace& f, int i, int j, PixelHit& best) const;
     const FrameContext& c_;
     const Solver& solver_;
     const PixelArray<PixelHit>& hits_;

@@ -112,10 +112,7 @@ void NearerSheet::screen_faces(int i, int j, PixelHit& best) const {
     MeshScreenPoints::FarFace faces[kMaxScreenFaces];
     const int nf = screen_points_.faces_near(sp, near, nn, faces, kMaxScreenFaces, reach * reach,
                                              depth_in_front(best.t, sp));
-    for (int q = 0; q < nf; ++q)
-        for (int k = 0; k < faces[q].nstarts; ++k)
-            consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
-                     static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
+    for (int q = 0; q < nf; ++q) from_mesh_starts(faces[q], i, j, best);
 }
 
 void NearerSheet::other_sheet_starts(int i, int j, PixelHit& best) const {
@@ -167,28 +164,29 @@ void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
     MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
     const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
     for (int q = 0; q < nf; ++q) {
-        bool outside = false;
-        for (int k = 0; k < faces[q].nstarts; ++k)
-            outside |= consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
-                                static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best) == kTrimmed;
-        if (outside) crossed[nc++] = faces[q].id;
+        if (from_mesh_starts(faces[q], i, j, best)) crossed[nc++] = faces[q].id;
         near[nn++] = faces[q].id;
     }
-    if (nc && best.face == p.face && best.t == p.t) beyond_edges(i, j, crossed, nc, {near, near + nn}, best);
+    if (nc && best.face == p.face && best.t == p.t) beyond_edges(i, j, {crossed, crossed + nc}, {near, near + nn}, best);
 }
 
-void NearerSheet::beyond_edges(int i, int j, const uint32_t* crossed, int nc, std::span<const uint32_t> tried,
+void NearerSheet::beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,
                                PixelHit& best) const {
     const ScreenPoint sp = c_.camera.pixel_screen(i, j);
     const double reach = c_.screen_distance(kPitFacePixels);
     MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-    const int nf = screen_points_.adjacent_far_faces(crossed, nc, sp, faces, kMaxAdjacentFaces, reach * reach);
-    for (int q = 0; q < nf; ++q) {
-        if (std::find(tried.begin(), tried.end(), faces[q].id) != tried.end()) continue;
-        for (int k = 0; k < faces[q].nstarts; ++k)
-            consider(faces[q].id, i, j, static_cast<float>(faces[q].starts[k].x),
-                     static_cast<float>(faces[q].starts[k].y), solver_.robust, false, best);
-    }
+    const int nf = screen_points_.adjacent_far_faces(crossed.data(), static_cast<int>(crossed.size()), sp, faces,
+                                                     kMaxAdjacentFaces, reach * reach);
+    for (int q = 0; q < nf; ++q)
+        if (std::find(tried.begin(), tried.end(), faces[q].id) == tried.end()) from_mesh_starts(faces[q], i, j, best);
+}
+
+bool NearerSheet::from_mesh_starts(const MeshScreenPoints::FarFace& f, int i, int j, PixelHit& best) const {
+    bool outside = false;
+    for (int k = 0; k < f.nstarts; ++k)
+        outside |= consider(f.id, i, j, static_cast<float>(f.starts[k].x), static_cast<float>(f.starts[k].y),
+                            solver_.robust, false, best) == kTrimmed;
+    return outside;
 }
 
 }  // namespace nurbsrt

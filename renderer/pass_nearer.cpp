@@ -221,7 +221,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // faces the 4-neighbours do not show (a strip thinner than a pixel between
     // the face in front and the pixel's).
     if (step && !pit && unchanged()) diagonal_faces(i, j, best);
-    if (ncrossed && !pit && unchanged()) beyond_edges(i, j, crossed, ncrossed, {}, best);
+    if (ncrossed && !pit && unchanged()) beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
     if (unchanged()) return false;
     out = best;
     return true;

@@ -193,8 +193,8 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // contact a crossing in the trim band blocks only beside another face's
         // at the same depth (a crack between two faces of an occluder): alone,
         // the band would widen every occluder into a phantom shadow line along
-        // its free edges. A stop on the parameter-box
-        // border near the ray (Solver's border-gap hit) is no crossing at all.
+        // its free edges. A stop on the parameter-box border near the ray
+        // (Solver's border-gap hit) is no crossing at all.
         const Outcome o = last = solver_.solve(id, sp, u0, v0, solver_.robust, true, h);
         last_t = h.t;
         if (o != kConverged && o != kNearTrim) return false;
