@@ -5,6 +5,8 @@
 // renderer.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -30,10 +32,32 @@ public:
     // edge, or on a silhouette a sheet gap behind the pair's other pixel, the
     // first tests of find, which the first pass reads for every pixel. The
     // hits are read only where the depths allow a fold's edge (both of the pair
-    // hit, one a sheet gap behind).
-    bool maybe_spike(int i, int j) const;
+    // hit, one a sheet gap behind). `thin`: whether the pixel may have
+    // thin_tries, a 4-neighbour a sheet gap behind it (in one scan of the depths).
+    bool maybe_spike(int i, int j, bool& thin) const;
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const;
+
+    // A solve of a thin face at a pixel near one of its hits (thin_tries).
+    struct ThinTry {
+        size_t k;       // the pixel tried
+        uint32_t face;  // the thin face, started from its hit's (u, v)
+        float u, v;
+        int reach;      // how far that hit lies (pixels, Chebyshev): the nearest start first
+    };
+    // Where pixel (i, j)'s hit is a thin face's, a line of pixels in front of
+    // other faces (both of a horizontal or vertical pair on other faces, one of
+    // them a hit a sheet gap behind it; maybe_spike's `thin` flag is the same
+    // test): the pixels within kThinReach a sheet gap behind it on other faces,
+    // but its 4-neighbours (find's steps), to be solved on its face from its
+    // (u, v). A face narrower than a pixel running diagonally (a thin ring of
+    // unsewn IGES panels seen edge-on, iges/marsCapsule.igs front) covers only
+    // every second or third pixel centre in the map; between those the pixels
+    // show the face behind, level all around, where no spike, step or pit
+    // starts a search, though the exact ray crosses the thin face.
+    void thin_tries(int i, int j, std::vector<ThinTry>& out) const;
+    // Solves a ThinTry; true, with out, where it is nearer than the pixel's hit.
+    bool solve(const ThinTry& t, PixelHit& out) const;
 
 private:
     // At a step that its 4-neighbours' faces did not fill: the faces that only
@@ -157,5 +181,30 @@ private:
     const MeshScreenPoints& screen_points_;
     double spike_ = 0, nearer_ = 0;
 };
+
+// Inline: the first pass calls it for every pixel of the frame.
+inline bool NearerSheet::maybe_spike(int i, int j, bool& thin) const {
+    const size_t k = c_.map.index(i, j);
+    const double d = depth_[k];
+    thin = false;
+    if (!(d < HUGE_VAL)) return false;
+    const double gap = sheet_gap(d), behind = d + gap;
+    auto spike_or_fold = [&](size_t a, size_t b) {
+        const double near = std::min(depth_[a], depth_[b]), far = std::max(depth_[a], depth_[b]);
+        return d > 0.5 * (near + far) + spike_ || (far == HUGE_VAL && near < d - gap) ||
+               (far > behind && far < HUGE_VAL && fold_edge(k, a, b));
+    };
+    const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
+    if (row && column) {
+        // thin_tries' test: a pair on other faces, one of them a hit behind.
+        auto hit_behind = [&](size_t n) { return depth_[n] > behind && depth_[n] < HUGE_VAL; };
+        auto thin_pair = [&](size_t a, size_t b) {
+            return (hit_behind(a) || hit_behind(b)) && hits_[a].face != hits_[k].face && hits_[b].face != hits_[k].face;
+        };
+        const size_t w = static_cast<size_t>(c_.width);
+        thin = thin_pair(k - 1, k + 1) || thin_pair(k - w, k + w);
+    }
+    return (row && spike_or_fold(k - 1, k + 1)) || (column && spike_or_fold(k - c_.width, k + c_.width));
+}
 
 }  // namespace nurbsrt

@@ -8,12 +8,15 @@
 // Such pixels are solved again from those neighbours' faces and (u, v), at a step
 // also from faces the neighbours do not show (nearer_sheet_search.cpp); a hit on
 // the pixel's own ray that is nearer by more than the nearer threshold replaces
-// it: the nearest intersection is the visible one. A hit just outside the neighbour face's trim, within its tolerance band,
+// it: the nearest intersection is the visible one. A face narrower than a pixel
+// that runs diagonally in front of others shows in the map only every second or
+// third pixel: its face is tried at the pixels around those (thin_tries). A hit just outside the neighbour face's trim, within its tolerance band,
 // counts where both neighbours are in front (a crack between two front faces
 // otherwise shows the face behind). Reads only the hits so far, so the result
 // stays independent of the thread count.
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "renderer/mesh_screen_points.h"
 #include "renderer/nearer_sheet.h"
@@ -79,20 +82,6 @@ NearerSheet::NearerSheet(const FrameContext& c, const Solver& solver, const Mesh
     const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
     spike_ = kSpikeRelative * diag;
     nearer_ = kNearerRelative * diag;
-}
-
-bool NearerSheet::maybe_spike(int i, int j) const {
-    const size_t k = c_.map.index(i, j);
-    const double d = depth_[k];
-    if (!(d < HUGE_VAL)) return false;
-    const double gap = sheet_gap(d), behind = d + gap;
-    auto spike_or_fold = [&](size_t a, size_t b) {
-        const double near = std::min(depth_[a], depth_[b]), far = std::max(depth_[a], depth_[b]);
-        return d > 0.5 * (near + far) + spike_ || (far == HUGE_VAL && near < d - gap) ||
-               (far > behind && far < HUGE_VAL && fold_edge(k, a, b));
-    };
-    const bool row = i > 0 && i + 1 < c_.width, column = j > 0 && j + 1 < c_.height;
-    return (row && spike_or_fold(k - 1, k + 1)) || (column && spike_or_fold(k - c_.width, k + c_.width));
 }
 
 bool NearerSheet::find(int i, int j, PixelHit& out) const {
@@ -259,6 +248,41 @@ Outcome NearerSheet::consider(uint32_t id, int i, int j, float u0, float v0, con
     return o;
 }
 
+namespace {
+
+// Solves the thin faces' tries, from each pixel's nearest start per face, and
+// adds the nearer hits found to updates.
+void solve_thin(const FrameContext& c, const NearerSheet& nearer, std::vector<NearerSheet::ThinTry>& tries,
+                std::vector<Update>& updates) {
+    if (tries.empty()) return;
+    using Try = NearerSheet::ThinTry;
+    std::sort(tries.begin(), tries.end(), [](const Try& x, const Try& y) {
+        return std::tie(x.k, x.face, x.reach, x.u, x.v) < std::tie(y.k, y.face, y.reach, y.u, y.v);
+    });
+    tries.erase(std::unique(tries.begin(), tries.end(),
+                            [](const Try& x, const Try& y) { return x.k == y.k && x.face == y.face; }),
+                tries.end());
+    std::vector<PixelHit> hit(tries.size());
+    std::vector<uint8_t> found(tries.size(), 0);
+    c.arena.execute([&] {
+        tbb::parallel_for(size_t(0), tries.size(), [&](size_t q) { found[q] = nearer.solve(tries[q], hit[q]); });
+    });
+    for (size_t q = 0; q < tries.size(); ++q)
+        if (found[q]) updates.push_back({tries[q].k, hit[q]});
+    tries.clear();
+}
+
+// One update per pixel, its nearest hit (a pixel may be found by find and by
+// several thin faces' tries).
+void nearest_per_pixel(std::vector<Update>& updates) {
+    std::sort(updates.begin(), updates.end(),
+              [](const Update& x, const Update& y) { return std::tie(x.k, x.hit.t) < std::tie(y.k, y.hit.t); });
+    updates.erase(std::unique(updates.begin(), updates.end(), [](const Update& x, const Update& y) { return x.k == y.k; }),
+                  updates.end());
+}
+
+}  // namespace
+
 uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                            FrameBuffers& b) {
     const NearerSheet nearer(c, solver, screen_points, b);
@@ -266,16 +290,26 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     // The first pass examines every pixel; replacements are collected per row
     // (almost always none) and applied between passes: no frame-sized buffer for
     // a handful of pixels. Later passes examine only the 4-neighbours of those the
-    // last pass changed (all 8: 7-19 % more solves here, most of them repeats).
+    // last pass changed (all 8: 7-19 % more solves here, most of them repeats),
+    // and try the thin faces of those changed pixels that are thin faces' on
+    // (a strip narrower than a pixel is followed along, its pixels 2-3 apart).
     std::vector<std::vector<Update>> row_updates(c.height);
+    std::vector<std::vector<NearerSheet::ThinTry>> row_tries(c.height);
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
             PixelHit h;
-            if (nearer.maybe_spike(i, j) && nearer.find(i, j, h)) row_updates[j].push_back({c.map.index(i, j), h});
+            bool thin;
+            if (nearer.maybe_spike(i, j, thin) && nearer.find(i, j, h))
+                row_updates[j].push_back({c.map.index(i, j), h});
+            if (thin) nearer.thin_tries(i, j, row_tries[j]);
         }
     });
     std::vector<Update> updates;
+    std::vector<NearerSheet::ThinTry> tries;
     for (const std::vector<Update>& r : row_updates) updates.insert(updates.end(), r.begin(), r.end());
+    for (const std::vector<NearerSheet::ThinTry>& r : row_tries) tries.insert(tries.end(), r.begin(), r.end());
+    solve_thin(c, nearer, tries, updates);
+    nearest_per_pixel(updates);
     uint64_t replaced = 0;
     std::vector<size_t> cand;
     std::vector<PixelHit> cand_hit;
@@ -290,6 +324,7 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
                 if ((ni == i) != (nj == j)) cand.push_back(c.map.index(ni, nj));  // the 4-neighbours
             });
         }
+        for (const Update& u : updates) nearer.thin_tries(static_cast<int>(u.k % W), static_cast<int>(u.k / W), tries);
         replaced += updates.size();
         std::sort(cand.begin(), cand.end());
         cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
@@ -304,6 +339,8 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
         updates.clear();
         for (size_t q = 0; q < cand.size(); ++q)
             if (cand_changed[q]) updates.push_back({cand[q], cand_hit[q]});
+        solve_thin(c, nearer, tries, updates);
+        nearest_per_pixel(updates);
     }
     // The last pass's finds are nearer hits on their own rays like any other:
     // kept, though their neighbours are not examined again.

@@ -6,6 +6,10 @@
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepOffsetAPI_ThruSections.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRep_Builder.hxx>
+#include <TopoDS_Compound.hxx>
+#include <gp_Circ.hxx>
+#include <gp_Pln.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepCheck_Analyzer.hxx>
@@ -215,6 +219,28 @@ TopoDS_Shape make_blade_fan() {
     return fuse.Shape();
 }
 
+// thin_ring (see the header): where the ring runs diagonally, the map shows it
+// at every second or third pixel only, and the pixels between show the plate
+// behind it (iges/marsCapsule.igs front had 68 such pixels).
+TopoDS_Shape make_thin_ring() {
+    const TopoDS_Shape plate = BRepPrimAPI_MakeBox(2 * kThinRingCentre, 4.0, 2 * kThinRingCentre).Shape();
+    const gp_Ax2 axis(gp_Pnt(kThinRingCentre, -kThinRingGap, kThinRingCentre), gp_Dir(0, 1, 0));
+    auto circle = [&](double r) {
+        return BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(gp_Circ(axis, r)).Edge()).Wire();
+    };
+    BRepBuilderAPI_MakeFace ring(gp_Pln(axis.Location(), axis.Direction()), circle(kThinRingRadius + kThinRingWidth));
+    ring.Add(TopoDS::Wire(circle(kThinRingRadius).Reversed()));
+    if (!ring.IsDone()) throw std::runtime_error("thin_ring: face failed");
+    ShapeFix_Face fix(ring.Face());
+    fix.Perform();
+    TopoDS_Compound both;
+    BRep_Builder b;
+    b.MakeCompound(both);
+    b.Add(both, plate);
+    b.Add(both, fix.Face());
+    return both;
+}
+
 // The free-form net: 6 x 5 poles over x in [0, 20], y in [0, 12], with a smooth
 // non-planar height field (values are fixed; no randomness).
 Handle(Geom_BSplineSurface) make_freeform_surface(bool rational) {
@@ -312,6 +338,7 @@ const Named kFixtures[] = {
     {"freeform_bspline", freeform_bspline}, {"freeform_rational", freeform_rational},
     {"assembly", assembly},
     {"filleted_box_blend", filleted_box_blend}, {"blade_fan", blade_fan},
+    {"thin_ring", thin_ring},
 };
 // Fixtures that also get an IGES copy ("<name>_iges").
 const char* const kIgesFixtures[] = {"box_with_holes", "filleted_box", "cylinder", "sphere",
@@ -325,6 +352,7 @@ std::string box_with_holes() { return step_fixture("box_with_holes", make_box_wi
 std::string filleted_box() { return step_fixture("filleted_box", make_filleted_box); }
 std::string filleted_box_blend() { return step_fixture("filleted_box_blend", make_filleted_box_blend); }
 std::string blade_fan() { return step_fixture("blade_fan", make_blade_fan); }
+std::string thin_ring() { return step_fixture("thin_ring", make_thin_ring); }
 std::string cylinder() {
     return step_fixture("cylinder", [] { return BRepPrimAPI_MakeCylinder(10.0, 30.0).Shape(); });
 }

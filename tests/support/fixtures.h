@@ -36,6 +36,11 @@ std::string filleted_box_blend();
 // A fan: a hub cylinder (r 8, h 8, axis Z) fused with 7 thin twisted blades
 // (lofted B-spline faces, 0.6 thick, 9 chord, radius 6 to 38, 50 deg twist).
 std::string blade_fan();
+// A flat ring kThinRingWidth wide (a third of a pixel at 512 px) in the plane
+// y = -kThinRingGap, centred on (kThinRingCentre, y, kThinRingCentre), in front of
+// the face y = 0 of a 100 x 4 x 100 plate as seen from the front (along +y).
+std::string thin_ring();
+inline constexpr double kThinRingRadius = 30.0, kThinRingWidth = 0.08, kThinRingGap = 1.0, kThinRingCentre = 50.0;
 // BRepPrimAPI primitives (analytic surfaces; NURBS conversion makes them rational).
 std::string cylinder();  // r 10, h 30, 3 faces
 std::string sphere();    // r 15, 1 face (two degenerate pole edges)
