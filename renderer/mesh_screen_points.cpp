@@ -320,4 +320,96 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
     return nearest_first(all, out, max_out);
 }
 
+bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested, const PixelArray<double>& hit_t,
+                                   double gap_footprints, std::vector<MeshPixel>& out) const {
+    const Entry& e = projected(id);
+    if (!(e.lo.x <= e.hi.x)) return true;  // nothing in front of the eye
+    const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+    const std::vector<Projected>& pts = e.pts;
+    const int W = c_.width, H = c_.height;
+    // Screen to pixel coordinates (Camera::screen inverted; pixel i's centre at i + 0.5).
+    const double aspect = c_.camera.screen(W, 0).sx;
+    auto px = [&](double sx) { return (sx / aspect + 1.0) * 0.5 * W - 0.5; };
+    auto py = [&](double sy) { return (1.0 - sy) * 0.5 * H - 0.5; };
+    const double r = c_.screen_distance(pixels), r2 = r * r;
+    const size_t first = out.size();
+    size_t tested = 0;
+    const size_t ntri = mesh.triangles.size() / 3;
+    for (size_t t = 0; t < ntri; ++t) {
+        if (!usable_triangle(mesh, pts, t)) continue;
+        const uint32_t* idx = &mesh.triangles[3 * t];
+        const Vec2 A = pts[idx[0]].s, B = pts[idx[1]].s, C = pts[idx[2]].s;
+        const int i0 = std::max(0, static_cast<int>(std::ceil(px(std::min({A.x, B.x, C.x})) - pixels)));
+        const int i1 = std::min(W - 1, static_cast<int>(std::floor(px(std::max({A.x, B.x, C.x})) + pixels)));
+        const int j0 = std::max(0, static_cast<int>(std::ceil(py(std::max({A.y, B.y, C.y})) - pixels)));
+        const int j1 = std::min(H - 1, static_cast<int>(std::floor(py(std::min({A.y, B.y, C.y})) + pixels)));
+        if (i1 < i0 || j1 < j0) continue;
+        {
+            const int ci = std::clamp(static_cast<int>(std::lround(px((A.x + B.x + C.x) / 3))), 0, W - 1);
+            const int cj = std::clamp(static_cast<int>(std::lround(py((A.y + B.y + C.y) / 3))), 0, H - 1);
+            const double t = hit_t[c_.map.index(ci, cj)];
+            const ScreenPoint sp = c_.camera.pixel_screen(ci, cj);
+            const double front = std::min({pts[idx[0]].depth, pts[idx[1]].depth, pts[idx[2]].depth});
+            if (t < HUGE_VAL &&
+                front > (t + gap_footprints * c_.pixel_footprint(t)) / c_.camera.hit_distance_from_depth(1.0, sp))
+                continue;
+        }
+        tested += static_cast<size_t>(i1 - i0 + 1) * static_cast<size_t>(j1 - j0 + 1);
+        if (tested > max_tested) {
+            out.resize(first);
+            return false;
+        }
+        const double z3[3] = {pts[idx[0]].depth, pts[idx[1]].depth, pts[idx[2]].depth};
+        // Each edge's signed distance a x + b y + c (unit normal, the opposite
+        // vertex on the positive side): a pixel centre more than r outside any
+        // edge lies farther than r from the triangle (the converse need not
+        // hold at the corners; the exact test follows). Degenerate triangles
+        // (no area) skip this cull.
+        double ea[3], eb[3], ec[3];
+        const Vec2 V[3] = {A, B, C};
+        const double area2 = (B.x - A.x) * (C.y - A.y) - (B.y - A.y) * (C.x - A.x);
+        const bool cull = std::fabs(area2) > 0;
+        for (int q = 0; q < 3 && cull; ++q) {
+            const Vec2 P = V[q], Q = V[(q + 1) % 3];
+            const double len = std::hypot(Q.x - P.x, Q.y - P.y), sgn = area2 > 0 ? 1.0 : -1.0;
+            ea[q] = -sgn * (Q.y - P.y) / len;
+            eb[q] = sgn * (Q.x - P.x) / len;
+            ec[q] = -(ea[q] * P.x + eb[q] * P.y);
+        }
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+                const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+                const Vec2 p{sp.sx, sp.sy};
+                if (cull && (ea[0] * p.x + eb[0] * p.y + ec[0] < -r || ea[1] * p.x + eb[1] * p.y + ec[1] < -r ||
+                             ea[2] * p.x + eb[2] * p.y + ec[2] < -r))
+                    continue;
+                double l[3];
+                if (inside_triangle(p, A, B, C, l)) {
+                    out.push_back({c_.map.index(i, j), interpolated_uv(l, mesh, idx), interpolated_depth(l, z3)});
+                    continue;
+                }
+                // Outside: the nearest point of its nearest edge, if within reach.
+                double best = r2, at = 0;
+                int edge = -1;
+                for (int q = 0; q < 3; ++q) {
+                    double s = 0;
+                    const double d2 = segment_distance2(p, pts[idx[q]].s, pts[idx[(q + 1) % 3]].s, s);
+                    if (d2 <= best) best = d2, at = s, edge = q;
+                }
+                if (edge < 0) continue;
+                const uint32_t a = idx[edge], b = idx[(edge + 1) % 3];
+                out.push_back({c_.map.index(i, j), lerp(mesh.uv[a], mesh.uv[b], at),
+                               pts[a].depth + at * (pts[b].depth - pts[a].depth)});
+            }
+    }
+    // One per pixel: the frontmost.
+    const auto begin = out.begin() + static_cast<std::ptrdiff_t>(first);
+    std::sort(begin, out.end(), [](const MeshPixel& x, const MeshPixel& y) {
+        return x.k < y.k || (x.k == y.k && x.depth < y.depth);
+    });
+    out.erase(std::unique(begin, out.end(), [](const MeshPixel& x, const MeshPixel& y) { return x.k == y.k; }),
+              out.end());
+    return true;
+}
+
 }  // namespace nurbsrt

@@ -55,7 +55,19 @@ public:
     // every second or third pixel centre in the map; between those the pixels
     // show the face behind, level all around, where no spike, step or pit
     // starts a search, though the exact ray crosses the thin face.
-    void thin_tries(int i, int j, std::vector<ThinTry>& out) const;
+    // Returns whether the pixel is a thin face's.
+    bool thin_tries(int i, int j, std::vector<ThinTry>& out) const;
+    // A thin face's tries over its whole mesh: the pixels within
+    // kThinFacePixels of its mesh on screen, where its frontmost mesh point
+    // there lies a sheet gap in front of the pixel's hit. Where the thin face
+    // runs along a row or a column, its map pixels can be many pixels apart or
+    // missing for a stretch: the mesh's chords sag by up to its deflection (a
+    // ring a third of a pixel wide whose mesh strip passes between two rows of
+    // pixel centres, where the exact ring covers one row's). Triangles hidden
+    // behind the hit at their centroid's pixel are skipped (a face mostly
+    // behind others, whose few visible pixels are thin: the mesh scan of
+    // trj8's iso frame 7.6 -> 5.3 M instructions).
+    void thin_face_tries(uint32_t face, std::vector<ThinTry>& out) const;
     // Solves a ThinTry; true, with out, where it is nearer than the pixel's hit.
     bool solve(const ThinTry& t, PixelHit& out) const;
 

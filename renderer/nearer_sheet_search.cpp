@@ -38,14 +38,23 @@ constexpr int kStepFaces = 12;
 // three pixels, so the pixels between lie within 2 of one of its map pixels
 // (iges/marsCapsule.igs front: 68 wrong-sheet pixels, all within 2).
 constexpr int kThinReach = 2;
+// thin_face_tries: the pixels within this of a thin face's mesh on screen. The
+// map mesh's chords lie within its deflection of the surface, under a pixel at
+// the views rendered (the thin ring fixture: 0.14 against 0.2 per pixel); half
+// a pixel more for the pixel centre's offset.
+constexpr double kThinFacePixels = 1.5;
+// ... and not for a face whose mesh's triangles' screen boxes hold more pixel
+// centres than this (a face covering much of the frame, which a few thin
+// pixels made a candidate: the map shows it anyway).
+constexpr size_t kMaxThinFaceTested = size_t(1) << 16;
 
 }  // namespace
 
-void NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
-    if (i <= 0 || j <= 0 || i + 1 >= c_.width || j + 1 >= c_.height) return;  // no pairs
+bool NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
+    if (i <= 0 || j <= 0 || i + 1 >= c_.width || j + 1 >= c_.height) return false;  // no pairs
     const size_t k = c_.map.index(i, j);
     const double d = depth_[k];
-    if (!(d < HUGE_VAL)) return;
+    if (!(d < HUGE_VAL)) return false;
     const double behind = d + sheet_gap(d);
     const PixelHit& p = hits_[k];
     // A pair on other faces (hits: a thin face against the background is the
@@ -56,7 +65,7 @@ void NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
     auto thin = [&](size_t a, size_t b) {
         return other(a) && other(b) && (depth_[a] > behind || depth_[b] > behind);
     };
-    if (!thin(k - 1, k + 1) && !thin(k - c_.width, k + c_.width)) return;
+    if (!thin(k - 1, k + 1) && !thin(k - c_.width, k + c_.width)) return false;
     for_each_neighbour(c_, i, j, kThinReach, [&](int ni, int nj) {
         const int reach = std::max(std::abs(ni - i), std::abs(nj - j));
         if (reach + std::min(std::abs(ni - i), std::abs(nj - j)) <= 1) return;  // the pixel, its 4-neighbours
@@ -64,6 +73,20 @@ void NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
         if (depth_[n] > behind && depth_[n] < HUGE_VAL && hits_[n].face != p.face)
             out.push_back({n, p.face, p.u, p.v, reach});
     });
+    return true;
+}
+
+void NearerSheet::thin_face_tries(uint32_t face, std::vector<ThinTry>& out) const {
+    std::vector<MeshScreenPoints::MeshPixel> pixels;
+    if (!screen_points_.pixels_near(face, kThinFacePixels, kMaxThinFaceTested, depth_, kSheetFootprints, pixels))
+        return;
+    for (const MeshScreenPoints::MeshPixel& m : pixels) {
+        const PixelHit& h = hits_[m.k];
+        if (!h.face || h.face == face) continue;  // the background is the rescue's
+        const int i = static_cast<int>(m.k % c_.width), j = static_cast<int>(m.k / c_.width);
+        if (m.depth < depth_in_front(h.t, c_.camera.pixel_screen(i, j)))
+            out.push_back({m.k, face, static_cast<float>(m.uv.x), static_cast<float>(m.uv.y), kThinReach + 1});
+    }
 }
 
 bool NearerSheet::solve(const ThinTry& t, PixelHit& out) const {

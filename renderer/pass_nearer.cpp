@@ -10,7 +10,10 @@
 // the pixel's own ray that is nearer by more than the nearer threshold replaces
 // it: the nearest intersection is the visible one. A face narrower than a pixel
 // that runs diagonally in front of others shows in the map only every second or
-// third pixel: its face is tried at the pixels around those (thin_tries). A hit just outside the neighbour face's trim, within its tolerance band,
+// third pixel: its face is tried at the pixels around those (thin_tries), and a
+// face most of whose pixels are such is tried along its whole mesh on screen
+// (thin_face_tries: where it runs along a row, its map pixels may be missing
+// for a stretch). A hit just outside the neighbour face's trim, within its tolerance band,
 // counts where both neighbours are in front (a crack between two front faces
 // otherwise shows the face behind). Reads only the hits so far, so the result
 // stays independent of the thread count.
@@ -272,6 +275,37 @@ void solve_thin(const FrameContext& c, const NearerSheet& nearer, std::vector<Ne
     tries.clear();
 }
 
+// A face is thin where at least this share of its pixels are thin pixels
+// (NearerSheet::thin_tries): a ring or a strip narrower than a pixel is all thin
+// pixels, while the faces of a machine part show a few at their corners and
+// narrow ends (whose meshes, searched too, cost trj8's nearer-sheet pass 4x).
+constexpr double kThinFaceShare = 0.5;
+
+// The thin faces among those of the rows' thin pixels, ascending.
+std::vector<uint32_t> thin_faces(const FrameContext& c, const FrameBuffers& b,
+                                 const std::vector<std::vector<uint32_t>>& row_thin) {
+    std::vector<uint32_t> thin(c.nfaces + 1, 0), all(c.nfaces + 1, 0), out;
+    bool any = false;
+    for (const std::vector<uint32_t>& r : row_thin)
+        for (const uint32_t f : r) ++thin[f], any = true;
+    if (!any) return out;
+    for (size_t k = 0; k < c.pixels(); ++k) ++all[b.hits[k].face];
+    for (uint32_t f = 1; f <= c.nfaces; ++f)
+        if (thin[f] && thin[f] >= kThinFaceShare * all[f]) out.push_back(f);
+    return out;
+}
+
+// The thin faces tried over their whole mesh too (NearerSheet::thin_face_tries),
+// appended to tries.
+void add_thin_face_tries(const FrameContext& c, const NearerSheet& nearer, const std::vector<uint32_t>& faces,
+                         std::vector<NearerSheet::ThinTry>& tries) {
+    std::vector<std::vector<NearerSheet::ThinTry>> per_face(faces.size());
+    c.arena.execute([&] {
+        tbb::parallel_for(size_t(0), faces.size(), [&](size_t q) { nearer.thin_face_tries(faces[q], per_face[q]); });
+    });
+    for (const std::vector<NearerSheet::ThinTry>& f : per_face) tries.insert(tries.end(), f.begin(), f.end());
+}
+
 // One update per pixel, its nearest hit (a pixel may be found by find and by
 // several thin faces' tries).
 void nearest_per_pixel(std::vector<Update>& updates) {
@@ -295,19 +329,21 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     // (a strip narrower than a pixel is followed along, its pixels 2-3 apart).
     std::vector<std::vector<Update>> row_updates(c.height);
     std::vector<std::vector<NearerSheet::ThinTry>> row_tries(c.height);
+    std::vector<std::vector<uint32_t>> row_thin(c.height);  // the faces of the row's thin pixels
     parallel_rows(c, false, [&](int j) {
         for (int i = 0; i < W; ++i) {
             PixelHit h;
             bool thin;
             if (nearer.maybe_spike(i, j, thin) && nearer.find(i, j, h))
                 row_updates[j].push_back({c.map.index(i, j), h});
-            if (thin) nearer.thin_tries(i, j, row_tries[j]);
+            if (thin && nearer.thin_tries(i, j, row_tries[j])) row_thin[j].push_back(b.hits[c.map.index(i, j)].face);
         }
     });
     std::vector<Update> updates;
     std::vector<NearerSheet::ThinTry> tries;
     for (const std::vector<Update>& r : row_updates) updates.insert(updates.end(), r.begin(), r.end());
     for (const std::vector<NearerSheet::ThinTry>& r : row_tries) tries.insert(tries.end(), r.begin(), r.end());
+    add_thin_face_tries(c, nearer, thin_faces(c, b, row_thin), tries);
     solve_thin(c, nearer, tries, updates);
     nearest_per_pixel(updates);
     uint64_t replaced = 0;
