@@ -325,8 +325,8 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     // (almost always none) and applied between passes: no frame-sized buffer for
     // a handful of pixels. Later passes examine only the 4-neighbours of those the
     // last pass changed (all 8: 7-19 % more solves here, most of them repeats),
-    // and try the thin faces of those changed pixels that are thin faces' on
-    // (a strip narrower than a pixel is followed along, its pixels 2-3 apart).
+    // and where a changed pixel is a thin face's, that face around it (a strip
+    // narrower than a pixel is followed along, its pixels 2-3 apart).
     std::vector<std::vector<Update>> row_updates(c.height);
     std::vector<std::vector<NearerSheet::ThinTry>> row_tries(c.height);
     std::vector<std::vector<uint32_t>> row_thin(c.height);  // the faces of the row's thin pixels
