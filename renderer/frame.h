@@ -98,6 +98,11 @@ struct FrameContext {
     double pixel_footprint(double t) const { return 2.0 * camera.image_to_model_scale(t) / height; }
     // A distance of `pixels` in screen units (ScreenPoint), which span 2 over the height.
     double screen_distance(double pixels) const { return 2.0 * pixels / height; }
+    // The depth along the view direction (the map mesh's measure) `footprints`
+    // pixel footprints behind a hit at distance t on the ray through sp.
+    double depth_behind(double t, double footprints, ScreenPoint sp) const {
+        return (t + footprints * pixel_footprint(t)) / camera.hit_distance_from_depth(1.0, sp);
+    }
 };
 
 // Frame-sized buffers are filled in blocks of this many bytes with a cancel check

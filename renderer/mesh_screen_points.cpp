@@ -328,7 +328,7 @@ bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested
     const std::vector<Projected>& pts = e.pts;
     const int W = c_.width, H = c_.height;
     // Screen to pixel coordinates (Camera::screen inverted; pixel i's centre at i + 0.5).
-    const double aspect = c_.camera.screen(W, 0).sx;
+    const double aspect = c_.camera.aspect();
     auto px = [&](double sx) { return (sx / aspect + 1.0) * 0.5 * W - 0.5; };
     auto py = [&](double sy) { return (1.0 - sy) * 0.5 * H - 0.5; };
     const double r = c_.screen_distance(pixels), r2 = r * r;
@@ -348,11 +348,8 @@ bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested
             const int ci = std::clamp(static_cast<int>(std::lround(px((A.x + B.x + C.x) / 3))), 0, W - 1);
             const int cj = std::clamp(static_cast<int>(std::lround(py((A.y + B.y + C.y) / 3))), 0, H - 1);
             const double t = hit_t[c_.map.index(ci, cj)];
-            const ScreenPoint sp = c_.camera.pixel_screen(ci, cj);
             const double front = std::min({pts[idx[0]].depth, pts[idx[1]].depth, pts[idx[2]].depth});
-            if (t < HUGE_VAL &&
-                front > (t + gap_footprints * c_.pixel_footprint(t)) / c_.camera.hit_distance_from_depth(1.0, sp))
-                continue;
+            if (t < HUGE_VAL && front > c_.depth_behind(t, gap_footprints, c_.camera.pixel_screen(ci, cj))) continue;
         }
         tested += static_cast<size_t>(i1 - i0 + 1) * static_cast<size_t>(j1 - j0 + 1);
         if (tested > max_tested) {

@@ -240,7 +240,7 @@ bool NearerSheet::continues(const PixelHit& p, const PixelHit& n, int fi, int fj
 }
 
 double NearerSheet::depth_in_front(double t, ScreenPoint sp) const {
-    return (t - sheet_gap(t)) / c_.camera.hit_distance_from_depth(1.0, sp);
+    return c_.depth_behind(t, -kSheetFootprints, sp);
 }
 
 Outcome NearerSheet::consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params,
