@@ -42,10 +42,12 @@ const char* kFragmentShader = R"(#version 450 core
 in vec2 v_uv;
 flat in uint v_face;
 layout(location = 0) out uint o_face;
-layout(location = 1) out vec2 o_uv;
+layout(location = 1) out float o_u;
+layout(location = 2) out float o_v;
 void main() {
     o_face = v_face;
-    o_uv = v_uv;
+    o_u = v_uv.x;
+    o_v = v_uv.y;
 }
 )";
 
@@ -62,7 +64,9 @@ struct MapRenderer::Impl {
     // ebo: the map mesh's camera-independent data of PreparedScene `uploaded`.
     GLuint vbo_clip = 0, vbo_uv = 0, vbo_face = 0, ebo = 0;
     uint64_t uploaded = 0;  // PreparedScene::id of the static buffers' contents, 0: none
-    GLuint fbo = 0, tex_face = 0, tex_uv = 0, rb_depth = 0;
+    // One attachment per map array (face, u, v), so that each is read back
+    // straight into its PreliminaryMap vector, with no interleaved copy to split.
+    GLuint fbo = 0, tex_face = 0, tex_u = 0, tex_v = 0, rb_depth = 0;
     int fb_w = 0, fb_h = 0;
 
     Impl() {
@@ -116,10 +120,10 @@ struct MapRenderer::Impl {
     void release_fbo() {
         if (!fbo) return;
         glDeleteFramebuffers(1, &fbo);
-        glDeleteTextures(1, &tex_face);
-        glDeleteTextures(1, &tex_uv);
+        const GLuint tex[3] = {tex_face, tex_u, tex_v};
+        glDeleteTextures(3, tex);
         glDeleteRenderbuffers(1, &rb_depth);
-        fbo = tex_face = tex_uv = rb_depth = 0;
+        fbo = tex_face = tex_u = tex_v = rb_depth = 0;
     }
 
     void ensure_fbo(int w, int h) {
@@ -127,20 +131,20 @@ struct MapRenderer::Impl {
         release_fbo();
         glGenFramebuffers(1, &fbo);
         glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-        glGenTextures(1, &tex_face);
-        glBindTexture(GL_TEXTURE_2D, tex_face);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, w, h);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex_face, 0);
-        glGenTextures(1, &tex_uv);
-        glBindTexture(GL_TEXTURE_2D, tex_uv);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RG32F, w, h);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, tex_uv, 0);
+        GLuint* const tex[3] = {&tex_face, &tex_u, &tex_v};
+        const GLenum formats[3] = {GL_R32UI, GL_R32F, GL_R32F};
+        for (int a = 0; a < 3; ++a) {
+            glGenTextures(1, tex[a]);
+            glBindTexture(GL_TEXTURE_2D, *tex[a]);
+            glTexStorage2D(GL_TEXTURE_2D, 1, formats[a], w, h);
+            glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + a, GL_TEXTURE_2D, *tex[a], 0);
+        }
         glGenRenderbuffers(1, &rb_depth);
         glBindRenderbuffer(GL_RENDERBUFFER, rb_depth);
         glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
         glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb_depth);
-        const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-        glDrawBuffers(2, bufs);
+        const GLenum bufs[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+        glDrawBuffers(3, bufs);
         if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) fail("framebuffer incomplete");
         fb_w = w;
         fb_h = h;
@@ -176,35 +180,36 @@ void depth_range(const Scene& scene, const Camera& camera, double& znear, double
 }
 
 // Reads the `rows` framebuffer rows of the band whose bottom is GL window row
-// y_lo into the map (ids and uv: reused read buffers). GL row 0 is the bottom:
-// flip to the contract's row order. rgb8: eq. (4).
-void read_back_band(PreliminaryMap& map, int y_lo, int rows, const Scene& scene, MapPrecision precision,
-                    std::vector<uint32_t>& ids, std::vector<float>& uv) {
-    const int W = map.width, H = map.height;
-    const size_t npx = static_cast<size_t>(W) * rows;
-    ids.resize(npx);
-    uv.resize(2 * npx);
+// y_lo into the map. GL row 0 is the bottom: the band's rows are the map's rows
+// H - y_lo - rows .. H - y_lo - 1 in reverse order, so each attachment is read
+// straight into that block of its map vector and the block's rows are then
+// swapped end for end (a copy through a read buffer and a per-pixel loop were
+// 2-3 % of a frame). rgb8: eq. (4).
+void read_back_band(PreliminaryMap& map, int y_lo, int rows, const Scene& scene, MapPrecision precision) {
+    const size_t W = static_cast<size_t>(map.width);
+    const size_t first = static_cast<size_t>(map.height - y_lo - rows) * W, npx = W * rows;
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, W, rows, GL_RED_INTEGER, GL_UNSIGNED_INT, ids.data());
+    glReadPixels(0, 0, map.width, rows, GL_RED_INTEGER, GL_UNSIGNED_INT, map.face.data() + first);
     glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, W, rows, GL_RG, GL_FLOAT, uv.data());
+    glReadPixels(0, 0, map.width, rows, GL_RED, GL_FLOAT, map.u.data() + first);
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, map.width, rows, GL_RED, GL_FLOAT, map.v.data() + first);
     if (glGetError() != GL_NO_ERROR) fail("OpenGL error while rendering");
-    for (int r = 0; r < rows; ++r) {
-        // Framebuffer row r is GL window row y_lo + r; GL counts rows bottom-up.
-        const size_t src = static_cast<size_t>(r) * W, dst = static_cast<size_t>(H - 1 - (y_lo + r)) * W;
-        for (int i = 0; i < W; ++i) {
-            const uint32_t id = ids[src + i];
-            float u = uv[2 * (src + i)], v = uv[2 * (src + i) + 1];
-            if (precision == MapPrecision::rgb8 && id >= 1 && id <= scene.faces.size()) {
-                const Face& f = scene.faces[id - 1];
-                u = quantize_rgb8(u, f.u_min, f.u_max);
-                v = quantize_rgb8(v, f.v_min, f.v_max);
-            }
-            map.face[dst + i] = id;
-            map.u[dst + i] = u;
-            map.v[dst + i] = v;
-        }
+    auto flip = [&](auto* block) {
+        for (int r = 0; r < rows / 2; ++r)
+            std::swap_ranges(block + r * W, block + (r + 1) * W, block + (rows - 1 - r) * W);
+    };
+    flip(map.face.data() + first);
+    flip(map.u.data() + first);
+    flip(map.v.data() + first);
+    if (precision != MapPrecision::rgb8) return;
+    for (size_t k = first; k < first + npx; ++k) {
+        const uint32_t id = map.face[k];
+        if (id < 1 || id > scene.faces.size()) continue;
+        const Face& f = scene.faces[id - 1];
+        map.u[k] = quantize_rgb8(map.u[k], f.u_min, f.u_max);
+        map.v[k] = quantize_rgb8(map.v[k], f.v_min, f.v_max);
     }
 }
 
@@ -266,8 +271,6 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
     map.face.resize(npx);
     map.u.resize(npx);
     map.v.resize(npx);
-    std::vector<uint32_t> ids;
-    std::vector<float> uv;
     // Bands bottom-up in GL's rows. The whole frame's viewport, shifted so that
     // the band's bottom row lands on framebuffer row 0: the same integer shift
     // for every vertex, so each pixel of a band sees the same clip-space
@@ -278,13 +281,14 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         const int rows = std::min(band_rows, H - y_lo);
         glViewport(0, -y_lo, W, H);
         const GLuint zero_u[4] = {0, 0, 0, 0};
-        const GLfloat zero_f[4] = {0, 0, 0, 0};
+        const GLfloat zero_f[4] = {0, 0, 0, 0};  // u and v where no face is drawn
         const GLfloat one = 1.0f;
         glClearBufferuiv(GL_COLOR, 0, zero_u);
         glClearBufferfv(GL_COLOR, 1, zero_f);
+        glClearBufferfv(GL_COLOR, 2, zero_f);
         glClearBufferfv(GL_DEPTH, 0, &one);
         if (draw) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
-        read_back_band(map, y_lo, rows, ps.scene(), precision, ids, uv);
+        read_back_band(map, y_lo, rows, ps.scene(), precision);
     }
     return map;
 }
