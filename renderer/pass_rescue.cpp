@@ -335,11 +335,11 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     // edge-on, a pixel or less across, whose mesh chord lies off the exact
     // surface: the map start of a fillet of a turbine (step/ec_turbine-A.stp
     // front) diverged and the pixel showed the face 33 units behind it; from its
-    // nearest mesh vertex Newton reaches it. Over all models 4 such pixels that
-    // the full-frame check flags; 2 more of trj8's iso frame and 3 of the
-    // cylinder block's change, each to a nearer hit. Where the own face truly
-    // ends short of the pixel (a silhouette) the starts fail too, at about 1.5 %
-    // of those frames' instructions.
+    // nearest mesh vertex Newton reaches it (full-frame check: 4 such pixels
+    // over all models, none left). Where the own face truly ends short of the
+    // pixel (a silhouette, most of the ~240 pixels of trj8's iso frame that try
+    // this) the starts fail, at 1.2 % of that frame's instructions and 1.8 % of
+    // the cylinder block's.
     // Inside its trim only: a hit in its trim band here would be the band laid
     // over the face across its edge, which the ray does hit (trj8 iso: 5 pixels
     // nearer than the reference's hit by a third of a footprint).
