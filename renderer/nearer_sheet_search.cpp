@@ -156,7 +156,7 @@ void NearerSheet::fill_pit(int i, int j, bool edge_of_other_face, PixelHit& best
     // hit within reach may start Newton on its root.
     const uint32_t own_map = c_.map.face[c_.map.index(i, j)];
     if (!found() && own_map != p.face && once(own_map)) mesh_in_front(own_map, i, j, best);
-    if (!found()) adjacent_faces(i, j, best);
+    if (!found() && !edge_of_other_face) adjacent_faces(i, j, best);
     if (!found() && !edge_of_other_face) screen_faces(i, j, best);
 }
 
