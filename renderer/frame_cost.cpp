@@ -20,8 +20,10 @@ constexpr size_t kSolveBytesPerPixel = sizeof(PixelHit) + 3 * sizeof(uint8_t);
 // The rescue and nearer-sheet passes' lists, at worst one entry per pixel.
 constexpr size_t kRescueBytesPerPixel = 2 * sizeof(size_t) + sizeof(PixelHit) + 2 * sizeof(uint8_t);
 constexpr size_t kMapBytesPerPixel = sizeof(uint32_t) + 2 * sizeof(float);
-// The GL framebuffer (R32UI id, RG32F (u, v), 32-bit depth) and its readback
-// copy, per pixel of one band of the map (kMapBandPixels at most).
+// The GL framebuffer (R32UI id, R32F u and v, 32-bit depth), per pixel of one
+// band of the map (kMapBandPixels at most), counted twice: the readback now
+// goes straight into the map's arrays (kMapBytesPerPixel), and the second copy,
+// once the read buffer, is kept as the margin the render gate was tuned with.
 constexpr size_t kFramebufferBytesPerPixel = 2 * (sizeof(uint32_t) + 2 * sizeof(float) + sizeof(float));
 // The encoder's 8-bit RGBA copy and the encoded file (at most as large again).
 constexpr size_t kEncodeBytesPerPixel = 2 * 4;
