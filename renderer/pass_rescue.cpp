@@ -329,20 +329,16 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
 
     PixelRescue pr(c, solver, src, i, j, crack);
     pr.neighbour_starts(own);
-    // The map shows its own face here, in front of every other mesh, but the
-    // solves of that face failed while another face was hit: the own face's far
-    // starts too, as B would give them had nothing been hit. A strip seen
-    // edge-on, a pixel or less across, whose mesh chord lies off the exact
-    // surface: the map start of a fillet of a turbine (step/ec_turbine-A.stp
-    // front) diverged and the pixel showed the face 33 units behind it; from its
-    // nearest mesh vertex Newton reaches it (full-frame check: 4 such pixels
-    // over all models, none left). Where the own face truly ends short of the
-    // pixel (a silhouette, most of the ~240 pixels of trj8's iso frame that try
-    // this) the starts fail, at 1.2 % of that frame's instructions and 1.8 % of
-    // the cylinder block's.
-    // Inside its trim only: a hit in its trim band here would be the band laid
-    // over the face across its edge, which the ray does hit (trj8 iso: 5 pixels
-    // nearer than the reference's hit by a third of a footprint).
+    // The map shows its own face here, in front of every other mesh, but its
+    // solves failed while another face was hit: the own face's far starts too,
+    // as B gives them where nothing was hit. A strip seen edge-on whose mesh
+    // chord lies off the exact surface: a turbine's fillet (step/ec_turbine-A.stp
+    // front) diverged from its map start, showing the face 33 units behind;
+    // from its nearest mesh vertex Newton reaches it (4 such pixels, none left).
+    // Where the own face ends short of the pixel (most of trj8 iso's ~240) they
+    // fail, at 1.2 % of that frame's instructions (cylinder block 1.8 %). Inside
+    // the trim only: a band hit here lies over the face across the edge, which
+    // the ray hits (trj8 iso: 5 pixels nearer than the reference's hit).
     if (own && pr.best.face && pr.best.face != own) {
         const PixelHit near = pr.best_near;
         pr.far_starts(screen_points, own, c.camera.pixel_screen(i, j));
