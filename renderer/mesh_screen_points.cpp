@@ -347,9 +347,10 @@ bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested
         {
             const int ci = std::clamp(static_cast<int>(std::lround(px((A.x + B.x + C.x) / 3))), 0, W - 1);
             const int cj = std::clamp(static_cast<int>(std::lround(py((A.y + B.y + C.y) / 3))), 0, H - 1);
-            const double t = hit_t[c_.map.index(ci, cj)];
+            const double hit = hit_t[c_.map.index(ci, cj)];
             const double front = std::min({pts[idx[0]].depth, pts[idx[1]].depth, pts[idx[2]].depth});
-            if (t < HUGE_VAL && front > c_.depth_behind(t, gap_footprints, c_.camera.pixel_screen(ci, cj))) continue;
+            if (hit < HUGE_VAL && front > c_.depth_behind(hit, gap_footprints, c_.camera.pixel_screen(ci, cj)))
+                continue;
         }
         tested += static_cast<size_t>(i1 - i0 + 1) * static_cast<size_t>(j1 - j0 + 1);
         if (tested > max_tested) {
