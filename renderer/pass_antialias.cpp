@@ -380,16 +380,29 @@ private:
     mutable bool own_hit_ = false, collected_ = false;
 };
 
-// Whether pixel (i, j) differs from one of its 8 neighbours in what it shows:
-// its own forward bits, or the bit of a neighbour before it pointing at it.
-bool is_edge(const FrameContext& c, const std::vector<uint8_t>& diff, int i, int j) {
-    const size_t k = c.map.index(i, j);
+// Whether each pixel of row j differs from one of its 8 neighbours in what it
+// shows (out[i], 0 or 1): its own forward bits, or the bit of a neighbour
+// before it pointing at it. Branch-free over the row's interior, so that the
+// compiler vectorizes the scan of a whole frame (most of it shows no edge).
+void edge_row(const FrameContext& c, const std::vector<uint8_t>& diff, int j, uint8_t* out) {
     const int W = c.width;
-    if (diff[k]) return true;
-    if (i > 0 && (diff[k - 1] & kDiffRight)) return true;
-    if (j == 0) return false;
-    return (diff[k - W] & kDiffDown) || (i > 0 && (diff[k - W - 1] & kDiffDownRight)) ||
-           (i + 1 < W && (diff[k - W + 1] & kDiffDownLeft));
+    const uint8_t* d = &diff[c.map.index(0, j)];
+    const uint8_t* up = j > 0 ? &diff[c.map.index(0, j - 1)] : nullptr;
+    auto at = [&](int i) {  // any column, borders included
+        bool e = d[i] || (i > 0 && (d[i - 1] & kDiffRight));
+        if (up) e = e || (up[i] & kDiffDown) || (i > 0 && (up[i - 1] & kDiffDownRight)) ||
+                    (i + 1 < W && (up[i + 1] & kDiffDownLeft));
+        return static_cast<uint8_t>(e);
+    };
+    out[0] = at(0);
+    if (W > 1) out[W - 1] = at(W - 1);
+    if (!up) {
+        for (int i = 1; i + 1 < W; ++i) out[i] = static_cast<uint8_t>((d[i] | (d[i - 1] & kDiffRight)) != 0);
+        return;
+    }
+    for (int i = 1; i + 1 < W; ++i)
+        out[i] = static_cast<uint8_t>((d[i] | (d[i - 1] & kDiffRight) | (up[i] & kDiffDown) |
+                                       (up[i - 1] & kDiffDownRight) | (up[i + 1] & kDiffDownLeft)) != 0);
 }
 
 // A pixel's colour in the encoding kSmoothContrast is measured in: gamma 2 of
@@ -446,8 +459,10 @@ void antialias_pass(const FrameContext& c, const Solver& solver, const Shader& s
     // colour changes, so the result does not depend on the order of the rows.
     std::vector<uint8_t> edge(c.pixels(), 0);
     parallel_rows(c, false, [&](int j) {
+        uint8_t* e = &edge[c.map.index(0, j)];
+        edge_row(c, diff, j, e);
         for (int i = 0; i < c.width; ++i)
-            edge[c.map.index(i, j)] = is_edge(c, diff, i, j) && !is_smooth(c, img, i, j);
+            if (e[i]) e[i] = !is_smooth(c, img, i, j);
     });
     const std::vector<float> centres = img.rgba;
     std::atomic<uint64_t> pixels{0}, rays{0};
