@@ -61,6 +61,10 @@ public:
     }
     // sx, sy of the centre of pixel (i, j): the contract's 0.5 offsets.
     ScreenPoint pixel_screen(int i, int j) const { return screen(i + 0.5, j + 0.5); }
+    // screen() inverted, one coordinate each: the continuous pixel position of
+    // sx and of sy (pixel i spans [i, i + 1), its centre at i + 0.5).
+    double pixel_x(double sx) const { return (sx / aspect_ + 1.0) * 0.5 * spec_.width; }
+    double pixel_y(double sy) const { return (1.0 - sy) * 0.5 * spec_.height; }
 
     // Inline: the shading pass and Martin's solves ask for one per pixel and solve.
     Ray ray(ScreenPoint s) const {

@@ -327,10 +327,9 @@ bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
     const std::vector<Projected>& pts = e.pts;
     const int W = c_.width, H = c_.height;
-    // Screen to pixel coordinates (Camera::screen inverted; pixel i's centre at i + 0.5).
-    const double aspect = c_.camera.aspect();
-    auto px = [&](double sx) { return (sx / aspect + 1.0) * 0.5 * W - 0.5; };
-    auto py = [&](double sy) { return (1.0 - sy) * 0.5 * H - 0.5; };
+    // Screen to pixel coordinates, in which pixel i's centre is at i.
+    auto px = [&](double sx) { return c_.camera.pixel_x(sx) - 0.5; };
+    auto py = [&](double sy) { return c_.camera.pixel_y(sy) - 0.5; };
     const double r = c_.screen_distance(pixels), r2 = r * r;
     const size_t first = out.size();
     size_t tested = 0;

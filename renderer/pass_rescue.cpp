@@ -102,7 +102,7 @@ public:
         PixelHit h;
         const Outcome o = solver_.solve(id, i_, j_, su, sv, solver_.robust, crack_, h);
         if (o == kConverged && h.t < best.t) best = h;
-        if (o == kNearTrim && h.t < best_near.t) best_near = h;
+        if (o == kNearTrim && keep_band_hits && h.t < best_near.t) best_near = h;
         return o == kConverged || o == kNearTrim;
     }
     // A: converged neighbours first (their uv is on the exact surface, next to this
@@ -216,6 +216,8 @@ public:
     }
 
     PixelHit best, best_near;
+    // Whether attempt keeps hits within the trim band (kNearTrim) in best_near.
+    bool keep_band_hits = true;
 
 private:
     // B's faces: those hit or in the map in the 5x5 neighbourhood, in
@@ -340,9 +342,9 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     // the trim only: a band hit here lies over the face across the edge, which
     // the ray hits (trj8 iso: 5 pixels nearer than the reference's hit).
     if (own && pr.best.face && pr.best.face != own) {
-        const PixelHit near = pr.best_near;
+        pr.keep_band_hits = false;
         pr.far_starts(screen_points, own, c.camera.pixel_screen(i, j));
-        pr.best_near = near;
+        pr.keep_band_hits = true;
     }
     uint8_t kind = own ? kRescueNeighbour : kRescueSilhouette;
     // A hit found behind both neighbours of a row or column pair (deeper than

@@ -157,8 +157,8 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
     const Vec4 P = camera_.project_h({p.x, p.y, p.z, 1});
     const ScreenPoint sp{P.x / P.z, P.y / P.z};
     const double t_p = camera_.depth(P);
-    const int ci = static_cast<int>(std::floor((sp.sx / camera_.aspect() + 1) * 0.5 * size_));
-    const int cj = static_cast<int>(std::floor((1 - sp.sy) * 0.5 * size_));
+    const int ci = static_cast<int>(std::floor(camera_.pixel_x(sp.sx)));
+    const int cj = static_cast<int>(std::floor(camera_.pixel_y(sp.sy)));
     const double self = kSelfCrossingTolerances * solver_.params.eps / std::max(cosine, kMinCosine);
     // The faces of the 3x3 around that pixel, each once from its pixel nearest
     // the centre: the map's mesh covers a face's exact silhouette to within a
