@@ -216,6 +216,7 @@ private:
         float u, v;
         double t;    // the depth of that pixel's hit
         int di, dj;  // the pixel it comes from, relative to the edge pixel
+        double cx, cy;  // that pixel's centre in pixel coordinates (exact: integers + 0.5)
     };
     // The hits of the 3x3 around (i, j): every sample's candidate starts.
     void collect_starts() const {
@@ -224,7 +225,7 @@ private:
         nstarts_ = 0;
         for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
-            if (h.face) starts_[nstarts_++] = {h.face, h.u, h.v, h.t, ni - i, nj - j};
+            if (h.face) starts_[nstarts_++] = {h.face, h.u, h.v, h.t, ni - i, nj - j, ni + 0.5, nj + 0.5};
         });
         // Front first (starts_[0] is the nearest hit, and equal keys in
         // candidates keep this order). Insertion sort, stable (equal depths keep
@@ -309,7 +310,9 @@ private:
     // between two centres crosses one of the two pixels.
     bool interpolated(double px, double py, double out[4], uint32_t& face) const {
         const double gx = px - 0.5, gy = py - 0.5;  // in the lattice of pixel centres
-        const int i0 = static_cast<int>(std::floor(gx)), j0 = static_cast<int>(std::floor(gy));
+        // floor(), for gx, gy >= -0.5 (samples lie in the frame): truncation
+        // where they are not negative, without a libm call per sample.
+        const int i0 = gx < 0 ? -1 : static_cast<int>(gx), j0 = gy < 0 ? -1 : static_cast<int>(gy);
         if (i0 < 0 || j0 < 0 || i0 + 1 >= c_.width || j0 + 1 >= c_.height) return false;
         const size_t k00 = c_.map.index(i0, j0), k10 = c_.map.index(i0 + 1, j0);
         const size_t k01 = c_.map.index(i0, j0 + 1), k11 = c_.map.index(i0 + 1, j0 + 1);
@@ -346,7 +349,7 @@ private:
         int best[kNeighbours];
         std::fill(best, best + nfaces_, -1);
         for (int q = 0; q < nstarts_; ++q) {
-            const double dx = ci_ + starts_[q].di + 0.5 - px, dy = cj_ + starts_[q].dj + 0.5 - py;
+            const double dx = starts_[q].cx - px, dy = starts_[q].cy - py;
             d2[q] = dx * dx + dy * dy;
             int& b = best[face_of_start_[q]];
             if (b < 0 || d2[q] < d2[b]) b = q;
