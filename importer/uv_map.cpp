@@ -33,7 +33,8 @@ constexpr int kSeedIntervals = 16;
 // Gauss-Newton from `seed` on |c(t) - p|^2 (Piegl & Tiller 6.1 without the
 // curvature term, which the zero residual makes unnecessary). `scale`: the
 // parameter range, for the step-size stop.
-double invert_on_curve(const Geom_Curve& c, const gp_Pnt& p, double seed, double scale) {
+template <class Curve>
+double invert_on_curve(const Curve& c, const gp_Pnt& p, double seed, double scale) {
     double t = seed;
     for (int step = 0; step < kMaxSteps; ++step) {
         gp_Pnt q;
@@ -75,7 +76,7 @@ bool invert_on_surface(const Geom_Surface& s, const gp_Pnt& p, double& u, double
 
 double UVMap::Axis::to_surface(double t) const {
     if (!active) return t;
-    return invert_on_curve(*surface_iso, face_iso->Value(t), seed(t), surface1 - surface0);
+    return invert_on_curve(*surface_eval, face_iso->Value(t), seed(t), surface1 - surface0);
 }
 
 double UVMap::Axis::seed(double t) const {
@@ -147,10 +148,12 @@ std::optional<UVMap> UVMap::between(const Handle(Geom_Surface)& face_surface,
     if (!invert_on_surface(*converted, face_surface->Value(um, vm), sm, tm, tol)) return std::nullopt;
 
     UVMap m;
-    m.u_ = Axis{true, face_surface->VIso(vm), converted->VIso(tm), u0, u1, s0, s1, {}, {}};
-    m.v_ = Axis{true, face_surface->UIso(um), converted->UIso(sm), v0, v1, t0, t1, {}, {}};
+    m.u_ = Axis{true, face_surface->VIso(vm), converted->VIso(tm), u0, u1, s0, s1, {}, {}, {}};
+    m.v_ = Axis{true, face_surface->UIso(um), converted->UIso(sm), v0, v1, t0, t1, {}, {}, {}};
     if (m.u_.face_iso.IsNull() || m.u_.surface_iso.IsNull() || m.v_.face_iso.IsNull() || m.v_.surface_iso.IsNull())
         return std::nullopt;
+    m.u_.surface_eval = new GeomAdaptor_Curve(m.u_.surface_iso);
+    m.v_.surface_eval = new GeomAdaptor_Curve(m.v_.surface_iso);
 
     // The check: the box's ends map to the surface's (no shift by a period),
     // each direction's map is increasing and inverts back, and the two maps

@@ -21,6 +21,7 @@
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Curve.hxx>
 #include <Geom_Surface.hxx>
+#include <GeomAdaptor_Curve.hxx>
 
 #include "renderer/vec.h"
 
@@ -54,6 +55,12 @@ private:
         // to_surface's seeds: s and ds/dt at evenly spaced t over [face0, face1]
         // (cubic Hermite between them); empty: the linear map.
         std::vector<double> table_s, table_ds;
+        // surface_iso's evaluator with its span cache (BSplCLib_Cache): the
+        // inversions evaluate it at nearby parameters over and over, which
+        // Geom_BSplineCurve::D1 does from the knots and poles every time. Its
+        // cache is mutable: a map is used by one thread at a time (the import
+        // works on each face in one task).
+        Handle(GeomAdaptor_Curve) surface_eval;
         double to_surface(double t) const;
         double to_face(double s) const;
         void tabulate();
