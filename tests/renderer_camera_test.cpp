@@ -76,6 +76,22 @@ TEST(RendererCamera, PixelRayContractOrthographic) {
     }
 }
 
+// pixel_x and pixel_y invert screen(): the continuous pixel position of a screen
+// point, pixel i's centre at i + 0.5 (a 320 x 200 frame: aspect 1.6, both projections).
+TEST(RendererCamera, PixelPositionInvertsScreen) {
+    for (const CameraSpec& s : {persp_spec(), ortho_spec()}) {
+        const Camera cam(s);
+        for (auto [px, py] : {std::pair{0.0, 0.0}, {320.0, 200.0}, {160.5, 100.5}, {17.25, 151.75}, {-3.0, 210.0}}) {
+            const ScreenPoint sp = cam.screen(px, py);
+            EXPECT_NEAR(cam.pixel_x(sp.sx), px, 1e-12);
+            EXPECT_NEAR(cam.pixel_y(sp.sy), py, 1e-12);
+        }
+        const ScreenPoint c = cam.pixel_screen(17, 151);
+        EXPECT_NEAR(cam.pixel_x(c.sx), 17.5, 1e-12);
+        EXPECT_NEAR(cam.pixel_y(c.sy), 151.5, 1e-12);
+    }
+}
+
 TEST(RendererCamera, RejectsDegenerateSpecs) {
     CameraSpec s = persp_spec();
     s.target = s.eye;
