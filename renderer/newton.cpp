@@ -137,6 +137,7 @@ namespace {
 //   bool step(state, eps_det, Step&)  the method's Newton step; false when
 //                                     singular by (14)
 //   void finish(state, NewtonResult&) t and the model-space partials at the root
+//   void stopped(state, NewtonResult&) gap_bound and t_bound where it failed
 template <class System>
 NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox& box, const NewtonParams& params,
                             const SurfaceDerivs* start) {
@@ -157,16 +158,19 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
         }
         if (it == params.max_iterations) {
             res.status = NewtonStatus::max_iterations;
+            sys.stopped(s, res);
             return res;
         }
         Step st;
         if (!sys.step(s, params.eps_det, st)) {                                // (14)
             res.status = NewtonStatus::singular;
+            sys.stopped(s, res);
             return res;
         }
         double un = u + st.du, vn = v + st.dv;                                 // (5)
         if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
             res.status = NewtonStatus::left_domain;
+            sys.stopped(s, res);
             return res;
         }
         auto sn = sys.eval(un, vn);
@@ -180,6 +184,7 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
         if (!(sn.r <= s.r)) {                                                  // (13)
             res.iterations = it + 1;
             res.status = NewtonStatus::diverged;
+            sys.stopped(s, res);
             return res;
         }
         u = un;
@@ -204,6 +209,22 @@ struct ProposedSystem {
     void finish(const State& st, NewtonResult& res) const {
         res.t = camera.hit_distance_from_depth(camera.depth(st.d.S), s);
         camera.model_partials(st.d.S, st.d.Su, st.d.Sv, res.Cu, res.Cv);
+    }
+    // The residual r is the point's offset from the ray within the plane at its
+    // depth z (perpendicular to f), where the ray lies at distance z / cos(a)
+    // (a: the angle between the ray and f). The point is then at least r cos(a)
+    // from the ray, and its foot on the ray at most z / cos(a) + r along it.
+    // Orthographic: the ray is along f, both exact (cos(a) = 1, t = z).
+    void stopped(const State& st, NewtonResult& res) const {
+        const double z = std::abs(camera.depth(st.d.S));
+        if (!camera.perspective()) {
+            res.gap_bound = st.r;
+            res.t_bound = camera.depth(st.d.S);
+            return;
+        }
+        const double per_depth = camera.hit_distance_from_depth(1.0, s);  // 1 / cos(a)
+        res.gap_bound = st.r / per_depth;
+        res.t_bound = z * per_depth + st.r;
     }
 };
 
@@ -239,6 +260,11 @@ struct MartinSystem {
         res.t = dot(st.c.P - ray.origin, ray.dir);
         res.Cu = st.c.Pu;
         res.Cv = st.c.Pv;
+    }
+    // F is the point's distance from the two planes through the ray: exact.
+    void stopped(const State& st, NewtonResult& res) const {
+        res.gap_bound = st.r;
+        res.t_bound = dot(st.c.P - ray.origin, ray.dir);
     }
 };
 

@@ -118,6 +118,11 @@ struct NewtonResult {
     // converged (or behind_eye), from the last iterate's derivatives: the
     // shading normal needs no second evaluation of the surface.
     Vec3 Cu, Cv;
+    // Where Newton stopped without converging: bounds, from the last iterate's
+    // residual and depth alone, on the distance of its point from the ray (at
+    // least gap_bound) and on where along the ray that point lies (at most
+    // t_bound). For the border-gap test of a stop on the box border (Solver).
+    double gap_bound = 0, t_bound = 0;
 };
 
 // proposed: `projected` is project_surface(camera, face.surface); s is the pixel's

@@ -21,6 +21,9 @@ namespace {
 // (the cylinder block's face 770: 0.3-0.4 footprints; without them, 11 pixels
 // there show the farther sheet).
 constexpr double kMaxBorderGapPixels = 0.5;
+// Relative margin of that early decision for the rounding of the bounds (a few
+// units in the last place) against the exact test's own.
+constexpr double kBoundRounding = 1e-9;
 
 // Fills a hit of face `id` at (u, v), distance t, normal from the partials there.
 void set_hit(const Face& f, uint32_t id, double u, double v, double t, Vec3 Cu, Vec3 Cv, PixelHit& hit) {
@@ -119,6 +122,12 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
     const UvBox& b = ff.box;
     const bool u_border = r.u == b.u0 || r.u == b.u1, v_border = r.v == b.v0 || r.v == b.v1;
     if (!u_border && !v_border) return false;
+    // The test below, decided early and exactly where the stop's bounds already
+    // fail it (NewtonResult::gap_bound, t_bound; the band never exceeds
+    // kMaxBorderGapPixels footprints, which grow with t): most such stops of the
+    // anti-aliasing samples, without the trim test and the surface evaluation.
+    if (!(r.t_bound > 0) || r.gap_bound > (1 + kBoundRounding) * kMaxBorderGapPixels * ctx.pixel_footprint(r.t_bound))
+        return false;
     if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
         return false;
     const CartesianDerivs c = cartesian_d1(ctx.scene.faces[id - 1].surface, ff.spans, r.u, r.v);
