@@ -216,15 +216,15 @@ struct ProposedSystem {
     // from the ray, and its foot on the ray at most z / cos(a) + r along it.
     // Orthographic: the ray is along f, both exact (cos(a) = 1, t = z).
     void stopped(const State& st, NewtonResult& res) const {
-        const double z = std::abs(camera.depth(st.d.S));
+        const double z = camera.depth(st.d.S);
         if (!camera.perspective()) {
             res.gap_bound = st.r;
-            res.t_bound = camera.depth(st.d.S);
+            res.t_bound = z;
             return;
         }
         const double per_depth = camera.hit_distance_from_depth(1.0, s);  // 1 / cos(a)
         res.gap_bound = st.r / per_depth;
-        res.t_bound = z * per_depth + st.r;
+        res.t_bound = std::abs(z) * per_depth + st.r;
     }
 };
 
