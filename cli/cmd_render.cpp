@@ -227,7 +227,7 @@ void add_render_command(CLI::App& app) {
             std::fprintf(stderr, fmt, xs...);
             std::fputc('\n', stderr);
         };
-        preload_image_writer();  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
+        const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
         say("importing %zu model(s)", a->models.size());
         // --stats timings: stages marked end to end from t0, so they sum to the total.
         StageClock stages(t0);

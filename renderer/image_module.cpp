@@ -58,9 +58,17 @@ void check_status(int status, const char* message) {
     }
 }
 
+// The loading thread of the ImageWriterPreload alive (one at a time). Never
+// destroyed: a program leaving through exit() inside the preload's scope must
+// not meet a joinable thread's destructor (std::terminate).
+std::thread& preload_thread() {
+    static auto* loader = new std::thread;
+    return *loader;
+}
+
 }  // namespace
 
-void preload_image_writer() {
+ImageWriterPreload::ImageWriterPreload() {
     // oneTBB loads its scalable allocator (libtbbmalloc) and its thread-pool
     // server (libirml) with dlopen on first use. Had that first use to wait for
     // the loader's lock while the thread below holds it (OpenImageIO's libraries:
@@ -68,14 +76,20 @@ void preload_image_writer() {
     // conversion) would wait for all of it (measured: 0.6-0.8 s of
     // "nurbs_convert" for a 3-face file). So oneTBB starts here, first.
     tbb::parallel_for(0, 2, [](int) {});
-    // Detached: a program that ends first leaves it to the loader's own lock.
-    std::thread([] {
+    std::thread& loader = preload_thread();
+    if (loader.joinable()) return;  // the one alive is loading it already
+    loader = std::thread([] {
         try {
             load_writer();
         } catch (const Error&) {
             // write_image will try again and report it
         }
-    }).detach();
+    });
+}
+
+ImageWriterPreload::~ImageWriterPreload() {
+    std::thread& loader = preload_thread();
+    if (loader.joinable()) loader.join();
 }
 
 void write_image(const RenderImage& image, const std::string& path) {

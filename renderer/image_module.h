@@ -24,10 +24,21 @@ inline constexpr const char* kImageModuleFile = "libnurbsrt_image.so";
 inline constexpr const char* kImageWriteSymbol = "nurbsrt_write_image_v1";
 inline constexpr const char* kImageEncodeSymbol = "nurbsrt_encode_image_v1";
 
-// Starts loading the module on a thread of its own and returns: a program that
-// will write an image calls it early, so that the loading overlaps its other
-// work. Errors surface at write_image (render.h), which loads it otherwise.
-void preload_image_writer();
+// Loads the module on a thread of its own while the program goes on: a program
+// that will write an image creates one early, so that the loading overlaps its
+// other work. Errors surface at write_image (render.h), which loads it
+// otherwise. The destructor waits for the loading to end: a process must not
+// exit while the loader runs the constructors of the module's libraries in
+// another thread (exit's destructors under them crashed a service stopped
+// right after its start, in libproj's initializer, 4 times in 30). One per
+// process at a time.
+class ImageWriterPreload {
+public:
+    ImageWriterPreload();
+    ~ImageWriterPreload();
+    ImageWriterPreload(const ImageWriterPreload&) = delete;
+    ImageWriterPreload& operator=(const ImageWriterPreload&) = delete;
+};
 
 }  // namespace nurbsrt
 

@@ -3,9 +3,12 @@ connection floods and bursts. Each gets its answer at once or at the configured
 deadline, without the service spending memory or threads on it, and every other
 client (the health probe above all) keeps being answered promptly."""
 import json
+import os
+import pathlib
 import socket
 import statistics
 import subprocess
+import tempfile
 import threading
 import time
 import zlib
@@ -298,6 +301,33 @@ def test_keep_alive_answers_without_delay(url):
 def test_long_target_problem_status(url):
     r = requests.get(url + "/v1/jobs?x=" + "a" * 9000, timeout=TIMEOUT)
     check_problem(r, 414)
+
+
+def test_stop_right_after_start():
+    """SIGTERM as soon as the port file appears (a supervisor's quick restart)
+    stops the service promptly and cleanly, every time: the signal may come
+    before the listening loop runs, and while the image writer's libraries are
+    still being loaded."""
+    for attempt in range(12):
+        with tempfile.TemporaryDirectory() as tmp:
+            port_file = pathlib.Path(tmp) / "port"
+            with open(pathlib.Path(tmp) / "log", "wb") as log:
+                proc = subprocess.Popen([os.environ["NURBSRT_BIN"], "serve", "--port", "0", "--port-file",
+                                         str(port_file), "--data-dir", str(pathlib.Path(tmp) / "data")], stderr=log)
+                deadline = time.monotonic() + 30
+                while not (port_file.exists() and port_file.read_text().strip()):
+                    assert time.monotonic() < deadline and proc.poll() is None, "server did not start"
+                    time.sleep(0.001)
+                proc.terminate()
+                try:
+                    rc = proc.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+                    raise AssertionError(f"attempt {attempt}: SIGTERM right after the start went unheard")
+            text = (pathlib.Path(tmp) / "log").read_text()
+            assert rc == 0, (attempt, rc, text[-500:])
+            assert '"event":"stopped"' in text, (attempt, text[-500:])
 
 
 def test_stop_does_not_wait_for_slow_clients(own_server):
