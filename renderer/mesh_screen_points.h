@@ -57,15 +57,16 @@ public:
         Vec2 uv;
         double depth;
     };
-    // The pixels whose centre lies within `pixels` of the face's projected mesh
-    // on screen, one each, ascending, appended to out; false (out as it was)
-    // where that takes testing more than max_tested pixel centres (a face
-    // covering much of the frame: the map shows it anyway).
+    // The pixels showing another face (`hits`: neither the background nor face
+    // id) whose centre lies within `pixels` of the face's projected mesh on
+    // screen, one each, ascending, appended to out; false (out as it was) where
+    // that takes testing more than max_tested pixel centres (a face covering
+    // much of the frame: the map shows it anyway).
     // `hit_t`: the frame's hit distances (+inf: none); a triangle behind the hit
     // at its centroid's pixel by more than `gap_footprints` pixel footprints
     // there is hidden and skipped (a face mostly behind others).
-    bool pixels_near(uint32_t id, double pixels, size_t max_tested, const PixelArray<double>& hit_t,
-                     double gap_footprints, std::vector<MeshPixel>& out) const;
+    bool pixels_near(uint32_t id, double pixels, size_t max_tested, const PixelArray<PixelHit>& hits,
+                     const PixelArray<double>& hit_t, double gap_footprints, std::vector<MeshPixel>& out) const;
 
     // Starts on the part of the face's mesh nearer to the eye than max_depth
     // (the mesh clipped at that depth): the (u, v) of each of its sheets that

@@ -78,11 +78,12 @@ bool NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
 
 void NearerSheet::thin_face_tries(uint32_t face, std::vector<ThinTry>& out) const {
     std::vector<MeshScreenPoints::MeshPixel> pixels;
-    if (!screen_points_.pixels_near(face, kThinFacePixels, kMaxThinFaceTested, depth_, kSheetFootprints, pixels))
+    // Pixels on the background are the rescue's; those on the face itself need nothing.
+    if (!screen_points_.pixels_near(face, kThinFacePixels, kMaxThinFaceTested, hits_, depth_, kSheetFootprints,
+                                    pixels))
         return;
     for (const MeshScreenPoints::MeshPixel& m : pixels) {
         const PixelHit& h = hits_[m.k];
-        if (!h.face || h.face == face) continue;  // the background is the rescue's
         const int i = static_cast<int>(m.k % c_.width), j = static_cast<int>(m.k / c_.width);
         if (m.depth < depth_in_front(h.t, c_.camera.pixel_screen(i, j)))
             out.push_back({m.k, face, static_cast<float>(m.uv.x), static_cast<float>(m.uv.y), kThinReach + 1});
