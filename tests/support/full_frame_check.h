@@ -7,7 +7,8 @@
 //    pixels along a row, a column or a diagonal (enclosed by the object: a crack
 //    along a shared edge, a pinhole in a face).
 //  * wrong-sheet speckle: a pixel whose hit is farther than a hit the exact ray
-//    has. Candidates: depth spikes, hits farther than BOTH neighbours of a row or
+//    has (by more than the noise floor, and on its own face by more than one
+//    contact's spread at grazing incidence, kContactSpreadMargin). Candidates: depth spikes, hits farther than BOTH neighbours of a row or
 //    column pair by more than the depth noise floor (kDepthNoiseRelative); and
 //    the far side of every depth step between sheets (kStepFootprints,
 //    kStepAsymmetry): a run of several far-sheet pixels has no spike in it, but
@@ -58,6 +59,19 @@ constexpr int kEnclosureRadius = 2;
 // smaller than that, or a reference hit nearer by less, is not evidence of a
 // farther sheet.
 constexpr double kDepthNoiseRelative = 1e-6;
+// A speckle needs the reference nearer by more than the spread of one contact
+// at grazing incidence: every point of the surface within a solver's tolerance
+// of the ray counts as its root, and along a ray meeting the surface at
+// cos(a) = |n . d| (n the unit normal, d the ray's direction) such points span
+// (tol / cos(a)) to either side of the exact root (the tangent plane rises from
+// the ray by cos(a) per unit along it). Two correct roots of one contact can so
+// differ in t by (our tolerance + the reference's) / cos(a): at cos(a) = 0.002
+// on a dense coil seen edge-on (step/bug29715_slow.stp front), 9e-4, five times
+// the noise floor above. This factor of margin covers the perspective image
+// plane's residual (proposed's (12) measures the offset perpendicular to the
+// view axis, not the ray) and the surface's curvature along the contact.
+constexpr double kContactSpreadMargin = 2.0;
+
 // "Lies on its face": the distance from a hit point to the trimmed face is at most
 // max(kDepthNoiseRelative x diag, kOnFaceTolFactor x BRep_Tool::Tolerance(face)):
 // the modeller guarantees the face only to its tolerance, with a margin of 4 for
@@ -116,6 +130,7 @@ struct FullFrameReport {
     long steps = 0;              // speckle candidates (far sides of depth steps, not spikes)
     long holes = 0, speckles = 0;
     long off_ray = 0;            // hit pixels showing a point off their ray (every hit pixel checked)
+    long grazing = 0;            // reference nearer, on our face, within the contact's spread (not speckles)
     long ref_errors = 0;         // candidates the intersector threw on (no reference)
     long ref_spurious = 0;       // reference hits settled as not on their face
     long unchecked = 0;          // candidates left when kCheckBudgetSeconds ran out
