@@ -95,7 +95,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     const int pairs[2][4] = {{i - 1, j, i + 1, j}, {i, j - 1, i, j + 1}};
     // Pits where a neighbour continues the pixel's sheet and the other is on
     // another face; and whether a pit's neighbour on the pixel's face does not.
-    bool continued = false, own_face_jump = false, step = false;
+    bool continued = false, own_face_jump = false, step = false, silhouette = false;
     // The faces in front at a step whose surface the ray crosses outside their trim.
     uint32_t crossed[2];
     int ncrossed = 0;
@@ -116,6 +116,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             // evenly, on one sheet).
             const bool a_side = a.face != 0;
             const PixelHit& n = a_side ? a : b;
+            silhouette = true;
             const int ni = a_side ? pq[0] : pq[2], nj = a_side ? pq[1] : pq[3];
             if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j)) {
                 consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
@@ -211,8 +212,12 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (pit && unchanged()) fill_pit(i, j, continued && !own_face_jump, best);
     // A step (one neighbour in front) that the pair's faces did not fill: the
     // faces the 4-neighbours do not show (a strip thinner than a pixel between
-    // the face in front and the pixel's).
-    if (step && !pit && unchanged()) diagonal_faces(i, j, best);
+    // the face in front and the pixel's). So too at a silhouette pixel the
+    // rescue filled (its map start failed): the face in front of it may show
+    // only diagonally, where a face's corner overhangs the silhouette
+    // (step/ec_turbine-A.stp iso: a blade's pixel 1.5 units behind the hub face
+    // its lower-right neighbour shows).
+    if (((step && !pit) || (silhouette && rescued_[c_.map.index(i, j)])) && unchanged()) diagonal_faces(i, j, best);
     if (ncrossed && !pit && unchanged()) beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
     if (unchanged()) return false;
     out = best;

@@ -125,7 +125,6 @@ const std::vector<Known> kKnownRemaining = {
     {"iges/marsCapsule.igs", "front", 0, 4, kThinWithinGap},
     {"iges/marsCapsule.igs", "iso", 0, 1, kNotTaken},
     {"step/bug29715_slow.stp", "front", 0, 1, kMissedByAllStarts},  // a dense coil seen edge-on
-    {"step/ec_turbine-A.stp", "iso", 0, 1, kNotTaken},
     {"iges/heartValve.igs", "iso", 0, 2, kRescuedFarRoot},
     {"iges/BUC50025.igs", "iso", 0, 1, kOtherRoot},
     {"duck/duck_from_glscene.igs", "front", 0, 2, kOtherRoot},
@@ -134,6 +133,10 @@ const std::vector<Known> kKnownRemaining = {
     {"iges/bearing.iges", "front", 0, 1, kFaceInFront},
     {"iges/bearing.iges", "iso", 0, 1, kFaceInFront},
     {"step/cylinder_block.stp", "front", 0, 1, kFaceInFront},
+    // (ec_turbine-A iso's speckle, a blade's silhouette pixel filled by the
+    // rescue 1.5 units behind the hub face only its diagonal neighbour showed,
+    // went when the nearer-sheet pass tried the diagonal neighbours' faces at
+    // rescued silhouette pixels too, as at steps.)
     // (bug29715_slow front's speckle, a dense folded face seen edge-on, whose
     // pixel by the fold's silhouette reached the farther of two roots close
     // together (v -160.6; the nearer at -164.4) from every start tried (the
