@@ -81,6 +81,9 @@ private:
     // iges/marsCapsule.igs front), or while its own solves there failed and the
     // hits show the faces around it (a fillet strip, step/r0901_ec.stp iso).
     void diagonal_faces(int i, int j, PixelHit& best) const;
+    // The diagonal neighbours' hits in front of the pixel's by a sheet gap, each
+    // from its own (u, v), robustly, until one is nearer.
+    void diagonal_starts(int i, int j, PixelHit& best) const;
     // Whether hit p, with neighbour n on its face, has the pair's other
     // neighbour a sheet gap behind on the same face, (u, v) jumping (kUvJump2:
     // a steep smooth sheet steps more in depth, but evenly): the silhouette of

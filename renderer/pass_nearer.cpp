@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <tuple>
+#include <utility>
 
 #include "renderer/mesh_screen_points.h"
 #include "renderer/nearer_sheet.h"
@@ -216,8 +217,12 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // rescue filled (its map start failed): the face in front of it may show
     // only diagonally, where a face's corner overhangs the silhouette
     // (step/ec_turbine-A.stp iso: a blade's pixel 1.5 units behind the hub face
-    // its lower-right neighbour shows).
-    if (((step && !pit) || (silhouette && rescued_[c_.map.index(i, j)])) && unchanged()) diagonal_faces(i, j, best);
+    // its lower-right neighbour shows); first the diagonal neighbours' own
+    // starts, on any face: the rescue may have reached the farther root of its
+    // face from a 4-neighbour's start that only a diagonal one avoids.
+    const bool rescued_rim = silhouette && rescued_[c_.map.index(i, j)];
+    if (rescued_rim && unchanged()) diagonal_starts(i, j, best);
+    if (((step && !pit) || rescued_rim) && unchanged()) diagonal_faces(i, j, best);
     if (ncrossed && !pit && unchanged()) beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
     if (unchanged()) return false;
     out = best;
@@ -231,6 +236,17 @@ bool NearerSheet::fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit
 
 bool NearerSheet::fold_edge(size_t k, size_t a, size_t b) const {
     return fold_edge(hits_[k], hits_[a], hits_[b]) || fold_edge(hits_[k], hits_[b], hits_[a]);
+}
+
+void NearerSheet::diagonal_starts(int i, int j, PixelHit& best) const {
+    const PixelHit p = best;
+    for (const auto& [di, dj] : {std::pair{-1, -1}, std::pair{1, -1}, std::pair{-1, 1}, std::pair{1, 1}}) {
+        if (!c_.in_frame(i + di, j + dj)) continue;
+        const PixelHit& h = hits_[c_.map.index(i + di, j + dj)];
+        if (!h.face || !(h.t < p.t - sheet_gap(p.t))) continue;
+        consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+        if (best.face != p.face || best.t != p.t) return;
+    }
 }
 
 bool NearerSheet::continues(const PixelHit& p, const PixelHit& n, int fi, int fj) const {
