@@ -81,6 +81,13 @@ private:
     // iges/marsCapsule.igs front), or while its own solves there failed and the
     // hits show the faces around it (a fillet strip, step/r0901_ec.stp iso).
     void diagonal_faces(int i, int j, PixelHit& best) const;
+    // At a silhouette pixel, the 4-neighbours on other faces in front of its hit
+    // (by more than the spike threshold) that find's silhouette test did not
+    // try, each from its own (u, v), robustly, until one is nearer: a face just
+    // in front of the pixel's where its rim meets the silhouette, whose pixels
+    // lie beside the silhouette rather than across it (iges/marsCapsule.igs iso:
+    // 0.0075 in front).
+    void rim_faces_in_front(int i, int j, PixelHit& best) const;
     // The diagonal neighbours' hits in front of the pixel's by a sheet gap, each
     // from its own (u, v), robustly, until one is nearer.
     void diagonal_starts(int i, int j, PixelHit& best) const;

@@ -221,6 +221,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // starts, on any face: the rescue may have reached the farther root of its
     // face from a 4-neighbour's start that only a diagonal one avoids.
     const bool rescued_rim = silhouette && rescued_[c_.map.index(i, j)];
+    if (silhouette && unchanged()) rim_faces_in_front(i, j, best);
     if (rescued_rim && unchanged()) diagonal_starts(i, j, best);
     if (((step && !pit) || rescued_rim) && unchanged()) diagonal_faces(i, j, best);
     if (ncrossed && !pit && unchanged()) beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
@@ -236,6 +237,20 @@ bool NearerSheet::fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit
 
 bool NearerSheet::fold_edge(size_t k, size_t a, size_t b) const {
     return fold_edge(hits_[k], hits_[a], hits_[b]) || fold_edge(hits_[k], hits_[b], hits_[a]);
+}
+
+void NearerSheet::rim_faces_in_front(int i, int j, PixelHit& best) const {
+    const PixelHit p = best;
+    for (const auto& [di, dj] : {std::pair{-1, 0}, std::pair{1, 0}, std::pair{0, -1}, std::pair{0, 1}}) {
+        if (!c_.in_frame(i + di, j + dj)) continue;
+        const PixelHit& h = hits_[c_.map.index(i + di, j + dj)];
+        if (!h.face || h.face == p.face || !(h.t < p.t - spike_)) continue;
+        // A sheet gap in front opposite the background: find's silhouette test tried it.
+        const bool opposite_open = !c_.in_frame(i - di, j - dj) || !hits_[c_.map.index(i - di, j - dj)].face;
+        if (opposite_open && h.t < p.t - sheet_gap(p.t)) continue;
+        consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
+        if (best.face != p.face || best.t != p.t) return;
+    }
 }
 
 void NearerSheet::diagonal_starts(int i, int j, PixelHit& best) const {
