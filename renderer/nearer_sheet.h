@@ -88,9 +88,10 @@ private:
     // lie beside the silhouette rather than across it (iges/marsCapsule.igs iso:
     // 0.0075 in front).
     void rim_faces_in_front(int i, int j, PixelHit& best) const;
-    // The diagonal neighbours' hits in front of the pixel's by a sheet gap, each
-    // from its own (u, v), robustly, until one is nearer.
-    void diagonal_starts(int i, int j, PixelHit& best) const;
+    // The diagonal neighbours' hits in front of the pixel's by a sheet gap (with
+    // own_face, only those on the pixel's face), each from its own (u, v),
+    // robustly, until one is nearer.
+    void diagonal_starts(int i, int j, bool own_face, PixelHit& best) const;
     // Whether hit p, with neighbour n on its face, has the pair's other
     // neighbour a sheet gap behind on the same face, (u, v) jumping (kUvJump2:
     // a steep smooth sheet steps more in depth, but evenly): the silhouette of
