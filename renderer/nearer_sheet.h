@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "renderer/frame.h"
@@ -92,6 +93,12 @@ private:
     // own_face, only those on the pixel's face), each from its own (u, v),
     // robustly, until one is nearer.
     void diagonal_starts(int i, int j, bool own_face, PixelHit& best) const;
+    // The hits of the neighbours at `offsets` (di, dj) that accept(di, dj,
+    // pixel's hit, neighbour's hit) takes, in order, each solved at the pixel
+    // from its own (u, v), robustly, until one is nearer (the two above).
+    template <class Accept>
+    void from_neighbour_hits(int i, int j, std::span<const std::pair<int, int>> offsets, Accept accept,
+                             PixelHit& best) const;
     // Whether hit p, with neighbour n on its face, has the pair's other
     // neighbour a sheet gap behind on the same face, (u, v) jumping (kUvJump2:
     // a steep smooth sheet steps more in depth, but evenly): the silhouette of

@@ -38,6 +38,9 @@ constexpr double kSpikeRelative = 1e-5;
 // Nearer: 100x the default Newton tolerance (kDefaultRelativeTolerance), so the
 // same root reached from another start never counts as nearer.
 constexpr double kNearerRelative = 1e-6;
+// Neighbour offsets (di, dj): the 4-neighbours, the diagonal ones.
+constexpr std::pair<int, int> kSideOffsets[] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+constexpr std::pair<int, int> kDiagonalOffsets[] = {{-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
 // A neighbour's (u, v) "jumps" when it is 3x farther from the pixel's than the
 // opposite neighbour's, or than half the distance between the two neighbours'
 // (compared squared: 9): on one smooth sheet all three are about equal.
@@ -243,30 +246,33 @@ bool NearerSheet::fold_edge(size_t k, size_t a, size_t b) const {
     return fold_edge(hits_[k], hits_[a], hits_[b]) || fold_edge(hits_[k], hits_[b], hits_[a]);
 }
 
-void NearerSheet::rim_faces_in_front(int i, int j, PixelHit& best) const {
+template <class Accept>
+void NearerSheet::from_neighbour_hits(int i, int j, std::span<const std::pair<int, int>> offsets, Accept accept,
+                                      PixelHit& best) const {
     const PixelHit p = best;
-    for (const auto& [di, dj] : {std::pair{-1, 0}, std::pair{1, 0}, std::pair{0, -1}, std::pair{0, 1}}) {
+    for (const auto& [di, dj] : offsets) {
         if (!c_.in_frame(i + di, j + dj)) continue;
         const PixelHit& h = hits_[c_.map.index(i + di, j + dj)];
-        if (!h.face || h.face == p.face || !(h.t < p.t - spike_)) continue;
-        // A sheet gap in front opposite the background: find's silhouette test tried it.
-        const bool opposite_open = !c_.in_frame(i - di, j - dj) || !hits_[c_.map.index(i - di, j - dj)].face;
-        if (opposite_open && h.t < p.t - sheet_gap(p.t)) continue;
+        if (!h.face || !accept(di, dj, p, h)) continue;
         consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
         if (best.face != p.face || best.t != p.t) return;
     }
 }
 
+void NearerSheet::rim_faces_in_front(int i, int j, PixelHit& best) const {
+    from_neighbour_hits(i, j, kSideOffsets, [&](int di, int dj, const PixelHit& p, const PixelHit& h) {
+        if (h.face == p.face || !(h.t < p.t - spike_)) return false;
+        // A sheet gap in front opposite the background: find's silhouette test tried it.
+        const bool opposite_open = !c_.in_frame(i - di, j - dj) || !hits_[c_.map.index(i - di, j - dj)].face;
+        return !(opposite_open && h.t < p.t - sheet_gap(p.t));
+    }, best);
+}
+
 void NearerSheet::diagonal_starts(int i, int j, bool own_face, PixelHit& best) const {
-    const PixelHit p = best;
-    for (const auto& [di, dj] : {std::pair{-1, -1}, std::pair{1, -1}, std::pair{-1, 1}, std::pair{1, 1}}) {
-        if (!c_.in_frame(i + di, j + dj)) continue;
-        const PixelHit& h = hits_[c_.map.index(i + di, j + dj)];
-        if (!h.face || (own_face && h.face != p.face) || !(h.t < p.t - sheet_gap(p.t))) continue;
-        if (continues(p, h, i + 2 * di, j + 2 * dj)) continue;  // one sheet turning away (see find)
-        consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
-        if (best.face != p.face || best.t != p.t) return;
-    }
+    from_neighbour_hits(i, j, kDiagonalOffsets, [&](int di, int dj, const PixelHit& p, const PixelHit& h) {
+        if ((own_face && h.face != p.face) || !(h.t < p.t - sheet_gap(p.t))) return false;
+        return !continues(p, h, i + 2 * di, j + 2 * dj);  // not one sheet turning away (see find)
+    }, best);
 }
 
 bool NearerSheet::continues(const PixelHit& p, const PixelHit& n, int fi, int fj) const {
