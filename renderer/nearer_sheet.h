@@ -109,6 +109,8 @@ private:
     // frame on 10 models and changed pixels only of that file.)
     bool fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit& behind) const;
     bool fold_edge(size_t k, size_t a, size_t b) const;
+    // Whether no 8-neighbour of pixel (i, j) shows the face its hit is on.
+    bool alone_on_face(int i, int j) const;
     // Whether the pixel's hit p continues the sheet of its neighbour n's hit
     // and of the hit beyond n, pixel (fi, fj): all three on one face, with p
     // where n and the next pixel extrapolate it, in (u, v) and in depth. Such

@@ -127,11 +127,18 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
                 // Beside another face in front, a rescued pixel's own face may
                 // have a nearer sheet that no neighbour shows (a rim face whose
                 // pixels the rescue all filled from its farther root, started
-                // from each other's (u, v)): its mesh in front. Not a primary
-                // hit's (the map's start there lies on the mesh's front sheet),
+                // from each other's (u, v)): its mesh in front. So too a
+                // primary hit whose face no 8-neighbour shows: the map's start
+                // there lies on the edge of its face's mesh, a chord that barely
+                // reaches the pixel, from where Newton can run over the rim to
+                // the far root (step/eight_cyl.stp iso: 20 units behind;
+                // iges/BUC50025.igs iso: 0.38). Not at every primary hit (the
+                // map's start lies on the mesh's front sheet, and on every face:
+                // +25 % of the pass's instructions on trj8 for one more pixel);
                 // never a plane's (a ray crosses it once).
-                if (n.face != p.face && best.face == p.face && best.t == p.t && rescued_[c_.map.index(i, j)] &&
-                    !c_.prepared.faces()[p.face - 1].planar)
+                if (n.face != p.face && best.face == p.face && best.t == p.t &&
+                    !c_.prepared.faces()[p.face - 1].planar &&
+                    (rescued_[c_.map.index(i, j)] || alone_on_face(i, j)))
                     mesh_in_front(p.face, i, j, best);
             }
             continue;
@@ -235,6 +242,15 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (unchanged()) return false;
     out = best;
     return true;
+}
+
+bool NearerSheet::alone_on_face(int i, int j) const {
+    const uint32_t f = hits_[c_.map.index(i, j)].face;
+    bool alone = true;
+    for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+        alone = alone && ((ni == i && nj == j) || hits_[c_.map.index(ni, nj)].face != f);
+    });
+    return alone;
 }
 
 bool NearerSheet::fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit& behind) const {
