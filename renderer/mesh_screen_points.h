@@ -147,37 +147,29 @@ private:
         std::atomic<bool> done_{false};
     };
     // Built on first use, in two steps: the projection (and screen box) for any
-    // face asked about, the grid only for faces searched a few times (a scan of
-    // the triangles answers the first queries; adjacent_far_faces rejects most
-    // candidates by their box alone).
+    // face asked about, the grid for faces searched (adjacent_far_faces rejects
+    // most candidates by their box alone).
     struct Entry {
         std::mutex m;
         Once once, grid_once;
-        std::atomic<uint32_t> queries{0};
         std::vector<Projected> pts;
         Vec2 lo{HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL};  // screen box of the points in front of the eye
         Grid grid;
     };
     const Entry& projected(uint32_t id) const;
-    // The face's grid, or null while a scan is cheaper (its first queries).
-    const Grid* grid(uint32_t id) const;
+    // The face's grid (no cells where no point is in front of the eye).
+    const Grid& grid(uint32_t id) const;
     static bool usable_triangle(const FaceMesh& mesh, const std::vector<Projected>& pts, size_t t);
     // fn(t) for the usable triangles of face id that may lie within
-    // sqrt(bound()) of p: those of the grid cells near p once the face has a
-    // grid, else all (bound() is read again as fn tightens it).
+    // sqrt(bound()) of p: those of its grid's cells near p (bound() is read
+    // again as fn tightens it).
     template <class Bound, class Fn>
     void for_triangles_near(uint32_t id, Vec2 p, Bound&& bound, Fn&& fn) const {
-        if (const Grid* g = grid(id)) {
-            screen::for_near_cells(*g, p, bound, [&](size_t cell) {
-                for (uint32_t q = g->tri_begin[cell]; q < g->tri_begin[cell + 1]; ++q) fn(g->tris[q]);
-            });
-            return;
-        }
-        const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
-        const std::vector<Projected>& pts = faces_[id - 1].pts;
-        const size_t ntri = mesh.triangles.size() / 3;
-        for (size_t t = 0; t < ntri; ++t)
-            if (usable_triangle(mesh, pts, t)) fn(static_cast<uint32_t>(t));
+        const Grid& g = grid(id);
+        if (g.nx == 0) return;  // no usable triangle: nothing in front of the eye
+        screen::for_near_cells(g, p, bound, [&](size_t cell) {
+            for (uint32_t q = g.tri_begin[cell]; q < g.tri_begin[cell + 1]; ++q) fn(g.tris[q]);
+        });
     }
     void build_grid(uint32_t id, Entry& e) const;
     const FrameContext& c_;
