@@ -34,12 +34,15 @@ bool MeshScreenPoints::usable_triangle(const FaceMesh& mesh, const std::vector<P
     return true;
 }
 
-int MeshScreenPoints::Grid::cell_x(double x) const {
-    return std::clamp(static_cast<int>(std::floor((x - x0) / cw)), 0, nx - 1);
-}
-int MeshScreenPoints::Grid::cell_y(double y) const {
-    return std::clamp(static_cast<int>(std::floor((y - y0) / ch)), 0, ny - 1);
-}
+namespace {
+// floor(f) clamped to [0, n - 1] (0 for NaN): truncation where f is positive.
+// std::floor is a libm call on the baseline x86-64 target, and a grid's making
+// takes four per triangle: 37 % of it on the 27 ducks.
+int clamped_cell(double f, int n) { return !(f > 0) ? 0 : f < n ? static_cast<int>(f) : n - 1; }
+}  // namespace
+
+int MeshScreenPoints::Grid::cell_x(double x) const { return clamped_cell((x - x0) / cw, nx); }
+int MeshScreenPoints::Grid::cell_y(double y) const { return clamped_cell((y - y0) / ch, ny); }
 
 const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
     Entry& e = faces_[id - 1];
