@@ -244,7 +244,7 @@ struct MartinSystem {
     State at(const SurfaceDerivs& d) const { return at(cartesian_from(d)); }
     State at(const CartesianDerivs& c) const {
         const double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
-        return {c, f1, f2, std::hypot(f1, f2)};
+        return {c, f1, f2, std::sqrt(f1 * f1 + f2 * f2)};  // not std::hypot, a libm call (as proposed_residual)
     }
     bool step(const State& st, double eps_det, Step& out) const {
         // J = [N1.C_u  N1.C_v; N2.C_u  N2.C_v] with the rational partials.
