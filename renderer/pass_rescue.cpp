@@ -354,13 +354,17 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     if ((!pr.best.face && !pr.best_near.face && (own || n4 >= 2 || enclosed)) || pit) {
         // Thorough where a face should cover the pixel: not in a gap between
         // separate things (enclosed_in_crack), where the far starts find nothing.
-        pr.general_starts(screen_points, own || crack || pit || enclosed_in_crack(c, src, i, j));
+        const bool thorough = own || crack || pit || enclosed_in_crack(c, src, i, j);
+        pr.general_starts(screen_points, thorough);
         kind = kRescueGeneral;
         // C only where the pixel is enclosed (its map face failed, or hits on
         // opposite sides): not along every silhouette, where B already fails for good reason.
         if ((!pr.best.face && !pr.best_near.face && (own || enclosed)) || (pit && behind_pair(c, src, i, j, pr.best.t)))
             pr.adjacent_starts(screen_points);
-        if (!pr.best.face && !pr.best_near.face && enclosed) pr.screen_starts(screen_points);
+        // D only where a face should cover the pixel (thorough), as the far
+        // starts: in a gap between separate things (the 27 ducks' copies) it
+        // found nothing, 241 times a frame, making 78 faces' screen grids.
+        if (!pr.best.face && !pr.best_near.face && enclosed && thorough) pr.screen_starts(screen_points);
     }
     // A hit inside a trim beats a near-trim one unless the latter is in front
     // (a crack in a front face must not show the face behind it).
