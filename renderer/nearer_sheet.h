@@ -109,6 +109,19 @@ private:
     // frame on 10 models and changed pixels only of that file.)
     bool fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit& behind) const;
     bool fold_edge(size_t k, size_t a, size_t b) const;
+    // At a silhouette pixel behind another face's neighbour that did not fill
+    // it: beside that face in front, a rescued pixel's own face may have a
+    // nearer sheet that no neighbour shows (a rim face whose pixels the rescue
+    // all filled from its farther root, started from each other's (u, v)): its
+    // mesh in front (mesh_in_front). So too a primary hit whose face no
+    // 8-neighbour shows: the map's start there lies on the edge of its face's
+    // mesh, a chord that barely reaches the pixel, from where Newton can run
+    // over the rim to the far root (step/eight_cyl.stp iso: 20 units behind;
+    // iges/BUC50025.igs iso: 0.38). Not at every primary hit (the map's start
+    // lies on the mesh's front sheet; on every face: +25 % of the pass's
+    // instructions on trj8 for one more pixel); never a plane's (a ray crosses
+    // it once).
+    void rim_own_mesh(int i, int j, PixelHit& best) const;
     // Whether no 8-neighbour of pixel (i, j) shows the face its hit is on.
     bool alone_on_face(int i, int j) const;
     // Whether the pixel's hit p continues the sheet of its neighbour n's hit

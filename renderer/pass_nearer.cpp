@@ -124,22 +124,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             const int ni = a_side ? pq[0] : pq[2], nj = a_side ? pq[1] : pq[3];
             if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j)) {
                 consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
-                // Beside another face in front, a rescued pixel's own face may
-                // have a nearer sheet that no neighbour shows (a rim face whose
-                // pixels the rescue all filled from its farther root, started
-                // from each other's (u, v)): its mesh in front. So too a
-                // primary hit whose face no 8-neighbour shows: the map's start
-                // there lies on the edge of its face's mesh, a chord that barely
-                // reaches the pixel, from where Newton can run over the rim to
-                // the far root (step/eight_cyl.stp iso: 20 units behind;
-                // iges/BUC50025.igs iso: 0.38). Not at every primary hit (the
-                // map's start lies on the mesh's front sheet, and on every face:
-                // +25 % of the pass's instructions on trj8 for one more pixel);
-                // never a plane's (a ray crosses it once).
-                if (n.face != p.face && best.face == p.face && best.t == p.t &&
-                    !c_.prepared.faces()[p.face - 1].planar &&
-                    (rescued_[c_.map.index(i, j)] || alone_on_face(i, j)))
-                    mesh_in_front(p.face, i, j, best);
+                if (n.face != p.face && best.face == p.face && best.t == p.t) rim_own_mesh(i, j, best);
             }
             continue;
         }
@@ -242,6 +227,12 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (unchanged()) return false;
     out = best;
     return true;
+}
+
+void NearerSheet::rim_own_mesh(int i, int j, PixelHit& best) const {
+    const uint32_t f = best.face;
+    if (!c_.prepared.faces()[f - 1].planar && (rescued_[c_.map.index(i, j)] || alone_on_face(i, j)))
+        mesh_in_front(f, i, j, best);
 }
 
 bool NearerSheet::alone_on_face(int i, int j) const {
