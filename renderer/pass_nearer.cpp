@@ -65,6 +65,10 @@ constexpr double kSheetStepRatio = 8;
 // continues the sheet (foreshortening towards a silhouette grows steps far more
 // slowly, pixel to pixel); a step onto another sheet jumps by many steps.
 constexpr double kUvSmooth2 = 1.0;
+// across_own_rim's starts, in steps from the pixel's root through the map's
+// start: the ray's entry root lies on the far side of the rim from its exit,
+// at an unknown multiple of that step (8 on duck_from_glscene front).
+constexpr double kAcrossRimSteps[] = {2, 4, 8, 16};
 // Passes after the first: a run of far-sheet pixels is peeled one pixel per pass
 // from each end, so runs of up to about 64 pixels are cleared; longer runs are not spikes
 // but a whole region the map got wrong, which this pass does not claim to fix.
@@ -125,6 +129,8 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j)) {
                 consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
                 if (n.face != p.face && best.face == p.face && best.t == p.t) rim_own_mesh(i, j, best);
+                if (n.face == p.face && best.face == p.face && best.t == p.t && alone_on_sheet(i, j))
+                    across_own_rim(i, j, best);
             }
             continue;
         }
@@ -233,6 +239,29 @@ void NearerSheet::rim_own_mesh(int i, int j, PixelHit& best) const {
     const uint32_t f = best.face;
     if (!c_.prepared.faces()[f - 1].planar && (rescued_[c_.map.index(i, j)] || alone_on_face(i, j)))
         mesh_in_front(f, i, j, best);
+}
+
+void NearerSheet::across_own_rim(int i, int j, PixelHit& best) const {
+    const PixelHit p = best;
+    const size_t k = c_.map.index(i, j);
+    if (c_.map.face[k] != p.face) return;
+    const double du = double(c_.map.u[k]) - p.u, dv = double(c_.map.v[k]) - p.v;
+    for (const double f : kAcrossRimSteps) {
+        consider(p.face, i, j, static_cast<float>(p.u + f * du), static_cast<float>(p.v + f * dv), solver_.robust,
+                 false, best);
+        if (best.t != p.t) return;
+    }
+}
+
+bool NearerSheet::alone_on_sheet(int i, int j) const {
+    const PixelHit& p = hits_[c_.map.index(i, j)];
+    const double front = p.t - sheet_gap(p.t);
+    bool alone = true;
+    for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
+        const PixelHit& h = hits_[c_.map.index(ni, nj)];
+        alone = alone && ((ni == i && nj == j) || h.face != p.face || h.t < front);
+    });
+    return alone;
 }
 
 bool NearerSheet::alone_on_face(int i, int j) const {
