@@ -122,11 +122,13 @@ private:
     // instructions on trj8 for one more pixel); never a plane's (a ray crosses
     // it once).
     void rim_own_mesh(int i, int j, PixelHit& best) const;
-    // Whether no 8-neighbour of pixel (i, j) shows the face its hit is on.
-    bool alone_on_face(int i, int j) const;
+    // Whether no 8-neighbour of pixel (i, j) shows the face its hit is on but
+    // at a distance under nearer_than (-HUGE_VAL: none at all; a sheet gap in
+    // front of the hit: none on the hit's own sheet).
+    bool alone_on_face(int i, int j, double nearer_than) const;
     // At a silhouette pixel beside its own face's other sheet in front, that
     // sheet's start failing, where no 8-neighbour shows the pixel's sheet
-    // (alone_on_sheet): the ray may clip the face by its rim, entering and
+    // (alone_on_face): the ray may clip the face by its rim, entering and
     // leaving it close together, and the map's start led Newton to the exit.
     // The map's (u, v) lies on the mesh chord between the two roots, so the
     // entry lies beyond it from the exit: robust starts along that line
@@ -135,9 +137,6 @@ private:
     // on the 27 ducks, +0.7 % trj8, +0.5 % cylinder block (on every such
     // pixel, not only those alone on their sheet: +12.6 %, +2.5 %, +1.9 %).
     void across_own_rim(int i, int j, PixelHit& best) const;
-    // Whether no 8-neighbour of pixel (i, j) shows its hit's face within a
-    // sheet gap in front of the hit or behind it (only other sheets of it).
-    bool alone_on_sheet(int i, int j) const;
     // Whether the pixel's hit p continues the sheet of its neighbour n's hit
     // and of the hit beyond n, pixel (fi, fj): all three on one face, with p
     // where n and the next pixel extrapolate it, in (u, v) and in depth. Such

@@ -128,9 +128,12 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             const int ni = a_side ? pq[0] : pq[2], nj = a_side ? pq[1] : pq[3];
             if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j)) {
                 consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
-                if (n.face != p.face && best.face == p.face && best.t == p.t) rim_own_mesh(i, j, best);
-                if (n.face == p.face && best.face == p.face && best.t == p.t && alone_on_sheet(i, j))
-                    across_own_rim(i, j, best);
+                if (best.face == p.face && best.t == p.t) {
+                    if (n.face != p.face)
+                        rim_own_mesh(i, j, best);
+                    else if (alone_on_face(i, j, p.t - sheet_gap(p.t)))
+                        across_own_rim(i, j, best);
+                }
             }
             continue;
         }
@@ -237,7 +240,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
 
 void NearerSheet::rim_own_mesh(int i, int j, PixelHit& best) const {
     const uint32_t f = best.face;
-    if (!c_.prepared.faces()[f - 1].planar && (rescued_[c_.map.index(i, j)] || alone_on_face(i, j)))
+    if (!c_.prepared.faces()[f - 1].planar && (rescued_[c_.map.index(i, j)] || alone_on_face(i, j, -HUGE_VAL)))
         mesh_in_front(f, i, j, best);
 }
 
@@ -253,22 +256,12 @@ void NearerSheet::across_own_rim(int i, int j, PixelHit& best) const {
     }
 }
 
-bool NearerSheet::alone_on_sheet(int i, int j) const {
+bool NearerSheet::alone_on_face(int i, int j, double nearer_than) const {
     const PixelHit& p = hits_[c_.map.index(i, j)];
-    const double front = p.t - sheet_gap(p.t);
     bool alone = true;
     for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
         const PixelHit& h = hits_[c_.map.index(ni, nj)];
-        alone = alone && ((ni == i && nj == j) || h.face != p.face || h.t < front);
-    });
-    return alone;
-}
-
-bool NearerSheet::alone_on_face(int i, int j) const {
-    const uint32_t f = hits_[c_.map.index(i, j)].face;
-    bool alone = true;
-    for_each_neighbour(c_, i, j, 1, [&](int ni, int nj) {
-        alone = alone && ((ni == i && nj == j) || hits_[c_.map.index(ni, nj)].face != f);
+        alone = alone && ((ni == i && nj == j) || h.face != p.face || h.t < nearer_than);
     });
     return alone;
 }
