@@ -80,6 +80,15 @@ inline bool accept_box(double u, double v, double& un, double& vn, const UvBox& 
     return true;
 }
 
+// (14) for both methods: |det| > eps_det * (product of the column lengths),
+// compared squared against the product of the squared lengths: the same test
+// without a square root per column (three per proposed step, two per Martin
+// step, each a long-latency instruction on the Newton step's critical path).
+// NaN anywhere fails it, as the unsquared test did.
+inline bool regular(double det, double eps_det, double squared_lengths) {
+    return det * det > eps_det * eps_det * squared_lengths;
+}
+
 // ||F|| of the projected system in model units (see newton.h, (12)).
 inline double proposed_residual(const Vec4& S, const Camera& cam, ScreenPoint s) {
     const double fx = S.x / S.z - s.sx, fy = S.y / S.z - s.sy;
@@ -92,7 +101,7 @@ bool proposed_step(const SurfaceDerivs& d, ScreenPoint s, double eps_det, Step& 
     // Columns P = (X, Y, D), P_u, P_v, R = (xR, yR, 1); det[a, b, c] = a . (b x c).
     const Vec3 P = xyz(d.S), Pu = xyz(d.Su), Pv = xyz(d.Sv), R{s.sx, s.sy, 1.0};
     const double M = dot(P, cross(Pu, Pv));           // (10) M   = det[P, P_u, P_v]
-    if (!(std::abs(M) > eps_det * length(P) * length(Pu) * length(Pv))) return false;  // (14)
+    if (!regular(M, eps_det, dot(P, P) * dot(Pu, Pu) * dot(Pv, Pv))) return false;  // (14)
     const double MU = dot(R, cross(Pv, P));           // (10) M_U = det[P, R, P_v]
     const double MV = dot(R, cross(P, Pu));           // (11) M_V = det[P, P_u, R]
     const double k = P.z / M;                         // (9)  (du, dv) = (w / M) (M_U, M_V)
@@ -252,7 +261,7 @@ struct MartinSystem {
         const double a = dot(pl.n1, c.Pu), b = dot(pl.n1, c.Pv);
         const double cc = dot(pl.n2, c.Pu), e = dot(pl.n2, c.Pv);
         const double det = a * e - b * cc;
-        if (!(std::abs(det) > eps_det * length(c.Pu) * length(c.Pv))) return false;  // (14)
+        if (!regular(det, eps_det, dot(c.Pu, c.Pu) * dot(c.Pv, c.Pv))) return false;  // (14)
         out = {-(e * st.f1 - b * st.f2) / det, -(-cc * st.f1 + a * st.f2) / det};   // -J^{-1} F
         return true;
     }
