@@ -249,8 +249,9 @@ const std::vector<MeshScreenPoints::ScreenBox>& MeshScreenPoints::screen_boxes()
     return boxes_;
 }
 
-int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out,
-                                 double max_d2, double max_depth) const {
+int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, NearFaceBound bound,
+                                 double max_depth) const {
+    const double reach = c_.screen_distance(bound.reach_pixels), max_d2 = reach * reach;
     // Faces whose box reaches sp, front first; only so many have their mesh
     // searched (an O(triangles) scan or a grid each): bounds the cost where a
     // point lies in the boxes of hundreds of faces of a large assembly.
@@ -273,11 +274,12 @@ int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne
         f.nstarts = nearest_starts(f.id, sp, f.starts, &f.d2, max_d2);
         if (f.nstarts && f.d2 <= max_d2) all.push_back(f);
     }
-    return nearest_first(all, out, max_out);
+    return nearest_first(all, out, bound.max_faces);
 }
 
-int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
-                                         double max_d2) const {
+int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out,
+                                         NearFaceBound bound) const {
+    const double reach = c_.screen_distance(bound.reach_pixels), max_d2 = reach * reach;
     // Candidates whose distance is measured (an O(triangles) scan each): bounds
     // the cost where a near face has very many neighbours; the near faces' own
     // lists are in face order, so which ones are cut off is still deterministic.
@@ -305,7 +307,7 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
             f.nstarts = nearest_starts(id, sp, f.starts, &f.d2, max_d2);
             if (f.nstarts && f.d2 <= max_d2) all.push_back(f);
         }
-    return nearest_first(all, out, max_out);
+    return nearest_first(all, out, bound.max_faces);
 }
 
 bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested, const PixelArray<PixelHit>& hits,

@@ -26,6 +26,15 @@ namespace nurbsrt {
 // triangles, and the rescue asks for hundreds of pixels per frame). Same
 // arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
 // vertex behind the eye. Thread-safe.
+// How far a search for faces near a pixel on screen goes (adjacent_far_faces,
+// faces_near): at most max_faces faces, the nearest first, and only those whose
+// mesh comes within reach_pixels of the pixel (pixels of the frame the
+// MeshScreenPoints was made for). Each caller says why its bounds.
+struct NearFaceBound {
+    int max_faces;
+    double reach_pixels;
+};
+
 class MeshScreenPoints {
 public:
     explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
@@ -82,22 +91,21 @@ public:
         double d2 = 0;  // squared screen distance of its mesh from sp
     };
     // The faces adjacent (PreparedFace::adjacent) to near[0..nn) that are not
-    // among them, the max_out nearest to sp on screen first (a thin face between
+    // among them, the bound.max_faces nearest to sp on screen first (a thin face between
     // the near faces lies at the pixel; a face with many neighbours, a hub or a
     // base plate, would otherwise fill the list with faces far away). Returns the
     // number written to out.
-    // Faces whose mesh lies farther than sqrt(max_d2) from sp (screen units) are
-    // left out, most of them by their screen box alone, without a scan.
-    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, int max_out,
-                           double max_d2 = HUGE_VAL) const;
+    // Faces whose mesh lies farther than bound.reach_pixels from sp are left
+    // out, most of them by their screen box alone, without a scan.
+    int adjacent_far_faces(const uint32_t* near, int nn, ScreenPoint sp, FarFace* out, NearFaceBound bound) const;
 
-    // Any faces, not in exclude[0..ne), whose mesh lies within sqrt(max_d2) of
-    // sp on screen, nearest first (at most max_out; of the kMaxBoxCandidates
+    // Any faces, not in exclude[0..ne), whose mesh lies within bound.reach_pixels of
+    // sp on screen, nearest first (at most bound.max_faces; of the kMaxBoxCandidates
     // whose mesh box reaches sp nearest to the eye): a face seen through a gap
     // between faces that do not touch it, which neither the map nor adjacency
     // offers. Only faces whose mesh box comes nearer to the eye than max_depth
     // (the depth of frontmost_point) are considered. Returns the number written to out.
-    int faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, int max_out, double max_d2,
+    int faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, NearFaceBound bound,
                    double max_depth = HUGE_VAL) const;
 
 private:

@@ -14,16 +14,17 @@ namespace nurbsrt {
 
 namespace {
 
-// Faces adjacent to a pit's 3x3 that are tried when none of the 3x3's faces
-// fills it; a thin face in front touches one of them. Bounds the cost at a
-// vertex where many faces meet (per ring of adjacent_faces).
-constexpr int kMaxAdjacentFaces = 12;
-// ... and only those whose mesh comes within 2 pixels of the pit on screen (the
-// faces adjacent to a pit's are sorted nearest first, so the rest are farther).
+// A face in front of a pit covers it on screen: its mesh comes within the
+// mesh's deflection of the pixel centre, well inside 2 pixels.
 constexpr double kPitFacePixels = 2.0;
+// Faces adjacent to a pit's 3x3 that are tried when none of the 3x3's faces
+// fills it; a thin face in front touches one of them. 12 bounds the cost at a
+// vertex where many faces meet (per ring of adjacent_faces); the faces adjacent
+// to a pit's are sorted nearest first, so the rest are farther.
+constexpr NearFaceBound kPitAdjacentFaces{12, kPitFacePixels};
 // Faces near on screen (screen_faces) tried at a pit nothing else filled, the
 // nearest first: as many as the rescue's last resort tries at a hole.
-constexpr int kMaxScreenFaces = 4;
+constexpr NearFaceBound kPitScreenFaces{4, kPitFacePixels};
 // Sheets of the pixel's own face in front of its hit that are tried, nearest
 // to the eye first: a face folded over itself many times (a dense spring or
 // coil seen edge-on) puts several there, and the map's front one may be a mesh
@@ -175,10 +176,8 @@ void NearerSheet::screen_faces(int i, int j, PixelHit& best) const {
     uint32_t near[kFaces3x3];
     const int nn = faces_3x3(i, j, near);
     const ScreenPoint sp = c_.camera.pixel_screen(i, j);
-    const double reach = c_.screen_distance(kPitFacePixels);
-    MeshScreenPoints::FarFace faces[kMaxScreenFaces];
-    const int nf = screen_points_.faces_near(sp, near, nn, faces, kMaxScreenFaces, reach * reach,
-                                             depth_in_front(best.t, sp));
+    MeshScreenPoints::FarFace faces[kPitScreenFaces.max_faces];
+    const int nf = screen_points_.faces_near(sp, near, nn, faces, kPitScreenFaces, depth_in_front(best.t, sp));
     for (int q = 0; q < nf; ++q) from_mesh_starts(faces[q], i, j, best);
 }
 
@@ -219,17 +218,14 @@ void NearerSheet::mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const
 }
 
 void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
-    uint32_t near[kFaces3x3 + kMaxAdjacentFaces];
+    uint32_t near[kFaces3x3 + kPitAdjacentFaces.max_faces];
     int nn = faces_3x3(i, j, near);
     const ScreenPoint sp = c_.camera.pixel_screen(i, j);
-    // A face in front of the pixel covers it on screen: its mesh comes within
-    // the mesh's deflection of the pixel centre, well inside kPitFacePixels.
-    const double reach = c_.screen_distance(kPitFacePixels);
     const PixelHit p = best;
-    uint32_t crossed[kMaxAdjacentFaces];  // the first ring's faces crossed outside their trim
+    uint32_t crossed[kPitAdjacentFaces.max_faces];  // the first ring's faces crossed outside their trim
     int nc = 0;
-    MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-    const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
+    MeshScreenPoints::FarFace faces[kPitAdjacentFaces.max_faces];
+    const int nf = screen_points_.adjacent_far_faces(near, nn, sp, faces, kPitAdjacentFaces);
     for (int q = 0; q < nf; ++q) {
         if (from_mesh_starts(faces[q], i, j, best)) crossed[nc++] = faces[q].id;
         near[nn++] = faces[q].id;
@@ -240,10 +236,9 @@ void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
 void NearerSheet::beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,
                                PixelHit& best) const {
     const ScreenPoint sp = c_.camera.pixel_screen(i, j);
-    const double reach = c_.screen_distance(kPitFacePixels);
-    MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
+    MeshScreenPoints::FarFace faces[kPitAdjacentFaces.max_faces];
     const int nf = screen_points_.adjacent_far_faces(crossed.data(), static_cast<int>(crossed.size()), sp, faces,
-                                                     kMaxAdjacentFaces, reach * reach);
+                                                     kPitAdjacentFaces);
     for (int q = 0; q < nf; ++q)
         if (std::find(tried.begin(), tried.end(), faces[q].id) == tried.end()) from_mesh_starts(faces[q], i, j, best);
 }

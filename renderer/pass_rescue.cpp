@@ -45,23 +45,22 @@ namespace {
 constexpr int kFarStartsPerFace = 3;
 // C's faces: the adjacent faces of B's; a thin face between the neighbourhood's
 // faces touches at least one of them. 12 faces' far starts stay within the start
-// budget after A's and B's usual few.
-constexpr int kMaxAdjacentFaces = 12;
-// ... whose mesh comes within this many pixels of the pixel on screen: the face
-// that covers it has its mesh within the deflection of its true extent, a pixel
-// or two at most; a face farther away cannot close a hole here.
-constexpr double kAdjacentReachPixels = 8.0;
-// D's faces: any face whose mesh comes within kAdjacentReachPixels of an
-// enclosed pixel that A, B and C left empty (MeshScreenPoints::faces_near), the
-// nearest few on screen: a face seen through a gap between faces that do not
-// touch it (unsewn faces of an IGES file), hidden in the map by the faces around.
-constexpr int kMaxScreenFaces = 4;
+// budget after A's and B's usual few. Only those whose mesh comes within 8
+// pixels of the pixel on screen: the face that covers it has its mesh within
+// the deflection of its true extent, a pixel or two at most; a face farther
+// away cannot close a hole here.
+constexpr NearFaceBound kAdjacentFaces{12, 8.0};
+// D's faces: any face whose mesh comes within the same reach of an enclosed
+// pixel that A, B and C left empty (MeshScreenPoints::faces_near), the nearest
+// few on screen: a face seen through a gap between faces that do not touch it
+// (unsewn faces of an IGES file), hidden in the map by the faces around.
+constexpr NearFaceBound kScreenFaces{4, kAdjacentFaces.reach_pixels};
 // At most this many distinct starts (face, u, v) are solved per rescued pixel. A
 // needs at most 8 + 8 + 2 (each neighbour's hit and map start, the own map start
 // and one own converged start), B the rest of the first 64, C at most
-// kFarStartsPerFace x kMaxAdjacentFaces = 36 more, D 12. It bounds a pixel's cost where
-// many small faces meet, and sizes the stack array of tried starts.
-constexpr int kMaxStarts = 64 + kFarStartsPerFace * (kMaxAdjacentFaces + kMaxScreenFaces);
+// kFarStartsPerFace x 12 adjacent faces = 36 more, D 12. It bounds a pixel's cost
+// where many small faces meet, and sizes the stack array of tried starts.
+constexpr int kMaxStarts = 64 + kFarStartsPerFace * (kAdjacentFaces.max_faces + kScreenFaces.max_faces);
 // A's neighbourhood: the 8 pixels around (a hit there is at most a pixel away).
 constexpr int kNeighbourRadius = 1;
 // B's neighbourhood: 5x5, one ring beyond A's, for the faces a pixel-wide sliver
@@ -184,10 +183,9 @@ public:
         uint32_t near[kMaxGeneralFaces];
         const int nn = general_faces(near);
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
-        const double reach = c_.screen_distance(kAdjacentReachPixels);
-        MeshScreenPoints::FarFace faces[kMaxAdjacentFaces];
-        const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kMaxAdjacentFaces, reach * reach);
-        limit_ = kMaxStarts - kFarStartsPerFace * kMaxScreenFaces;
+        MeshScreenPoints::FarFace faces[kAdjacentFaces.max_faces];
+        const int nf = screen_points.adjacent_far_faces(near, nn, sp, faces, kAdjacentFaces);
+        limit_ = kMaxStarts - kFarStartsPerFace * kScreenFaces.max_faces;
         for (int q = 0; q < nf; ++q) far_starts(faces[q]);
     }
     // D: any faces whose mesh comes within reach of the pixel on screen, but
@@ -198,9 +196,8 @@ public:
         for (int q = 0; q < ntried_; ++q)
             if (std::find(solved_ids, solved_ids + ns, tried_[q].id) == solved_ids + ns) solved_ids[ns++] = tried_[q].id;
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
-        const double reach = c_.screen_distance(kAdjacentReachPixels);
-        MeshScreenPoints::FarFace faces[kMaxScreenFaces];
-        const int nf = screen_points.faces_near(sp, solved_ids, ns, faces, kMaxScreenFaces, reach * reach);
+        MeshScreenPoints::FarFace faces[kScreenFaces.max_faces];
+        const int nf = screen_points.faces_near(sp, solved_ids, ns, faces, kScreenFaces);
         limit_ = kMaxStarts;
         for (int q = 0; q < nf; ++q) far_starts(faces[q]);
     }
@@ -255,7 +252,7 @@ private:
     Start tried_[kMaxStarts];
     int ntried_ = 0;
     // A's and B's share; C and D may use the rest.
-    int limit_ = kMaxStarts - kFarStartsPerFace * (kMaxAdjacentFaces + kMaxScreenFaces);
+    int limit_ = kMaxStarts - kFarStartsPerFace * (kAdjacentFaces.max_faces + kScreenFaces.max_faces);
 };
 
 // Whether both pixels of a row or column pair around (i, j) are hit nearer than

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 
 #include "renderer/error.h"
 
@@ -63,13 +64,20 @@ public:
     void i32(int32_t v) { raw(v); }
     void u64(uint64_t v) { raw(v); }
     void f64(double v) { raw(v); }
+    // Runs of one type, in the order the format lists them.
+    void i32s(std::initializer_list<int32_t> vs) {
+        for (const int32_t v : vs) i32(v);
+    }
+    void f64s(std::initializer_list<double> vs) {
+        for (const double v : vs) f64(v);
+    }
     void str(const std::string& s) {
         u64(s.size());
         out.append(s);
     }
-    void vec2(Vec2 v) { f64(v.x); f64(v.y); }
-    void vec3(Vec3 v) { f64(v.x); f64(v.y); f64(v.z); }
-    void vec4(Vec4 v) { f64(v.x); f64(v.y); f64(v.z); f64(v.w); }
+    void vec2(Vec2 v) { f64s({v.x, v.y}); }
+    void vec3(Vec3 v) { f64s({v.x, v.y, v.z}); }
+    void vec4(Vec4 v) { f64s({v.x, v.y, v.z, v.w}); }
     void color(Color c) { raw(c.r); raw(c.g); raw(c.b); }
     void doubles(const std::vector<double>& v) {
         u64(v.size());
@@ -78,10 +86,7 @@ public:
 };
 
 void write_surface(Writer& w, const NurbsSurface& s) {
-    w.i32(s.degree_u);
-    w.i32(s.degree_v);
-    w.i32(s.num_u);
-    w.i32(s.num_v);
+    w.i32s({s.degree_u, s.degree_v, s.num_u, s.num_v});
     w.u8(s.rational);
     w.doubles(s.knots_u);
     w.doubles(s.knots_v);
@@ -92,10 +97,7 @@ void write_surface(Writer& w, const NurbsSurface& s) {
 void write_face(Writer& w, const Face& f) {
     w.u32(f.index);
     write_surface(w, f.surface);
-    w.f64(f.u_min);
-    w.f64(f.u_max);
-    w.f64(f.v_min);
-    w.f64(f.v_max);
+    w.f64s({f.u_min, f.u_max, f.v_min, f.v_max});
     w.u8(f.reversed);
     w.u64(f.loops.size());
     for (const TrimLoop& l : f.loops) {

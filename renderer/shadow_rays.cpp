@@ -43,11 +43,10 @@ constexpr int kRingOrder[kFirstRing][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0,
 // cross (its map mesh covers where the exact face does not: a thin face, the
 // band along a trim), the occluder may be a face hidden behind it in the map,
 // adjacent to it (it was the case for the leaks traced on step/box_sides.STEP).
-// Those adjacent faces whose mesh comes within this many light-map pixels of
-// the point are tried, at most kMaxAdjacentFaces of them, nearest first (a base
-// plate with many holes has dozens of neighbours).
-constexpr double kAdjacentReachPixels = 2.0;
-constexpr int kMaxAdjacentFaces = 4;
+// Those adjacent faces whose mesh comes within 2 light-map pixels of the point
+// are tried, at most 4 of them, nearest first (a base plate with many holes has
+// dozens of neighbours).
+constexpr NearFaceBound kAdjacentFaces{4, 2.0};
 // A screen distance bound of 0 for nearest_starts: only mesh triangles that
 // contain the light ray's screen point, i.e. the ray pierces the face's mesh.
 constexpr double kPiercedOnly = 0.0;
@@ -282,9 +281,8 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
     // cost 40 % of the frame on trj8 and found nothing more.
     const uint32_t centre = ctx_.in_frame(ci, cj) ? map_.face[map_.index(ci, cj)] : 0;
     if (!centre || centre == face || std::find(passed, passed + npassed, centre) == passed + npassed) return false;
-    const double reach = ctx_.screen_distance(kAdjacentReachPixels);
-    MeshScreenPoints::FarFace far[kMaxAdjacentFaces];
-    const int nfar = screen_points_.adjacent_far_faces(passed, npassed, sp, far, kMaxAdjacentFaces, reach * reach);
+    MeshScreenPoints::FarFace far[kAdjacentFaces.max_faces];
+    const int nfar = screen_points_.adjacent_far_faces(passed, npassed, sp, far, kAdjacentFaces);
     for (int q = 0; q < nfar; ++q) {
         if (far[q].id == face || std::find(tried, tried + ntried, far[q].id) != tried + ntried) continue;
         if (occludes_from_any(far[q].id, far[q].starts, far[q].nstarts)) return true;

@@ -226,12 +226,13 @@ TEST(MeshScreenPoints, FacesNearAreEveryFaceWithinTheBoundNearestFirst) {
     const TestFrame f(test_scene());
     const MeshScreenPoints points(f.c), each(f.c);
     const double pixel = 2.0 / f.cam.height();
+    constexpr double kReach = 8;  // pixels
     std::mt19937 rng(13);
     std::uniform_real_distribution<double> x(-1.8, 1.8), y(-1.2, 1.2);
     int found = 0;
     for (int k = 0; k < 400; ++k) {
         const ScreenPoint sp{x(rng), y(rng)};
-        const double max_d2 = (8 * pixel) * (8 * pixel);
+        const double max_d2 = (kReach * pixel) * (kReach * pixel);
         std::vector<std::pair<double, uint32_t>> expected;
         for (uint32_t id = 1; id <= f.c.nfaces; ++id) {
             Vec2 starts[2];
@@ -240,7 +241,7 @@ TEST(MeshScreenPoints, FacesNearAreEveryFaceWithinTheBoundNearestFirst) {
         }
         std::sort(expected.begin(), expected.end());
         MeshScreenPoints::FarFace out[4];
-        const int n = points.faces_near(sp, nullptr, 0, out, 4, max_d2);
+        const int n = points.faces_near(sp, nullptr, 0, out, {4, kReach});
         ASSERT_EQ(n, static_cast<int>(expected.size()));
         for (int q = 0; q < n; ++q) {
             EXPECT_EQ(out[q].id, expected[q].second);
@@ -250,7 +251,7 @@ TEST(MeshScreenPoints, FacesNearAreEveryFaceWithinTheBoundNearestFirst) {
         // An excluded face is left out, the others stay.
         if (n > 0) {
             const uint32_t skip = out[0].id;
-            EXPECT_EQ(points.faces_near(sp, &skip, 1, out, 4, max_d2), n - 1);
+            EXPECT_EQ(points.faces_near(sp, &skip, 1, out, {4, kReach}), n - 1);
             for (int q = 0; q < n - 1; ++q) EXPECT_NE(out[q].id, skip);
         }
     }
