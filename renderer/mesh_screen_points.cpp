@@ -249,6 +249,53 @@ const std::vector<MeshScreenPoints::ScreenBox>& MeshScreenPoints::screen_boxes()
     return boxes_;
 }
 
+namespace {
+
+// Cells per side of the box grid: 16 pixels a cell on a 512-pixel frame, so a
+// point's search square (faces_near's reach is a few pixels) spans 1 to 4
+// cells, while a face's box spans few of the 1024.
+constexpr int kBoxGridCells = 32;
+
+}  // namespace
+
+int MeshScreenPoints::BoxGrid::cell_x(double x) const {
+    // Non-negative after the clamp: truncation is the floor (no libm call).
+    return std::min(static_cast<int>(std::max(x - x0, 0.0) * inv_cw), n - 1);
+}
+
+int MeshScreenPoints::BoxGrid::cell_y(double y) const {
+    return std::min(static_cast<int>(std::max(y - y0, 0.0) * inv_ch), n - 1);
+}
+
+const MeshScreenPoints::BoxGrid& MeshScreenPoints::box_grid() const {
+    std::call_once(box_grid_once_, [&] {
+        const std::vector<ScreenBox>& boxes = screen_boxes();
+        BoxGrid& g = box_grid_;
+        g.n = kBoxGridCells;
+        // The frame's screen extent: x in [-aspect, aspect], y in [-1, 1].
+        const double a = c_.camera.aspect();
+        g.x0 = -a, g.y0 = -1;
+        g.inv_cw = g.n / (2 * a), g.inv_ch = g.n / 2.0;
+        g.begin.assign(static_cast<size_t>(g.n) * g.n + 1, 0);
+        auto for_cells = [&](const ScreenBox& b, auto&& fn) {
+            for (int y = g.cell_y(b.lo.y); y <= g.cell_y(b.hi.y); ++y)
+                for (int x = g.cell_x(b.lo.x); x <= g.cell_x(b.hi.x); ++x) fn(static_cast<size_t>(y) * g.n + x);
+        };
+        for (const ScreenBox& b : boxes)
+            if (!b.empty && !b.around) for_cells(b, [&](size_t cell) { ++g.begin[cell + 1]; });
+        for (size_t cell = 1; cell < g.begin.size(); ++cell) g.begin[cell] += g.begin[cell - 1];
+        g.ids.resize(g.begin.back());
+        std::vector<uint32_t> fill(g.begin.begin(), g.begin.end() - 1);
+        for (uint32_t id = 1; id <= c_.nfaces; ++id) {
+            const ScreenBox& b = boxes[id - 1];
+            if (b.empty) continue;
+            if (b.around) g.around.push_back(id);
+            else for_cells(b, [&](size_t cell) { g.ids[fill[cell]++] = id; });
+        }
+    });
+    return box_grid_;
+}
+
 int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne, FarFace* out, NearFaceBound bound,
                                  double max_depth) const {
     const double reach = c_.screen_distance(bound.reach_pixels), max_d2 = reach * reach;
@@ -257,9 +304,20 @@ int MeshScreenPoints::faces_near(ScreenPoint sp, const uint32_t* exclude, int ne
     // point lies in the boxes of hundreds of faces of a large assembly.
     constexpr size_t kMaxBoxCandidates = 16;
     const std::vector<ScreenBox>& boxes = screen_boxes();
+    const BoxGrid& g = box_grid();
     const Vec2 p{sp.sx, sp.sy};
+    // The faces binned in the cells of the square of half-side reach around p,
+    // and those around the eye; ascending, each once.
+    std::vector<uint32_t> ids(g.around);
+    for (int y = g.cell_y(p.y - reach); y <= g.cell_y(p.y + reach); ++y)
+        for (int x = g.cell_x(p.x - reach); x <= g.cell_x(p.x + reach); ++x) {
+            const size_t cell = static_cast<size_t>(y) * g.n + x;
+            ids.insert(ids.end(), g.ids.begin() + g.begin[cell], g.ids.begin() + g.begin[cell + 1]);
+        }
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     std::vector<std::pair<double, uint32_t>> cand;
-    for (uint32_t id = 1; id <= c_.nfaces; ++id) {
+    for (const uint32_t id : ids) {
         const ScreenBox& b = boxes[id - 1];
         if (b.empty || !(b.near < max_depth) || std::find(exclude, exclude + ne, id) != exclude + ne) continue;
         if (!b.around && !(box_distance2(p, b.lo.x, b.hi.x, b.lo.y, b.hi.y) <= max_d2)) continue;

@@ -119,6 +119,23 @@ private:
     const std::vector<ScreenBox>& screen_boxes() const;
     mutable std::once_flag boxes_once_;
     mutable std::vector<ScreenBox> boxes_;
+    // The screen boxes binned on a coarse uniform grid over the frame, for
+    // faces_near: per cell the faces whose box overlaps it (clamped to the
+    // frame's cells), as index ranges into one array (compressed rows); apart,
+    // the faces whose box may cover any point (`around`). A box within reach
+    // of a point overlaps a cell of the square around the point, so only those
+    // cells' faces need the exact box test: faces_near tested every face's box
+    // per call (a cylinder block's 822 faces, 2.5 % of its frame).
+    struct BoxGrid {
+        int n = 0;  // cells per side
+        double x0 = 0, y0 = 0, inv_cw = 1, inv_ch = 1;
+        std::vector<uint32_t> begin, ids, around;
+        int cell_x(double x) const;
+        int cell_y(double y) const;
+    };
+    const BoxGrid& box_grid() const;
+    mutable std::once_flag box_grid_once_;
+    mutable BoxGrid box_grid_;
     struct Projected {
         Vec2 s;        // screen position (NaN behind the eye)
         double depth;  // along the view direction
