@@ -32,12 +32,16 @@ namespace {
 constexpr int kNeighbours = 9;
 // An edge pixel across which the colour is smooth to within this (is_smooth),
 // in a gamma-2 encoding of the premultiplied colour (close to how 8-bit sRGB
-// spaces its steps), gets no extra rays: its samples, on the same smooth
-// shading, could move it by far less than one output step (Mitchell 1987
-// refines where the samples' contrast exceeds a threshold). Two tangent faces of
-// one colour meeting (a fillet's borders), or a crease both sides of which the
-// light hits alike.
-constexpr double kSmoothContrast = 1.0 / 255;
+// spaces its steps), gets no extra rays (Mitchell 1987 refines where the
+// samples' contrast exceeds a threshold): two tangent faces of one colour
+// meeting (a fillet's borders), or a crease both sides of which the light hits
+// alike. A step of contrast J through the pixel moves its box average from the
+// centre sample's by at most J / 2 (the edge through the centre), so under two
+// steps of the encoding the pixel is off by at most one output step. Measured
+// on trj8's iso frame (4 rays, feature lines), 1/255 -> 2/255: 12 % fewer
+// anti-aliased pixels (15,724 -> 13,802) and rays (41,423 -> 36,348); the 8-bit
+// sRGB image differs at 149 pixels, 148 of them by one step, one by two.
+constexpr double kSmoothContrast = 2.0 / 255;
 
 // A sample's hit is found to within this fraction of a pixel in the image plane
 // (Newton's residual (12), in model units at the hit's depth), not to the
