@@ -15,6 +15,15 @@
 
 namespace nurbsrt {
 
+// How far a search for faces near a pixel on screen goes (adjacent_far_faces,
+// faces_near): at most max_faces faces, the nearest first, and only those whose
+// mesh comes within reach_pixels of the pixel (pixels of the frame the
+// MeshScreenPoints was made for). Each caller says why its bounds.
+struct NearFaceBound {
+    int max_faces;
+    double reach_pixels;
+};
+
 // The point of the face's mesh nearest to the pixel on screen, its (u, v)
 // interpolated in that triangle (Newton then starts within the mesh's deflection
 // of the root). A face narrower than a pixel (a fillet or a blend seen edge-on)
@@ -26,15 +35,6 @@ namespace nurbsrt {
 // triangles, and the rescue asks for hundreds of pixels per frame). Same
 // arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
 // vertex behind the eye. Thread-safe.
-// How far a search for faces near a pixel on screen goes (adjacent_far_faces,
-// faces_near): at most max_faces faces, the nearest first, and only those whose
-// mesh comes within reach_pixels of the pixel (pixels of the frame the
-// MeshScreenPoints was made for). Each caller says why its bounds.
-struct NearFaceBound {
-    int max_faces;
-    double reach_pixels;
-};
-
 class MeshScreenPoints {
 public:
     explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
