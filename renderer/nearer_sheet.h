@@ -229,8 +229,9 @@ private:
     // The faces adjacent to `crossed`, faces whose surface the pixel's ray
     // crosses outside their trim (it passes beyond their edge, where a face
     // joining them may lie in front: a fillet strip too thin for the map along
-    // the edge of a face in front, step/bug27693_cornetta-step.stp iso), within
-    // reach on screen, but those in `tried`; from their mesh starts, robustly.
+    // the edge of a face in front, step/bug27693_cornetta-step.stp iso; find
+    // adds the pixel's own face at a step, see there), within reach on screen,
+    // but those in `tried`; from their mesh starts, robustly.
     void beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,
                       PixelHit& best) const;
     // Solves face f.id from each of its mesh starts (robustly, keeping the

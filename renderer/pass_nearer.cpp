@@ -104,8 +104,9 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // Pits where a neighbour continues the pixel's sheet and the other is on
     // another face; and whether a pit's neighbour on the pixel's face does not.
     bool continued = false, own_face_jump = false, step = false, silhouette = false;
-    // The faces in front at a step whose surface the ray crosses outside their trim.
-    uint32_t crossed[2];
+    // The faces in front at a step whose surface the ray crosses outside their
+    // trim (one per pair at the most), then the pixel's own face (see below).
+    uint32_t crossed[3];
     int ncrossed = 0;
     for (const auto& pq : pairs) {
         if (!c_.in_frame(pq[0], pq[1]) || !c_.in_frame(pq[2], pq[3])) continue;
@@ -232,7 +233,15 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (silhouette && unchanged()) rim_faces_in_front(i, j, best);
     if (silhouette && unchanged()) diagonal_starts(i, j, !rescued_rim, best);
     if (((step && !pit) || rescued_rim) && unchanged()) diagonal_faces(i, j, best);
-    if (ncrossed && !pit && unchanged()) beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
+    // Beyond the edge of a face in front, the faces joining it there, and those
+    // joining the pixel's own face, the face behind: a wall rising from it
+    // towards the edge, seen edge-on, lies between the two (step/cylinder_block.stp
+    // front: a drafted wall between a floor and the face in front, 14 units in
+    // front of the floor's hit, too thin to show in any map pixel).
+    if (ncrossed && !pit && unchanged()) {
+        crossed[ncrossed++] = p.face;
+        beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
+    }
     if (unchanged()) return false;
     out = best;
     return true;
