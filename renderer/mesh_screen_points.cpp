@@ -258,14 +258,12 @@ constexpr int kBoxGridCells = 32;
 
 }  // namespace
 
-int MeshScreenPoints::BoxGrid::cell_x(double x) const {
-    // Non-negative after the clamp: truncation is the floor (no libm call).
-    return std::min(static_cast<int>(std::max(x - x0, 0.0) * inv_cw), n - 1);
-}
+// As the face grids' cells (clamped_cell): a box corner just in front of the
+// eye plane projects to a huge or infinite coordinate, which must not reach the
+// integer conversion.
+int MeshScreenPoints::BoxGrid::cell_x(double x) const { return clamped_cell((x - x0) * inv_cw, n); }
 
-int MeshScreenPoints::BoxGrid::cell_y(double y) const {
-    return std::min(static_cast<int>(std::max(y - y0, 0.0) * inv_ch), n - 1);
-}
+int MeshScreenPoints::BoxGrid::cell_y(double y) const { return clamped_cell((y - y0) * inv_ch, n); }
 
 const MeshScreenPoints::BoxGrid& MeshScreenPoints::box_grid() const {
     std::call_once(box_grid_once_, [&] {
