@@ -39,6 +39,21 @@ namespace {
 // std::floor is a libm call on the baseline x86-64 target, and a grid's making
 // takes four per triangle: 37 % of it on the 27 ducks.
 int clamped_cell(double f, int n) { return !(f > 0) ? 0 : f < n ? static_cast<int>(f) : n - 1; }
+
+// A grid's compressed rows in two passes (count, then fill): begin[cell] ..
+// begin[cell + 1] index the cell's items in `items`, in the order offered
+// (ascending where the items come ascending). cells_of(q, add) calls
+// add(cell, item) for each cell item q of `count` lies in.
+template <class CellsOf>
+void compressed_rows(size_t ncells, size_t count, CellsOf&& cells_of, std::vector<uint32_t>& begin,
+                     std::vector<uint32_t>& items) {
+    begin.assign(ncells + 1, 0);
+    for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t) { ++begin[cell + 1]; });
+    for (size_t cell = 0; cell < ncells; ++cell) begin[cell + 1] += begin[cell];
+    items.resize(begin[ncells]);
+    std::vector<uint32_t> next(begin.begin(), begin.end() - 1);
+    for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t item) { items[next[cell]++] = item; });
+}
 }  // namespace
 
 int MeshScreenPoints::Grid::cell_x(double x) const { return clamped_cell((x - x0) / cw, nx); }
@@ -121,24 +136,16 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
                           static_cast<uint8_t>(g.cell_y(std::max({a.y, b.y, c.y})))});
     }
 
-    // Compressed rows in two passes (count, then fill), entries ascending per cell.
-    auto fill = [&](std::vector<uint32_t>& begin, std::vector<uint32_t>& items, size_t count, auto&& cells_of) {
-        begin.assign(ncells + 1, 0);
-        for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t) { ++begin[cell + 1]; });
-        for (size_t cell = 0; cell < ncells; ++cell) begin[cell + 1] += begin[cell];
-        items.resize(begin[ncells]);
-        std::vector<uint32_t> next(begin.begin(), begin.end() - 1);
-        for (size_t q = 0; q < count; ++q) cells_of(q, [&](size_t cell, uint32_t item) { items[next[cell]++] = item; });
-    };
-    fill(g.tri_begin, g.tris, ranges.size(), [&](size_t q, auto&& add) {
+    // Entries ascending per cell.
+    compressed_rows(ncells, ranges.size(), [&](size_t q, auto&& add) {
         const Cells& r = ranges[q];
         for (int y = r.y0; y <= r.y1; ++y)
             for (int x = r.x0; x <= r.x1; ++x) add(static_cast<size_t>(y) * g.nx + x, r.t);
-    });
-    fill(g.vtx_begin, g.vtxs, pts.size(), [&](size_t m, auto&& add) {
+    }, g.tri_begin, g.tris);
+    compressed_rows(ncells, pts.size(), [&](size_t m, auto&& add) {
         if (!std::isnan(pts[m].s.x))
             add(static_cast<size_t>(g.cell_y(pts[m].s.y)) * g.nx + g.cell_x(pts[m].s.x), static_cast<uint32_t>(m));
-    });
+    }, g.vtx_begin, g.vtxs);
 }
 
 int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2,
@@ -274,22 +281,16 @@ const MeshScreenPoints::BoxGrid& MeshScreenPoints::box_grid() const {
         const double a = c_.camera.aspect();
         g.x0 = -a, g.y0 = -1;
         g.inv_cw = g.n / (2 * a), g.inv_ch = g.n / 2.0;
-        g.begin.assign(static_cast<size_t>(g.n) * g.n + 1, 0);
-        auto for_cells = [&](const ScreenBox& b, auto&& fn) {
+        // Face ids ascending per cell; those around the eye apart.
+        compressed_rows(static_cast<size_t>(g.n) * g.n, boxes.size(), [&](size_t q, auto&& add) {
+            const ScreenBox& b = boxes[q];
+            if (b.empty || b.around) return;
             for (int y = g.cell_y(b.lo.y); y <= g.cell_y(b.hi.y); ++y)
-                for (int x = g.cell_x(b.lo.x); x <= g.cell_x(b.hi.x); ++x) fn(static_cast<size_t>(y) * g.n + x);
-        };
-        for (const ScreenBox& b : boxes)
-            if (!b.empty && !b.around) for_cells(b, [&](size_t cell) { ++g.begin[cell + 1]; });
-        for (size_t cell = 1; cell < g.begin.size(); ++cell) g.begin[cell] += g.begin[cell - 1];
-        g.ids.resize(g.begin.back());
-        std::vector<uint32_t> fill(g.begin.begin(), g.begin.end() - 1);
-        for (uint32_t id = 1; id <= c_.nfaces; ++id) {
-            const ScreenBox& b = boxes[id - 1];
-            if (b.empty) continue;
-            if (b.around) g.around.push_back(id);
-            else for_cells(b, [&](size_t cell) { g.ids[fill[cell]++] = id; });
-        }
+                for (int x = g.cell_x(b.lo.x); x <= g.cell_x(b.hi.x); ++x)
+                    add(static_cast<size_t>(y) * g.n + x, static_cast<uint32_t>(q + 1));
+        }, g.begin, g.ids);
+        for (uint32_t id = 1; id <= c_.nfaces; ++id)
+            if (!boxes[id - 1].empty && boxes[id - 1].around) g.around.push_back(id);
     });
     return box_grid_;
 }

@@ -124,8 +124,9 @@ private:
     // frame's cells), as index ranges into one array (compressed rows); apart,
     // the faces whose box may cover any point (`around`). A box within reach
     // of a point overlaps a cell of the square around the point, so only those
-    // cells' faces need the exact box test: faces_near tested every face's box
-    // per call (a cylinder block's 822 faces, 2.5 % of its frame).
+    // cells' faces need the exact box test, where faces_near tested every
+    // face's box per call (a cylinder block's 822 faces: faces_near 11.3 ->
+    // 8.8 M instructions of its iso frame's 446 M).
     struct BoxGrid {
         int n = 0;  // cells per side
         double x0 = 0, y0 = 0, inv_cw = 1, inv_ch = 1;
