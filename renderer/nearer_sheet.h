@@ -23,6 +23,9 @@ namespace nurbsrt {
 // footprint squared over the curvature radius, far below one footprint except
 // where the sheet is seen almost edge-on (a wasted re-solve there, never a wrong hit).
 constexpr double kSheetFootprints = 1.0;
+// unlinked_end's largest step, in sheet gaps: the speckles it was made for lie
+// 2.4 gaps behind the face in front; 4 keeps the search to such near steps.
+constexpr double kUnlinkedStepGaps = 4.0;
 
 class NearerSheet {
 public:
@@ -145,6 +148,33 @@ private:
     // of a cylinder block's pits). Two sheets of one face closer than a pixel
     // footprint still pass (a fold of the duck), so a solve from n is kept.
     bool continues(const PixelHit& p, const PixelHit& n, int fi, int fj) const;
+    // One side of the pair through pixel (i, j) is background, its neighbour
+    // (ni, nj) a hit: the pixel lies on a silhouette, next to a neighbour
+    // nearer by more than a footprint (another sheet), where a fold's near
+    // sheet reaches the silhouette over a run of far-sheet pixels that the
+    // pairs peel down to here (a dense folded face seen edge-on,
+    // step/bug29715_slow.stp), or where the ray crosses a curved face twice by
+    // its silhouette and the map's start led to the farther root (a fillet's
+    // or a sphere's rim): solved from that neighbour, unless the pixel
+    // continues its sheet (continues(): a surface turning away steps more in
+    // depth towards its silhouette, evenly, on one sheet).
+    void silhouette_pair(int i, int j, int ni, int nj, PixelHit& best) const;
+    // At a step, whether the neighbour n's face in front ends at the pixel
+    // without a face linked to it there: solved from n, its surface is met
+    // outside its trim or Newton leaves its parameter box (o), and the face
+    // has no adjacent faces at all (PreparedFace::adjacent: an unsewn IGES
+    // face shares no mesh node with another). Beyond the edges of linked
+    // faces, beyond_edges tries the faces joining them; here none are known,
+    // and a piece continuing the face in front may lie between it and the
+    // hit (iges/marsCapsule.igs front: a panel's band split into two unsewn
+    // faces, the second 0.03 units, 1.5 footprints, in front of the face the
+    // pixel showed; 4 pixels). Only for steps of more than one footprint
+    // (smaller ones are a slope across an unsewn seam) and fewer than
+    // kUnlinkedStepGaps: the continuation of a face lies about as deep as the
+    // face at its edge, so a step of many footprints is a silhouette over a
+    // face far behind. (Without those bounds the screen search ran at 4,712
+    // pixels of marsCapsule's front frame, +8 % of its instructions.)
+    bool unlinked_end(const PixelHit& p, const PixelHit& n, Outcome o) const;
     // How far in front of a hit at distance t another sheet must lie to count as one.
     double sheet_gap(double t) const { return kSheetFootprints * c_.pixel_footprint(t); }
     // The depth along the view direction (the mesh's measure, MeshScreenPoints)

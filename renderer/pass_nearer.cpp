@@ -108,34 +108,15 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // trim (one per pair at the most), then the pixel's own face (see below).
     uint32_t crossed[3];
     int ncrossed = 0;
+    bool unlinked_edge = false;
     for (const auto& pq : pairs) {
         if (!c_.in_frame(pq[0], pq[1]) || !c_.in_frame(pq[2], pq[3])) continue;
         const PixelHit& a = hits_[c_.map.index(pq[0], pq[1])];
         const PixelHit& b = hits_[c_.map.index(pq[2], pq[3])];
         if (!a.face != !b.face) {
-            // One side background: the pixel lies on a silhouette, next to a
-            // neighbour nearer by more than a footprint (another sheet), where a
-            // fold's near sheet reaches the silhouette over a run of far-sheet
-            // pixels that the pairs above peel down to here (a dense folded face
-            // seen edge-on, step/bug29715_slow.stp), or where the ray crosses a
-            // curved face twice by its silhouette and the map's start led to the
-            // farther root (a fillet's or a sphere's rim): solved from that
-            // neighbour, unless the pixel continues its sheet (continues(): a
-            // surface turning away steps more in depth towards its silhouette,
-            // evenly, on one sheet).
-            const bool a_side = a.face != 0;
-            const PixelHit& n = a_side ? a : b;
             silhouette = true;
-            const int ni = a_side ? pq[0] : pq[2], nj = a_side ? pq[1] : pq[3];
-            if (n.t < p.t - sheet_gap(p.t) && !continues(p, n, 2 * ni - i, 2 * nj - j)) {
-                consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
-                if (best.face == p.face && best.t == p.t) {
-                    if (n.face != p.face)
-                        rim_own_mesh(i, j, best);
-                    else if (alone_on_face(i, j, p.t - sheet_gap(p.t)))
-                        across_own_rim(i, j, best);
-                }
-            }
+            const bool a_side = a.face != 0;
+            silhouette_pair(i, j, a_side ? pq[0] : pq[2], a_side ? pq[1] : pq[3], best);
             continue;
         }
         // Beyond a fold's silhouette, the near sheet's root (solved from where
@@ -193,6 +174,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             // of the hit: the ray passes beyond that face's edge (beyond_edges).
             if (jumps == 1 && o == kTrimmed && n.face != p.face && crossing[q] < p.t - sheet_gap(p.t))
                 crossed[ncrossed++] = n.face;
+            unlinked_edge |= jumps == 1 && unlinked_end(p, n, o);
         }
         // A pit between two nearer neighbours on one face: the middle of their
         // (u, v) starts next to the root between them, where Newton from either
@@ -242,9 +224,30 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
         crossed[ncrossed++] = p.face;
         beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
     }
+    // Where the face in front ends unlinked (unlinked_end), the faces near on
+    // screen stand in for the adjacency beyond_edges reads.
+    if (unlinked_edge && !pit && unchanged()) screen_faces(i, j, best);
     if (unchanged()) return false;
     out = best;
     return true;
+}
+
+void NearerSheet::silhouette_pair(int i, int j, int ni, int nj, PixelHit& best) const {
+    const PixelHit& p = hits_[c_.map.index(i, j)];  // as find's tests: the pixel's hit, not best
+    const PixelHit& n = hits_[c_.map.index(ni, nj)];
+    if (!(n.t < p.t - sheet_gap(p.t)) || continues(p, n, 2 * ni - i, 2 * nj - j)) return;
+    consider(n.face, i, j, n.u, n.v, solver_.robust, false, best);
+    if (best.face != p.face || best.t != p.t) return;
+    if (n.face != p.face)
+        rim_own_mesh(i, j, best);
+    else if (alone_on_face(i, j, p.t - sheet_gap(p.t)))
+        across_own_rim(i, j, best);
+}
+
+bool NearerSheet::unlinked_end(const PixelHit& p, const PixelHit& n, Outcome o) const {
+    const double step = p.t - n.t, gap = sheet_gap(p.t);
+    return n.face != p.face && (o == kTrimmed || o == kLeftDomain) && step > gap &&
+           step < kUnlinkedStepGaps * gap && c_.prepared.faces()[n.face - 1].adjacent.empty();
 }
 
 void NearerSheet::rim_own_mesh(int i, int j, PixelHit& best) const {
