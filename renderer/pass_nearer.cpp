@@ -109,6 +109,9 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     uint32_t crossed[3];
     int ncrossed = 0;
     bool unlinked_edge = false;
+    // The sides (di, dj) of steps whose face in front Newton failed on (one per pair at the most).
+    std::pair<int, int> failed_side[2];
+    int nfailed = 0;
     for (const auto& pq : pairs) {
         if (!c_.in_frame(pq[0], pq[1]) || !c_.in_frame(pq[2], pq[3])) continue;
         const PixelHit& a = hits_[c_.map.index(pq[0], pq[1])];
@@ -175,6 +178,8 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             if (jumps == 1 && o == kTrimmed && n.face != p.face && crossing[q] < p.t - sheet_gap(p.t))
                 crossed[ncrossed++] = n.face;
             unlinked_edge |= jumps == 1 && unlinked_end(p, n, o);
+            if (jumps == 1 && n.face != p.face && newton_failed(o))
+                failed_side[nfailed++] = {pq[2 * q] - i, pq[2 * q + 1] - j};
         }
         // A pit between two nearer neighbours on one face: the middle of their
         // (u, v) starts next to the root between them, where Newton from either
@@ -215,6 +220,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (silhouette && unchanged()) rim_faces_in_front(i, j, best);
     if (silhouette && unchanged()) diagonal_starts(i, j, !rescued_rim, best);
     if (((step && !pit) || rescued_rim) && unchanged()) diagonal_faces(i, j, best);
+    if (nfailed && step && !pit && unchanged()) faces_beyond_failed(i, j, {failed_side, failed_side + nfailed}, best);
     // Beyond the edge of a face in front, the faces joining it there, and those
     // joining the pixel's own face, the face behind: a wall rising from it
     // towards the edge, seen edge-on, lies between the two (step/cylinder_block.stp

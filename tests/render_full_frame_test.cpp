@@ -99,13 +99,15 @@ struct Known {
 // their sheet trying starts across their face's rim, 10 -> 8; steps past the
 // edge of a face in front trying the faces that join the pixel's own face, 8 -> 7;
 // steps past the end of an unsewn face in front trying the faces near on screen,
-// 7 -> 3 (the notes in the list).
+// 7 -> 3; steps whose face in front Newton fails on trying the faces hit two
+// pixels beyond the step, 3 -> 2 (the notes in the list).
 // What is left, by kind of cause (the check's diagnosis):
-//  - kFaceInFront: a face in front that the 3x3 does not show (its nearest map
-//    pixels 2 or more pixels away), at a step whose face in front the ray does
-//    not cross outside its trim (bearing.iges: its solve fails), so the faces
+//  - kFaceInFront: a face in front that the 3x3 does not show (its nearest
+//    pixels 3 rows away), at a step whose face in front the ray does not cross
+//    outside its trim (bearing.iges front: its solve fails), so the faces
 //    joining those of the 3x3 are not tried (at every step they would cost some
-//    8 % of a machine part's frame).
+//    8 % of a machine part's frame; at the steps whose solve fails, with the
+//    faces joining the pixel's own, 4-6 %).
 //  - kMissedByAllStarts: the map's start diverges at once and the rescue fills
 //    the pixel from its neighbours' (u, v), all of which lead to a root on
 //    another turn of a dense coil 15 units (9 % of the diagonal) behind the
@@ -121,7 +123,10 @@ constexpr const char* kMissedByAllStarts = "the map's start diverges, no start t
 const std::vector<Known> kKnownRemaining = {
     {"step/bug29715_slow.stp", "front", 0, 1, kMissedByAllStarts},  // a dense coil seen edge-on
     {"iges/bearing.iges", "front", 0, 1, kFaceInFront},
-    {"iges/bearing.iges", "iso", 0, 1, kFaceInFront},
+    // (bearing iso's, a blend 0.0021 in front of the hit whose nearest pixels
+    // lay two to the right, beyond a face in front on which Newton failed, went
+    // when such steps tried the faces hit two pixels beyond them:
+    // NearerSheet::faces_beyond_failed.)
     // (marsCapsule front's four, symmetric: a panel's band split into two
     // unsewn faces, the second 1.5 footprints in front of the face shown, at a
     // step whose face in front, the band's first half, ends there (Newton
