@@ -89,13 +89,18 @@ struct FrameContext {
     Progress& progress;
     int width, height;
     uint32_t nfaces;
+    // 2 / height, once: pixel_footprint runs per pixel pair in several passes,
+    // where a division per call (the compiler may not turn x / h into a
+    // product) costs far more cycles than its one instruction. The same
+    // frames (a power-of-two height keeps every product exact).
+    double two_over_height = 2.0 / height;
 
     bool in_frame(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
     size_t pixels() const { return static_cast<size_t>(width) * height; }
     // The size of one pixel in model units at hit distance t (screen units span
     // 2 over the height; depth along the view direction for orthographic views,
     // where it does not matter).
-    double pixel_footprint(double t) const { return 2.0 * camera.image_to_model_scale(t) / height; }
+    double pixel_footprint(double t) const { return camera.image_to_model_scale(t) * two_over_height; }
     // A distance of `pixels` in screen units (ScreenPoint), which span 2 over the height.
     double screen_distance(double pixels) const { return 2.0 * pixels / height; }
     // The depth along the view direction (the map mesh's measure) `footprints`

@@ -83,8 +83,11 @@ void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderI
     // the listed points of the rows within reach, not at every pixel of its
     // window (boundaries are a few percent of a frame's pixels; the window scan
     // was most of this pass).
+    // A pixel is covered where its centre lies nearer than half + 0.5 to a
+    // boundary point, which lies half a pixel off the centres of the pixels
+    // it separates: within fewer than half + 1 columns and rows, reach of them.
     const double half = 0.5 * o.edge_width;
-    const int reach = static_cast<int>(std::ceil(half + 1.0));
+    const int reach = static_cast<int>(std::ceil(half + 1.0)) - 1;
     std::vector<std::vector<int>> row_right(H), row_down(H);  // columns of each row's boundary points
     parallel_rows(c, false, [&](int j) {
         const uint8_t* d = &diff[c.map.index(0, j)];
