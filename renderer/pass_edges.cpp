@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 
 #include "renderer/passes.h"
 
@@ -35,6 +34,7 @@ inline bool hits_differ(const FrameContext& c, const PixelHit& p, const PixelHit
 }  // namespace
 
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img) {
+    constexpr int kBlock = 8;
     const int W = c.width, H = c.height;
     const bool diagonals = c.options.antialias > 0;  // only anti-aliasing reads them
     std::vector<uint8_t> diff;
@@ -49,7 +49,19 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
         // reading the 40-byte hits.
         const uint32_t* below = last_row ? nullptr : face + c.map.index(0, j + 1);
         const uint32_t* row = face + c.map.index(0, j);
+        // Eight such pixels at a time (their faces, their right neighbours' and
+        // the row below's, ORed: a loop the compiler vectorizes), then one at a time.
+        auto none = [](const uint32_t* f, int n) {
+            uint32_t any = 0;
+            for (int q = 0; q < n; ++q) any |= f[q];
+            return any == 0;
+        };
         for (int i = 0; i < W; ++i) {
+            if (row[i] == 0 && i > 0 && i + kBlock + 1 <= W && none(row + i, kBlock + 1) &&
+                (!below || none(below + i - 1, kBlock + 2))) {
+                i += kBlock - 1;
+                continue;
+            }
             const size_t k = c.map.index(i, j);
             if ((row[i] | (i + 1 < W ? row[i + 1] : 0u)) == 0 &&
                 (!below || (below[i] | (i + 1 < W ? below[i + 1] : 0u) | (i > 0 ? below[i - 1] : 0u)) == 0))
@@ -91,12 +103,7 @@ void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderI
     std::vector<std::vector<int>> row_right(H), row_down(H);  // columns of each row's boundary points
     parallel_rows(c, false, [&](int j) {
         const uint8_t* d = &diff[c.map.index(0, j)];
-        for (int i = 0; i < W; ++i) {
-            // Eight pixels without a difference bit at a time (most of a row).
-            if (uint64_t word; i + 8 <= W && (std::memcpy(&word, d + i, 8), word == 0)) {
-                i += 7;
-                continue;
-            }
+        for (int i = next_set(d, 0, W); i < W; i = next_set(d, i + 1, W)) {
             if (d[i] & kDiffRight) row_right[j].push_back(i);
             if (d[i] & kDiffDown) row_down[j].push_back(i);
         }
@@ -105,12 +112,20 @@ void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderI
     // 1984), in the image's straight alpha: rows are independent.
     const float er = o.edge_color.r, eg = o.edge_color.g, eb = o.edge_color.b;
     parallel_rows(c, false, [&](int j) {
+        const int nj0 = std::max(j - reach, 0), nj1 = std::min(j + reach, H - 1);
+        bool any = false;
+        for (int nj = nj0; nj <= nj1 && !any; ++nj) any = !row_right[nj].empty() || !row_down[nj].empty();
+        if (!any) return;  // no boundary point within reach (most rows of a frame)
         std::vector<double> d2(W, HUGE_VAL);
-        for (int nj = std::max(j - reach, 0); nj <= std::min(j + reach, H - 1); ++nj) {
+        int lo = W, hi = -1;  // the columns reached
+        for (int nj = nj0; nj <= nj1; ++nj) {
             const double cy = nj - j;
             for (const bool is_down : {false, true}) {
                 for (const int ni : is_down ? row_down[nj] : row_right[nj]) {
-                    for (int i = std::max(ni - reach, 0); i <= std::min(ni + reach, W - 1); ++i) {
+                    const int i0 = std::max(ni - reach, 0), i1 = std::min(ni + reach, W - 1);
+                    lo = std::min(lo, i0);
+                    hi = std::max(hi, i1);
+                    for (int i = i0; i <= i1; ++i) {
                         const double cx = ni - i;
                         const double d =
                             is_down ? cx * cx + (cy + 0.5) * (cy + 0.5) : (cx + 0.5) * (cx + 0.5) + cy * cy;
@@ -119,7 +134,7 @@ void edges_pass(const FrameContext& c, const std::vector<uint8_t>& diff, RenderI
                 }
             }
         }
-        for (int i = 0; i < W; ++i) {
+        for (int i = lo; i <= hi; ++i) {
             if (d2[i] == HUGE_VAL) continue;  // no boundary point within reach (most pixels)
             const float a = static_cast<float>(std::clamp(half + 0.5 - std::sqrt(d2[i]), 0.0, 1.0));
             if (a <= 0) continue;

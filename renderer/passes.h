@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 
 #include "renderer/frame.h"
 #include "renderer/lighting.h"
@@ -75,6 +76,15 @@ inline constexpr double kDepthStepFootprints = 3.0;
 // right and lower neighbours).
 enum NeighbourDiff : uint8_t { kDiffRight = 1, kDiffDown = 2, kDiffDownRight = 4, kDiffDownLeft = 8 };
 std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuffers& b, const RenderImage& img);
+
+// The first index from i on (at most n) whose byte is not zero: the scans of a
+// row's difference bits and edge flags, most of which are zero, eight bytes at
+// a time.
+inline int next_set(const uint8_t* bytes, int i, int n) {
+    for (uint64_t word; i + 8 <= n && (std::memcpy(&word, bytes + i, 8), word == 0);) i += 8;
+    while (i < n && !bytes[i]) ++i;
+    return i;
+}
 
 // Anti-aliasing: pixels on silhouettes, face borders, depth steps and creases get
 // c.options.antialias extra sub-pixel samples (exact rays where an edge can cross
