@@ -86,16 +86,17 @@ private:
     // hits show the faces around it (a fillet strip, step/r0901_ec.stp iso).
     void diagonal_faces(int i, int j, PixelHit& best) const;
     // At a step where Newton failed on the face in front (newton_failed: it
-    // left its box, diverged or stalled; no crossing outside its trim, beyond
-    // whose edge beyond_edges would search), the faces hit in front of the pixel's hit two
-    // pixels away on the side of each such step (kRingSide pixels centred on
-    // the step's line) that the 3x3 does not show: a face between the face in
-    // front and the pixel's, a pixel or two wide, whose map pixels lie just
-    // beyond the 3x3 (iges/bearing.iges iso: a blend 0.0021 in front of the
-    // hit, its pixels two to the right). Three pixels, not the ring's side of
-    // five nor the whole ring of 16 (the same pixel found, one iso frame: trj8
-    // +0.7 % instructions with 3, +0.8 % with 5, +0.7 % for the ring when only
-    // diagonal_faces' untried faces; the cylinder block front +0.9, 1.2, 1.3 %).
+    // left its box, diverged or stalled; no crossing outside its trim beyond
+    // which beyond_edges would search), the faces hit in front of the pixel's
+    // hit two pixels away on the side of each such step (kRingSide pixels
+    // centred on the step's line) that the 3x3 does not show: a face between
+    // the face in front and the pixel's, a pixel or two wide, whose map pixels
+    // lie just beyond the 3x3 (iges/bearing.iges iso: a blend 0.0021 in front
+    // of the hit, its pixels two to the right). Three pixels, not the ring's
+    // side of five nor the whole ring of 16, which found the same pixel (one
+    // iso frame, instructions: trj8 +0.7 % with 3, +0.8 % with 5, +0.7 % for
+    // the ring after diagonal_faces; the cylinder block's orthographic front
+    // +0.9, 1.2, 1.3 %).
     static constexpr int kRingSide = 3;
     void faces_beyond_failed(int i, int j, std::span<const std::pair<int, int>> sides, PixelHit& best) const;
     // At a silhouette pixel, the 4-neighbours on other faces in front of its hit

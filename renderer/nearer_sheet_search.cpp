@@ -131,15 +131,16 @@ void NearerSheet::diagonal_faces(int i, int j, PixelHit& best) const {
     });
 }
 
-void NearerSheet::faces_beyond_failed(int i, int j, std::span<const std::pair<int, int>> sides, PixelHit& best) const {
+void NearerSheet::faces_beyond_failed(int i, int j, std::span<const std::pair<int, int>> sides,
+                                      PixelHit& best) const {
     const PixelHit p = best;
     const double in_front = p.t - sheet_gap(p.t);
     // The 4-neighbours' faces, then (at the first face none of them shows:
     // most calls have none) the whole 3x3's, which the searches before tried.
-    uint32_t sides4[4];
+    uint32_t side_faces[4];
     int n4 = 0;
     for (const auto& [di, dj] : {std::pair{-1, 0}, std::pair{1, 0}, std::pair{0, -1}, std::pair{0, 1}})
-        if (c_.in_frame(i + di, j + dj)) sides4[n4++] = hits_[c_.map.index(i + di, j + dj)].face;
+        if (c_.in_frame(i + di, j + dj)) side_faces[n4++] = hits_[c_.map.index(i + di, j + dj)].face;
     uint32_t tried[kFaces3x3 + 2 * kRingSide];
     int ntried = -1;
     for (const auto& [di, dj] : sides)
@@ -147,7 +148,8 @@ void NearerSheet::faces_beyond_failed(int i, int j, std::span<const std::pair<in
             const int ni = i + 2 * di + k * dj, nj = j + 2 * dj + k * di;
             if (!c_.in_frame(ni, nj)) continue;
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
-            if (!h.face || h.face == p.face || !(h.t < in_front) || std::find(sides4, sides4 + n4, h.face) != sides4 + n4)
+            if (!h.face || h.face == p.face || !(h.t < in_front) ||
+                std::find(side_faces, side_faces + n4, h.face) != side_faces + n4)
                 continue;
             if (ntried < 0) ntried = faces_3x3(i, j, tried);
             if (std::find(tried, tried + ntried, h.face) != tried + ntried) continue;
