@@ -10,6 +10,7 @@
 #include <functional>
 
 #include "renderer/render.h"
+#include "renderer/sample_pattern.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;
@@ -382,4 +383,47 @@ TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
     EXPECT_GT(n.sloped, n.border / 2);
     EXPECT_EQ(n.border_changed, 0);
     EXPECT_GT(n.ring_changed, n.ring / 4);
+}
+
+// The sample pattern: for n a power of two, every pixel's n samples form a
+// (0, m, 2)-net in base 2 (each column 1/n wide, each row 1/n high, and each
+// elementary box of area 1/n in between holds exactly one sample), whatever the
+// pixel's seed; for other n, n samples in the square, one per column stratum.
+TEST(RendererAntialias, SamplePatternIsAStratifiedNetForEverySeed) {
+    for (const int n : {2, 4, 8, 16, 32}) {
+        for (uint32_t pixel = 0; pixel < 200; ++pixel) {
+            const uint32_t seed = hash32(pixel * 7919u);
+            std::vector<double> x(n), y(n);
+            for (int s = 0; s < n; ++s) {
+                sample_position(s, n, seed, x[s], y[s]);
+                ASSERT_GE(x[s], 0.0);
+                ASSERT_LT(x[s], 1.0);
+                ASSERT_GE(y[s], 0.0);
+                ASSERT_LT(y[s], 1.0);
+            }
+            // Boxes of 2^a columns x 2^b rows with 2^(a+b) = n.
+            for (int cols = 1; cols <= n; cols *= 2) {
+                const int rows = n / cols;
+                std::vector<int> count(n, 0);
+                for (int s = 0; s < n; ++s)
+                    ++count[static_cast<int>(x[s] * cols) * rows + static_cast<int>(y[s] * rows)];
+                for (int b = 0; b < n; ++b)
+                    ASSERT_EQ(count[b], 1) << "n " << n << " pixel " << pixel << " box " << b << " of " << cols
+                                           << " x " << rows;
+            }
+        }
+    }
+    for (const int n : {3, 5, 12}) {
+        std::vector<int> column(n, 0);
+        for (int s = 0; s < n; ++s) {
+            double x = 0, y = 0;
+            sample_position(s, n, hash32(12345u), x, y);
+            ASSERT_GE(x, 0.0);
+            ASSERT_LT(x, 1.0);
+            ASSERT_GE(y, 0.0);
+            ASSERT_LT(y, 1.0);
+            ++column[static_cast<int>(x * n)];
+        }
+        for (int c = 0; c < n; ++c) EXPECT_EQ(column[c], 1) << "n " << n << " column " << c;
+    }
 }
