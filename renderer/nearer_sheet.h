@@ -85,18 +85,20 @@ private:
     // iges/marsCapsule.igs front), or while its own solves there failed and the
     // hits show the faces around it (a fillet strip, step/r0901_ec.stp iso).
     void diagonal_faces(int i, int j, PixelHit& best) const;
-    // At a step where Newton failed on the face in front (newton_failed: it
-    // left its box, diverged or stalled; no crossing outside its trim beyond
-    // which beyond_edges would search), the faces hit in front of the pixel's
-    // hit two pixels away on the side of each such step (kRingSide pixels
-    // centred on the step's line) that the 3x3 does not show: a face between
-    // the face in front and the pixel's, a pixel or two wide, whose map pixels
-    // lie just beyond the 3x3 (iges/bearing.iges iso: a blend 0.0021 in front
-    // of the hit, its pixels two to the right). Three pixels, not the ring's
-    // side of five nor the whole ring of 16, which found the same pixel (one
-    // iso frame, instructions: trj8 +0.7 % with 3, +0.8 % with 5, +0.7 % for
-    // the ring after diagonal_faces; the cylinder block's orthographic front
-    // +0.9, 1.2, 1.3 %).
+    // At a step where Newton diverged or stalled on the face in front (no
+    // crossing outside its trim beyond which beyond_edges would search), the
+    // faces hit in front of the pixel's hit two pixels away on the side of
+    // each such step (kRingSide pixels centred on the step's line) that the
+    // 3x3 does not show: a face between the face in front and the pixel's, a
+    // pixel or two wide, whose map pixels lie just beyond the 3x3
+    // (iges/bearing.iges iso: a blend 0.0021 in front of the hit, its pixels
+    // two to the right). Not where Newton left the face's parameter box (the
+    // face ends there): those steps found no other pixel (the full-frame
+    // test, 8 models x 2 views) and were a third of this search's cost. Three
+    // pixels, not the ring's side of five nor the whole ring of 16, which
+    // found the same pixel (one iso frame, instructions, the box-leaving steps
+    // included: trj8 +0.7 % with 3, +0.8 % with 5, +0.7 % for the ring after
+    // diagonal_faces; the cylinder block's orthographic front +0.9, 1.2, 1.3 %).
     static constexpr int kRingSide = 3;
     void faces_beyond_failed(int i, int j, std::span<const std::pair<int, int>> sides, PixelHit& best) const;
     // At a silhouette pixel, the 4-neighbours on other faces in front of its hit

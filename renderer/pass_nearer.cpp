@@ -109,7 +109,8 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     uint32_t crossed[3];
     int ncrossed = 0;
     bool unlinked_edge = false;
-    // The sides (di, dj) of steps whose face in front Newton failed on (one per pair at the most).
+    // The sides (di, dj) of steps whose face in front Newton diverged or stalled on
+    // (one per pair at the most; faces_beyond_failed).
     std::pair<int, int> failed_side[2];
     int nfailed = 0;
     for (const auto& pq : pairs) {
@@ -178,7 +179,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             if (jumps == 1 && o == kTrimmed && n.face != p.face && crossing[q] < p.t - sheet_gap(p.t))
                 crossed[ncrossed++] = n.face;
             unlinked_edge |= jumps == 1 && unlinked_end(p, n, o);
-            if (jumps == 1 && n.face != p.face && newton_failed(o))
+            if (jumps == 1 && n.face != p.face && newton_failed(o) && o != kLeftDomain)
                 failed_side[nfailed++] = {pq[2 * q] - i, pq[2 * q + 1] - j};
         }
         // A pit between two nearer neighbours on one face: the middle of their
