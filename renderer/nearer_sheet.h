@@ -175,7 +175,8 @@ private:
     // continues its sheet (continues(): a surface turning away steps more in
     // depth towards its silhouette, evenly, on one sheet).
     void silhouette_pair(int i, int j, int ni, int nj, PixelHit& best) const;
-    // At a step, whether the neighbour n's face in front ends at the pixel
+    // At a step, whether the neighbour n's face in front (another than the
+    // pixel's, p's) ends at the pixel
     // without a face linked to it there: solved from n, its surface is met
     // outside its trim or Newton leaves its parameter box (o), and the face
     // has no adjacent faces at all (PreparedFace::adjacent: an unsewn IGES

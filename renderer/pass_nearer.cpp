@@ -174,13 +174,14 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             const PixelHit& n = q == 0 ? a : b;
             if (!from[q]) continue;
             const Outcome o = consider(n.face, i, j, n.u, n.v, solver_.params, jumps == 2, best, &crossing[q]);
-            // At a step, the face in front crossed outside its trim and in front
-            // of the hit: the ray passes beyond that face's edge (beyond_edges).
-            if (jumps == 1 && o == kTrimmed && n.face != p.face && crossing[q] < p.t - sheet_gap(p.t))
-                crossed[ncrossed++] = n.face;
-            unlinked_edge |= jumps == 1 && unlinked_end(p, n, o);
-            if (jumps == 1 && n.face != p.face && newton_failed(o) && o != kLeftDomain)
-                failed_side[nfailed++] = {pq[2 * q] - i, pq[2 * q + 1] - j};
+            if (jumps != 1 || n.face == p.face) continue;
+            // At a step, how the solve on the face in front ended: crossed
+            // outside its trim and in front of the hit, the ray passes beyond
+            // that face's edge (beyond_edges); ended where no face is linked
+            // (unlinked_end); Newton diverged or stalled (faces_beyond_failed).
+            if (o == kTrimmed && crossing[q] < p.t - sheet_gap(p.t)) crossed[ncrossed++] = n.face;
+            unlinked_edge |= unlinked_end(p, n, o);
+            if (newton_failed(o) && o != kLeftDomain) failed_side[nfailed++] = {pq[2 * q] - i, pq[2 * q + 1] - j};
         }
         // A pit between two nearer neighbours on one face: the middle of their
         // (u, v) starts next to the root between them, where Newton from either
@@ -253,8 +254,8 @@ void NearerSheet::silhouette_pair(int i, int j, int ni, int nj, PixelHit& best) 
 
 bool NearerSheet::unlinked_end(const PixelHit& p, const PixelHit& n, Outcome o) const {
     const double step = p.t - n.t, gap = sheet_gap(p.t);
-    return n.face != p.face && (o == kTrimmed || o == kLeftDomain) && step > gap &&
-           step < kUnlinkedStepGaps * gap && c_.prepared.faces()[n.face - 1].adjacent.empty();
+    return (o == kTrimmed || o == kLeftDomain) && step > gap && step < kUnlinkedStepGaps * gap &&
+           c_.prepared.faces()[n.face - 1].adjacent.empty();
 }
 
 void NearerSheet::rim_own_mesh(int i, int j, PixelHit& best) const {

@@ -6,6 +6,8 @@
 
 namespace nurbsrt {
 
+namespace sample_pattern_detail {
+
 // The bits of s in reverse order.
 inline uint32_t reverse_bits(uint32_t s) {
     s = (s << 16) | (s >> 16);
@@ -14,6 +16,11 @@ inline uint32_t reverse_bits(uint32_t s) {
     s = ((s & 0x33333333u) << 2) | ((s & 0xccccccccu) >> 2);
     return ((s & 0x55555555u) << 1) | ((s & 0xaaaaaaaau) >> 1);
 }
+
+// x mod 1 for x in [0, 2).
+inline double wrap01(double x) { return x >= 1.0 ? x - 1.0 : x; }
+
+}  // namespace sample_pattern_detail
 
 // A per-pixel hash for the randomization of the sample pattern, so that
 // neighbouring edge pixels do not share one pattern (which would turn the
@@ -29,9 +36,6 @@ inline uint32_t hash32(uint32_t x) {
     return x;
 }
 
-// x mod 1 for x in [0, 2).
-inline double wrap01(double x) { return x >= 1.0 ? x - 1.0 : x; }
-
 // Sample s of n in the pixel square [0, 1)^2, randomized by the pixel's seed.
 // The Hammersley points ((s + 0.5) / n, radical inverse of s): for n a power of
 // two a (0, m, 2)-net in base 2 (every elementary box of area 1/n, e.g. each
@@ -42,6 +46,7 @@ inline double wrap01(double x) { return x >= 1.0 ? x - 1.0 : x; }
 // 1976), which other n keep: mean |alpha - coverage| on the sphere and holed
 // plane 0.074 / 0.050 / 0.031 for 4 / 8 / 16 samples, against 0.086 / 0.054 / 0.035.
 inline void sample_position(int s, int n, uint32_t seed, double& x, double& y) {
+    using sample_pattern_detail::reverse_bits, sample_pattern_detail::wrap01;
     const uint32_t us = static_cast<uint32_t>(s), un = static_cast<uint32_t>(n);
     if ((un & (un - 1)) == 0) {
         const uint32_t jitter = hash32(seed ^ (0x9e3779b9u * (us + 1))) & 0xffffu;
