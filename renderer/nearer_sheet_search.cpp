@@ -131,8 +131,10 @@ void NearerSheet::diagonal_faces(int i, int j, PixelHit& best) const {
     });
 }
 
-void NearerSheet::faces_beyond_failed(int i, int j, std::span<const std::pair<int, int>> sides,
-                                      PixelHit& best) const {
+void NearerSheet::faces_beyond_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const {
+    const auto failed = std::span(fronts.failed, fronts.nfailed);
+    if (std::all_of(failed.begin(), failed.end(), [](const StepFronts::Failed& f) { return f.how == kLeftDomain; }))
+        return;
     const PixelHit p = best;
     const double in_front = p.t - sheet_gap(p.t);
     // The 4-neighbours' faces, then (at the first face none of them shows:
@@ -143,8 +145,8 @@ void NearerSheet::faces_beyond_failed(int i, int j, std::span<const std::pair<in
         if (c_.in_frame(i + di, j + dj)) side_faces[n4++] = hits_[c_.map.index(i + di, j + dj)].face;
     uint32_t tried[kFaces3x3 + 2 * kRingSide];
     int ntried = -1;
-    for (const auto& [di, dj] : sides)
-        for (int k = -kRingSide / 2; k <= kRingSide / 2; ++k) {
+    for (const auto& [di, dj, how] : failed)
+        for (int k = -kRingSide / 2; k <= kRingSide / 2 && how != kLeftDomain; ++k) {
             const int ni = i + 2 * di + k * dj, nj = j + 2 * dj + k * di;
             if (!c_.in_frame(ni, nj)) continue;
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
@@ -259,6 +261,39 @@ void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
         near[nn++] = faces[q].id;
     }
     if (nc && best.face == p.face && best.t == p.t) beyond_edges(i, j, {crossed, crossed + nc}, {near, near + nn}, best);
+}
+
+void NearerSheet::faces_joining_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const {
+    const PixelHit p = best;
+    const double in_front = p.t - sheet_gap(p.t);
+    uint32_t tried[kFaces3x3 + kMaxJoiningFaces];
+    int ntried = -1;
+    const ScreenPoint sp = c_.camera.pixel_screen(i, j);
+    for (const auto& [si, sj, how] : std::span(fronts.failed, fronts.nfailed)) {
+        const PixelHit& front = hits_[c_.map.index(i + si, j + sj)];
+        const std::vector<uint32_t>& joining = c_.prepared.faces()[front.face - 1].adjacent;
+        // The block beyond the 3x3 on the step's side: 2..kJoiningReach pixels
+        // out, kJoiningReach either way across.
+        for (int along = 2; along <= kJoiningReach; ++along)
+            for (int across = -kJoiningReach; across <= kJoiningReach; ++across) {
+                const int ni = i + along * si + across * sj, nj = j + along * sj + across * si;
+                if (!c_.in_frame(ni, nj)) continue;
+                const PixelHit& h = hits_[c_.map.index(ni, nj)];
+                // Between the face in front and the pixel's hit, joining the former.
+                if (!h.face || h.face == p.face || !(h.t < in_front) || !(h.t > front.t) ||
+                    !std::binary_search(joining.begin(), joining.end(), h.face))
+                    continue;
+                if (ntried < 0) ntried = faces_3x3(i, j, tried);
+                if (std::find(tried, tried + ntried, h.face) != tried + ntried) continue;
+                if (ntried == kFaces3x3 + kMaxJoiningFaces) return;
+                tried[ntried++] = h.face;
+                MeshScreenPoints::FarFace f;
+                f.id = h.face;
+                f.nstarts = screen_points_.nearest_starts(h.face, sp, f.starts);
+                from_mesh_starts(f, i, j, best);
+                if (best.face != p.face || best.t != p.t) return;
+            }
+    }
 }
 
 void NearerSheet::beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,

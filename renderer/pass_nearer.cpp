@@ -104,15 +104,7 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // Pits where a neighbour continues the pixel's sheet and the other is on
     // another face; and whether a pit's neighbour on the pixel's face does not.
     bool continued = false, own_face_jump = false, step = false, silhouette = false;
-    // The faces in front at a step whose surface the ray crosses outside their
-    // trim (one per pair at the most), then the pixel's own face (see below).
-    uint32_t crossed[3];
-    int ncrossed = 0;
-    bool unlinked_edge = false;
-    // The sides (di, dj) of steps whose face in front Newton diverged or stalled on
-    // (one per pair at the most; faces_beyond_failed).
-    std::pair<int, int> failed_side[2];
-    int nfailed = 0;
+    StepFronts fronts;
     for (const auto& pq : pairs) {
         if (!c_.in_frame(pq[0], pq[1]) || !c_.in_frame(pq[2], pq[3])) continue;
         const PixelHit& a = hits_[c_.map.index(pq[0], pq[1])];
@@ -178,17 +170,22 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
             // At a step, how the solve on the face in front ended: crossed
             // outside its trim and in front of the hit, the ray passes beyond
             // that face's edge (beyond_edges); ended where no face is linked
-            // (unlinked_end); Newton diverged or stalled (faces_beyond_failed).
-            if (o == kTrimmed && crossing[q] < p.t - sheet_gap(p.t)) crossed[ncrossed++] = n.face;
-            unlinked_edge |= unlinked_end(p, n, o);
-            if (newton_failed(o) && o != kLeftDomain) failed_side[nfailed++] = {pq[2 * q] - i, pq[2 * q + 1] - j};
+            // (unlinked_end); Newton diverged or stalled (faces_beyond_failed);
+            // failed in any way (faces_joining_failed).
+            if (o == kTrimmed && crossing[q] < p.t - sheet_gap(p.t)) fronts.crossed[fronts.ncrossed++] = n.face;
+            fronts.unlinked |= unlinked_end(p, n, o);
+            if (newton_failed(o)) fronts.failed[fronts.nfailed++] = {pq[2 * q] - i, pq[2 * q + 1] - j, o};
         }
         // A pit between two nearer neighbours on one face: the middle of their
         // (u, v) starts next to the root between them, where Newton from either
         // end can still run to another sheet (near a silhouette, a sheet's two
-        // roots lie close together).
-        if (jumps == 2 && a.face == b.face)
-            consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, true, best);
+        // roots lie close together). So too a step whose pair lies on the
+        // pixel's face: the pixel on a far turn of a face folded many times
+        // (step/bug29715_slow.stp front: the map's start diverged, all 8
+        // neighbours' starts led 15 units behind; the pair's middle lay 2.5 in v
+        // from the nearest root, the starts 12 to 56). No trim band there (a step).
+        if ((jumps == 2 || (jumps == 1 && a.face == p.face)) && a.face == b.face)
+            consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, jumps == 2, best);
         // A pit whose two neighbours' surfaces both meet the ray at or behind
         // the pixel's hit is a concave corner (a groove, a fillet's foot seen
         // from outside: every concave edge's pixels), not a crack: a crack's
@@ -222,19 +219,20 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (silhouette && unchanged()) rim_faces_in_front(i, j, best);
     if (silhouette && unchanged()) diagonal_starts(i, j, !rescued_rim, best);
     if (((step && !pit) || rescued_rim) && unchanged()) diagonal_faces(i, j, best);
-    if (nfailed && step && !pit && unchanged()) faces_beyond_failed(i, j, {failed_side, failed_side + nfailed}, best);
+    if (fronts.nfailed && step && !pit && unchanged()) faces_beyond_failed(i, j, fronts, best);
+    if (fronts.nfailed && step && !pit && unchanged()) faces_joining_failed(i, j, fronts, best);
     // Beyond the edge of a face in front, the faces joining it there, and those
     // joining the pixel's own face, the face behind: a wall rising from it
     // towards the edge, seen edge-on, lies between the two (step/cylinder_block.stp
     // front: a drafted wall between a floor and the face in front, 14 units in
     // front of the floor's hit, too thin to show in any map pixel).
-    if (ncrossed && !pit && unchanged()) {
-        crossed[ncrossed++] = p.face;
-        beyond_edges(i, j, {crossed, crossed + ncrossed}, {}, best);
+    if (fronts.ncrossed && !pit && unchanged()) {
+        fronts.crossed[fronts.ncrossed++] = p.face;
+        beyond_edges(i, j, {fronts.crossed, fronts.crossed + fronts.ncrossed}, {}, best);
     }
     // Where the face in front ends unlinked (unlinked_end), the faces near on
     // screen stand in for the adjacency beyond_edges reads.
-    if (unlinked_edge && !pit && unchanged()) screen_faces(i, j, best);
+    if (fronts.unlinked && !pit && unchanged()) screen_faces(i, j, best);
     if (unchanged()) return false;
     out = best;
     return true;

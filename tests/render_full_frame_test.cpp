@@ -100,29 +100,26 @@ struct Known {
 // edge of a face in front trying the faces that join the pixel's own face, 8 -> 7;
 // steps past the end of an unsewn face in front trying the faces near on screen,
 // 7 -> 3; steps whose face in front Newton fails on trying the faces hit two
-// pixels beyond the step, 3 -> 2 (the notes in the list).
-// What is left, by kind of cause (the check's diagnosis):
-//  - kFaceInFront: a face in front that the 3x3 does not show (its nearest
-//    pixels 3 rows away), at a step whose face in front the ray does not cross
-//    outside its trim (bearing.iges front: its solve fails), so the faces
-//    joining those of the 3x3 are not tried (at every step they would cost some
-//    8 % of a machine part's frame; at the steps whose solve fails, with the
-//    faces joining the pixel's own, 4-6 %).
-//  - kMissedByAllStarts: the map's start diverges at once and the rescue fills
-//    the pixel from its neighbours' (u, v), all of which lead to a root on
-//    another turn of a dense coil 15 units (9 % of the diagonal) behind the
-//    nearest; none of the 8 neighbours' starts reaches that one.
+// pixels beyond the step, 3 -> 2; steps on one face trying the middle of their
+// pair's (u, v), and steps whose face in front Newton fails on trying the faces
+// joining it a few pixels off, 2 -> 0 (the notes in the list).
 // (bug29715_slow front listed 14 speckles, diagnosed as reachable from a
 // neighbour's start where the pixel is no candidate, until the check learnt one
 // contact's spread at grazing incidence (kContactSpreadMargin): 13 of them were
 // our root and the reference's on the same contact of a coil seen edge-on,
 // |n . d| 0.002-0.004 (three measured), both within their solver's tolerance of
 // the ray and 2.2e-4 to 1.1e-3 apart along it, inside 2 (1.7e-6 + 1e-7) / |n . d|.)
-constexpr const char* kFaceInFront = "a face in front outside the 3x3 and its adjacency (see above)";
-constexpr const char* kMissedByAllStarts = "the map's start diverges, no start tried reaches the nearer root (see above)";
 const std::vector<Known> kKnownRemaining = {
-    {"step/bug29715_slow.stp", "front", 0, 1, kMissedByAllStarts},  // a dense coil seen edge-on
-    {"iges/bearing.iges", "front", 0, 1, kFaceInFront},
+    // (bearing front's, face 20, a blend strip 0.0106 in front of the hit
+    // between the face in front (165) and the pixel's, hidden behind 165's
+    // edge but for a few pixels 3 rows off, where Newton left 165's box at the
+    // step, went when such steps tried the faces joining the face in front hit
+    // within 3 pixels beyond the step, from their mesh at the pixel:
+    // NearerSheet::faces_joining_failed.)
+    // (bug29715_slow front's, a dense coil seen edge-on whose map start
+    // diverged and whose 8 neighbours' starts all led to a root on another
+    // turn 15 units behind, went when a step whose pair lies on the pixel's
+    // face tried the middle of the pair's (u, v), as pits do: NearerSheet::find.)
     // (bearing iso's, a blend 0.0021 in front of the hit whose nearest pixels
     // lay two to the right, beyond a face in front on which Newton failed, went
     // when such steps tried the faces hit two pixels beyond them:
