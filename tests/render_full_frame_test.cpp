@@ -174,10 +174,16 @@ const std::vector<Known> kKnownRemaining = {
     // to 3e-6 instead of 1e-5 of their box: ImportOptions::trim_relative_tolerance.)
 };
 
-// Models the reference cannot check in CI time: IntCurvesFace_ShapeIntersector
-// needs ~0.3 s per ray on this file's dense helical face, and one view has ~2500
-// candidates (over 10 minutes). Skipped with this reason, never silently.
-const char* const kTooSlowForTheReference[] = {"iges/bug22869_Spring.igs"};
+// Models whose reference is slow: IntCurvesFace_ShapeIntersector needs 65 ms per
+// ray on average (40 rays measured, one thread) on the dense helical face of
+// bug22869_Spring.igs, whose every view has ~5,000 candidates (each coil turn's
+// silhouette over the next is a step): 320 s a view to check them all, more than
+// ctest's 600 s per test case allows for two views and their shadows. It gets
+// kSlowReferenceBudget a view (the ~1,500 deepest candidates: every enclosed
+// background pixel, then the deepest spikes and steps), the rest counted and
+// reported as unchecked; every other model is checked whole.
+const char* const kSlowReference[] = {"iges/bug22869_Spring.igs"};
+constexpr double kSlowReferenceBudget = 100.0;
 
 // Shadow disagreements the renderer still has (work to do, not a tolerance),
 // counted over the fixed sample of tests/support/shadow_check.h; everywhere else
@@ -249,6 +255,15 @@ struct KnownShadow {
     long false_shadows, leaks;
 };
 const KnownShadow kKnownShadowDisagreements[] = {
+    // Spring: the coil crossed in front of a point on the end face where
+    // Newton from the light map's and the pierced mesh's starts diverges (iso);
+    // a contact crossing of the end face 0.16 from a coil point, outside its
+    // trim by more than the concave-edge allowance (iso); the coil's or the
+    // end face's own other part in front of a point whose map starts all lead
+    // to the point itself (front: the coil lit at cosine 0.06, the end face
+    // at 0.46, where the own-sheet retry, for grazing light only, does not run).
+    {"iges/bug22869_Spring.igs", "iso", 0, 2},
+    {"iges/bug22869_Spring.igs", "front", 0, 2},
     {"step/ec_turbine-A.stp", "front", 0, 1},
     {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
     {"step/trj8_b1-ec-214.stp", "front", 0, 1},
@@ -300,10 +315,9 @@ class RenderFullFrame : public testing::TestWithParam<Case> {};
 TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
     const Case& c = GetParam();
     if (c.fixture.empty() && c.path.empty()) NURBSRT_REQUIRE_SHARED_MODELS();
-    for (const char* slow : kTooSlowForTheReference)
-        if (c.rel == slow)
-            GTEST_SKIP() << c.rel << ": the reference intersector needs ~0.3 s per ray on this model; checking "
-                                     "a 512x512 view takes over 10 minutes";
+    double budget = T::kCheckBudgetSeconds;
+    for (const char* slow : kSlowReference)
+        if (c.rel == slow) budget = kSlowReferenceBudget;
     const std::string path = c.fixture.empty() ? c.path : T::fixture_by_name(c.fixture);
     ASSERT_TRUE(fs::exists(path)) << path;
 
@@ -329,7 +343,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         options.shadows = true;
         const RenderResult r = render(prepared, camera, options);
         const std::string label = c.name + "/" + view.name;
-        const T::FullFrameReport rep = T::full_frame_check(label, scene, model, inter, camera, r.image);
+        const T::FullFrameReport rep = T::full_frame_check(label, scene, model, inter, camera, r.image, budget);
         std::cout << rep.text() << "   render " << std::fixed << std::setprecision(0) << r.stats.total_ms << " ms"
                   << std::defaultfloat << "\n"
                   << std::flush;

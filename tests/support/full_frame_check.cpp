@@ -316,7 +316,7 @@ double reference_ray_limit(const Scene& scene, const Camera& camera) {
 
 FullFrameReport full_frame_check(const std::string& label, const Scene& scene, const occt::OcctModel& model,
                                  ReferenceIntersector& inter, const Camera& camera, const RenderImage& im,
-                                 size_t max_diagnosed) {
+                                 double budget_seconds, size_t max_diagnosed) {
     const auto t0 = std::chrono::steady_clock::now();
     Checker c{scene, model, inter, camera, im, scene.bbox.diagonal(), reference_ray_limit(scene, camera)};
     FullFrameReport rep;
@@ -349,7 +349,7 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
         return (a.score < 0) != (b.score < 0) ? a.score < 0 : a.score > b.score;
     });
     for (const Candidate& cd : cand) {
-        if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > kCheckBudgetSeconds) {
+        if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > budget_seconds) {
             ++rep.unchecked;
             continue;
         }
