@@ -143,7 +143,8 @@ void add_render_command(CLI::App& app) {
         ->check(CLI::Range(1, 16384));
     cmd->add_option("--height", a->height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
         ->check(CLI::Range(1, 16384));
-    cmd->add_option("--view", a->view, "named view fitted to the model: iso, front, back, left, right, top, bottom")
+    cmd->add_option("--view", a->view, "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
+                   "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
         ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))->capture_default_str();
     cmd->add_option("--eye", a->eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
         ->check(vec3_validator());

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -114,3 +115,34 @@ TEST(FittedViews, MarginSetsTheBorder) {
 }
 
 }  // namespace
+
+// The named views' directions and ups as the README, the CLI's --help and the
+// OpenAPI View schema document them (CAD convention, Z up): the direction from
+// the eye to the target, and the image's up, for both projections.
+TEST(FittedViews, DocumentedDirections) {
+    struct Documented {
+        const char* view;
+        Vec3 along, up;
+    };
+    const double s = 1 / std::sqrt(3.0);
+    const Documented kDocumented[] = {
+        {"front", {0, 1, 0}, {0, 0, 1}},  {"back", {0, -1, 0}, {0, 0, 1}}, {"left", {1, 0, 0}, {0, 0, 1}},
+        {"right", {-1, 0, 0}, {0, 0, 1}}, {"top", {0, 0, -1}, {0, 1, 0}},  {"bottom", {0, 0, 1}, {0, 1, 0}},
+        {"iso", {-s, -s, -s}, {0, 0, 1}},
+    };
+    const Scene scene = import_file(test::elongated_rod());
+    for (Projection proj : {Projection::perspective, Projection::orthographic})
+        for (const Documented& d : kDocumented) {
+            CameraSpec base;
+            base.projection = proj;
+            ViewRequest rq;
+            rq.view = d.view;
+            const CameraSpec cs = fitted_camera(rq, scene, base);
+            const Vec3 along = normalize(cs.target - cs.eye);
+            EXPECT_GT(dot(along, d.along), 1 - 1e-12) << d.view;
+            // The image's up: the up made perpendicular to the view (iso's
+            // +Z tilts towards the eye), the camera's and the documented one alike.
+            auto image_up = [&](Vec3 u) { return normalize(u - dot(u, along) * along); };
+            EXPECT_GT(dot(image_up(cs.up), image_up(d.up)), 1 - 1e-9) << d.view << " up";
+        }
+}
