@@ -267,7 +267,7 @@ void NearerSheet::faces_joining_failed(int i, int j, const StepFronts& fronts, P
     const PixelHit p = best;
     const double in_front = p.t - sheet_gap(p.t);
     uint32_t tried[kFaces3x3 + kMaxJoiningFaces];
-    int ntried = -1;
+    int ntried = -1, njoining = 0;
     const ScreenPoint sp = c_.camera.pixel_screen(i, j);
     for (const auto& [si, sj, how] : std::span(fronts.failed, fronts.nfailed)) {
         const PixelHit& front = hits_[c_.map.index(i + si, j + sj)];
@@ -285,7 +285,7 @@ void NearerSheet::faces_joining_failed(int i, int j, const StepFronts& fronts, P
                     continue;
                 if (ntried < 0) ntried = faces_3x3(i, j, tried);
                 if (std::find(tried, tried + ntried, h.face) != tried + ntried) continue;
-                if (ntried == kFaces3x3 + kMaxJoiningFaces) return;
+                if (njoining++ == kMaxJoiningFaces) return;
                 tried[ntried++] = h.face;
                 MeshScreenPoints::FarFace f;
                 f.id = h.face;
