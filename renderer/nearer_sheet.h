@@ -269,6 +269,18 @@ private:
     // out (room for kFaces3x3); returns how many.
     static constexpr int kFaces3x3 = 2 * 9;
     int faces_3x3(int i, int j, uint32_t* out) const;
+    // The faces a search beyond the 3x3 (faces_beyond_failed,
+    // faces_joining_failed) has tried at one pixel: the 3x3's, which the
+    // searches before tried, read at the first face that needs the test (most
+    // calls have none), then those it adds (at most kMaxBeyondFaces).
+    static constexpr int kMaxBeyondFaces = 8;
+    static_assert(2 * kRingSide <= kMaxBeyondFaces && kMaxJoiningFaces <= kMaxBeyondFaces);
+    struct TriedFaces {
+        uint32_t ids[kFaces3x3 + kMaxBeyondFaces];
+        int n = -1;  // -1: the 3x3's not read yet
+    };
+    // Whether face id is new to `tried` at pixel (i, j), recording it if so.
+    bool first_try(TriedFaces& tried, int i, int j, uint32_t id) const;
     // Any faces whose mesh comes within reach of pixel (i, j) on screen and
     // nearer to the eye than its hit, but those of the 3x3 (hit or in the map):
     // a face seen through a gap between faces that do not touch it, which the

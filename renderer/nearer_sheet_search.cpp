@@ -132,33 +132,31 @@ void NearerSheet::diagonal_faces(int i, int j, PixelHit& best) const {
 }
 
 void NearerSheet::faces_beyond_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const {
+    // Not where Newton left the face's parameter box (see the header).
+    auto stalled = [](const StepFronts::Failed& f) { return f.how != kLeftDomain; };
     const auto failed = std::span(fronts.failed, fronts.nfailed);
-    if (std::all_of(failed.begin(), failed.end(), [](const StepFronts::Failed& f) { return f.how == kLeftDomain; }))
-        return;
+    if (std::none_of(failed.begin(), failed.end(), stalled)) return;
     const PixelHit p = best;
     const double in_front = p.t - sheet_gap(p.t);
-    // The 4-neighbours' faces, then (at the first face none of them shows:
-    // most calls have none) the whole 3x3's, which the searches before tried.
+    // The 4-neighbours' faces, then (first_try) the whole 3x3's.
     uint32_t side_faces[4];
     int n4 = 0;
     for (const auto& [di, dj] : {std::pair{-1, 0}, std::pair{1, 0}, std::pair{0, -1}, std::pair{0, 1}})
         if (c_.in_frame(i + di, j + dj)) side_faces[n4++] = hits_[c_.map.index(i + di, j + dj)].face;
-    uint32_t tried[kFaces3x3 + 2 * kRingSide];
-    int ntried = -1;
-    for (const auto& [di, dj, how] : failed)
-        for (int k = -kRingSide / 2; k <= kRingSide / 2 && how != kLeftDomain; ++k) {
-            const int ni = i + 2 * di + k * dj, nj = j + 2 * dj + k * di;
+    TriedFaces tried;
+    for (const StepFronts::Failed& f : failed) {
+        if (!stalled(f)) continue;
+        for (int k = -kRingSide / 2; k <= kRingSide / 2; ++k) {
+            const int ni = i + 2 * f.di + k * f.dj, nj = j + 2 * f.dj + k * f.di;
             if (!c_.in_frame(ni, nj)) continue;
             const PixelHit& h = hits_[c_.map.index(ni, nj)];
             if (!h.face || h.face == p.face || !(h.t < in_front) ||
-                std::find(side_faces, side_faces + n4, h.face) != side_faces + n4)
+                std::find(side_faces, side_faces + n4, h.face) != side_faces + n4 || !first_try(tried, i, j, h.face))
                 continue;
-            if (ntried < 0) ntried = faces_3x3(i, j, tried);
-            if (std::find(tried, tried + ntried, h.face) != tried + ntried) continue;
-            tried[ntried++] = h.face;
             consider(h.face, i, j, h.u, h.v, solver_.robust, false, best);
             if (best.face != p.face || best.t != p.t) return;
         }
+    }
 }
 
 void NearerSheet::fill_pit(int i, int j, bool edge_of_other_face, PixelHit& best) const {
@@ -266,34 +264,37 @@ void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
 void NearerSheet::faces_joining_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const {
     const PixelHit p = best;
     const double in_front = p.t - sheet_gap(p.t);
-    uint32_t tried[kFaces3x3 + kMaxJoiningFaces];
-    int ntried = -1, njoining = 0;
+    TriedFaces tried;
+    int njoining = 0;
     const ScreenPoint sp = c_.camera.pixel_screen(i, j);
-    for (const auto& [si, sj, how] : std::span(fronts.failed, fronts.nfailed)) {
-        const PixelHit& front = hits_[c_.map.index(i + si, j + sj)];
+    for (const StepFronts::Failed& f : std::span(fronts.failed, fronts.nfailed)) {
+        const PixelHit& front = hits_[c_.map.index(i + f.di, j + f.dj)];
         const std::vector<uint32_t>& joining = c_.prepared.faces()[front.face - 1].adjacent;
         // The block beyond the 3x3 on the step's side: 2..kJoiningReach pixels
         // out, kJoiningReach either way across.
         for (int along = 2; along <= kJoiningReach; ++along)
             for (int across = -kJoiningReach; across <= kJoiningReach; ++across) {
-                const int ni = i + along * si + across * sj, nj = j + along * sj + across * si;
+                const int ni = i + along * f.di + across * f.dj, nj = j + along * f.dj + across * f.di;
                 if (!c_.in_frame(ni, nj)) continue;
                 const PixelHit& h = hits_[c_.map.index(ni, nj)];
                 // Between the face in front and the pixel's hit, joining the former.
                 if (!h.face || h.face == p.face || !(h.t < in_front) || !(h.t > front.t) ||
-                    !std::binary_search(joining.begin(), joining.end(), h.face))
+                    !std::binary_search(joining.begin(), joining.end(), h.face) || !first_try(tried, i, j, h.face))
                     continue;
-                if (ntried < 0) ntried = faces_3x3(i, j, tried);
-                if (std::find(tried, tried + ntried, h.face) != tried + ntried) continue;
-                if (njoining++ == kMaxJoiningFaces) return;
-                tried[ntried++] = h.face;
-                MeshScreenPoints::FarFace f;
-                f.id = h.face;
-                f.nstarts = screen_points_.nearest_starts(h.face, sp, f.starts);
-                from_mesh_starts(f, i, j, best);
-                if (best.face != p.face || best.t != p.t) return;
+                MeshScreenPoints::FarFace far;
+                far.id = h.face;
+                far.nstarts = screen_points_.nearest_starts(h.face, sp, far.starts);
+                from_mesh_starts(far, i, j, best);
+                if (best.face != p.face || best.t != p.t || ++njoining == kMaxJoiningFaces) return;
             }
     }
+}
+
+bool NearerSheet::first_try(TriedFaces& tried, int i, int j, uint32_t id) const {
+    if (tried.n < 0) tried.n = faces_3x3(i, j, tried.ids);
+    if (std::find(tried.ids, tried.ids + tried.n, id) != tried.ids + tried.n) return false;
+    tried.ids[tried.n++] = id;
+    return true;
 }
 
 void NearerSheet::beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,
