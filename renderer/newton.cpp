@@ -89,10 +89,19 @@ inline bool regular(double det, double eps_det, double squared_lengths) {
     return det * det > eps_det * eps_det * squared_lengths;
 }
 
-// ||F|| of the projected system in model units (see newton.h, (12)).
-inline double proposed_residual(const Vec4& S, const Camera& cam, ScreenPoint s) {
-    const double fx = S.x / S.z - s.sx, fy = S.y / S.z - s.sy;
-    return std::sqrt(fx * fx + fy * fy) * cam.image_to_model_scale(std::abs(cam.depth(S)));
+// ||F||^2 of the projected system in model units (see newton.h, (12)). F is the
+// image-plane offset (X / D - xR, Y / D - yR) times the model size of an image
+// unit at the point's depth: depth tan(fov / 2) with depth = D / w (perspective),
+// or h / 2 (orthographic). With g = (X - xR D, Y - yR D) = D F the D cancels:
+//   perspective   ||F|| = |g| / |D| * |D / w| tan(fov / 2) = |g| tan(fov / 2) / |w|
+//   orthographic  ||F|| = |g| / |D| * h / 2
+// one division instead of three, and no square root: (12) and (13) compare
+// squares (newton_iterate), and each is a long-latency instruction on the
+// critical path of every iteration.
+inline double proposed_residual2(const Vec4& S, const Camera& cam, ScreenPoint s) {
+    const double gx = S.x - s.sx * S.z, gy = S.y - s.sy * S.z;
+    const double q = cam.perspective() ? cam.tan_half_fov() / S.w : 0.5 * cam.spec().ortho_height / S.z;
+    return (gx * gx + gy * gy) * (q * q);
 }
 
 }  // namespace
@@ -139,61 +148,70 @@ namespace {
 // `System` plugs in what the papers make differ (as pbrt-v4's NewtonBisection
 // takes its function): a template parameter, so each method's evaluation and
 // step inline into its own copy of the loop, with no indirect call per iteration.
-//   State eval(u, v)                  the surface and F at (u, v); State::r = ||F||,
-//                                     model units (12)
+//   State eval(u, v)                  the surface and F at (u, v); State::r2 = ||F||^2,
+//                                     model units (12): the tests compare squares,
+//                                     without a square root per iteration
 //   State at(d)                       the same from the surface's derivatives d
 //                                     at (u, v), evaluated already (`start`)
 //   bool step(state, eps_det, Step&)  the method's Newton step; false when
 //                                     singular by (14)
 //   void finish(state, NewtonResult&) t and the model-space partials at the root
 //   void stopped(state, NewtonResult&) gap_bound and t_bound where it failed
+//                                     (res.residual = ||F|| already set)
 template <class System>
 NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox& box, const NewtonParams& params,
                             const SurfaceDerivs* start) {
     NewtonResult res;
+    const double eps2 = params.eps * params.eps;  // (12) on squared residuals (State::r2)
     double u = u0, v = v0;
     clamp_to_box(u, v, box);
     bool clamped_once = false;
     auto s = start && u == u0 && v == v0 ? sys.at(*start) : sys.eval(u, v);
+    // The end of the iteration at state s (the square root of its residual
+    // taken once, here); the caller returns res.
+    auto end = [&](NewtonStatus status) {
+        res.residual = std::sqrt(s.r2);
+        res.status = status;
+        if (status == NewtonStatus::converged) {
+            sys.finish(s, res);
+            if (!(res.t > 0)) res.status = NewtonStatus::behind_eye;
+        } else {
+            sys.stopped(s, res);
+        }
+    };
     for (int it = 0;; ++it) {
         res.u = u;
         res.v = v;
-        res.residual = s.r;
         res.iterations = it;
-        if (s.r < params.eps) {                                                // (12)
-            sys.finish(s, res);
-            res.status = res.t > 0 ? NewtonStatus::converged : NewtonStatus::behind_eye;
+        if (s.r2 < eps2) {                                                     // (12)
+            end(NewtonStatus::converged);
             return res;
         }
         if (it == params.max_iterations) {
-            res.status = NewtonStatus::max_iterations;
-            sys.stopped(s, res);
+            end(NewtonStatus::max_iterations);
             return res;
         }
         Step st;
         if (!sys.step(s, params.eps_det, st)) {                                // (14)
-            res.status = NewtonStatus::singular;
-            sys.stopped(s, res);
+            end(NewtonStatus::singular);
             return res;
         }
         double un = u + st.du, vn = v + st.dv;                                 // (5)
         if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
-            res.status = NewtonStatus::left_domain;
-            sys.stopped(s, res);
+            end(NewtonStatus::left_domain);
             return res;
         }
         auto sn = sys.eval(un, vn);
         // (13); robust: backtrack along the (clamped) step before giving up
         // (NewtonParams::backtracks halvings).
-        for (int half = 0; params.robust && !(sn.r <= s.r) && half < params.backtracks; ++half) {
+        for (int half = 0; params.robust && !(sn.r2 <= s.r2) && half < params.backtracks; ++half) {
             un = 0.5 * (u + un);
             vn = 0.5 * (v + vn);
             sn = sys.eval(un, vn);
         }
-        if (!(sn.r <= s.r)) {                                                  // (13)
+        if (!(sn.r2 <= s.r2)) {                                                // (13)
             res.iterations = it + 1;
-            res.status = NewtonStatus::diverged;
-            sys.stopped(s, res);
+            end(NewtonStatus::diverged);
             return res;
         }
         u = un;
@@ -210,10 +228,10 @@ struct ProposedSystem {
     ScreenPoint s;
     struct State {
         SurfaceDerivs d;
-        double r;
+        double r2;  // ||F||^2
     };
     State eval(double u, double v) const { return at(projected.d1(u, v)); }
-    State at(const SurfaceDerivs& d) const { return {d, proposed_residual(d.S, camera, s)}; }
+    State at(const SurfaceDerivs& d) const { return {d, proposed_residual2(d.S, camera, s)}; }
     bool step(const State& st, double eps_det, Step& out) const { return proposed_step(st.d, s, eps_det, out); }
     void finish(const State& st, NewtonResult& res) const {
         res.t = camera.hit_distance_from_depth(camera.depth(st.d.S), s);
@@ -225,15 +243,15 @@ struct ProposedSystem {
     // from the ray, and its foot on the ray at most z / cos(a) + r along it.
     // Orthographic: the ray is along f, both exact (cos(a) = 1, t = z).
     void stopped(const State& st, NewtonResult& res) const {
-        const double z = camera.depth(st.d.S);
+        const double z = camera.depth(st.d.S), r = res.residual;
         if (!camera.perspective()) {
-            res.gap_bound = st.r;
+            res.gap_bound = r;
             res.t_bound = z;
             return;
         }
         const double per_depth = camera.hit_distance_from_depth(1.0, s);  // 1 / cos(a)
-        res.gap_bound = st.r / per_depth;
-        res.t_bound = std::abs(z) * per_depth + st.r;
+        res.gap_bound = r / per_depth;
+        res.t_bound = std::abs(z) * per_depth + r;
     }
 };
 
@@ -245,7 +263,7 @@ struct MartinSystem {
     RayPlanes pl;
     struct State {
         CartesianDerivs c;
-        double f1, f2, r;
+        double f1, f2, r2;  // F and ||F||^2
     };
     // cartesian_d1 (nurbs.h, span_basis.h) is cartesian_from(evaluate_d1) on
     // every path: the same numbers.
@@ -253,7 +271,7 @@ struct MartinSystem {
     State at(const SurfaceDerivs& d) const { return at(cartesian_from(d)); }
     State at(const CartesianDerivs& c) const {
         const double f1 = dot(pl.n1, c.P) + pl.d1, f2 = dot(pl.n2, c.P) + pl.d2;
-        return {c, f1, f2, std::sqrt(f1 * f1 + f2 * f2)};  // not std::hypot, a libm call (as proposed_residual)
+        return {c, f1, f2, f1 * f1 + f2 * f2};
     }
     bool step(const State& st, double eps_det, Step& out) const {
         // J = [N1.C_u  N1.C_v; N2.C_u  N2.C_v] with the rational partials.
@@ -272,7 +290,7 @@ struct MartinSystem {
     }
     // F is the point's distance from the two planes through the ray: exact.
     void stopped(const State& st, NewtonResult& res) const {
-        res.gap_bound = st.r;
+        res.gap_bound = res.residual;
         res.t_bound = dot(st.c.P - ray.origin, ray.dir);
     }
 };

@@ -200,12 +200,13 @@ namespace {
 // The regularity test above and the normal where it passes.
 bool regular_normal(Vec3 Pu, Vec3 Pv, double ru, double rv, Vec3& out) {
     constexpr double kRel = 1e-8;
+    // Squared: one square root (the normalization's) instead of four, at every hit.
     const Vec3 n = cross(Pu, Pv);
-    const double a = length(Pu) * ru, b = length(Pv) * rv;
-    const double big = std::max(a, b);
-    const double nn = length(n) * ru * rv;
-    if (nn > kRel * big * big && std::isfinite(nn)) {
-        out = n / length(n);
+    const double a2 = dot(Pu, Pu) * (ru * ru), b2 = dot(Pv, Pv) * (rv * rv);
+    const double big2 = std::max(a2, b2), n2 = dot(n, n);
+    const double nn2 = n2 * ((ru * rv) * (ru * rv));
+    if (nn2 > (kRel * kRel) * big2 * big2 && std::isfinite(nn2)) {
+        out = (1 / std::sqrt(n2)) * n;
         return true;
     }
     return false;
