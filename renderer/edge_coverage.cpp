@@ -62,7 +62,9 @@ double straight_edge_coverage(const SidePoints& a, const SidePoints& b) {
     // The normals' arc: from hi turned back 90 degrees to lo turned on 90, its
     // width pi minus the spread from lo to hi (negative or pi: not separable).
     // Angles as (cos, sin) pairs: the steps are halvings and rotations.
-    const double nl = std::hypot(lo_x, lo_y), nh = std::hypot(hi_x, hi_y);
+    // (Square roots, not std::hypot: a libm call each, on every two-sided edge
+    // pixel; the differences are sums of sample offsets, far from overflow.)
+    const double nl = std::sqrt(lo_x * lo_x + lo_y * lo_y), nh = std::sqrt(hi_x * hi_x + hi_y * hi_y);
     const double spread_c = (lo_x * hi_x + lo_y * hi_y) / (nl * nh), spread_s = cross(lo_x, lo_y, hi_x, hi_y) / (nl * nh);
     if (spread_s < 0 || (spread_s == 0 && spread_c < 0)) return kNaN;
     double step_c = -spread_c, step_s = spread_s;  // the width

@@ -160,11 +160,10 @@ bool TrimTester::inside(Vec2 p) const {
 }
 
 double TrimTester::boundary_distance(Vec2 p, double max_d) const {
-    double best = HUGE_VAL;
-    if (edges_.empty() || !(max_d >= 0)) return best;
+    if (edges_.empty() || !(max_d >= 0)) return HUGE_VAL;
     const double fx0 = (p.x - max_d - u0_) / du_, fx1 = (p.x + max_d - u0_) / du_;
     const double fy0 = (p.y - max_d - v0_) / dv_, fy1 = (p.y + max_d - v0_) / dv_;
-    if (!(fx1 >= 0 && fy1 >= 0 && fx0 < nu_ && fy0 < nv_)) return best;  // also NaN
+    if (!(fx1 >= 0 && fy1 >= 0 && fx0 < nu_ && fy0 < nv_)) return HUGE_VAL;  // also NaN
     // At most 8 x 8 cells: the callers' tolerances are far below a cell; larger
     // windows are clipped around p (a miss only makes the caller stricter).
     const int ci = std::clamp(static_cast<int>((p.x - u0_) / du_), 0, nu_ - 1);
@@ -173,6 +172,7 @@ double TrimTester::boundary_distance(Vec2 p, double max_d) const {
     const int i1 = std::min({nu_ - 1, static_cast<int>(std::min(fx1, double(nu_ - 1))), ci + 4});
     const int j0 = std::max({0, static_cast<int>(std::max(fy0, 0.0)), cj - 4});
     const int j1 = std::min({nv_ - 1, static_cast<int>(std::min(fy1, double(nv_ - 1))), cj + 4});
+    double best2 = HUGE_VAL;
     for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i) {
             const size_t c = static_cast<size_t>(j) * nu_ + i;
@@ -180,9 +180,13 @@ double TrimTester::boundary_distance(Vec2 p, double max_d) const {
                 const Edge& e = edges_[cell_edges_[k]];
                 const double ex = e.bx - e.ax, ey = e.by - e.ay, len2 = ex * ex + ey * ey;
                 const double s = len2 > 0 ? std::clamp(((p.x - e.ax) * ex + (p.y - e.ay) * ey) / len2, 0.0, 1.0) : 0.0;
-                best = std::min(best, std::hypot(e.ax + s * ex - p.x, e.ay + s * ey - p.y));
+                const double dx = e.ax + s * ex - p.x, dy = e.ay + s * ey - p.y;
+                best2 = std::min(best2, dx * dx + dy * dy);
             }
         }
+    // Squared distances, one root at the end (std::hypot per edge was a libm
+    // call each, on the near-trim test of every solve converged outside a loop).
+    const double best = std::sqrt(best2);
     return best <= max_d ? best : HUGE_VAL;
 }
 
