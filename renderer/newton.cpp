@@ -91,16 +91,17 @@ inline bool regular(double det, double eps_det, double squared_lengths) {
 
 // ||F||^2 of the projected system in model units (see newton.h, (12)). F is the
 // image-plane offset (X / D - xR, Y / D - yR) times the model size of an image
-// unit at the point's depth: depth tan(fov / 2) with depth = D / w (perspective),
-// or h / 2 (orthographic). With g = (X - xR D, Y - yR D) = D F the D cancels:
-//   perspective   ||F|| = |g| / |D| * |D / w| tan(fov / 2) = |g| tan(fov / 2) / |w|
-//   orthographic  ||F|| = |g| / |D| * h / 2
+// unit at the point's depth (Camera::image_to_model_scale): depth tan(fov / 2)
+// with depth = D / w (perspective), h / 2 at any depth (orthographic). With
+// g = (X - xR D, Y - yR D) = D F the D cancels:
+//   perspective   ||F|| = |g| / |D| * |D / w| tan(fov / 2) = |g| scale(1) / |w|
+//   orthographic  ||F|| = |g| / |D| * h / 2                 = |g| scale(1) / |D|
 // one division instead of three, and no square root: (12) and (13) compare
 // squares (newton_iterate), and each is a long-latency instruction on the
 // critical path of every iteration.
 inline double proposed_residual2(const Vec4& S, const Camera& cam, ScreenPoint s) {
     const double gx = S.x - s.sx * S.z, gy = S.y - s.sy * S.z;
-    const double q = cam.perspective() ? cam.tan_half_fov() / S.w : 0.5 * cam.spec().ortho_height / S.z;
+    const double q = cam.image_to_model_scale(1.0) / (cam.perspective() ? S.w : S.z);
     return (gx * gx + gy * gy) * (q * q);
 }
 

@@ -219,8 +219,10 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     if (silhouette && unchanged()) rim_faces_in_front(i, j, best);
     if (silhouette && unchanged()) diagonal_starts(i, j, !rescued_rim, best);
     if (((step && !pit) || rescued_rim) && unchanged()) diagonal_faces(i, j, best);
-    if (fronts.nfailed && step && !pit && unchanged()) faces_beyond_failed(i, j, fronts, best);
-    if (fronts.nfailed && step && !pit && unchanged()) faces_joining_failed(i, j, fronts, best);
+    if (fronts.nfailed && step && !pit) {
+        if (unchanged()) faces_beyond_failed(i, j, fronts, best);
+        if (unchanged()) faces_joining_failed(i, j, fronts, best);
+    }
     // Beyond the edge of a face in front, the faces joining it there, and those
     // joining the pixel's own face, the face behind: a wall rising from it
     // towards the edge, seen edge-on, lies between the two (step/cylinder_block.stp
