@@ -131,7 +131,8 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
         return false;
     if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
         return false;
-    const CartesianDerivs c = cartesian_d1(ctx.scene.faces[id - 1].surface, ff.spans, r.u, r.v);
+    const SurfaceEvaluation eval(ctx.scene.faces[id - 1].surface, &ff.spans, &ff.patches);
+    const CartesianDerivs c = eval.cartesian(r.u, r.v);
     const Ray ray = ctx.camera.ray(sp);
     const Vec3 q = c.P - ray.origin;
     const double t = dot(q, ray.dir);

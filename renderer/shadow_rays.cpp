@@ -145,7 +145,8 @@ bool KeyLightShadows::own_face_first(int ci, int cj, uint32_t face, double u, do
 
 double KeyLightShadows::speed(uint32_t id, const PixelHit& h) const {
     const PreparedFace& f = ctx_.prepared.faces()[id - 1];
-    const CartesianDerivs c = cartesian_d1(ctx_.scene.faces[id - 1].surface, f.spans, h.u, h.v);
+    const SurfaceEvaluation eval(ctx_.scene.faces[id - 1].surface, &f.spans, &f.patches);
+    const CartesianDerivs c = eval.cartesian(h.u, h.v);
     return std::max(length(c.Pu), length(c.Pv));
 }
 

@@ -57,6 +57,8 @@ struct SurfaceEvaluation {
         if (patches) return evaluate_d1(*patches, *spans, u, v);
         return spans ? evaluate_d1(surface, *spans, u, v) : evaluate_d1(surface, u, v);
     }
+    // The Cartesian point and partials (cartesian_d1, nurbs.h) the same way.
+    CartesianDerivs cartesian(double u, double v) const { return cartesian_from(d1(u, v)); }
 };
 
 // The patches of project_surface(camera, s) from those of s, made once per frame.
