@@ -95,31 +95,61 @@ TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_sid
     ref_.resize(ncell);
     for (int j = 0; j < nv_; ++j)
         for (int i = 0; i < nu_; ++i) ref_[static_cast<size_t>(j) * nu_ + i] = {u0_ + (i + 0.5) * du_, v0_ + (j + 0.5) * dv_};
-    std::vector<double> xs;
+    // The crossings of each row's centre line, bucketed by row (two passes:
+    // count, then fill): an edge crosses only the rows between its end points,
+    // and testing every edge on every row was 40 % of prepare() (the cylinder
+    // block's 822 faces, loops sampled finely). rows_of gives a range at least
+    // one row wider each way (by truncation: the edges lie above v0_, and
+    // std::floor is a library call on the baseline target); the test itself
+    // decides, as it did per row.
+    auto row_y = [&](int j) { return v0_ + (j + 0.5) * dv_; };
+    auto crosses = [](const Edge& e, double y) { return (e.ay > y) != (e.by > y); };
+    auto rows_of = [&](const Edge& e, int& j0, int& j1) {
+        j0 = std::clamp(static_cast<int>((std::min(e.ay, e.by) - v0_) / dv_) - 1, 0, nv_ - 1);
+        j1 = std::clamp(static_cast<int>((std::max(e.ay, e.by) - v0_) / dv_) + 1, 0, nv_ - 1);
+    };
+    std::vector<uint32_t> row_start(static_cast<size_t>(nv_) + 1, 0);
+    for (const Edge& e : edges_) {
+        int j0, j1;
+        rows_of(e, j0, j1);
+        for (int j = j0; j <= j1; ++j) row_start[j + 1] += crosses(e, row_y(j));
+    }
+    for (int j = 0; j < nv_; ++j) row_start[j + 1] += row_start[j];
+    std::vector<double> xs(row_start[nv_]);
+    std::vector<uint32_t> next(row_start.begin(), row_start.end() - 1);
+    for (const Edge& e : edges_) {
+        int j0, j1;
+        rows_of(e, j0, j1);
+        for (int j = j0; j <= j1; ++j) {
+            const double y = row_y(j);
+            if (crosses(e, y)) xs[next[j]++] = e.ax + (y - e.ay) * (e.bx - e.ax) / (e.by - e.ay);
+        }
+    }
     for (int j = 0; j < nv_; ++j) {
-        const double y = v0_ + (j + 0.5) * dv_;
-        xs.clear();
-        for (const Edge& e : edges_)
-            if ((e.ay > y) != (e.by > y)) xs.push_back(e.ax + (y - e.ay) * (e.bx - e.ax) / (e.by - e.ay));
-        std::sort(xs.begin(), xs.end());
+        double* const row = xs.data() + row_start[j];
+        const size_t n = row_start[j + 1] - row_start[j];
+        std::sort(row, row + n);
         size_t k = 0;
         for (int i = 0; i < nu_; ++i) {
             const double x = u0_ + (i + 0.5) * du_;
-            while (k < xs.size() && xs[k] <= x) ++k;
-            // crossings strictly right of x: xs.size() - k
-            centre_inside_[static_cast<size_t>(j) * nu_ + i] = (xs.size() - k) & 1;
+            while (k < n && row[k] <= x) ++k;
+            // crossings strictly right of x: n - k
+            centre_inside_[static_cast<size_t>(j) * nu_ + i] = (n - k) & 1;
         }
     }
     // A reference point (nearly) on an edge of its cell would make the query's
     // crossing count ambiguous: move it to another point of the cell, away from
     // every edge, and classify it by brute force (rare: exact CAD coordinates).
-    const double tol = 1e-6 * std::min(du_, dv_);
+    // (Squared distances: std::hypot, a libm call per edge of every cell, was a
+    // sixth of prepare() on the cylinder block.)
+    const double tol = 1e-6 * std::min(du_, dv_), tol2 = tol * tol;
     auto near_edge = [&](size_t c, Vec2 q) {
         for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
             const Edge& e = edges_[cell_edges_[k]];
             const double ex = e.bx - e.ax, ey = e.by - e.ay, len2 = ex * ex + ey * ey;
             const double s = std::clamp(((q.x - e.ax) * ex + (q.y - e.ay) * ey) / len2, 0.0, 1.0);
-            if (std::hypot(e.ax + s * ex - q.x, e.ay + s * ey - q.y) <= tol) return true;
+            const double dx = e.ax + s * ex - q.x, dy = e.ay + s * ey - q.y;
+            if (dx * dx + dy * dy <= tol2) return true;
         }
         return false;
     };
