@@ -14,12 +14,23 @@ inline double orient(double ax, double ay, double bx, double by, double cx, doub
 
 // Does the closed segment a-b overlap the closed box [x0,x1] x [y0,y1]?
 // (separating axes: the box's two axes and the segment's normal)
-bool segment_overlaps_box(double ax, double ay, double bx, double by, double x0, double y0, double x1, double y1) {
+inline bool segment_overlaps_box(double ax, double ay, double bx, double by, double x0, double y0, double x1,
+                                 double y1) {
     if (std::max(ax, bx) < x0 || std::min(ax, bx) > x1 || std::max(ay, by) < y0 || std::min(ay, by) > y1)
         return false;
     const double s0 = orient(ax, ay, bx, by, x0, y0), s1 = orient(ax, ay, bx, by, x1, y0);
     const double s2 = orient(ax, ay, bx, by, x0, y1), s3 = orient(ax, ay, bx, by, x1, y1);
     return !((s0 > 0 && s1 > 0 && s2 > 0 && s3 > 0) || (s0 < 0 && s1 < 0 && s2 < 0 && s3 < 0));
+}
+
+// Squared distance from p to the closed segment a-b (to a where a = b). Squared:
+// the callers compare it with a squared tolerance, or take one root at the end
+// (std::hypot per edge was a libm call each).
+inline double segment_distance2(double ax, double ay, double bx, double by, Vec2 p) {
+    const double ex = bx - ax, ey = by - ay, len2 = ex * ex + ey * ey;
+    const double s = len2 > 0 ? std::clamp(((p.x - ax) * ex + (p.y - ay) * ey) / len2, 0.0, 1.0) : 0.0;
+    const double dx = ax + s * ex - p.x, dy = ay + s * ey - p.y;
+    return dx * dx + dy * dy;
 }
 
 }  // namespace
@@ -146,10 +157,7 @@ TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_sid
     auto near_edge = [&](size_t c, Vec2 q) {
         for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
             const Edge& e = edges_[cell_edges_[k]];
-            const double ex = e.bx - e.ax, ey = e.by - e.ay, len2 = ex * ex + ey * ey;
-            const double s = std::clamp(((q.x - e.ax) * ex + (q.y - e.ay) * ey) / len2, 0.0, 1.0);
-            const double dx = e.ax + s * ex - q.x, dy = e.ay + s * ey - q.y;
-            if (dx * dx + dy * dy <= tol2) return true;
+            if (segment_distance2(e.ax, e.ay, e.bx, e.by, q) <= tol2) return true;
         }
         return false;
     };
@@ -208,14 +216,11 @@ double TrimTester::boundary_distance(Vec2 p, double max_d) const {
             const size_t c = static_cast<size_t>(j) * nu_ + i;
             for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
                 const Edge& e = edges_[cell_edges_[k]];
-                const double ex = e.bx - e.ax, ey = e.by - e.ay, len2 = ex * ex + ey * ey;
-                const double s = len2 > 0 ? std::clamp(((p.x - e.ax) * ex + (p.y - e.ay) * ey) / len2, 0.0, 1.0) : 0.0;
-                const double dx = e.ax + s * ex - p.x, dy = e.ay + s * ey - p.y;
-                best2 = std::min(best2, dx * dx + dy * dy);
+                best2 = std::min(best2, segment_distance2(e.ax, e.ay, e.bx, e.by, p));
             }
         }
-    // Squared distances, one root at the end (std::hypot per edge was a libm
-    // call each, on the near-trim test of every solve converged outside a loop).
+    // One root at the end (this is the near-trim test of every solve converged
+    // outside a loop).
     const double best = std::sqrt(best2);
     return best <= max_d ? best : HUGE_VAL;
 }
