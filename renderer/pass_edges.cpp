@@ -20,14 +20,31 @@ namespace {
 // degrees (cos 30 = 0.866). A smooth face turns by far less between pixels
 // except seen almost edge-on, where a silhouette is next anyway.
 constexpr double kCreaseCos = 0.866;
+// The smallest cosine of incidence the depth-step test below divides by: a
+// sheet seen within 0.06 degrees of edge-on may step 1000 footprints a pixel.
+constexpr double kMinIncidenceCos = 1e-3;
 // Whether hits p and q, with AOV normals a and b, show different things (passes.h,
 // neighbour_differences); inline in the frame's loop (a call per pair was most of
-// that loop's cost).
-inline bool hits_differ(const FrameContext& c, const PixelHit& p, const PixelHit& q, const float* a, const float* b) {
+// that loop's cost). `dir`: p's pixel ray direction, asked for only at a depth
+// step. One sheet seen at incidence angle theta steps in depth by up to a
+// footprint times tan(theta) from one pixel to the next, smoothly: a step counts
+// (a fold, or another sheet of the face behind) beyond kDepthStepFootprints times
+// the larger of 1 and the steeper slope of the two pixels. (A fixed 3 footprints
+// drew lines all over a hole's wall seen 17 degrees from edge-on.)
+template <class Dir>
+inline bool hits_differ(const FrameContext& c, const PixelHit& p, const PixelHit& q, const float* a, const float* b,
+                        Dir dir) {
     if (!p.face && !q.face) return false;
     if (!p.face || !q.face || p.face != q.face) return true;  // silhouette, face border
-    const double footprint = c.pixel_footprint(std::min(p.t, q.t));
-    if (std::abs(p.t - q.t) > kDepthStepFootprints * footprint) return true;  // one face folding over itself
+    const double step = std::abs(p.t - q.t), allowed = kDepthStepFootprints * c.pixel_footprint(std::min(p.t, q.t));
+    if (step > allowed) {
+        const Vec3 d = dir();
+        const double ca = std::abs(a[0] * d.x + a[1] * d.y + a[2] * d.z);
+        const double cb = std::abs(b[0] * d.x + b[1] * d.y + b[2] * d.z);
+        const double cos_min = std::max(std::min(ca, cb), kMinIncidenceCos);
+        const double slope = std::sqrt(std::max(0.0, 1 - cos_min * cos_min)) / cos_min;
+        if (step > allowed * std::max(1.0, slope)) return true;  // one face folding over itself
+    }
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < kCreaseCos;
 }
 
@@ -68,7 +85,8 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
                 continue;  // diff[k] stays 0
             const PixelHit& p = hits[k];
             const float* a = normal + 3 * k;
-            auto differs = [&](size_t n) { return hits_differ(c, p, hits[n], a, normal + 3 * n); };
+            auto dir = [&] { return c.camera.pixel_ray(i, j).dir; };
+            auto differs = [&](size_t n) { return hits_differ(c, p, hits[n], a, normal + 3 * n, dir); };
             uint8_t bits = 0;
             if (i + 1 < W && differs(k + 1)) bits |= kDiffRight;
             if (!last_row) {

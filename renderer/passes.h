@@ -61,9 +61,9 @@ void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers&
 
 // A depth step on one face (a fold occluding itself, or one sheet of a closed
 // face behind another): adjacent hits farther apart in depth than this many
-// pixel footprints. On one sheet, neighbouring depths differ by about one
-// footprint times the slope, so only sheets seen within ~20 degrees of edge-on
-// (slope 3) count as steps.
+// pixel footprints, times the sheet's slope where it is steeper than 1 (seen
+// more than 45 degrees from face-on, pass_edges.cpp). On one sheet,
+// neighbouring depths differ by about one footprint times the slope.
 inline constexpr double kDepthStepFootprints = 3.0;
 
 // Whether adjacent pixels show different things: background and a face, two

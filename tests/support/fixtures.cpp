@@ -148,6 +148,15 @@ TopoDS_Shape make_filleted_box() {
     return f.Shape();
 }
 
+// filleted_box with a through-hole of radius 6 along Z, cut after the fillets
+// (the hole's rims are sharp edges on the flat tops, the box's edges blends).
+TopoDS_Shape make_holed_filleted_box() {
+    const TopoDS_Shape hole = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(20, 15, -1), gp::DZ()), 6.0, 22.0).Shape();
+    BRepAlgoAPI_Cut cut(make_filleted_box(), hole);
+    if (!cut.IsDone()) throw std::runtime_error("holed_filleted_box: cut failed");
+    return cut.Shape();
+}
+
 // Fillet radius per edge direction of filleted_box_blend (x, y, z): three
 // different radii meet at every corner, so OCCT builds a free-form vertex blend
 // there instead of a sphere.
@@ -351,6 +360,7 @@ std::string fixture_dir() { return dir().path; }
 std::string box_with_holes() { return step_fixture("box_with_holes", make_box_with_holes); }
 std::string filleted_box() { return step_fixture("filleted_box", make_filleted_box); }
 std::string filleted_box_blend() { return step_fixture("filleted_box_blend", make_filleted_box_blend); }
+std::string holed_filleted_box() { return step_fixture("holed_filleted_box", make_holed_filleted_box); }
 std::string blade_fan() { return step_fixture("blade_fan", make_blade_fan); }
 std::string thin_ring() { return step_fixture("thin_ring", make_thin_ring); }
 std::string cylinder() {

@@ -29,6 +29,10 @@ std::string box_with_holes();
 // Box 40 x 30 x 20 with every edge filleted (radius 4, BRepFilletAPI_MakeFillet):
 // 6 planes + 12 cylinders + 8 spherical corners = 26 faces.
 std::string filleted_box();
+// filleted_box with a through-hole (radius 6, along Z, through the top and
+// bottom faces) cut after the fillets: 26 + 1 faces. Not in fixture_names()
+// (the feature-line test's part).
+std::string holed_filleted_box();
 // The same box with a different radius per edge direction (x 2, y 3.5, z 5):
 // where three fillets of different radii meet, OCCT builds a free-form vertex
 // blend (no sphere), the corner where fillet cracks were seen on real files.
