@@ -20,6 +20,13 @@ OCCT_DATA = pathlib.Path("/usr/share/opencascade/data")
 SCREW = OCCT_DATA / "step" / "screw.step"
 BEARING = OCCT_DATA / "iges" / "bearing.iges"
 TIMEOUT = 180  # seconds, for every HTTP call: no test can hang
+# The options of a job's render that must still be running while a test acts on
+# it (deletes it, kills the service, renders beside it). The 1600x1600 frame these
+# tests asked for took seconds when they were written; on one thread it takes
+# 0.47 s of the bearing and 0.38 s of the screw now. The most pixels the shared
+# server allows (4 Mpixel) with 16 anti-aliasing rays, shadows and lines: 1.24 s
+# and 0.86 s (2026-12-06, the 2-core VM).
+SLOW_RENDER = {"width": 2000, "height": 2000, "antialias": 16, "shadows": True, "edges": True}
 # Set by tests/api_postgres.sh: the suite runs against the PostgreSQL job store.
 PG_ADMIN = os.environ.get("NURBSRT_TEST_PG_ADMIN")
 sqlite_only = pytest.mark.skipif(

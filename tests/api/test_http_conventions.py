@@ -15,7 +15,7 @@ import urllib.parse
 import pytest
 import requests
 
-from conftest import BEARING, SCREW, TIMEOUT, check_problem, post_raw, validate
+from conftest import SLOW_RENDER, BEARING, SCREW, TIMEOUT, check_problem, post_raw, validate
 
 JOB_ID = "0123456789abcdef0123456789abcdef"
 ORIGIN = "https://app.example.com"
@@ -343,7 +343,7 @@ def test_artifacts_have_a_strong_etag_and_answer_304(url):
 
 def test_retry_after_while_queued_or_running(own_server):
     s = own_server(args=["--job-runners", "1", "--render-threads", "1"])
-    slow = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}}]}
+    slow = {"outputs": [{"file": 0, "type": "render", "options": SLOW_RENDER}]}
     first = submit(s.url, slow, BEARING.read_bytes())
     second = submit(s.url, slow, BEARING.read_bytes())
     for r in (first, second):

@@ -18,7 +18,7 @@ import zlib
 import pytest
 import requests
 
-from conftest import BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, validate
+from conftest import SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, validate
 
 # Inputs: a large-ish IGES and a small STEP from ../shared/models, else OCCT's own data files.
 if MODELS.is_dir():
@@ -395,7 +395,7 @@ def test_job_limits_and_queue_bound(own_server):
                   422, "limit_exceeded")
     check_problem(submit(s.url, [("a.step", step)], {"outputs": [render] * 4}), 422, "limit_exceeded")
     # One slow job runs, one waits: the next is turned away with Retry-After.
-    slow = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}}]}
+    slow = {"outputs": [{"file": 0, "type": "render", "options": SLOW_RENDER}]}
     running = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], slow))
     wait_for(s.url, running["id"], lambda j: j["outputs"][0]["state"] == "running", what="running")
     # The job's render holds memory, not the only import/conversion worker: a small synchronous
@@ -423,7 +423,7 @@ def test_job_limits_and_queue_bound(own_server):
 
 def test_delete_running_job(own_server):
     s = own_server(args=["--workers", "1", "--job-runners", "1", "--render-threads", "1"])
-    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}},
+    spec = {"outputs": [{"file": 0, "type": "render", "options": SLOW_RENDER},
                         {"file": 0, "type": "conversion", "format": "step"}]}
     job = accepted(submit(s.url, [("b.igs", BEARING.read_bytes())], spec))
     job = wait_for(s.url, job["id"], lambda j: j["outputs"][0]["state"] == "running" and j["progress"] > 0,
@@ -474,7 +474,7 @@ def test_finished_jobs_expire(own_server):
 
 SLOW_ARGS = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
 SLOW_SPEC = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"},
-                         {"file": 0, "type": "render", "options": {"width": 1600, "height": 1600}}]}
+                         {"file": 0, "type": "render", "options": SLOW_RENDER}]}
 
 
 def kill_while_rendering(s, job_id, attempt):
@@ -499,7 +499,7 @@ def test_sigkill_then_restart_reruns_the_job(own_server, tmp_path):
     assert job["attempts"] == 2
     assert job["outputs"][0]["finished_at"] == conversion["finished_at"]  # kept, not converted again
     assert download(s2.url, job["outputs"][0])[72:73] == b"S"  # IGES: the first record is the Start section
-    assert png_size(download(s2.url, job["outputs"][1])) == (1600, 1600)
+    assert png_size(download(s2.url, job["outputs"][1])) == (SLOW_RENDER["width"], SLOW_RENDER["height"])
 
 
 def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_path):
@@ -534,7 +534,7 @@ def test_graceful_stop_requeues_without_counting_the_run(own_server, tmp_path):
     s2 = own_server(args=SLOW_ARGS, data_dir=data)
     job = wait_finished(s2.url, job["id"])
     assert job["state"] == "succeeded" and job["attempts"] == 1
-    assert png_size(download(s2.url, job["outputs"][1])) == (1600, 1600)
+    assert png_size(download(s2.url, job["outputs"][1])) == (SLOW_RENDER["width"], SLOW_RENDER["height"])
 
 
 def test_corrupt_job_database_stops_the_start_with_a_clear_error(tmp_path):
