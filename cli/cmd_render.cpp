@@ -114,6 +114,223 @@ void check_camera_before_import(const Args& a) {
     }
 }
 
+// Options are bound to the fields of `a`, which outlives the parse (the
+// command's callback holds it).
+void add_output_options(CLI::App* cmd, Args& a) {
+    // Checked in the callback, after CLI11 has reported unknown options: with a
+    // CLI11 check here, `--widht 100` would be reported as a missing file "100".
+    cmd->add_option("MODEL", a.models, "STEP/IGES file(s), NURBS JSON, or a JSON scene file")->required();
+    cmd->add_option("-o,--output", a.output, "image to write: .png, .jpg, .tif or .exr")->required()
+        ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
+    cmd->add_option("--aov", a.aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
+        ->check(output_file_validator({".exr"}));
+    cmd->add_option("--stats", a.stats, "write statistics and stage timings as JSON ('-' for stdout)")
+        ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
+}
+
+void add_camera_options(CLI::App* cmd, Args& a) {
+    cmd->add_option("--width", a.width, "image width in pixels (default 800; given alone, the height keeps 4:3)")
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--height", a.height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--view", a.view, "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
+                   "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
+        ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))->capture_default_str();
+    cmd->add_option("--eye", a.eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
+        ->check(vec3_validator());
+    cmd->add_option("--target", a.target, "point looked at, x,y,z")->check(vec3_validator());
+    cmd->add_option("--up", a.up, "up vector x,y,z")->check(vec3_validator());
+    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")
+        ->check(CLI::Range(0.01, 179.0));
+    cmd->add_option("--ortho-height", a.ortho_height, "orthographic view height in model units (implies orthographic)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--fit-margin", a.fit_margin,
+                    "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
+        ->check(CLI::Range(0.0, kMaxFitMargin))->capture_default_str();
+    cmd->add_option("--projection", a.projection, "perspective or orthographic")
+        ->check(CLI::IsMember({"perspective", "orthographic"}))->capture_default_str();
+}
+
+// The API's parsers as CLI11 checks, so that both accept and refuse the same values.
+template <class Parse>
+CLI::Validator shared_check(Parse parse, const char* description) {
+    return CLI::Validator(
+        [parse](std::string& s) -> std::string {
+            try {
+                parse(s);
+                return {};
+            } catch (const Error& e) {
+                return e.what();
+            } catch (const std::exception&) {
+                return "not a number: " + s;
+            }
+        },
+        description);
+}
+
+void add_method_options(CLI::App* cmd, Args& a) {
+    cmd->add_option("--method", a.method, "Newton method: proposed (paper eq. 9-11) or martin (Martin et al. 2000)")
+        ->check(CLI::IsMember({"proposed", "martin"}))->capture_default_str();
+    cmd->add_option("--map-precision", a.map_precision,
+                    "preliminary map: float (32-bit id, float u,v) or rgb8 (u,v quantized as paper eq. 4)")
+        ->check(CLI::IsMember({"float", "rgb8"}))->capture_default_str();
+    cmd->add_option("--threads", a.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))
+        ->capture_default_str();
+    cmd->add_option("--tolerance", a.tolerance,
+                    "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
+                    "the bounding-box diagonal (same for both methods)")
+        ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
+    cmd->add_option("--background", a.background,
+                    "background: r,g,b (opaque) or r,g,b,a in [0,1], or transparent (default: transparent; "
+                    "opaque white for JPEG)")
+        ->check(CLI::Validator(
+            [](std::string& s) -> std::string {
+                try {
+                    server::parse_background(s, "the value");
+                    return {};
+                } catch (const Error& e) {
+                    return e.what();
+                }
+            },
+            "R,G,B[,A]|transparent"));
+}
+
+void add_look_options(CLI::App* cmd, Args& a) {
+    cmd->add_option("--antialias", a.antialias,
+                    "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
+                    "can cross them; 0: off "
+                    "(default: " + std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
+        ->check(shared_check([](const std::string& s) { server::parse_antialias(std::stod(s), "the value"); }, "N"));
+    cmd->add_flag("--edges", a.edges, "draw feature lines: silhouettes, face borders and creases");
+    cmd->add_option("--edge-color", a.edge_color, "feature line colour r,g,b in [0,1] (default 0.02,0.02,0.02)")
+        ->check(shared_check([](const std::string& s) { server::parse_rgb(s, "the value"); }, "R,G,B"));
+    cmd->add_option("--edge-width", a.edge_width, "feature line width in pixels, at any resolution")
+        ->check(shared_check([](const std::string& s) { server::parse_edge_width(std::stod(s), "the value"); }, "PX"))
+        ->capture_default_str();
+    cmd->add_flag("--shadows", a.shadows,
+                  "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
+    cmd->add_option("--mesh-deflection", a.load.import.mesh_relative_deflection,
+                    "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
+        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
+    cmd->add_flag("--isolated", a.load.isolated, "import in a child process with a time limit");
+    cmd->add_flag("-q,--quiet", a.quiet, "no progress messages on stderr");
+}
+// The renderer's options from the command line; the option strings were
+// checked by CLI11 (IsMember) and are parsed here, once.
+RenderOptions render_options(const Args& a, const Scene& scene) {
+    RenderOptions options;
+    options.method = *parse_newton_method(a.method);
+    options.map_precision = *parse_map_precision(a.map_precision);
+    options.threads = a.threads;
+    options.newton.eps = a.tolerance * std::max(scene.bbox.diagonal(), 1e-300);
+    const server::Background bg = a.background.empty() ? server::default_background(output_format(a.output))
+                                                       : server::parse_background(a.background, "--background");
+    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
+    options.background_alpha = static_cast<float>(bg.alpha);
+    server::ImageLook look;
+    look.antialias = a.antialias;
+    look.edges = a.edges;
+    if (!a.edge_color.empty()) look.edge_color = server::parse_rgb(a.edge_color, "--edge-color");
+    look.edge_width = a.edge_width;
+    look.shadows = a.shadows;
+    server::apply_look(look, output_format(a.output), options);
+    return options;
+}
+
+// Progress on stderr: live on a terminal; otherwise a line per 10% once the
+// render has taken over a second (logs of long renders, quiet for short ones).
+class ProgressPrinter {
+public:
+    explicit ProgressPrinter(clock_type::time_point t0) : t0_(t0), tr_(clock_type::now()) {}
+    void operator()(double f) {
+        const double ms = ms_since(tr_);
+        if (tty_) {
+            if (ms < 300 && f < 1.0) return;
+            std::fprintf(stderr, "\rnurbsrt: rendering %3.0f%%", 100.0 * f);
+            if (f >= 1.0) std::fputc('\n', stderr);
+            live_ = f < 1.0;
+        } else if (ms > 1000 && f >= 0.1 * next_decile_) {
+            std::fprintf(stderr, "nurbsrt: [%8.1f ms] rendering %3.0f%%\n", ms_since(t0_), 100.0 * f);
+            next_decile_ = static_cast<int>(f * 10.0) + 1;
+        }
+        std::fflush(stderr);
+    }
+    // Ends a live line that the render left unfinished (canceled or failed: no 100 %).
+    void finish() const {
+        if (live_) std::fputc('\n', stderr);
+    }
+
+private:
+    clock_type::time_point t0_, tr_;
+    bool tty_ = isatty(STDERR_FILENO) != 0;
+    bool live_ = false;
+    int next_decile_ = 1;
+};
+
+void write_stats(const Args& a, const Scene& scene, const Camera& camera, const RenderResult& result,
+                 StageClock& stages) {
+    nlohmann::json j = render_stats_json(result.stats, nlohmann::json::object());
+    j["camera"] = camera_json(camera);
+    j["map_precision"] = a.map_precision;
+    j["warnings"] = scene.warnings;
+    stages.mark("statistics");
+    j["timings_ms"] = server::stage_timings_json(stages, kCliRenderStages);
+    if (a.stats == "-") {
+        std::cout << j.dump(2) << "\n";
+        return;
+    }
+    std::ofstream out(a.stats);
+    out << j.dump(2) << "\n";
+    if (!out) throw Error(ErrorCode::io, "cannot write " + a.stats);
+}
+
+void run_render(const Args& a) {
+    for (const std::string& m : a.models)
+        if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
+    check_camera_before_import(a);
+    const auto t0 = clock_type::now();
+    auto say = [&](const char* fmt, auto... xs) {
+        if (a.quiet) return;
+        std::fprintf(stderr, "nurbsrt: [%8.1f ms] ", ms_since(t0));
+        std::fprintf(stderr, fmt, xs...);
+        std::fputc('\n', stderr);
+    };
+    const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
+    say("importing %zu model(s)", a.models.size());
+    // --stats timings: stages marked end to end from t0, so they sum to the total.
+    StageClock stages(t0);
+    IsolationTimings isolation;
+    const Scene scene = load_models(a.models, a.load, &isolation);
+    add_import_stages(scene.timings, stages);
+    if (a.load.isolated) {
+        stages.add("prescan", isolation.prescan_ms);
+        stages.add("isolation", isolation.isolation_ms);
+        stages.add("transfer", isolation.transfer_ms);
+    }
+    stages.mark("assemble");  // the rest: scene files, placing and joining the models
+    say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
+        scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
+
+    const Camera camera(fitted_camera(view_request(a), scene, base_camera(a)));
+    RenderOptions options = render_options(a, scene);
+    say("rendering %dx%d with %s", camera.width(), camera.height(), a.method.c_str());
+    auto progress = std::make_shared<ProgressPrinter>(t0);
+    if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
+    stages.mark("frame_setup");
+    const RenderResult result = render(scene, camera, options);
+    add_frame_stages(result.stats, stages);
+    stages.mark("frame_setup");  // the rest of the call of render()
+    progress->finish();
+    say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms", result.stats.pixels_hit,
+        result.stats.mean_iterations, result.stats.total_ms);
+
+    write_image(result.image, a.output);
+    if (!a.aov.empty()) write_image(result.image, a.aov);
+    stages.mark("encode");
+    say("wrote %s%s%s", a.output.c_str(), a.aov.empty() ? "" : " and ", a.aov.c_str());
+    if (!a.stats.empty()) write_stats(a, scene, camera, result, stages);
+}
+
 }  // namespace
 
 void add_render_command(CLI::App& app) {
@@ -130,189 +347,11 @@ void add_render_command(CLI::App& app) {
         "  nurbsrt render part.step -o part.png --aov part.exr --stats stats.json --method martin\n"
         "  nurbsrt render part.step -o top.png --view top --ortho-height 120\n"
         "  nurbsrt render part.step -o p.png --eye=-100,50,80 --target 0,0,0 --up 0,0,1 --fov 30");
-    // Checked in the callback, after CLI11 has reported unknown options: with a
-    // CLI11 check here, `--widht 100` would be reported as a missing file "100".
-    cmd->add_option("MODEL", a->models, "STEP/IGES file(s), NURBS JSON, or a JSON scene file")->required();
-    cmd->add_option("-o,--output", a->output, "image to write: .png, .jpg, .tif or .exr")->required()
-        ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
-    cmd->add_option("--aov", a->aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
-        ->check(output_file_validator({".exr"}));
-    cmd->add_option("--stats", a->stats, "write statistics and stage timings as JSON ('-' for stdout)")
-        ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
-    cmd->add_option("--width", a->width, "image width in pixels (default 800; given alone, the height keeps 4:3)")
-        ->check(CLI::Range(1, 16384));
-    cmd->add_option("--height", a->height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
-        ->check(CLI::Range(1, 16384));
-    cmd->add_option("--view", a->view, "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
-                   "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
-        ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))->capture_default_str();
-    cmd->add_option("--eye", a->eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
-        ->check(vec3_validator());
-    cmd->add_option("--target", a->target, "point looked at, x,y,z")->check(vec3_validator());
-    cmd->add_option("--up", a->up, "up vector x,y,z")->check(vec3_validator());
-    cmd->add_option("--fov", a->fov, "vertical field of view in degrees (perspective)")
-        ->check(CLI::Range(0.01, 179.0));
-    cmd->add_option("--ortho-height", a->ortho_height, "orthographic view height in model units (implies orthographic)")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--fit-margin", a->fit_margin,
-                    "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
-        ->check(CLI::Range(0.0, kMaxFitMargin))->capture_default_str();
-    cmd->add_option("--projection", a->projection, "perspective or orthographic")
-        ->check(CLI::IsMember({"perspective", "orthographic"}))->capture_default_str();
-    cmd->add_option("--method", a->method, "Newton method: proposed (paper eq. 9-11) or martin (Martin et al. 2000)")
-        ->check(CLI::IsMember({"proposed", "martin"}))->capture_default_str();
-    cmd->add_option("--map-precision", a->map_precision,
-                    "preliminary map: float (32-bit id, float u,v) or rgb8 (u,v quantized as paper eq. 4)")
-        ->check(CLI::IsMember({"float", "rgb8"}))->capture_default_str();
-    cmd->add_option("--threads", a->threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))
-        ->capture_default_str();
-    cmd->add_option("--tolerance", a->tolerance,
-                    "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
-                    "the bounding-box diagonal (same for both methods)")
-        ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
-    cmd->add_option("--background", a->background,
-                    "background: r,g,b (opaque) or r,g,b,a in [0,1], or transparent (default: transparent; "
-                    "opaque white for JPEG)")
-        ->check(CLI::Validator(
-            [](std::string& s) -> std::string {
-                try {
-                    server::parse_background(s, "the value");
-                    return {};
-                } catch (const Error& e) {
-                    return e.what();
-                }
-            },
-            "R,G,B[,A]|transparent"));
-    // The API's parsers, so that both accept and refuse the same values.
-    auto shared_check = [](auto parse, const char* description) {
-        return CLI::Validator(
-            [parse](std::string& s) -> std::string {
-                try {
-                    parse(s);
-                    return {};
-                } catch (const Error& e) {
-                    return e.what();
-                } catch (const std::exception&) {
-                    return "not a number: " + s;
-                }
-            },
-            description);
-    };
-    cmd->add_option("--antialias", a->antialias,
-                    "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
-                    "can cross them; 0: off "
-                    "(default: " + std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
-        ->check(shared_check([](const std::string& s) { server::parse_antialias(std::stod(s), "the value"); }, "N"));
-    cmd->add_flag("--edges", a->edges, "draw feature lines: silhouettes, face borders and creases");
-    cmd->add_option("--edge-color", a->edge_color, "feature line colour r,g,b in [0,1] (default 0.02,0.02,0.02)")
-        ->check(shared_check([](const std::string& s) { server::parse_rgb(s, "the value"); }, "R,G,B"));
-    cmd->add_option("--edge-width", a->edge_width, "feature line width in pixels, at any resolution")
-        ->check(shared_check([](const std::string& s) { server::parse_edge_width(std::stod(s), "the value"); }, "PX"))
-        ->capture_default_str();
-    cmd->add_flag("--shadows", a->shadows,
-                  "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
-    cmd->add_option("--mesh-deflection", a->load.import.mesh_relative_deflection,
-                    "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
-        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
-    cmd->add_flag("--isolated", a->load.isolated, "import in a child process with a time limit");
-    cmd->add_flag("-q,--quiet", a->quiet, "no progress messages on stderr");
-
-    cmd->callback([a] {
-        for (const std::string& m : a->models)
-            if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
-        check_camera_before_import(*a);
-        const auto t0 = clock_type::now();
-        auto say = [&](const char* fmt, auto... xs) {
-            if (a->quiet) return;
-            std::fprintf(stderr, "nurbsrt: [%8.1f ms] ", ms_since(t0));
-            std::fprintf(stderr, fmt, xs...);
-            std::fputc('\n', stderr);
-        };
-        const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
-        say("importing %zu model(s)", a->models.size());
-        // --stats timings: stages marked end to end from t0, so they sum to the total.
-        StageClock stages(t0);
-        IsolationTimings isolation;
-        const Scene scene = load_models(a->models, a->load, &isolation);
-        add_import_stages(scene.timings, stages);
-        if (a->load.isolated) {
-            stages.add("prescan", isolation.prescan_ms);
-            stages.add("isolation", isolation.isolation_ms);
-            stages.add("transfer", isolation.transfer_ms);
-        }
-        stages.mark("assemble");  // the rest: scene files, placing and joining the models
-        say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
-            scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
-
-        const Camera camera(fitted_camera(view_request(*a), scene, base_camera(*a)));
-        RenderOptions options;
-        // The option strings were checked by CLI11 (IsMember): parsed here, once.
-        options.method = *parse_newton_method(a->method);
-        options.map_precision = *parse_map_precision(a->map_precision);
-        options.threads = a->threads;
-        options.newton.eps = a->tolerance * std::max(scene.bbox.diagonal(), 1e-300);
-        const server::Background bg = a->background.empty()
-                                          ? server::default_background(output_format(a->output))
-                                          : server::parse_background(a->background, "--background");
-        options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
-        options.background_alpha = static_cast<float>(bg.alpha);
-        server::ImageLook look;
-        look.antialias = a->antialias;
-        look.edges = a->edges;
-        if (!a->edge_color.empty()) look.edge_color = server::parse_rgb(a->edge_color, "--edge-color");
-        look.edge_width = a->edge_width;
-        look.shadows = a->shadows;
-        server::apply_look(look, output_format(a->output), options);
-        say("rendering %dx%d with %s", camera.width(), camera.height(), a->method.c_str());
-        // Progress on stderr: live on a terminal; otherwise a line per 10% once the
-        // render has taken over a second (logs of long renders, quiet for short ones).
-        const bool tty = isatty(STDERR_FILENO) != 0;
-        const auto tr = clock_type::now();
-        bool live = false;
-        int next_decile = 1;
-        if (!a->quiet)
-            options.progress = [&](double f) {
-                const double ms = ms_since(tr);
-                if (tty) {
-                    if (ms < 300 && f < 1.0) return;
-                    std::fprintf(stderr, "\rnurbsrt: rendering %3.0f%%", 100.0 * f);
-                    if (f >= 1.0) std::fputc('\n', stderr);
-                    live = f < 1.0;
-                } else if (ms > 1000 && f >= 0.1 * next_decile) {
-                    std::fprintf(stderr, "nurbsrt: [%8.1f ms] rendering %3.0f%%\n", ms_since(t0), 100.0 * f);
-                    next_decile = static_cast<int>(f * 10.0) + 1;
-                }
-                std::fflush(stderr);
-            };
-        stages.mark("frame_setup");
-        const RenderResult result = render(scene, camera, options);
-        add_frame_stages(result.stats, stages);
-        stages.mark("frame_setup");  // the rest of the call of render()
-        if (live) std::fputc('\n', stderr);
-        say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms",
-            result.stats.pixels_hit, result.stats.mean_iterations, result.stats.total_ms);
-
-        write_image(result.image, a->output);
-        if (!a->aov.empty()) write_image(result.image, a->aov);
-        stages.mark("encode");
-        say("wrote %s%s%s", a->output.c_str(), a->aov.empty() ? "" : " and ", a->aov.c_str());
-
-        if (!a->stats.empty()) {
-            nlohmann::json j = render_stats_json(result.stats, nlohmann::json::object());
-            j["camera"] = camera_json(camera);
-            j["map_precision"] = a->map_precision;
-            j["warnings"] = scene.warnings;
-            stages.mark("statistics");
-            j["timings_ms"] = server::stage_timings_json(stages, kCliRenderStages);
-            if (a->stats == "-") {
-                std::cout << j.dump(2) << "\n";
-            } else {
-                std::ofstream out(a->stats);
-                out << j.dump(2) << "\n";
-                if (!out) throw Error(ErrorCode::io, "cannot write " + a->stats);
-            }
-        }
-    });
+    add_output_options(cmd, *a);
+    add_camera_options(cmd, *a);
+    add_method_options(cmd, *a);
+    add_look_options(cmd, *a);
+    cmd->callback([a] { run_render(*a); });
 }
 
 }  // namespace nurbsrt::cli
