@@ -48,21 +48,37 @@ bool inside_even_odd_bruteforce(const std::vector<TrimLoop>& loops, Vec2 p) {
 }
 
 TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_side) {
-    double lo_x = HUGE_VAL, lo_y = HUGE_VAL, hi_x = -HUGE_VAL, hi_y = -HUGE_VAL;
+    const Bounds box = collect_edges(loops);
+    if (edges_.empty()) return;
+    size_grid(box, max_cells_per_side);
+    bin_edges();
+    classify_cell_centres();
+    settle_reference_points(loops);
+}
+
+TrimTester::Bounds TrimTester::collect_edges(const std::vector<TrimLoop>& loops) {
+    Bounds b;
+    size_t points = 0;
+    for (const TrimLoop& loop : loops) points += loop.points.size();
+    edges_.reserve(points);  // at most one edge a point (loops are sampled finely: thousands)
     for (const TrimLoop& loop : loops) {
         const size_t n = loop.points.size();
         if (n < 2) continue;
         for (size_t k = 0, l = n - 1; k < n; l = k++) {
-            const Vec2 a = loop.points[l], b = loop.points[k];
-            if (a.x == b.x && a.y == b.y) continue;
-            edges_.push_back({a.x, a.y, b.x, b.y});
-            lo_x = std::min({lo_x, a.x, b.x});
-            hi_x = std::max({hi_x, a.x, b.x});
-            lo_y = std::min({lo_y, a.y, b.y});
-            hi_y = std::max({hi_y, a.y, b.y});
+            const Vec2 p = loop.points[l], q = loop.points[k];
+            if (p.x == q.x && p.y == q.y) continue;
+            edges_.push_back({p.x, p.y, q.x, q.y});
+            b.lo_x = std::min({b.lo_x, p.x, q.x});
+            b.hi_x = std::max({b.hi_x, p.x, q.x});
+            b.lo_y = std::min({b.lo_y, p.y, q.y});
+            b.hi_y = std::max({b.hi_y, p.y, q.y});
         }
     }
-    if (edges_.empty()) return;
+    return b;
+}
+
+void TrimTester::size_grid(const Bounds& b, int max_cells_per_side) {
+    const double lo_x = b.lo_x, lo_y = b.lo_y, hi_x = b.hi_x, hi_y = b.hi_y;
     // About 2 cells per edge, as square as the box allows. The box is grown by an
     // odd fraction so that cell centres rarely coincide with exact CAD coordinates.
     const double w0 = std::max(hi_x - lo_x, 1e-12), h0 = std::max(hi_y - lo_y, 1e-12);
@@ -76,22 +92,29 @@ TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_sid
     nv_ = std::clamp(static_cast<int>(std::ceil(cells / nu_)), 1, max_cells_per_side);
     du_ = w / nu_;
     dv_ = h / nv_;
+}
 
-    // Bin edges into the cells they overlap (two passes: count, then fill).
-    const size_t ncell = static_cast<size_t>(nu_) * nv_;
+// Each edge into the cells it overlaps (two passes: count, then fill).
+void TrimTester::bin_edges() {
+    // The grid in locals: the stores into the uint32_t / uint8_t arrays below
+    // may alias the members as far as the compiler knows, which made it reload
+    // them in the inner loops (+6 % instructions in prepare()).
+    const double u0 = u0_, v0 = v0_, du = du_, dv = dv_;
+    const int nu = nu_, nv = nv_;
+    const size_t ncell = static_cast<size_t>(nu) * nv;
     cell_start_.assign(ncell + 1, 0);
     auto for_cells = [&](const Edge& e, auto&& fn) {
-        const int i0 = std::clamp(static_cast<int>((std::min(e.ax, e.bx) - u0_) / du_), 0, nu_ - 1);
-        const int i1 = std::clamp(static_cast<int>((std::max(e.ax, e.bx) - u0_) / du_), 0, nu_ - 1);
-        const int j0 = std::clamp(static_cast<int>((std::min(e.ay, e.by) - v0_) / dv_), 0, nv_ - 1);
-        const int j1 = std::clamp(static_cast<int>((std::max(e.ay, e.by) - v0_) / dv_), 0, nv_ - 1);
+        const int i0 = std::clamp(static_cast<int>((std::min(e.ax, e.bx) - u0) / du), 0, nu - 1);
+        const int i1 = std::clamp(static_cast<int>((std::max(e.ax, e.bx) - u0) / du), 0, nu - 1);
+        const int j0 = std::clamp(static_cast<int>((std::min(e.ay, e.by) - v0) / dv), 0, nv - 1);
+        const int j1 = std::clamp(static_cast<int>((std::max(e.ay, e.by) - v0) / dv), 0, nv - 1);
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) {
-                const double x0 = u0_ + i * du_, y0 = v0_ + j * dv_;
+                const double x0 = u0 + i * du, y0 = v0 + j * dv;
                 // Slightly enlarged cell: floating-point cell assignment of the query never misses an edge.
-                const double ex = 1e-9 * du_, ey = 1e-9 * dv_;
-                if (segment_overlaps_box(e.ax, e.ay, e.bx, e.by, x0 - ex, y0 - ey, x0 + du_ + ex, y0 + dv_ + ey))
-                    fn(static_cast<size_t>(j) * nu_ + i);
+                const double ex = 1e-9 * du, ey = 1e-9 * dv;
+                if (segment_overlaps_box(e.ax, e.ay, e.bx, e.by, x0 - ex, y0 - ey, x0 + du + ex, y0 + dv + ey))
+                    fn(static_cast<size_t>(j) * nu + i);
             }
     };
     for (const Edge& e : edges_) for_cells(e, [&](size_t c) { ++cell_start_[c + 1]; });
@@ -99,34 +122,39 @@ TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_sid
     cell_edges_.resize(cell_start_[ncell]);
     std::vector<uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
     for (uint32_t k = 0; k < edges_.size(); ++k) for_cells(edges_[k], [&](size_t c) { cell_edges_[fill[c]++] = k; });
+}
 
-    // Inside state of the cell centres: one scanline per grid row (even-odd with
-    // the same half-open rule as the brute-force test).
+// Inside state of the cell centres: one scanline per grid row (even-odd with
+// the same half-open rule as the brute-force test).
+void TrimTester::classify_cell_centres() {
+    const double u0 = u0_, v0 = v0_, du = du_, dv = dv_;  // locals, as in bin_edges
+    const int nu = nu_, nv = nv_;
+    const size_t ncell = static_cast<size_t>(nu) * nv;
     centre_inside_.assign(ncell, 0);
     ref_.resize(ncell);
-    for (int j = 0; j < nv_; ++j)
-        for (int i = 0; i < nu_; ++i) ref_[static_cast<size_t>(j) * nu_ + i] = {u0_ + (i + 0.5) * du_, v0_ + (j + 0.5) * dv_};
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) ref_[static_cast<size_t>(j) * nu + i] = {u0 + (i + 0.5) * du, v0 + (j + 0.5) * dv};
     // The crossings of each row's centre line, bucketed by row (two passes:
     // count, then fill): an edge crosses only the rows between its end points,
     // and testing every edge on every row was 40 % of prepare() (the cylinder
     // block's 822 faces, loops sampled finely). rows_of gives a range at least
-    // one row wider each way (by truncation: the edges lie above v0_, and
+    // one row wider each way (by truncation: the edges lie above v0, and
     // std::floor is a library call on the baseline target); the test itself
     // decides, as it did per row.
-    auto row_y = [&](int j) { return v0_ + (j + 0.5) * dv_; };
+    auto row_y = [&](int j) { return v0 + (j + 0.5) * dv; };
     auto crosses = [](const Edge& e, double y) { return (e.ay > y) != (e.by > y); };
     auto rows_of = [&](const Edge& e, int& j0, int& j1) {
-        j0 = std::clamp(static_cast<int>((std::min(e.ay, e.by) - v0_) / dv_) - 1, 0, nv_ - 1);
-        j1 = std::clamp(static_cast<int>((std::max(e.ay, e.by) - v0_) / dv_) + 1, 0, nv_ - 1);
+        j0 = std::clamp(static_cast<int>((std::min(e.ay, e.by) - v0) / dv) - 1, 0, nv - 1);
+        j1 = std::clamp(static_cast<int>((std::max(e.ay, e.by) - v0) / dv) + 1, 0, nv - 1);
     };
-    std::vector<uint32_t> row_start(static_cast<size_t>(nv_) + 1, 0);
+    std::vector<uint32_t> row_start(static_cast<size_t>(nv) + 1, 0);
     for (const Edge& e : edges_) {
         int j0, j1;
         rows_of(e, j0, j1);
         for (int j = j0; j <= j1; ++j) row_start[j + 1] += crosses(e, row_y(j));
     }
-    for (int j = 0; j < nv_; ++j) row_start[j + 1] += row_start[j];
-    std::vector<double> xs(row_start[nv_]);
+    for (int j = 0; j < nv; ++j) row_start[j + 1] += row_start[j];
+    std::vector<double> xs(row_start[nv]);
     std::vector<uint32_t> next(row_start.begin(), row_start.end() - 1);
     for (const Edge& e : edges_) {
         int j0, j1;
@@ -136,24 +164,29 @@ TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_sid
             if (crosses(e, y)) xs[next[j]++] = e.ax + (y - e.ay) * (e.bx - e.ax) / (e.by - e.ay);
         }
     }
-    for (int j = 0; j < nv_; ++j) {
+    for (int j = 0; j < nv; ++j) {
         double* const row = xs.data() + row_start[j];
         const size_t n = row_start[j + 1] - row_start[j];
         std::sort(row, row + n);
         size_t k = 0;
-        for (int i = 0; i < nu_; ++i) {
-            const double x = u0_ + (i + 0.5) * du_;
+        for (int i = 0; i < nu; ++i) {
+            const double x = u0 + (i + 0.5) * du;
             while (k < n && row[k] <= x) ++k;
             // crossings strictly right of x: n - k
-            centre_inside_[static_cast<size_t>(j) * nu_ + i] = (n - k) & 1;
+            centre_inside_[static_cast<size_t>(j) * nu + i] = (n - k) & 1;
         }
     }
-    // A reference point (nearly) on an edge of its cell would make the query's
-    // crossing count ambiguous: move it to another point of the cell, away from
-    // every edge, and classify it by brute force (rare: exact CAD coordinates).
-    // (Squared distances: std::hypot, a libm call per edge of every cell, was a
-    // sixth of prepare() on the cylinder block.)
-    const double tol = 1e-6 * std::min(du_, dv_), tol2 = tol * tol;
+}
+
+// A reference point (nearly) on an edge of its cell would make the query's
+// crossing count ambiguous: move it to another point of the cell, away from
+// every edge, and classify it by brute force (rare: exact CAD coordinates).
+// (Squared distances: std::hypot, a libm call per edge of every cell, was a
+// sixth of prepare() on the cylinder block.)
+void TrimTester::settle_reference_points(const std::vector<TrimLoop>& loops) {
+    const double u0 = u0_, v0 = v0_, du = du_, dv = dv_;  // locals, as in bin_edges
+    const int nu = nu_, nv = nv_;
+    const double tol = 1e-6 * std::min(du, dv), tol2 = tol * tol;
     auto near_edge = [&](size_t c, Vec2 q) {
         for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
             const Edge& e = edges_[cell_edges_[k]];
@@ -163,12 +196,12 @@ TrimTester::TrimTester(const std::vector<TrimLoop>& loops, int max_cells_per_sid
     };
     static const double kAlt[][2] = {{0.3137, 0.6911}, {0.7219, 0.2683}, {0.1871, 0.1429}, {0.8377, 0.8621},
                                      {0.4423, 0.3089}, {0.6047, 0.5813}};
-    for (int j = 0; j < nv_; ++j)
-        for (int i = 0; i < nu_; ++i) {
-            const size_t c = static_cast<size_t>(j) * nu_ + i;
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) {
+            const size_t c = static_cast<size_t>(j) * nu + i;
             if (!near_edge(c, ref_[c])) continue;
             for (const auto& a : kAlt) {
-                const Vec2 q{u0_ + (i + a[0]) * du_, v0_ + (j + a[1]) * dv_};
+                const Vec2 q{u0 + (i + a[0]) * du, v0 + (j + a[1]) * dv};
                 if (near_edge(c, q)) continue;
                 ref_[c] = q;
                 centre_inside_[c] = inside_even_odd_bruteforce(loops, q);

@@ -14,6 +14,7 @@
 // Points outside the grid are outside every loop.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -45,6 +46,18 @@ private:
     struct Edge {
         double ax, ay, bx, by;
     };
+    // The constructor's stages, in order: the loops' edges (zero-length ones
+    // dropped); a grid of about 2 cells per edge over their box; each edge into
+    // the cells it overlaps; the cell centres' inside state by scanlines; and
+    // the reference points that lie (nearly) on an edge moved off it.
+    struct Bounds {
+        double lo_x = HUGE_VAL, lo_y = HUGE_VAL, hi_x = -HUGE_VAL, hi_y = -HUGE_VAL;
+    };
+    Bounds collect_edges(const std::vector<TrimLoop>& loops);  // returns the edges' box
+    void size_grid(const Bounds& box, int max_cells_per_side);
+    void bin_edges();
+    void classify_cell_centres();
+    void settle_reference_points(const std::vector<TrimLoop>& loops);
     std::vector<Edge> edges_;
     double u0_ = 0, v0_ = 0, du_ = 1, dv_ = 1;  // grid origin and cell size
     int nu_ = 0, nv_ = 0;
