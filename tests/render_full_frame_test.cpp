@@ -358,7 +358,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
                       << " speckles (" << known->cause << ")\n";
         if (rep.unchecked)
             std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within "
-                      << T::kCheckBudgetSeconds << " s\n";
+                      << budget << " s\n";
         EXPECT_LE(rep.holes, known ? known->holes : 0)
             << label << ": background pixels where the exact ray hits a face";
         EXPECT_LE(rep.speckles, known ? known->speckles : 0)
