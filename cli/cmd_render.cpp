@@ -168,7 +168,7 @@ CLI::Validator shared_check(Parse parse, const char* description) {
         description);
 }
 
-void add_method_options(CLI::App* cmd, Args& a) {
+void add_solver_options(CLI::App* cmd, Args& a) {
     cmd->add_option("--method", a.method, "Newton method: proposed (paper eq. 9-11) or martin (Martin et al. 2000)")
         ->check(CLI::IsMember({"proposed", "martin"}))->capture_default_str();
     cmd->add_option("--map-precision", a.map_precision,
@@ -180,22 +180,22 @@ void add_method_options(CLI::App* cmd, Args& a) {
                     "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
                     "the bounding-box diagonal (same for both methods)")
         ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
-    cmd->add_option("--background", a.background,
-                    "background: r,g,b (opaque) or r,g,b,a in [0,1], or transparent (default: transparent; "
-                    "opaque white for JPEG)")
-        ->check(CLI::Validator(
-            [](std::string& s) -> std::string {
-                try {
-                    server::parse_background(s, "the value");
-                    return {};
-                } catch (const Error& e) {
-                    return e.what();
-                }
-            },
-            "R,G,B[,A]|transparent"));
+}
+
+void add_import_options(CLI::App* cmd, Args& a) {
+    cmd->add_option("--mesh-deflection", a.load.import.mesh_relative_deflection,
+                    "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
+        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
+    cmd->add_flag("--isolated", a.load.isolated, "import in a child process with a time limit");
+    cmd->add_flag("-q,--quiet", a.quiet, "no progress messages on stderr");
 }
 
 void add_look_options(CLI::App* cmd, Args& a) {
+    cmd->add_option("--background", a.background,
+                    "background: r,g,b (opaque) or r,g,b,a in [0,1], or transparent (default: transparent; "
+                    "opaque white for JPEG)")
+        ->check(shared_check([](const std::string& s) { server::parse_background(s, "the value"); },
+                             "R,G,B[,A]|transparent"));
     cmd->add_option("--antialias", a.antialias,
                     "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
                     "can cross them; 0: off "
@@ -209,12 +209,8 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->capture_default_str();
     cmd->add_flag("--shadows", a.shadows,
                   "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
-    cmd->add_option("--mesh-deflection", a.load.import.mesh_relative_deflection,
-                    "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
-        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
-    cmd->add_flag("--isolated", a.load.isolated, "import in a child process with a time limit");
-    cmd->add_flag("-q,--quiet", a.quiet, "no progress messages on stderr");
 }
+
 // The renderer's options from the command line; the option strings were
 // checked by CLI11 (IsMember) and are parsed here, once.
 RenderOptions render_options(const Args& a, const Scene& scene) {
@@ -349,8 +345,9 @@ void add_render_command(CLI::App& app) {
         "  nurbsrt render part.step -o p.png --eye=-100,50,80 --target 0,0,0 --up 0,0,1 --fov 30");
     add_output_options(cmd, *a);
     add_camera_options(cmd, *a);
-    add_method_options(cmd, *a);
+    add_solver_options(cmd, *a);
     add_look_options(cmd, *a);
+    add_import_options(cmd, *a);
     cmd->callback([a] { run_render(*a); });
 }
 
