@@ -219,10 +219,9 @@ RenderOptions render_options(const Args& a, const Scene& scene) {
     options.map_precision = *parse_map_precision(a.map_precision);
     options.threads = a.threads;
     options.newton.eps = a.tolerance * std::max(scene.bbox.diagonal(), 1e-300);
-    const server::Background bg = a.background.empty() ? server::default_background(output_format(a.output))
-                                                       : server::parse_background(a.background, "--background");
-    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
-    options.background_alpha = static_cast<float>(bg.alpha);
+    server::apply_background(a.background.empty() ? server::default_background(output_format(a.output))
+                                                  : server::parse_background(a.background, "--background"),
+                             options);
     server::ImageLook look;
     look.antialias = a.antialias;
     look.edges = a.edges;

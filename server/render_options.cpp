@@ -340,6 +340,11 @@ Color parse_rgb(const std::string& s, const std::string& what) {
     return {static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])};
 }
 
+void apply_background(const Background& bg, RenderOptions& options) {
+    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
+    options.background_alpha = static_cast<float>(bg.alpha);
+}
+
 void apply_look(const ImageLook& look, ImageFormat format, RenderOptions& options) {
     options.antialias = look.antialias.value_or(default_antialias(format));
     options.edges = look.edges;

@@ -42,6 +42,8 @@ Background parse_background(const std::string& text, const std::string& what);
 // A format's default: transparent where it has alpha (PNG, TIFF, EXR), opaque
 // white for JPEG, which cannot carry "no background".
 Background default_background(ImageFormat format);
+// The renderer's background colour and alpha (floats) from `bg`.
+void apply_background(const Background& bg, RenderOptions& options);
 
 // Anti-aliasing and feature lines, the same options on the API and the CLI.
 // Extra rays per edge pixel: 4 make 5 samples, an edge pixel's coverage within

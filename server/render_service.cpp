@@ -201,9 +201,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     options.map_precision = r.map_precision;
     options.threads = ctx.config.render_threads;
     options.progress = control.progress;
-    const Background bg = r.background.value_or(default_background(r.format.kind));
-    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
-    options.background_alpha = static_cast<float>(bg.alpha);
+    apply_background(r.background.value_or(default_background(r.format.kind)), options);
     apply_look(r.look, r.format.kind, options);
     const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows});
     check_frame_cost(ctx.config, cost);
