@@ -46,13 +46,13 @@ private:
     struct Edge {
         double ax, ay, bx, by;
     };
+    struct Bounds {
+        double lo_x = HUGE_VAL, lo_y = HUGE_VAL, hi_x = -HUGE_VAL, hi_y = -HUGE_VAL;
+    };
     // The constructor's stages, in order: the loops' edges (zero-length ones
     // dropped); a grid of about 2 cells per edge over their box; each edge into
     // the cells it overlaps; the cell centres' inside state by scanlines; and
     // the reference points that lie (nearly) on an edge moved off it.
-    struct Bounds {
-        double lo_x = HUGE_VAL, lo_y = HUGE_VAL, hi_x = -HUGE_VAL, hi_y = -HUGE_VAL;
-    };
     Bounds collect_edges(const std::vector<TrimLoop>& loops);  // returns the edges' box
     void size_grid(const Bounds& box, int max_cells_per_side);
     void bin_edges();
