@@ -6,7 +6,7 @@
 #include <set>
 
 #include "bench/bench_context.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 #ifndef NURBSRT_SOURCE_DIR
 #define NURBSRT_SOURCE_DIR "."

@@ -2,7 +2,7 @@
 #include "bench/embree_peer.h"
 
 #include "bench/bench_context.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 #ifdef NURBSRT_WITH_EMBREE
 #include <embree3/rtcore.h>

@@ -9,7 +9,7 @@
 #include <limits>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/gl_context.h"
 
 namespace nurbsrt {

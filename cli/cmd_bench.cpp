@@ -9,7 +9,7 @@
 
 #include "bench/bench.h"
 #include "cli/commands.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::cli {
 namespace {

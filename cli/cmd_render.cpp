@@ -16,7 +16,7 @@
 #include "cli/commands.h"
 #include "cli/scene_file.h"
 #include "cli/validators.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/image_module.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"

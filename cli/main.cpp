@@ -5,7 +5,7 @@
 #include <exception>
 
 #include "cli/commands.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/heap_tuning.h"
 
 int main(int argc, char** argv) {

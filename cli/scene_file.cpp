@@ -7,7 +7,7 @@
 
 #include "cli/scene_placements.h"
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/scene_json.h"
 #include "renderer/scene_ops.h"
 

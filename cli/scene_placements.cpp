@@ -4,7 +4,8 @@
 
 #include <filesystem>
 
-#include "renderer/error.h"
+#include "core/error.h"
+#include "core/json_limits.h"
 
 namespace nurbsrt::cli {
 namespace {
@@ -23,12 +24,10 @@ Vec3 vec3_of(const json& j, const char* key, Vec3 fallback) {
 }  // namespace
 
 std::vector<Placement> parse_scene_file(std::istream& in, const std::string& path) {
-    json doc;
-    try {
-        doc = json::parse(in);
-    } catch (const json::exception& e) {
-        throw Error(ErrorCode::invalid_argument, "scene file " + path + ": " + e.what());
-    }
+    const std::string text(std::istreambuf_iterator<char>(in), {});
+    const BoundedJson parsed = parse_json_bounded(text, kDocumentJsonLimits);
+    if (!parsed.ok()) throw Error(ErrorCode::invalid_argument, "scene file " + path + ": " + parsed.detail);
+    const json& doc = parsed.value;
     if (!doc.is_object() || !doc.contains("models") || !doc["models"].is_array() || doc["models"].empty())
         throw Error(ErrorCode::invalid_argument, "scene file " + path + ": needs a non-empty \"models\" array");
     const fs::path base = fs::path(path).parent_path();

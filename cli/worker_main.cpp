@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 int main(int argc, char** argv) {
     // Exit status 2 for a malformed command line, as `nurbsrt` uses; the parent

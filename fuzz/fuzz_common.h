@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::fuzz {
 

@@ -29,6 +29,7 @@
 #include "fuzz/fuzz_common.h"
 #include "importer/importer.h"
 #include "server/config.h"
+#include "server/http_framing.h"
 #include "server/job_spec.h"
 #include "server/problem.h"
 #include "server/redact.h"
@@ -138,6 +139,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const std::string head = request.substr(0, end + 2);
         if (!has_header(head, "content-length") && !has_header(head, "transfer-encoding"))
             request.insert(end + 2, "Content-Length: " + std::to_string(request.size() - end - 4) + "\r\n");
+        // The service checks the head's framing before cpp-httplib reads on
+        // (server/http_framing.h); a refused head gets a problem answer only.
+        const server::FramingVerdict v = server::check_request_head(std::string_view(request).substr(0, request.find("\r\n\r\n") + 4));
+        if (!v.ok()) {
+            if (v.status != 400 && v.status != 501) __builtin_trap();
+            if (!nlohmann::json::accept(server::make_problem(v.code, v.detail, "0123456789abcdef").body)) __builtin_trap();
+            return 0;
+        }
     }
     harness.run(request);
     return 0;

@@ -6,7 +6,7 @@
 
 #include "importer/convert_writers.h"
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/scene_json.h"
 
 namespace nurbsrt {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <iterator>
 #include <set>
+#include <vector>
 
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Writer.hxx>
@@ -26,7 +27,7 @@
 
 #include "importer/convert_writers.h"
 #include "importer/internal.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::occt {
 namespace {
@@ -67,24 +68,31 @@ void add_colour(XdeContent& c, const Color& colour) {
     c.colours.emplace_back(colour, 1);
 }
 
-// Walks a shape definition once (shared definitions are counted once).
-void walk_definition(const TDF_Label& def, TDF_LabelMap& seen, XdeContent& c) {
-    if (!seen.Add(def)) return;
-    if (std::string n = label_name(def); !n.empty()) c.names.insert(std::move(n));
-    if (XCAFDoc_ShapeTool::IsAssembly(def)) {
-        ++c.assemblies;
-        TDF_LabelSequence comps;
-        XCAFDoc_ShapeTool::GetComponents(def, comps, Standard_False);
-        for (const TDF_Label& comp : comps) {
-            ++c.components;
-            if (std::string n = label_name(comp); !n.empty()) c.names.insert(std::move(n));
-            TDF_Label ref;
-            if (XCAFDoc_ShapeTool::GetReferredShape(comp, ref)) walk_definition(ref, seen, c);
+// Walks the definitions under `root` once each (shared definitions are counted
+// once), with an explicit stack: the assembly's depth is the input file's, and a
+// file can nest assemblies far deeper than a thread's stack has frames for.
+void walk_definitions(const TDF_Label& root, TDF_LabelMap& seen, XdeContent& c) {
+    std::vector<TDF_Label> pending{root};
+    while (!pending.empty()) {
+        const TDF_Label def = pending.back();
+        pending.pop_back();
+        if (!seen.Add(def)) continue;
+        if (std::string n = label_name(def); !n.empty()) c.names.insert(std::move(n));
+        if (XCAFDoc_ShapeTool::IsAssembly(def)) {
+            ++c.assemblies;
+            TDF_LabelSequence comps;
+            XCAFDoc_ShapeTool::GetComponents(def, comps, Standard_False);
+            for (const TDF_Label& comp : comps) {
+                ++c.components;
+                if (std::string n = label_name(comp); !n.empty()) c.names.insert(std::move(n));
+                TDF_Label ref;
+                if (XCAFDoc_ShapeTool::GetReferredShape(comp, ref)) pending.push_back(ref);
+            }
+            continue;
         }
-        return;
+        for (TDF_ChildIterator ci(def); ci.More(); ci.Next())  // named faces/solids of a part
+            if (std::string n = label_name(ci.Value()); !n.empty()) c.names.insert(std::move(n));
     }
-    for (TDF_ChildIterator ci(def); ci.More(); ci.Next())  // named faces/solids of a part
-        if (std::string n = label_name(ci.Value()); !n.empty()) c.names.insert(std::move(n));
 }
 
 XdeContent content_of(const OcctModel& m) {
@@ -97,7 +105,7 @@ XdeContent content_of(const OcctModel& m) {
     TDF_LabelSequence roots;
     shapes->GetFreeShapes(roots);
     TDF_LabelMap seen;
-    for (const TDF_Label& root : roots) walk_definition(root, seen, c);
+    for (const TDF_Label& root : roots) walk_definitions(root, seen, c);
     for (XCAFPrs_DocumentExplorer ex(m.document, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More();
          ex.Next())
         ++c.instances;

@@ -15,7 +15,7 @@
 
 #include "importer/convert_writers.h"
 #include "importer/internal.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::occt {
 

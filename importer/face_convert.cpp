@@ -24,7 +24,7 @@
 #include <TopoDS.hxx>
 
 #include "importer/internal.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::occt {
 namespace {

@@ -7,7 +7,7 @@
 #include <string_view>
 
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

@@ -10,7 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "importer/internal.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

@@ -20,7 +20,7 @@
 #include <sstream>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/executable_path.h"
 #include "renderer/scene_io.h"
 

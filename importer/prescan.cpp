@@ -6,7 +6,7 @@
 #include <istream>
 #include <vector>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

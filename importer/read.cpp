@@ -35,7 +35,7 @@
 #include <XCAFPrs_Style.hxx>
 
 #include "importer/internal.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::occt {
 namespace {

@@ -18,7 +18,7 @@
 #include <cmath>
 
 #include "importer/occt_shape.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

@@ -12,7 +12,7 @@
 #include <chrono>
 
 #include "importer/occt_shape.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 

@@ -3,7 +3,7 @@
 
 #include <unistd.h>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 

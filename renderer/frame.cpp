@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 

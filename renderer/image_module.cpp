@@ -8,7 +8,7 @@
 #include <string>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/executable_path.h"
 #include "renderer/render.h"
 

@@ -9,7 +9,7 @@
 #include <mutex>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/gl_context.h"
 #include "renderer/prepared_scene.h"
 

@@ -11,7 +11,7 @@
 #include <cmath>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 

@@ -10,7 +10,7 @@
 #include <optional>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/frame.h"
 #include "renderer/mesh_screen_points.h"
 #include "renderer/nurbs.h"

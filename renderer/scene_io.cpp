@@ -25,7 +25,7 @@
 #include <cstring>
 #include <initializer_list>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 

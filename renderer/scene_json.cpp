@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

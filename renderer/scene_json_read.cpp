@@ -5,7 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "renderer/error.h"
+#include "core/error.h"
+#include "core/json_limits.h"
 #include "renderer/nurbs.h"
 #include "renderer/scene_io.h"
 #include "renderer/scene_json.h"
@@ -143,13 +144,16 @@ void grid_mesh(Face& f) {
 }  // namespace
 
 bool is_scene_json(const std::string& text) {
-    const json j = json::parse(text, nullptr, false);
-    return !j.is_discarded() && j.is_object() && j.contains("format") && j.at("format") == kSceneJsonFormat;
+    const BoundedJson b = parse_json_bounded(text, kDocumentJsonLimits);
+    const json& j = b.value;
+    return b.ok() && j.is_object() && j.contains("format") && j.at("format") == kSceneJsonFormat;
 }
 
 Scene scene_from_json(const std::string& text) {
-    const json j = json::parse(text, nullptr, false);
-    if (j.is_discarded() || !j.is_object()) bad("document", "not a JSON object");
+    const BoundedJson b = parse_json_bounded(text, kDocumentJsonLimits);
+    if (!b.ok()) bad("document", b.detail);
+    const json& j = b.value;
+    if (!j.is_object()) bad("document", "not a JSON object");
     if (!j.contains("format") || j.at("format") != kSceneJsonFormat) bad("format", "not a nurbsrt NURBS scene");
     if (!j.contains("version") || j.at("version") != kSceneJsonVersion)
         bad("version", "only version " + std::to_string(kSceneJsonVersion) + " is known");

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 namespace {

@@ -3,7 +3,7 @@
 #include <cctype>
 #include <fstream>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 namespace {

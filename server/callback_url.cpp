@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cctype>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 namespace {

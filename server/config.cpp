@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/cors.h"
 
 namespace nurbsrt::server {

@@ -3,7 +3,7 @@
 #include <cctype>
 #include <regex>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 namespace {

@@ -6,7 +6,7 @@
 #include <cerrno>
 #include <filesystem>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 

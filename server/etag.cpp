@@ -5,7 +5,7 @@
 #include <memory>
 #include <vector>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/file_store.h"
 #include "server/sha256.h"
 

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/durable_file.h"
 #include "server/request_log.h"
 #include "server/service_error.h"

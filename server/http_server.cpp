@@ -122,6 +122,7 @@ struct Connection {
     std::array<char, kReadBufferBytes> buffer{};
     size_t pos = 0, len = 0;
     ReadFailure failure = ReadFailure::none;
+    FramingVerdict framing;  // of the current request's head, once read
     bool close_requested = false;
     Clock::time_point last_read{};  // when the parser last got bytes: a handler's request is in by then
     bool buffered() const { return pos < len; }
@@ -186,13 +187,19 @@ void send_canned_problem(socket_t sock, int status, const char* reason, ProblemC
 class RequestStream final : public httplib::Stream {
 public:
     RequestStream(Connection& c, const ConnectionLimits& limits)
-        : c_(c), limits_(limits), start_(Clock::now()) {}
+        : c_(c), limits_(limits), start_(Clock::now()) {
+        c_.framing = FramingVerdict{};
+    }
 
     bool is_readable() const override { return c_.buffered() || wait_for(c_.sock, POLLIN, kPollStepMs); }
     bool is_writable() const override { return wait_for(c_.sock, POLLOUT, kWriteTimeoutMs); }
 
     ssize_t read(char* ptr, size_t size) override {
         if (c_.failure != ReadFailure::none) return -1;
+        // A request without Content-Length or Transfer-Encoding has no body
+        // (RFC 9112 §6.3); cpp-httplib would read a PUT, PATCH or DELETE's
+        // until the client closes. The buffered bytes are the next request's.
+        if (!in_headers_ && c_.framing.body == BodyFraming::none) return 0;
         if (!c_.buffered()) {
             if (!wait_readable()) return -1;
             const ssize_t n = recv_retrying(c_.buffer.data(), c_.buffer.size());
@@ -258,15 +265,20 @@ private:
     }
 
     // Counts bytes handed to the parser; finds the end of the headers (CRLF CRLF,
-    // the only end cpp-httplib accepts) to switch to the body's deadline and cap.
+    // the only end cpp-httplib accepts) to switch to the body's deadline and cap,
+    // and checks the head's framing there: cpp-httplib reads it a byte at a
+    // time, so a refused head never reaches its parser's end.
     void account(const char* p, size_t n) {
         size_t i = 0;
         for (; in_headers_ && i < n; ++i) {
             tail_ = (tail_ << 8) | static_cast<unsigned char>(p[i]);
             ++header_bytes_;
+            if (header_bytes_ <= kMaxRequestHeaderBytes) head_ += p[i];
             if (tail_ == 0x0D0A0D0Au) {
                 in_headers_ = false;
                 body_start_ = Clock::now();
+                c_.framing = check_request_head(head_);
+                if (!c_.framing.ok()) c_.failure = ReadFailure::bad_framing;
             }
         }
         body_bytes_ += n - i;
@@ -280,6 +292,7 @@ private:
     const Clock::time_point start_;
     Clock::time_point body_start_{};
     bool in_headers_ = true;
+    std::string head_;  // the request line and headers as received
     uint32_t tail_ = 0;
     size_t header_bytes_ = 0, written_ = 0;
     double body_bytes_ = 0;
@@ -316,6 +329,17 @@ GuardedServer::GuardedServer(const ConnectionLimits& limits) : limits_(limits), 
     const size_t threads = static_cast<size_t>(limits_.max_connections + kSpareThreads);
     new_task_queue = [threads] { return new ElasticPool(threads); };
     set_payload_max_length(limits_.max_body_bytes);
+    // cpp-httplib binds with SO_REUSEPORT, so a second service on the same port
+    // started silently and took half the connections. SO_REUSEADDR alone lets a
+    // restart bind beside connections in TIME_WAIT, never beside a listener.
+    set_socket_options([](socket_t sock) {
+        const int yes = 1;
+        ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    });
+    // cpp-httplib announces these in each answer's Keep-Alive header; the
+    // connection loop below is what enforces them.
+    set_keep_alive_max_count(static_cast<size_t>(limits_.max_requests_per_connection));
+    set_keep_alive_timeout(static_cast<time_t>(std::ceil(limits_.keep_alive_timeout_s)));
 }
 
 GuardedServer::~GuardedServer() = default;
@@ -327,6 +351,8 @@ void GuardedServer::raise_listen_backlog() {
 }
 
 ReadFailure GuardedServer::current_read_failure() { return t_connection ? t_connection->failure : ReadFailure::none; }
+
+FramingVerdict GuardedServer::current_framing() { return t_connection ? t_connection->framing : FramingVerdict{}; }
 
 void GuardedServer::close_after_response() {
     if (t_connection) t_connection->close_requested = true;

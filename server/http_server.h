@@ -30,6 +30,8 @@
 #include <memory>
 #include <string>
 
+#include "server/http_framing.h"
+
 namespace nurbsrt::server {
 
 // Request line + headers: cpp-httplib caps one line at 8 KiB but not their
@@ -48,7 +50,8 @@ struct ConnectionLimits {
 };
 
 // Why reading the current request stopped early (for the error handler's answer).
-enum class ReadFailure { none, header_timeout, body_timeout, header_too_large, body_too_large };
+// bad_framing: its head breaks RFC 9112's framing rules (server/http_framing.h).
+enum class ReadFailure { none, header_timeout, body_timeout, header_too_large, body_too_large, bad_framing };
 
 class GuardedServer : public httplib::Server {
 public:
@@ -62,6 +65,9 @@ public:
     // it is fine), and a request to close the connection after this answer
     // (an early answer before the body was read).
     static ReadFailure current_read_failure();
+    // On a handler's thread: the framing check of the current request's head
+    // (its status, code and detail when current_read_failure() is bad_framing).
+    static FramingVerdict current_framing();
     static void close_after_response();
     // On a handler's thread: a check, cheap enough to poll, that is true once
     // the client of the current request has closed or reset its connection (so

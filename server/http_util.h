@@ -9,7 +9,7 @@
 #include <map>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/service_error.h"
 #include "server/file_store.h"
 #include "server/upload.h"

@@ -16,7 +16,7 @@
 #include <set>
 
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/context.h"
 #include "server/durable_file.h"
 #include "server/job_spec.h"

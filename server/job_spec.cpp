@@ -5,7 +5,8 @@
 #include <regex>
 
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
+#include "core/json_limits.h"
 #include "server/render_options.h"
 #include "server/callback_url.h"
 
@@ -44,8 +45,8 @@ int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::
 }  // namespace
 
 JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs, const ServerConfig& config) {
-    const json j = json::parse(job_json, nullptr, false);
-    if (j.is_discarded() || !j.is_object()) bad("the 'job' part must be a JSON object");
+    const json j = parse_json_or_throw(job_json, kRequestJsonLimits, "the 'job' part");
+    if (!j.is_object()) bad("the 'job' part must be a JSON object");
     for (const auto& [key, v] : j.items())
         if (key != "outputs" && key != "callback_url") bad("unknown job field '" + key.substr(0, 64) + "'");
     JobSpec spec;

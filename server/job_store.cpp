@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 

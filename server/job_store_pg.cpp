@@ -3,7 +3,7 @@
 // transitions are in job_store_pg_work.cpp.
 #include "server/job_store_pg.h"
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 namespace {

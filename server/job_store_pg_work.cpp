@@ -3,7 +3,7 @@
 // output is done (on whichever instance), and putting work back on a stop.
 #include "server/job_store_pg.h"
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/request_log.h"
 
 namespace nurbsrt::server {

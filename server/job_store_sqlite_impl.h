@@ -8,7 +8,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/job_store_sqlite.h"
 
 namespace nurbsrt::server {

@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <regex>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 

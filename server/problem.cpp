@@ -7,7 +7,8 @@ namespace {
 
 int library_status(ErrorCode code) {
     switch (code) {
-        case ErrorCode::invalid_argument: return 400;
+        case ErrorCode::invalid_argument:
+        case ErrorCode::invalid_json: return 400;
         case ErrorCode::canceled: return 409;                // the resource's work was canceled
         // Pixels, faces, render memory, files or outputs of a job: the request is
         // well formed but asks for more than this service is configured to do,
@@ -34,6 +35,8 @@ int service_status(ServiceCode code) {
         case ServiceCode::method_not_allowed: return 405;
         case ServiceCode::request_timeout: return 408;
         case ServiceCode::overloaded: return 503;
+        case ServiceCode::malformed_request: return 400;
+        case ServiceCode::not_implemented: return 501;
         case ServiceCode::render_timeout: return 504;
         case ServiceCode::interrupted: return 500;           // job errors only; never a request's
     }
@@ -43,6 +46,7 @@ int service_status(ServiceCode code) {
 const char* library_title(ErrorCode code) {
     switch (code) {
         case ErrorCode::invalid_argument: return "Invalid request";
+        case ErrorCode::invalid_json: return "Invalid JSON";
         case ErrorCode::canceled: return "Canceled";
         case ErrorCode::limit_exceeded: return "Limit exceeded";
         case ErrorCode::unsupported_format: return "Unsupported format";
@@ -67,6 +71,8 @@ const char* service_title(ServiceCode code) {
         case ServiceCode::overloaded: return "Service overloaded";
         case ServiceCode::render_timeout: return "Render timed out";
         case ServiceCode::interrupted: return "Interrupted by a service restart";
+        case ServiceCode::malformed_request: return "Malformed request";
+        case ServiceCode::not_implemented: return "Not implemented";
     }
     return "Internal error";
 }

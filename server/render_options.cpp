@@ -10,7 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "renderer/error.h"
+#include "core/error.h"
+#include "core/json_limits.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -179,8 +180,8 @@ std::string quoted_name(const std::string& key) {
 }
 
 json parse_object(const std::string& options_json) {
-    const json o = json::parse(options_json, nullptr, false);
-    if (o.is_discarded() || !o.is_object()) bad("options must be a JSON object");
+    const json o = parse_json_or_throw(options_json, kRequestJsonLimits, "the options");
+    if (!o.is_object()) bad("options must be a JSON object");
     return o;
 }
 

@@ -10,7 +10,7 @@
 
 #include "importer/importer.h"
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/frame_cost.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"

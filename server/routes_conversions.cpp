@@ -7,7 +7,7 @@
 
 #include "importer/importer.h"
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/base64.h"
 #include "server/context.h"
 #include "server/http_server.h"

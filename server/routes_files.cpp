@@ -12,7 +12,8 @@
 #include <tuple>
 
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
+#include "core/json_limits.h"
 #include "server/context.h"
 #include "server/etag.h"
 #include "server/file_store.h"
@@ -238,8 +239,8 @@ void handle_patch(ServerContext& ctx, const httplib::Request& req, httplib::Resp
     // application/merge-patch+json: the body is a JSON Merge Patch (RFC 7396).
     if (base != "application/json" && base != "application/merge-patch+json")
         throw Error(ErrorCode::unsupported_format, "send the change as JSON: {\"pinned\": true}");
-    const json body = json::parse(req.body, nullptr, false);
-    if (body.is_discarded() || !body.is_object() || !body.contains("pinned") || !body["pinned"].is_boolean())
+    const json body = parse_json_or_throw(req.body, kRequestJsonLimits, "the body");
+    if (!body.is_object() || !body.contains("pinned") || !body["pinned"].is_boolean())
         throw Error(ErrorCode::invalid_argument, "the body must be {\"pinned\": true} or {\"pinned\": false}");
     for (const auto& [k, v] : body.items())
         if (k != "pinned")

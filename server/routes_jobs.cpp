@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/context.h"
 #include "server/etag.h"
 #include "server/http_util.h"

@@ -8,7 +8,7 @@
 #include <chrono>
 
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/base64.h"
 #include "server/context.h"
 #include "server/etag.h"

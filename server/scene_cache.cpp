@@ -1,7 +1,7 @@
 #include "server/scene_cache.h"
 
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/sha256.h"
 
 namespace nurbsrt::server {

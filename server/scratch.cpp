@@ -12,7 +12,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 

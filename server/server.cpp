@@ -12,17 +12,19 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/image_module.h"
 #include "server/api_keys.h"
 #include "server/context.h"
 #include "server/cors.h"
+#include "server/data_dir_lock.h"
 #include "server/http_server.h"
 #include "server/http_util.h"
 #include "server/job_runner.h"
@@ -227,6 +229,13 @@ void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
             return httplib::Server::HandlerResponse::Handled;
         }
         const ReadFailure failure = GuardedServer::current_read_failure();
+        if (failure == ReadFailure::bad_framing) {
+            // Where this request ends is unknown or disputed: answer and close.
+            const FramingVerdict framing = GuardedServer::current_framing();
+            send_problem_with_status(res, framing.status, framing.code, framing.detail);
+            res.set_header("Connection", "close");
+            return httplib::Server::HandlerResponse::Handled;
+        }
         if (failure == ReadFailure::header_timeout) {
             send_problem(res, ServiceCode::request_timeout,
                          "the request headers did not arrive within " + format_seconds(config.header_timeout_s));
@@ -317,6 +326,9 @@ int run_server(const ServerConfig& given) {
     if (!config.api_keys_file.empty()) keys.add_file(config.api_keys_file);
     if (config.api_keys) keys.add_list(*config.api_keys);
 
+    // Before anything in the data directory is touched (scratch clean-up, job recovery).
+    std::optional<DataDirLock> data_dir_lock;
+    if (config.job_store.empty()) data_dir_lock.emplace(config.data_dir);
     ServerContext ctx(config);
     // Opened (and recovered) before listening: a bad job database stops the start.
     JobService jobs(ctx);
@@ -338,9 +350,12 @@ int run_server(const ServerConfig& given) {
     int port = config.port;
     if (port == 0) {
         port = svr.bind_to_any_port(config.host);
-        if (port <= 0) throw Error(ErrorCode::io, "cannot listen on " + config.host);
+        if (port <= 0) throw Error(ErrorCode::io, "cannot listen on " + config.host + ": " + std::strerror(errno));
     } else if (!svr.bind_to_port(config.host, port)) {
-        throw Error(ErrorCode::io, "cannot listen on " + config.host + ":" + std::to_string(port));
+        const int err = errno;
+        throw Error(ErrorCode::io, "cannot listen on " + config.host + ":" + std::to_string(port) + ": " +
+                                       (err == EADDRINUSE ? std::string("the port is in use by another process")
+                                                          : std::string(std::strerror(err))));
     }
     svr.raise_listen_backlog();
     if (!config.port_file.empty()) write_port_file(config.port_file, port);

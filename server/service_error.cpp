@@ -11,6 +11,8 @@ const char* service_code_name(ServiceCode code) {
         case ServiceCode::unauthorized: return "unauthorized";
         case ServiceCode::request_timeout: return "request_timeout";
         case ServiceCode::interrupted: return "interrupted";
+        case ServiceCode::malformed_request: return "malformed_request";
+        case ServiceCode::not_implemented: return "not_implemented";
     }
     return "internal";  // out-of-range value cast to ServiceCode
 }

@@ -1,5 +1,5 @@
 // The service's own error conditions, apart from the library's ErrorCode
-// (renderer/error.h): a route or resource that does not exist, a full queue, a
+// (core/error.h): a route or resource that does not exist, a full queue, a
 // missing API key, a request too slow to arrive, a render over the service's
 // time limit, a job cut short by restarts. The renderer and importer never
 // raise these; only server/ does, so they live here.
@@ -13,7 +13,7 @@
 #include <string>
 #include <variant>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 
@@ -25,6 +25,8 @@ enum class ServiceCode {
     unauthorized,        // an API key is configured and the request has none or a wrong one
     request_timeout,     // the request's headers or body did not arrive in time (server/http_server.h)
     interrupted,         // a job's run was cut short by service restarts too often (server/job_runner.h)
+    malformed_request,   // the request's HTTP framing or header syntax is invalid (RFC 9112; server/http_framing.h)
+    not_implemented,     // a transfer coding other than chunked (RFC 9112 §6.1: 501); the last code (tests iterate up to it)
 };
 
 // Stable machine-readable name ("not_found", ...), used in JSON errors and the job store.

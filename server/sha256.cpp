@@ -2,7 +2,7 @@
 
 #include <openssl/evp.h>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::server {
 

@@ -5,7 +5,8 @@
 #include <cctype>
 
 #include "importer/importer.h"
-#include "renderer/error.h"
+#include "core/error.h"
+#include "core/json_limits.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -59,8 +60,8 @@ void read_multipart(const httplib::Request& req, std::initializer_list<const cha
     }
     up.multipart = true;
     if (const auto part = req.files.find("options"); part != req.files.end()) {
-        const json o = json::parse(part->second.content, nullptr, false);
-        if (o.is_discarded() || !o.is_object())
+        const json o = parse_json_or_throw(part->second.content, kRequestJsonLimits, "the 'options' part");
+        if (!o.is_object())
             throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
         options.merge_patch(o);
     }
@@ -79,13 +80,15 @@ void read_multipart(const httplib::Request& req, std::initializer_list<const cha
 
 // {"file_id": "...", <options>}: a stored file and the options, over the query parameters.
 void read_json_body(const std::string& body, nlohmann::json& options, Upload& up) {
-    nlohmann::json j = nlohmann::json::parse(body, nullptr, false);
-    // Not JSON at all: most likely a CAD file sent with the wrong type.
-    if (j.is_discarded())
-        throw Error(ErrorCode::unsupported_format,
-                    "the body of type 'application/json' is not JSON: send the STEP/IGES file raw "
-                    "(application/octet-stream, model/step, model/iges) or as the 'file' part of multipart/form-data, "
-                    "or name a stored file in a JSON body {\"file_id\": ...}");
+    BoundedJson parsed = parse_json_bounded(body, kRequestJsonLimits);
+    // Not JSON: most likely a CAD file sent with the wrong type.
+    if (parsed.problem == JsonProblem::not_json)
+        throw Error(ErrorCode::invalid_json,
+                    "the body of type 'application/json' is " + parsed.detail +
+                        ": send the STEP/IGES file raw (application/octet-stream, model/step, model/iges) or as the "
+                        "'file' part of multipart/form-data, or name a stored file in a JSON body {\"file_id\": ...}");
+    if (!parsed.ok()) throw Error(ErrorCode::invalid_json, "the JSON body: " + parsed.detail);
+    nlohmann::json& j = parsed.value;
     if (!j.is_object())
         throw Error(ErrorCode::invalid_argument, "a JSON body must be an object: {\"file_id\": \"...\", <options>}");
     if (!j.contains("file_id") || !j["file_id"].is_string())

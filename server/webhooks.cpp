@@ -12,7 +12,7 @@
 #include <random>
 #include <sstream>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/job_document.h"
 #include "server/metrics.h"
 #include "server/request_log.h"

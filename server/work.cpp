@@ -3,7 +3,7 @@
 #include <string>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/service_error.h"
 
 namespace nurbsrt::server {

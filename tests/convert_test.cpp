@@ -46,7 +46,7 @@
 #include "importer/importer.h"
 #include "importer/isolated.h"
 #include "importer/occt_shape.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/nurbs.h"
 #include "renderer/scene_json.h"
 #include "tests/support/fixtures.h"

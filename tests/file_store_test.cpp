@@ -13,7 +13,7 @@
 #include <algorithm>
 #include <set>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/file_store.h"
 #include "server/service_error.h"
 

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "cli/scene_placements.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/scene_io.h"
 #include "server/upload.h"
 #include "tests/support/error_code_of.h"

@@ -10,7 +10,7 @@
 #include <set>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/context.h"
 #include "server/cors.h"
 #include "server/etag.h"
@@ -118,7 +118,7 @@ TEST(ProblemCodes, OneDocumentedNameSpace) {
     size_t count = 0;
     for (int c = 0; c <= static_cast<int>(nurbsrt::ErrorCode::internal); ++c, ++count)
         names.insert(ProblemCode(static_cast<nurbsrt::ErrorCode>(c)).name());
-    for (int c = 0; c <= static_cast<int>(ServiceCode::interrupted); ++c, ++count)
+    for (int c = 0; c <= static_cast<int>(ServiceCode::not_implemented); ++c, ++count)  // the last one
         names.insert(ProblemCode(static_cast<ServiceCode>(c)).name());
     EXPECT_EQ(names.size(), count);
     const nlohmann::json spec = nlohmann::json::parse(openapi_document());
@@ -136,6 +136,9 @@ TEST(ProblemCodes, StatusesAndBodies) {
     EXPECT_EQ(http_status(ServiceCode::overloaded), 503);
     EXPECT_EQ(http_status(ServiceCode::render_timeout), 504);
     EXPECT_EQ(http_status(nurbsrt::ErrorCode::invalid_argument), 400);
+    EXPECT_EQ(http_status(nurbsrt::ErrorCode::invalid_json), 400);
+    EXPECT_EQ(http_status(ServiceCode::malformed_request), 400);
+    EXPECT_EQ(http_status(ServiceCode::not_implemented), 501);
     EXPECT_EQ(http_status(nurbsrt::ErrorCode::unreadable_file), 422);
     EXPECT_EQ(http_status(nurbsrt::ErrorCode::internal), 500);
     EXPECT_TRUE(ProblemCode(ServiceCode::not_found) == ServiceCode::not_found);

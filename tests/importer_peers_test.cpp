@@ -9,7 +9,7 @@
 
 #include "importer/reference_intersector.h"
 #include "importer/tessellate.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "tests/support/fixtures.h"
 
 namespace nurbsrt {

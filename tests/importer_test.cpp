@@ -53,7 +53,7 @@
 
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/nurbs.h"
 #include "renderer/scene.h"
 #include "renderer/trim.h"

@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "importer/isolated.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/scene_io.h"
 #include "tests/support/error_code_of.h"
 

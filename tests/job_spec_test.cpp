@@ -6,7 +6,7 @@
 
 #include <functional>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/job_spec.h"
 #include "tests/support/error_code_of.h"
 

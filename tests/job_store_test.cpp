@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/job_store_sqlite.h"
 
 namespace fs = std::filesystem;

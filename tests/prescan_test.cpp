@@ -12,7 +12,7 @@
 
 #include "importer/isolated.h"
 #include "importer/prescan.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "tests/support/fixtures.h"
 
 using namespace nurbsrt;

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "renderer/camera.h"
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/nurbs.h"
 
 using namespace nurbsrt;

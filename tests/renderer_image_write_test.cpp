@@ -12,7 +12,7 @@
 #include <iterator>
 #include <vector>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/render.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <thread>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/newton.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/prepared_scene.h"

@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render.h"
 #include "renderer_test_surfaces.h"

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "renderer/render.h"
 #include "renderer_test_surfaces.h"
 

@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/sha256.h"
 #include "server/scene_cache.h"
 

@@ -12,7 +12,7 @@
 #include <set>
 #include <string>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 using namespace nurbsrt;
 using ::testing::HasSubstr;

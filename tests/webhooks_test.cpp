@@ -6,7 +6,7 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 
-#include "renderer/error.h"
+#include "core/error.h"
 #include "server/sha256.h"
 #include "server/callback_url.h"
 #include "server/webhooks.h"

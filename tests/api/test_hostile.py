@@ -14,9 +14,10 @@ import time
 import zlib
 from urllib.parse import urlparse
 
+import pytest
 import requests
 
-from conftest import SCREW, TIMEOUT, check_problem, healthy, post_raw, validate
+from conftest import BEARING, SCREW, SLOW_RENDER, TIMEOUT, check_problem, healthy, post_raw, validate
 
 
 def address(url):
@@ -111,7 +112,7 @@ def test_refused_before_the_body_is_sent(own_server):
         ({"Content-Length": "10000000000000"}, 413, "limit_exceeded"),
         ({"Content-Length": "1000", "Content-Encoding": "gzip", "Expect": "100-continue"}, 415,
          "unsupported_format"),
-        ({"Content-Length": "12abc"}, 400, "invalid_argument"),
+        ({"Content-Length": "12abc"}, 400, "malformed_request"),  # no length to frame the body by
     ]
     for extra, status, code in cases:
         with connect(s.url) as sock:
@@ -341,3 +342,289 @@ def test_stop_does_not_wait_for_slow_clients(own_server):
         s.proc.terminate()
         s.proc.wait(timeout=30)
         assert time.monotonic() - t < 3
+
+
+# ---- hostile JSON: nesting, malformed text, size and value bounds ------------------------------------------
+# The JSON of requests (a file_id body, options and job parts, PATCH of a stored file) is parsed with bounds:
+# at most 64 levels deep, 256 KiB, 20,000 values; beyond them, or when it is no JSON at all, the answer is 400
+# invalid_json. The recursive parser once overflowed the stack on a deep body and the whole process died
+# (SIGSEGV), taking every request and running job with it.
+
+ZERO_ID = "0" * 64
+
+
+def deep(d):
+    """A JSON array nested `d` levels deep: [[[...]]]."""
+    return b"[" * d + b"]" * d
+
+
+DEPTHS = (10_000, 60_000, 1_000_000)  # the 1M one is 2 MB: under the 4 MiB upload limit
+
+
+def deep_request(base, entry, d):
+    """One request whose JSON holds deep(d), sent to `entry` (see DEEP_ENTRIES)."""
+    nested = deep(d)
+    step = ("file", ("s.step", SCREW.read_bytes(), "application/octet-stream"))
+    if entry == "render_json":
+        return requests.post(base + "/v1/renders", data=b'{"file_id":"%s","x":%s}' % (ZERO_ID.encode(), nested),
+                             headers={"Content-Type": "application/json"}, timeout=TIMEOUT)
+    if entry == "render_options":
+        return requests.post(base + "/v1/renders", timeout=TIMEOUT,
+                             files=[step, ("options", (None, b'{"x":%s}' % nested, "application/json"))])
+    if entry == "conversion_options":
+        return requests.post(base + "/v1/conversions", timeout=TIMEOUT,
+                             files=[step, ("options", (None, b'{"format":"stl","x":%s}' % nested,
+                                                       "application/json"))])
+    if entry == "job_outputs":
+        return requests.post(base + "/v1/jobs", timeout=TIMEOUT,
+                             files=[step, ("job", (None, b'{"outputs":%s}' % nested, "application/json"))])
+    if entry == "job_output_options":
+        spec = b'{"outputs":[{"file":0,"type":"render","options":{"x":%s}}]}' % nested
+        return requests.post(base + "/v1/jobs", timeout=TIMEOUT,
+                             files=[step, ("job", (None, spec, "application/json"))])
+    if entry.startswith("patch_file:"):
+        return requests.patch(f"{base}/v1/files/{entry.split(':', 1)[1]}", data=b'{"pinned":%s}' % nested,
+                              headers={"Content-Type": "application/json"}, timeout=TIMEOUT)
+    raise AssertionError(entry)
+
+
+DEEP_ENTRIES = ["render_json", "render_options", "conversion_options", "job_outputs", "job_output_options",
+                "patch_file"]
+
+
+def stored_file_id(base):
+    r = requests.post(base + "/v1/files", files=[("file", ("s.step", SCREW.read_bytes(), "application/octet-stream"))],
+                      timeout=TIMEOUT)
+    assert r.status_code in (200, 201), r.text[:300]
+    return r.json()["id"]
+
+
+def deep_outcome(server, entry, d):
+    """None if the deep request is a 400 invalid_json naming the depth limit and the process still
+    answers; else what happened instead."""
+    try:
+        r = deep_request(server.url, entry, d)
+    except requests.ConnectionError as e:
+        time.sleep(0.2)
+        return f"no answer ({type(e).__name__}); the service's exit status: {server.proc.poll()} (-11: SIGSEGV)"
+    try:
+        p = check_problem(r, 400, "invalid_json")
+        assert "64" in p["detail"], f"the detail does not name the limit: {p['detail']}"
+        healthy(server.url)
+    except (AssertionError, requests.ConnectionError, KeyError, ValueError):
+        return f"{r.status_code} {r.text[:140]}"
+    return None
+
+
+@pytest.mark.parametrize("entry", DEEP_ENTRIES)
+def test_deeply_nested_json_is_refused_not_a_crash(own_server, entry):
+    """Every way JSON enters the service, 10k, 60k and 1M levels deep: 400 invalid_json, the service lives.
+    Its own server: the old service died of it, and the shared one must outlive this test."""
+    s = own_server(args=["--max-upload-mb", "4"])
+    if entry == "patch_file":
+        entry = "patch_file:" + stored_file_id(s.url)
+    wrong = {}
+    for d in DEPTHS:
+        if s.proc.poll() is not None:
+            break
+        if (outcome := deep_outcome(s, entry, d)) is not None:
+            wrong[d] = outcome
+    assert not wrong, "; ".join(f"depth {d}: {what}" for d, what in wrong.items())
+    assert s.proc.poll() is None
+
+
+def test_deeply_nested_json_leaves_a_running_job_alone(own_server):
+    """A job running while deep JSON arrives ends 'succeeded': the hostile request fails alone, it does not
+    take the process (and so the job, 'interrupted' at the next start) with it."""
+    s = own_server(args=["--max-upload-mb", "4", "--job-runners", "1", "--render-threads", "1"])
+    spec = {"outputs": [{"file": 0, "type": "render", "options": SLOW_RENDER}]}
+    r = requests.post(s.url + "/v1/jobs", timeout=TIMEOUT,
+                      files=[("file", ("b.igs", BEARING.read_bytes(), "application/octet-stream")),
+                             ("job", (None, json.dumps(spec), "application/json"))])
+    assert r.status_code == 202, r.text[:300]
+    job_url = f"{s.url}/v1/jobs/{r.json()['id']}"
+    deadline = time.monotonic() + 60
+    while requests.get(job_url, timeout=TIMEOUT).json()["outputs"][0]["state"] != "running":
+        assert time.monotonic() < deadline, "the job never ran"
+        time.sleep(0.05)
+    for entry, d in (("render_json", 60_000), ("render_options", 60_000), ("job_outputs", 60_000),
+                     ("render_json", 1_000_000)):
+        assert (outcome := deep_outcome(s, entry, d)) is None, (entry, d, outcome)
+    deadline = time.monotonic() + 120
+    while (job := requests.get(job_url, timeout=TIMEOUT).json())["state"] not in ("succeeded", "failed"):
+        assert time.monotonic() < deadline, json.dumps(job)[:600]
+        time.sleep(0.1)
+    assert job["state"] == "succeeded", json.dumps(job)[:600]
+
+
+@pytest.mark.parametrize("body", [b'{"file_id":"ab', b'{"file_id": NaN}', b'{"file_id":"x","width":1e400}',
+                                  b'{"file_id":"x"} xyz', b""],
+                         ids=["truncated", "nan", "number_overflow", "trailing_garbage", "empty"])
+def test_unparseable_json_body_is_invalid_json(url, body):
+    """A body declared application/json that is no JSON (RFC 8259: no NaN, no trailing text; a number beyond
+    a double is refused rather than read as infinity) is the client's malformed request, 400 invalid_json,
+    not 415: its media type is supported. An empty one (Content-Length: 0) too."""
+    r = requests.post(url + "/v1/renders", data=body, headers={"Content-Type": "application/json"},
+                      timeout=TIMEOUT)
+    if not body:
+        assert r.request.headers["Content-Length"] == "0"
+    check_problem(r, 400, "invalid_json")
+
+
+def test_json_over_256_kib_is_invalid_json(url):
+    """A JSON request body over 256 KiB (under the upload limit) is refused before it is parsed, naming the
+    limit in bytes."""
+    body = b'{"file_id":"%s","x":"%s"}' % (ZERO_ID.encode(), b"a" * 300_000)
+    r = requests.post(url + "/v1/renders", data=body, headers={"Content-Type": "application/json"},
+                      timeout=TIMEOUT)
+    assert "262144" in check_problem(r, 400, "invalid_json")["detail"]
+
+
+def test_json_with_too_many_values_is_invalid_json(url):
+    """30,000 values in 60 KB (small, shallow, but each one a node to allocate): over the 20,000 values a
+    request's JSON may hold."""
+    body = b'{"file_id":"%s","x":[%s]}' % (ZERO_ID.encode(), b",".join([b"0"] * 30_000))
+    assert len(body) < 256 << 10
+    r = requests.post(url + "/v1/renders", data=body, headers={"Content-Type": "application/json"},
+                      timeout=TIMEOUT)
+    assert "20000" in check_problem(r, 400, "invalid_json")["detail"]
+
+
+# ---- strict HTTP/1.1 framing (RFC 9112 §6) -----------------------------------------------------------------
+# A request whose framing is ambiguous (two lengths, a length and a chunked body, a length that is no plain
+# number, a header line that is no "name: value") could be read differently by a proxy in front of the
+# service: request smuggling. Each is answered once (400 malformed_request, or 501 not_implemented for a
+# transfer coding the service does not know) and the connection is closed, since where the next request
+# would start is unknown. The old service answered the smuggled request too, and waited 10 s on unknown
+# transfer codings.
+
+def exchange_until_close(url, data, wait=3):
+    """Sends `data` on a new connection and reads all that comes until the server closes it; returns (the
+    first answer as read_response gives it, the bytes after it, seconds until its head arrived). Fails if
+    nothing comes, or if the connection is still open `wait` seconds after the last bytes."""
+    with connect(url) as sock:
+        t = time.monotonic()
+        try:
+            sock.sendall(data)
+        except OSError:
+            pass  # the service answered and closed before taking everything: the answer is still there
+        sock.settimeout(wait)
+        received, elapsed = b"", None
+        try:
+            while chunk := sock.recv(65536):
+                received += chunk
+                if elapsed is None and b"\r\n\r\n" in received:
+                    elapsed = time.monotonic() - t
+        except ConnectionResetError:
+            pass  # closed with unread bytes of ours: a close too
+        except socket.timeout:
+            raise AssertionError(f"the connection is still open {wait} s after {received[:300]!r}") from None
+    assert elapsed is not None, f"closed without an answer: {received[:200]!r}"
+    head, _, body = received.partition(b"\r\n\r\n")
+    lines = head.decode("latin-1").split("\r\n")
+    headers = {k.strip().lower(): v.strip() for k, v in (line.split(":", 1) for line in lines[1:])}
+    length = int(headers.get("content-length", "0"))
+    return (int(lines[0].split()[1]), headers, body[:length]), body[length:], elapsed
+
+
+def refused_framing(url, data, status=400, code="malformed_request"):
+    (st, headers, body), rest, elapsed = exchange_until_close(url, data)
+    p = problem_of(st, headers, body, status, code)
+    assert elapsed < 3, elapsed
+    assert b"HTTP/1.1 " not in rest, f"a second answer on the connection: {rest[:300]!r}"
+    return p
+
+
+def test_framing_smuggled_request_is_not_answered(url):
+    """A GET with a Content-Length whose body is a second request: one answer (400), never the /metrics one."""
+    smuggled = b"GET /metrics HTTP/1.1\r\nHost: x\r\n\r\n"
+    data = b"GET /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: %d\r\n\r\n" % len(smuggled) + smuggled
+    (st, headers, body), rest, _ = exchange_until_close(url, data)
+    assert 1 + rest.count(b"HTTP/1.1 ") == 1, f"more answers than requests: {st} then {rest[:300]!r}"
+    problem_of(st, headers, body, 400, "malformed_request")
+
+
+def test_framing_head_with_a_body(url):
+    """HEAD (like GET) has no body the service would read: the 5 bytes would be taken for the next request."""
+    (st, headers, body), rest, elapsed = exchange_until_close(
+        url, b"HEAD /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 5\r\n\r\nhello")
+    assert st == 400 and elapsed < 3, (st, elapsed)
+    if body:  # the answer to a HEAD may leave its body out
+        problem_of(st, headers, body, 400, "malformed_request")
+    assert b"HTTP/1.1 " not in rest, rest[:300]
+
+
+def test_framing_get_with_content_length_zero_is_fine(url):
+    """Content-Length: 0 on a GET frames no body: no reason to refuse it or to close the connection."""
+    with connect(url) as sock:
+        sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n")
+        st, headers, _ = read_response(sock, timeout=3)
+        assert st == 200 and headers.get("connection") != "close", (st, headers)
+        sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+        assert read_response(sock, timeout=3)[0] == 200
+
+
+POST_HEAD = b"POST /v1/renders HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\n"
+
+
+@pytest.mark.parametrize("lengths", [[b"+10"], [b"1, 1"], [b"10", b"11"], [b"10", b"10"]],
+                         ids=["plus_sign", "list", "two_different", "two_same"])
+def test_framing_content_length_not_one_plain_number(url, lengths):
+    """Content-Length is 1*DIGIT, once: a sign, a list or a repeated header (even with the same value,
+    which a proxy may have joined or not) is no length to trust."""
+    head = POST_HEAD + b"".join(b"Content-Length: %s\r\n" % v for v in lengths) + b"\r\n"
+    refused_framing(url, head + b"0123456789")
+
+
+@pytest.mark.parametrize("coding", [b"xchunked", b"gzip, chunked", b"chunked, identity"])
+def test_framing_unknown_transfer_coding_is_501(url, coding):
+    """Only "chunked" alone is understood: for any other transfer coding the body's end is unknown, so the
+    answer is 501 at once (not a 408 after waiting for a body that never ends) and the connection closes."""
+    refused_framing(url, POST_HEAD + b"Transfer-Encoding: %s\r\n\r\n0\r\n\r\n" % coding, 501, "not_implemented")
+
+
+def test_framing_chunked_and_content_length(url):
+    refused_framing(url, POST_HEAD + b"Transfer-Encoding: chunked\r\nContent-Length: 10\r\n\r\n0\r\n\r\n")
+
+
+@pytest.mark.parametrize("lines", [b"Host: x\r\nX-Bad-Line\r\n", b"Host : x\r\n", b"Host: x\r\nX-A : a\r\n",
+                                   b"Host: x\r\nX-A: a\r\n folded\r\n", b"Host: x\nX-A: a\r\n"],
+                         ids=["no_colon", "space_before_colon_host", "space_before_colon", "obs_fold", "bare_lf"])
+def test_framing_malformed_header_line(url, lines):
+    """RFC 9112 §5.1/§5.2/§2.2: a field line without a colon, whitespace before the colon, a folded line and
+    a line ended by a bare LF are each read differently by different parsers: 400."""
+    refused_framing(url, b"GET /healthz HTTP/1.1\r\n" + lines + b"\r\n")
+
+
+@pytest.mark.parametrize("hosts", [b"", b"Host: x\r\nHost: y\r\n"], ids=["none", "two"])
+def test_framing_http11_needs_exactly_one_host(url, hosts):
+    refused_framing(url, b"GET /healthz HTTP/1.1\r\n" + hosts + b"\r\n")
+    # HTTP/1.0 predates Host: none is fine.
+    (st, _, _), _, _ = exchange_until_close(url, b"GET /healthz HTTP/1.0\r\n\r\n")
+    assert st == 200
+
+
+# ---- Keep-Alive announces the real limits -------------------------------------------------------------------
+
+def test_keep_alive_header_tells_the_real_request_limit(url):
+    """A connection serves 100 requests: the 100th answer closes it, and every Keep-Alive header before
+    says max=100 (or the requests left), not a number the service does not keep to (it said max=5)."""
+    limit = 100
+    with connect(url) as sock:
+        for n in range(1, limit + 1):
+            sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+            st, headers, _ = read_response(sock, timeout=5)
+            assert st == 200
+            closing = headers.get("connection", "").lower() == "close"
+            if n < limit:
+                assert not closing, f"answer {n} closed the connection"
+                if "keep-alive" in headers:
+                    params = dict(p.strip().partition("=")[::2] for p in headers["keep-alive"].split(","))
+                    assert int(params["max"]) in (limit, limit - n + 1, limit - n), (n, headers["keep-alive"])
+        if not closing:  # the 100th answer may leave the close unsaid, but then the connection must end
+            sock.settimeout(3)
+            try:
+                sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+                assert sock.recv(65536) == b"", "a 101st request answered"
+            except (ConnectionResetError, BrokenPipeError):
+                pass

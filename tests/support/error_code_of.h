@@ -6,7 +6,7 @@
 
 #include <functional>
 
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt::test {
 

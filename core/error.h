@@ -20,6 +20,7 @@ enum class ErrorCode {
     occt_failure,        // an OCCT algorithm threw (message carries OCCT's text)
     corrupt_scene,       // serialized scene is truncated, has a bad header or checksum
     invalid_argument,    // a parameter out of range (camera, size, options)
+    invalid_json,        // JSON text that is not JSON, or beyond the limits it is parsed within (core/json_limits.h)
     limit_exceeded,      // a configured limit (pixels, faces, bytes) was exceeded
     canceled,            // the work was canceled (RenderOptions::cancel, a deleted job)
     internal,            // a bug: should never reach a user

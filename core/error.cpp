@@ -1,4 +1,4 @@
-#include "renderer/error.h"
+#include "core/error.h"
 
 namespace nurbsrt {
 
@@ -13,6 +13,7 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::occt_failure: return "occt_failure";
         case ErrorCode::corrupt_scene: return "corrupt_scene";
         case ErrorCode::invalid_argument: return "invalid_argument";
+        case ErrorCode::invalid_json: return "invalid_json";
         case ErrorCode::limit_exceeded: return "limit_exceeded";
         case ErrorCode::canceled: return "canceled";
         case ErrorCode::internal: return "internal";
