@@ -129,6 +129,10 @@ void add_job_options(CLI::App* cmd, ServeArgs& a) {
         ->envname("NURBSRT_MAX_JOB_FILES")->check(CLI::Range(1, 10000))->capture_default_str();
     cmd->add_option("--max-job-outputs", a.c.max_job_outputs, "most outputs (renders + conversions) of one batch job")
         ->envname("NURBSRT_MAX_JOB_OUTPUTS")->check(CLI::Range(1, 10000))->capture_default_str();
+    cmd->add_option("--max-output-attempts", a.c.max_output_attempts,
+                    "runs of one job output that a crash of the service (or a lost instance) may cut\n"
+                    "short before the output fails with code interrupted; a graceful stop does not count")
+        ->envname("NURBSRT_MAX_OUTPUT_ATTEMPTS")->check(CLI::Range(1, 100))->capture_default_str();
     cmd->add_option("--job-retention", a.c.job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
         ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();

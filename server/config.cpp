@@ -80,6 +80,7 @@ void ServerConfig::validate() const {
     if (import_max_nesting < 1 || import_max_nesting > 10000) fail("import max nesting must be in 1..10000");
     if (job_runners < 1 || job_runners > 256) fail("job runners must be in 1..256");
     if (max_queued_jobs < 1) fail("max queued jobs must be positive");
+    if (max_output_attempts < 1 || max_output_attempts > 100) fail("max output attempts must be in 1..100");
     if (max_job_files < 1 || max_job_files > 10000) fail("max job files must be in 1..10000");
     if (max_job_outputs < 1 || max_job_outputs > 10000) fail("max job outputs must be in 1..10000");
     if (!(job_retention_s > 0)) fail("job retention must be positive");

@@ -64,6 +64,11 @@ struct ServerConfig {
     int max_queued_jobs = 100;       // jobs waiting; beyond -> 503
     int max_job_files = 16;          // files per job
     int max_job_outputs = 64;        // outputs per job
+    // Runs of one output that a crash or a lost instance may cut short before
+    // it fails with `interrupted` (server/job_runner.h). A crash is not the
+    // job's fault, so only runs of that output count, not its siblings' or a
+    // graceful stop; 3 leaves room for two unrelated crashes in one long output.
+    int max_output_attempts = 3;
     double job_retention_s = 7 * 86400.0;  // finished jobs are deleted this long after they finished
     // Stored files (POST /v1/files, server/file_store.h): the bytes they may
     // hold together; beyond -> 507. 1 GiB: sixteen uploads of the default

@@ -76,7 +76,7 @@ JobService::JobService(ServerContext& ctx)
         sweep();
         return;  // every other instance's files are in flight in the shared directory
     }
-    const RecoveryReport r = store_->recover(kMaxJobAttempts, unix_now_ms());
+    const RecoveryReport r = store_->recover(ctx_.config.max_output_attempts, unix_now_ms());
     for (const std::string& id : r.removed) remove_files(id);
     if (!r.requeued.empty() || !r.failed.empty() || !r.removed.empty())
         log_event("jobs_recovered",
@@ -260,7 +260,7 @@ void JobService::run_loop() {
             seen = submissions_;
         }
         try {
-            claim = store_->claim_next(unix_now_ms(), kMaxJobAttempts);
+            claim = store_->claim_next(unix_now_ms(), ctx_.config.max_output_attempts);
             if (claim) run_claim(*claim);
         } catch (const std::exception& e) {
             failed = true;

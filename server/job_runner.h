@@ -25,9 +25,6 @@ namespace nurbsrt::server {
 
 struct ServerContext;
 
-// Runs that a service restart may interrupt before the job fails with `interrupted`.
-inline constexpr int kMaxJobAttempts = 2;
-
 class JobService {
 public:
     // Opens the job store (--job-store, or DATA_DIR/jobs.db; throws Error(io)

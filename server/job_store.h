@@ -136,7 +136,7 @@ public:
     // An output claimed `max_attempts` times whose lease expired each time
     // fails with code `interrupted` instead (PostgreSQL; SQLite does that in
     // recover()).
-    virtual std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 2) = 0;
+    virtual std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 3) = 0;
     // Output transitions; each returns false when the job is gone (deleted) or,
     // with a lease, when the lease is no longer this claim's (fencing).
     virtual bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) = 0;
@@ -170,9 +170,11 @@ public:
     virtual bool renew(const JobClaim& claim) = 0;
 
     // At start (SQLite, one process): jobs found running were interrupted.
-    // Those with fewer than `max_attempts` runs go back to the queue (their
-    // unfinished outputs too); the others fail with code `interrupted`.
-    // Finished outputs are kept. Jobs found `canceled` are removed. With a
+    // Each output found running (the crash cut it short) goes back to the
+    // queue, or fails with code `interrupted` once it has started
+    // `max_attempts` runs; queued and finished outputs are kept as they are,
+    // and a job with work left is queued again (else it ends, `requeued` /
+    // `failed` in the report). Jobs found `canceled` are removed. With a
     // shared store this does nothing: work of a lost instance comes back when
     // its lease expires (claim_next).
     virtual RecoveryReport recover(int max_attempts, int64_t now_ms) = 0;

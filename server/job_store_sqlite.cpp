@@ -6,6 +6,7 @@ namespace nurbsrt::server {
 
 using sqlite_store::kSchema;
 using sqlite_store::kSchemaV2;
+using sqlite_store::kSchemaV3;
 using sqlite_store::kSchemaVersion;
 
 SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_unique<Impl>()) {
@@ -38,6 +39,7 @@ SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_uni
             Impl::Transaction t(*impl_);
             if (version < 1) impl_->exec(kSchema);
             if (version < 2) impl_->exec(kSchemaV2);
+            if (version < 3) impl_->exec(kSchemaV3);
             impl_->exec("DELETE FROM schema_version");
             Impl::Stmt(*impl_, "INSERT INTO schema_version(version) VALUES (?)").bind(1, kSchemaVersion).run();
             t.commit();
@@ -158,7 +160,7 @@ bool SqliteJobStore::output_running(const std::string& id, int output, int64_t n
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     Impl::Stmt s(*impl_,
-                 "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = ? "
+                 "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = ?, attempts = attempts + 1 "
                  "WHERE job_id = ? AND idx = ? AND state = 'queued'");
     s.bind(1, now_ms).bind(2, id).bind(3, output).run();
     const bool ok = s.changes() > 0;
@@ -203,10 +205,16 @@ std::optional<JobState> SqliteJobStore::finish(const std::string& id, int64_t no
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     if (!impl_->job_running(id)) return std::nullopt;
+    const JobState state = impl_->finish_job(id, now_ms);
+    t.commit();
+    return state;
+}
+
+JobState SqliteJobStore::Impl::finish_job(const std::string& id, int64_t now_ms) {
     int64_t total = 0, failed = 0;
     std::string first_code, first_message;
     {
-        Impl::Stmt s(*impl_, "SELECT state, error_code, error_message FROM job_outputs WHERE job_id = ? ORDER BY idx");
+        Stmt s(*this, "SELECT state, error_code, error_message FROM job_outputs WHERE job_id = ? ORDER BY idx");
         s.bind(1, id);
         while (s.step()) {
             ++total;
@@ -222,12 +230,11 @@ std::optional<JobState> SqliteJobStore::finish(const std::string& id, int64_t no
     std::string message;
     if (failed)
         message = std::to_string(failed) + " of " + std::to_string(total) + " outputs failed; first: " + first_message;
-    Impl::Stmt s(*impl_,
-                 "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ?, "
-                 NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?");
+    Stmt s(*this,
+           "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ?, "
+           NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?");
     s.bind(1, std::string(job_state_name(state))).bind(2, now_ms).bind(3, failed ? first_code : std::string()).bind(4, message).bind(5, now_ms);
     s.bind(6, id).run();
-    t.commit();
     return state;
 }
 
@@ -242,8 +249,8 @@ void SqliteJobStore::requeue(const std::string& id) {
         .bind(1, id)
         .run();
     Impl::Stmt(*impl_,
-               "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 WHERE job_id = ? AND "
-               "state = 'running'")
+               "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0, "
+               "attempts = MAX(attempts - 1, 0) WHERE job_id = ? AND state = 'running'")
         .bind(1, id)
         .run();
     t.commit();

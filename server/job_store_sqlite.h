@@ -25,7 +25,7 @@ public:
                  std::optional<int64_t> after_seq) override;
     std::map<JobState, int64_t> count_by_state() override;
     // The oldest queued job with all its queued outputs (attempts + 1).
-    std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 2) override;
+    std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 3) override;
     bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;
     bool output_progress(const std::string& id, int output, double progress, const std::string& lease = {}) override;
     bool output_succeeded(const std::string& id, int output, int64_t artifact_bytes, const std::string& result_json,

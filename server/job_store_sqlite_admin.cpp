@@ -60,40 +60,47 @@ RecoveryReport SqliteJobStore::recover(int max_attempts, int64_t now_ms) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     RecoveryReport r;
+    std::vector<std::string> running;
     {
-        Impl::Stmt s(*impl_, "SELECT id, attempts FROM jobs WHERE state = 'running' ORDER BY seq");
-        while (s.step()) (s.i64(1) >= max_attempts ? r.failed : r.requeued).push_back(s.text(0));
+        Impl::Stmt s(*impl_, "SELECT id FROM jobs WHERE state = 'running' ORDER BY seq");
+        while (s.step()) running.push_back(s.text(0));
     }
     {
         Impl::Stmt s(*impl_, "SELECT id FROM jobs WHERE state = 'canceled' ORDER BY seq");
         while (s.step()) r.removed.push_back(s.text(0));
     }
     for (const std::string& id : r.removed) impl_->remove_rows(id);
-    const std::string reason = "interrupted by a service restart (" + std::to_string(max_attempts) + " attempts)";
-    for (const std::string& id : r.requeued) {
-        Impl::Stmt(*impl_, "UPDATE jobs SET state = 'queued' WHERE id = ?").bind(1, id).run();
+    // Only the outputs the crash cut short were running: each runs again unless
+    // that was its last allowed run. Its siblings, finished or still queued, are
+    // not charged: a crash is not the job's fault.
+    const std::string reason = "interrupted by a service restart in each of its " + std::to_string(max_attempts) +
+                               " runs (--max-output-attempts)";
+    for (const std::string& id : running) {
+        Impl::Stmt(*impl_,
+                   "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
+                   "error_message = ? WHERE job_id = ? AND state = 'running' AND attempts >= ?")
+            .bind(1, now_ms)
+            .bind(2, reason)
+            .bind(3, id)
+            .bind(4, max_attempts)
+            .run();
         Impl::Stmt(*impl_,
                    "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 "
                    "WHERE job_id = ? AND state = 'running'")
             .bind(1, id)
             .run();
-    }
-    for (const std::string& id : r.failed) {
-        Impl::Stmt(*impl_,
-                   "UPDATE jobs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
-                   "error_message = ?, " NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?")
-            .bind(1, now_ms)
-            .bind(2, reason)
-            .bind(3, now_ms)
-            .bind(4, id)
-            .run();
-        Impl::Stmt(*impl_,
-                   "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
-                   "error_message = ? WHERE job_id = ? AND state IN ('queued', 'running')")
-            .bind(1, now_ms)
-            .bind(2, reason)
-            .bind(3, id)
-            .run();
+        bool work_left = false;
+        {
+            Impl::Stmt s(*impl_, "SELECT 1 FROM job_outputs WHERE job_id = ? AND state = 'queued' LIMIT 1");
+            s.bind(1, id);
+            work_left = s.step();
+        }
+        if (work_left) {
+            Impl::Stmt(*impl_, "UPDATE jobs SET state = 'queued' WHERE id = ?").bind(1, id).run();
+            r.requeued.push_back(id);
+        } else if (impl_->finish_job(id, now_ms) == JobState::failed) {
+            r.failed.push_back(id);  // (one that had finished every output but its own end is kept succeeded)
+        }
     }
     t.commit();
     return r;

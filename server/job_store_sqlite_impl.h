@@ -15,7 +15,7 @@ namespace nurbsrt::server {
 namespace sqlite_store {
 
 // 1: jobs, inputs, outputs. 2: the webhook columns of jobs.
-inline constexpr int kSchemaVersion = 2;
+inline constexpr int kSchemaVersion = 3;
 
 inline constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS jobs (
@@ -68,6 +68,12 @@ ALTER TABLE jobs ADD COLUMN callback_status INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE jobs ADD COLUMN callback_error TEXT NOT NULL DEFAULT '';
 ALTER TABLE jobs ADD COLUMN callback_done_ms INTEGER NOT NULL DEFAULT 0;
 CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
+)sql";
+
+// Version 3: runs started of each output, so that a crash counts against the
+// output it cut short only (SqliteJobStore::recover).
+inline constexpr const char* kSchemaV3 = R"sql(
+ALTER TABLE job_outputs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0;
 )sql";
 
 // The columns read_job() reads, in its order.
@@ -242,6 +248,10 @@ struct SqliteJobStore::Impl {
     }
 
     void remove_rows(const std::string& id);
+
+    // Ends a running job whose outputs are all finished (in the caller's
+    // transaction); see JobStore::finish.
+    JobState finish_job(const std::string& id, int64_t now_ms);
 
     bool job_running(const std::string& id) {
         Stmt s(*this, "SELECT state FROM jobs WHERE id = ?");

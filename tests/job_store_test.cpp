@@ -200,8 +200,10 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         EXPECT_EQ(a->outputs[0].state, JobState::succeeded);  // kept
         EXPECT_EQ(a->outputs[1].state, JobState::queued);     // will run again
         EXPECT_EQ(store.get(j3.id)->state, JobState::queued);
-        // Second run of j1 (and j2) is interrupted as well.
+        // The second run of j1 is cut short in the same output again; j2's second
+        // run is cut short before any of its outputs started.
         EXPECT_EQ(store.claim_next(2100)->id, j1.id);
+        store.output_running(j1.id, 1, 2100);
         EXPECT_EQ(store.claim_next(2100)->id, j2.id);
         EXPECT_EQ(store.get(j1.id)->attempts, 2);
         EXPECT_EQ(store.get(j1.id)->started_ms, 1000);  // the first start is kept
@@ -209,7 +211,12 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
     {
         SqliteJobStore store(db_);
         const auto r = store.recover(2, 3000);
-        EXPECT_EQ(r.failed, (std::vector<std::string>{j1.id, j2.id}));
+        // Only runs of an output count against it: j1's output 1 ran twice and
+        // fails; j2 lost two runs but none of its outputs ran, so it goes on.
+        EXPECT_EQ(r.failed, (std::vector<std::string>{j1.id}));
+        EXPECT_EQ(r.requeued, (std::vector<std::string>{j2.id}));
+        EXPECT_EQ(store.get(j2.id)->state, JobState::queued);
+        EXPECT_EQ(store.get(j2.id)->outputs[0].state, JobState::queued);
         const auto a = store.get(j1.id);
         EXPECT_EQ(a->state, JobState::failed);
         EXPECT_EQ(a->error_code, "interrupted");
@@ -219,6 +226,7 @@ TEST_F(JobStoreTest, RecoveryAfterRestart) {
         EXPECT_EQ(a->outputs[1].state, JobState::failed);
         EXPECT_EQ(a->outputs[1].error_code, "interrupted");
         EXPECT_EQ(store.get(j3.id)->state, JobState::queued);  // never started: untouched
+        store.remove(j2.id);
         // A graceful stop puts a running job back without counting the run.
         EXPECT_EQ(store.claim_next(3100)->attempts, 1);
         store.requeue(j3.id);
@@ -359,8 +367,9 @@ TEST_F(JobStoreTest, AJobFailedByRecoveryHasItsCallbackDue) {
         JobRecord j = make_job(3, 1);
         j.callback_url = "https://hooks.example.com/done";
         store.create(j);
-        for (int run = 0; run < 2; ++run) {  // two runs cut short by restarts
+        for (int run = 0; run < 2; ++run) {  // two runs of its output cut short by restarts
             ASSERT_TRUE(store.claim_next(1000));
+            ASSERT_TRUE(store.output_running(j.id, 0, 1000));
             store.recover(2, 2000);
         }
     }
@@ -369,6 +378,33 @@ TEST_F(JobStoreTest, AJobFailedByRecoveryHasItsCallbackDue) {
     ASSERT_TRUE(due);
     EXPECT_EQ(due->state, JobState::failed);
     EXPECT_EQ(due->error_code, "interrupted");
+}
+
+TEST_F(JobStoreTest, CrashesChargeOnlyTheOutputTheyCutShort) {
+    // Six outputs, and a crash in each of them in turn, twice over: with a
+    // budget of 3 runs per output nothing fails, although the job was cut
+    // short 12 times (under one budget per job it failed at the second crash).
+    const JobRecord j = make_job(5, 6);
+    SqliteJobStore store(db_);
+    JobRecord copy = j;
+    store.create(copy);
+    for (int round = 0; round < 2; ++round)
+        for (int output = 0; output < 6; ++output) {
+            const auto claim = store.claim_next(1000);
+            ASSERT_TRUE(claim);
+            ASSERT_TRUE(store.output_running(j.id, output, 1000));
+            const auto r = store.recover(3, 2000);
+            EXPECT_EQ(r.requeued, (std::vector<std::string>{j.id})) << round << " " << output;
+        }
+    // A third cut in output 2: that output has had its three runs and fails; the others go on.
+    ASSERT_TRUE(store.claim_next(3000));
+    ASSERT_TRUE(store.output_running(j.id, 2, 3000));
+    EXPECT_EQ(store.recover(3, 4000).requeued, (std::vector<std::string>{j.id}));
+    const auto after = store.get(j.id);
+    EXPECT_EQ(after->state, JobState::queued);
+    EXPECT_EQ(after->outputs[2].state, JobState::failed);
+    EXPECT_EQ(after->outputs[2].error_code, "interrupted");
+    EXPECT_EQ(after->outputs[0].state, JobState::queued);
 }
 
 TEST_F(JobStoreTest, AVersion1DatabaseIsMigrated) {

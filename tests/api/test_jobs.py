@@ -3,10 +3,12 @@ to completion, artifacts download and decode (images) or re-import with the
 same face count (STEP/IGES); paging; 404s and traversal; every validation
 error before 202; DELETE of a queued and a running job; the job queue bound;
 retention; and recovery after the service is killed (SIGKILL) under a job."""
+import datetime
 import http.client
 import json
 import os
 import pathlib
+import random
 import signal
 import struct
 import subprocess
@@ -18,7 +20,7 @@ import zlib
 import pytest
 import requests
 
-from conftest import SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, validate
+from conftest import SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, sqlite_only, validate
 
 # Inputs: a large-ish IGES and a small STEP from ../shared/models, else OCCT's own data files.
 if MODELS.is_dir():
@@ -503,13 +505,15 @@ def test_sigkill_then_restart_reruns_the_job(own_server, tmp_path):
 
 
 def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_path):
+    """An output cut short by a crash in each of its allowed runs (here 2) fails `interrupted`."""
     data = tmp_path / "data"
-    s1 = own_server(args=SLOW_ARGS, data_dir=data)
+    args = [*SLOW_ARGS, "--max-output-attempts", "2"]
+    s1 = own_server(args=args, data_dir=data)
     job = accepted(submit(s1.url, [("s.step", SCREW.read_bytes())], SLOW_SPEC))
     kill_while_rendering(s1, job["id"], 1)
-    s2 = own_server(args=SLOW_ARGS, data_dir=data)
+    s2 = own_server(args=args, data_dir=data)
     kill_while_rendering(s2, job["id"], 2)
-    s3 = own_server(args=SLOW_ARGS, data_dir=data)
+    s3 = own_server(args=args, data_dir=data)
     # SQLite: failed at once by the restart's recovery; PostgreSQL: once the lease has expired.
     job = wait_finished(s3.url, job["id"])
     assert job["state"] == "failed"
@@ -520,6 +524,53 @@ def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_pat
     assert download(s3.url, conv)[72:73] == b"S"  # the finished output keeps its IGES artifact
     assert rend["state"] == "failed" and rend["error"]["code"] == "interrupted"
     healthy(s3.url)
+
+
+def ms(rfc3339):
+    """Unix ms of an RFC 3339 UTC time as the API writes it."""
+    return round(datetime.datetime.fromisoformat(rfc3339.replace("Z", "+00:00")).timestamp() * 1000)
+
+
+@sqlite_only
+def test_random_sigkills_fail_no_job(own_server, tmp_path):
+    """16 jobs of 6 outputs, and the service SIGKILLed 14 times at random moments while they run, restarted
+    each time on its data directory: every job succeeds, each output once, none lost. A crash counts only
+    against the output it cut short (3 runs each by default), not against its queued or finished siblings: under
+    one budget of 2 runs per job, 12 of 16 such jobs failed `interrupted`, outputs that never started included."""
+    rng = random.Random(46)  # the kill moments vary the same way in every run
+    data = tmp_path / "data"
+    # One runner, and kills further apart than the slowest output's run (a first render in a new process
+    # included): a crash then cuts an output short once, never in every run, which is the case the
+    # per-output budget is for. (Kills faster than an output can finish fail it under any budget.)
+    args = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1000, "height": 750, "edges": True, "shadows": True}},
+                        {"file": 0, "type": "conversion", "format": "stl"}] * 3}
+    s = own_server(args=args, data_dir=data)
+    ids = [accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))["id"] for _ in range(16)]
+    kills = 0
+    while kills < 14:
+        time.sleep(rng.uniform(1.0, 1.8))
+        states = [get_job(s.url, i)["state"] for i in ids]
+        if all(st in ("succeeded", "failed") for st in states):
+            break  # all done before the kills ran out: the rest would test nothing
+        s.proc.kill()
+        s.proc.wait(timeout=10)
+        kills += 1
+        s = own_server(args=args, data_dir=data)
+    jobs = [wait_finished(s.url, i, timeout=180) for i in ids]
+    durations = sorted(ms(o["finished_at"]) - ms(o["started_at"]) for j in jobs for o in j["outputs"]
+                       if o.get("started_at") and o.get("finished_at"))
+    runs = (f"{kills} kills; output run times p50 {durations[len(durations) // 2]} ms, max {durations[-1]} ms; "
+            f"jobs run {sum(j['attempts'] for j in jobs)} times in all")
+    print(runs)
+    assert kills >= 10, f"only {kills} kills happened while jobs ran: the test lost its point ({runs})"
+    listed = requests.get(s.url + "/v1/jobs", params={"limit": 100}, timeout=TIMEOUT).json()["jobs"]
+    assert sorted(j["id"] for j in listed) == sorted(ids)  # none lost, none duplicated
+    failed = [(j["id"], j.get("error")) for j in jobs if j["state"] != "succeeded"]
+    assert not failed, f"{len(failed)} of 16 jobs failed ({runs}): {failed[:3]}"
+    for j in jobs:
+        assert [o["state"] for o in j["outputs"]] == ["succeeded"] * 6
+        assert j["attempts"] >= 1
 
 
 def test_graceful_stop_requeues_without_counting_the_run(own_server, tmp_path):
