@@ -19,6 +19,7 @@ struct ServeArgs {
     double import_memory_mb = static_cast<double>(c.import_memory_bytes >> 20);
     double cache_mb = static_cast<double>(c.cache_bytes >> 20);
     double stored_mb = static_cast<double>(c.max_stored_bytes >> 20);
+    double artifacts_mb = 0.0;  // 0: half the data directory's file system
     double budget_mb = 0.0;
     double render_mb = static_cast<double>(c.max_render_bytes >> 20);
     double body_rate_kib = c.min_body_rate_bytes / 1024;
@@ -140,6 +141,10 @@ void add_job_options(CLI::App* cmd, ServeArgs& a) {
                     "stored files (POST /v1/files) together, MiB (507 beyond); unpinned ones expire\n"
                     "with --job-retention")
         ->envname("NURBSRT_MAX_STORED_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--max-artifacts-mb", a.artifacts_mb,
+                    "job artifacts of all kept jobs together, MiB: a job beyond it is refused (507), an\n"
+                    "output whose artifact would pass it fails; 0: half the data directory's file system")
+        ->envname("NURBSRT_MAX_ARTIFACTS_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--job-store", a.c.job_store,
                     "where batch jobs are queued: empty = SQLite in DATA_DIR/jobs.db (one instance);\n"
                     "postgresql://user[:password]@host[:port]/db = one queue for every instance started\n"
@@ -185,6 +190,7 @@ void run_serve(ServeArgs& a) {
     c.import_memory_bytes = static_cast<size_t>(a.import_memory_mb * (1 << 20));
     c.cache_bytes = static_cast<size_t>(a.cache_mb * (1 << 20));
     c.max_stored_bytes = static_cast<size_t>(a.stored_mb * (1 << 20));
+    c.max_artifact_bytes = static_cast<size_t>(a.artifacts_mb * (1 << 20));
     c.min_body_rate_bytes = a.body_rate_kib * 1024;
     const int rc = server::run_server(c);
     if (rc != 0) std::exit(rc);

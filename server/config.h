@@ -64,6 +64,10 @@ struct ServerConfig {
     int max_queued_jobs = 100;       // jobs waiting; beyond -> 503
     int max_job_files = 16;          // files per job
     int max_job_outputs = 64;        // outputs per job
+    // Job artifacts of all kept jobs together (server/artifact_quota.h): checked
+    // at submission against an estimate and when each artifact is written.
+    // 0: half the size of the data directory's file system, taken at start.
+    size_t max_artifact_bytes = 0;
     // Runs of one output that a crash or a lost instance may cut short before
     // it fails with `interrupted` (server/job_runner.h). A crash is not the
     // job's fault, so only runs of that output count, not its siblings' or a

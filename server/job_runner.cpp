@@ -18,6 +18,7 @@
 #include "importer/isolated.h"
 #include "core/error.h"
 #include "server/context.h"
+#include "server/artifact_quota.h"
 #include "server/durable_file.h"
 #include "server/job_spec.h"
 #include "server/redact.h"
@@ -459,6 +460,13 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
         fs::remove(partial, ec);
         cancel->store(true);
         throw Error(ErrorCode::canceled, "the lease of this output was lost or its job canceled");
+    }
+    try {
+        check_artifact_quota(store_->artifact_bytes(), static_cast<int64_t>(fs::file_size(partial, ec)),
+                             ctx_.config.max_artifact_bytes, "the artifact " + out.artifact);
+    } catch (const Error&) {
+        fs::remove(partial, ec);
+        throw;
     }
     fs::rename(partial, final_path, ec);
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());

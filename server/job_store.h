@@ -131,6 +131,9 @@ public:
     virtual JobPage list(const std::optional<JobState>& state, bool newest_first, int limit,
                          std::optional<int64_t> after_seq) = 0;
     virtual std::map<JobState, int64_t> count_by_state() = 0;
+    // Bytes of every artifact written (succeeded outputs of kept jobs): what
+    // the artifact quota (ServerConfig::max_artifact_bytes) is checked against.
+    virtual int64_t artifact_bytes() = 0;
 
     // The next work, its job now running (started_ms set on the first run).
     // An output claimed `max_attempts` times whose lease expired each time

@@ -248,6 +248,13 @@ std::map<JobState, int64_t> PgJobStore::count_by_state() {
     return counts;
 }
 
+int64_t PgJobStore::artifact_bytes() {
+    std::lock_guard<std::mutex> lock(m_);
+    const PgResult r =
+        conn_->exec("SELECT COALESCE(SUM(artifact_bytes), 0) FROM job_outputs WHERE state = 'succeeded'");
+    return r.i64(0, 0);
+}
+
 void PgJobStore::lock_outputs(const std::string& id) {
     conn_->exec("SELECT 1 FROM job_outputs WHERE job_id = $1 ORDER BY idx FOR UPDATE", {id});
 }

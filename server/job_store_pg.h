@@ -30,6 +30,7 @@ public:
     JobPage list(const std::optional<JobState>& state, bool newest_first, int limit,
                  std::optional<int64_t> after_seq) override;
     std::map<JobState, int64_t> count_by_state() override;
+    int64_t artifact_bytes() override;
     std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 3) override;
     bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;
     bool output_progress(const std::string& id, int output, double progress, const std::string& lease = {}) override;

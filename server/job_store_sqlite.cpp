@@ -130,6 +130,12 @@ std::map<JobState, int64_t> SqliteJobStore::count_by_state() {
     return counts;
 }
 
+int64_t SqliteJobStore::artifact_bytes() {
+    std::lock_guard<std::mutex> lock(m_);
+    Impl::Stmt s(*impl_, "SELECT COALESCE(SUM(artifact_bytes), 0) FROM job_outputs WHERE state = 'succeeded'");
+    return s.step() ? s.i64(0) : 0;
+}
+
 std::optional<JobClaim> SqliteJobStore::claim_next(int64_t now_ms, int) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);

@@ -12,6 +12,7 @@
 #include "importer/importer.h"
 #include "core/error.h"
 #include "server/context.h"
+#include "server/artifact_quota.h"
 #include "server/etag.h"
 #include "server/http_util.h"
 #include "server/job_runner.h"
@@ -60,6 +61,18 @@ void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Res
     JobSpec spec = parse_job_spec(*up.job_json, job.inputs, ctx.config);
     job.outputs = std::move(spec.outputs);
     job.callback_url = std::move(spec.callback_url);
+    int64_t estimate = 0;
+    for (const JobOutput& o : job.outputs)
+        estimate += estimated_artifact_bytes(o, job.inputs[static_cast<size_t>(o.file)].bytes);
+    try {
+        check_artifact_quota(jobs_of(ctx).store().artifact_bytes(), estimate, ctx.config.max_artifact_bytes,
+                             "the job's artifacts, estimated");
+    } catch (const Error& e) {
+        // 507 Insufficient Storage (RFC 4918 §11.5), as for stored files: the
+        // request is fine, the service cannot keep its results now.
+        send_problem_with_status(res, 507, e.code(), e.what());
+        return;
+    }
     jobs_of(ctx).submit(job, up.bytes);
     res.set_header("Location", job_url(job.id));
     res.set_header("Retry-After", std::to_string(kJobPollAfterS));

@@ -23,6 +23,7 @@
 #include "renderer/image_module.h"
 #include "server/api_keys.h"
 #include "server/context.h"
+#include "server/artifact_quota.h"
 #include "server/cors.h"
 #include "server/data_dir_lock.h"
 #include "server/http_server.h"
@@ -329,6 +330,7 @@ int run_server(const ServerConfig& given) {
     // Before anything in the data directory is touched (scratch clean-up, job recovery).
     std::optional<DataDirLock> data_dir_lock;
     if (config.job_store.empty()) data_dir_lock.emplace(config.data_dir);
+    if (config.max_artifact_bytes == 0) config.max_artifact_bytes = default_artifact_quota(config.data_dir);
     ServerContext ctx(config);
     // Opened (and recovered) before listening: a bad job database stops the start.
     JobService jobs(ctx);
@@ -381,6 +383,7 @@ int run_server(const ServerConfig& given) {
                                    {"max_queued_jobs", config.max_queued_jobs},
                                    {"job_retention_s", config.job_retention_s},
                                    {"max_stored_bytes", config.max_stored_bytes},
+                                   {"max_artifact_bytes", config.max_artifact_bytes},
                                    {"instance", config.instance_id},
                                    {"webhooks_signed", !config.webhook_secret.empty()},
                                    {"webhook_allow_private", config.webhook_allow_private},
