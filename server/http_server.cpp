@@ -47,6 +47,15 @@ constexpr int kLingerIdleMs = 500;
 // Read buffer of a connection, as cpp-httplib's own SocketStream (its line
 // reader asks for one byte at a time).
 constexpr size_t kReadBufferBytes = 4096;
+// Connections beyond the caps that may still be served as health probes at
+// once: enough for an orchestrator's liveness and readiness probes and a
+// balancer's checks, few enough that they cannot be used to pass the caps.
+constexpr int kProbeSlots = 8;
+// A probe's request line must arrive within this time (probes send it at
+// once); a connection that is slower is refused like any other beyond the caps.
+constexpr int kProbeLineWaitMs = 500;
+// The request line of a probe fits in this many bytes.
+constexpr size_t kProbeLineBytes = 64;
 // Admission follows the accept order (below); a connection whose turn does not
 // come within this time (its predecessor's thread never got to decide) is
 // decided anyway, so one lost turn cannot stall every later connection.
@@ -298,6 +307,27 @@ private:
     double body_bytes_ = 0;
 };
 
+// True when the connection's first bytes (peeked, not consumed) are the
+// request line of a health probe, arriving within kProbeLineWaitMs.
+bool is_health_probe(socket_t sock) {
+    const auto until = Clock::now() + std::chrono::milliseconds(kProbeLineWaitMs);
+    char line[kProbeLineBytes + 1] = {};
+    for (;;) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
+        if (left <= 0 || !wait_for(sock, POLLIN, static_cast<int>(left))) return false;
+        const ssize_t n = ::recv(sock, line, kProbeLineBytes, MSG_PEEK);
+        if (n <= 0) return false;
+        const std::string_view head(line, static_cast<size_t>(n));
+        if (head.find("\r\n") != std::string_view::npos || static_cast<size_t>(n) == kProbeLineBytes) {
+            for (const char* probe : {"GET /healthz ", "GET /readyz ", "HEAD /healthz ", "HEAD /readyz "})
+                if (head.rfind(probe, 0) == 0) return true;
+            return false;
+        }
+        // Not all of the line yet: wait for more than what is buffered.
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+}
+
 // Closes without a reset: the write side first, then unread input drained
 // briefly (the client may still be sending a body we did not read).
 void close_lingering(socket_t sock) {
@@ -316,6 +346,7 @@ void close_lingering(socket_t sock) {
 struct GuardedServer::Tracker {
     std::mutex mutex;
     int total = 0;
+    std::atomic<int> probes{0};  // connections served in the reserved probe slots
     std::map<std::string, int> per_client;
     // Connections are admitted in accept order: a client's fifth connection
     // under a cap of four is the one refused, however the pool's threads are
@@ -399,14 +430,10 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
         }
     }
     if (!admitted) {
-        log_event("connection_refused", "{\"remote\":\"" + client + "\",\"reason\":\"connection cap\"}");
-        send_canned_problem(sock, 503, "Service Unavailable", ServiceCode::overloaded,
-                            "too many open connections (from this address or in all); retry later",
-                            limits_.retry_after_s);
-        close_lingering(sock);
+        probe_or_refuse(sock, client, peer_port);
         return false;
     }
-    const bool ok = serve_connection(sock, client, peer_port);
+    const bool ok = serve_connection(sock, client, peer_port, limits_.max_requests_per_connection);
     {
         std::lock_guard lock(tracker_->mutex);
         --tracker_->total;
@@ -415,7 +442,20 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
     return ok;
 }
 
-bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip, int remote_port) {
+void GuardedServer::probe_or_refuse(socket_t sock, const std::string& client, int port) {
+    if (tracker_->probes.fetch_add(1) < kProbeSlots && is_health_probe(sock)) {
+        serve_connection(sock, client, port, 1);
+        --tracker_->probes;
+        return;
+    }
+    --tracker_->probes;
+    log_event("connection_refused", "{\"remote\":\"" + client + "\",\"reason\":\"connection cap\"}");
+    send_canned_problem(sock, 503, "Service Unavailable", ServiceCode::overloaded,
+                        "too many open connections (from this address or in all); retry later", limits_.retry_after_s);
+    close_lingering(sock);
+}
+
+bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip, int remote_port, int max_requests) {
     Connection c;
     c.sock = sock;
     c.listening = &svr_sock_;
@@ -428,7 +468,7 @@ bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip
 
     bool ok = false;
     const int idle_ms = static_cast<int>(limits_.keep_alive_timeout_s * 1000);
-    for (int served = 0; served < limits_.max_requests_per_connection && svr_sock_ != INVALID_SOCKET; ++served) {
+    for (int served = 0; served < max_requests && svr_sock_ != INVALID_SOCKET; ++served) {
         // Wait for the next request's first byte (a stopping server ends the wait).
         bool readable = c.buffered();
         for (int waited = 0; !readable && waited < idle_ms && svr_sock_ != INVALID_SOCKET; waited += kPollStepMs)
@@ -437,7 +477,7 @@ bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip
 
         RequestStream stream(c, limits_);
         bool closed = false;
-        const bool last = served + 1 == limits_.max_requests_per_connection;
+        const bool last = served + 1 == max_requests;
         ok = process_request(stream, last, closed, nullptr);
         // A request that failed before routing got no answer from cpp-httplib.
         if (stream.written() == 0 && stream.header_bytes() > 0 && c.failure != ReadFailure::none) {

@@ -14,6 +14,10 @@
 //  - connections are capped in total and per client address (503 beyond), and
 //    each runs on a thread of an elastic pool sized above the cap, so a slow
 //    client delays only itself and a probe always finds a thread;
+//  - beyond the caps, a few reserved slots still answer a health probe
+//    (GET or HEAD of /healthz or /readyz, one request, then closed), so that an
+//    orchestrator never restarts a healthy instance because clients (or one
+//    balancer's address) hold every connection;
 //  - the listen backlog is SOMAXCONN (cpp-httplib listens with 5: bursts were
 //    reset), and TCP_NODELAY is set (a keep-alive answer written in two parts
 //    otherwise waits ~40 ms for the client's delayed ACK, Nagle's algorithm);
@@ -82,7 +86,10 @@ public:
 
 private:
     bool process_and_close_socket(socket_t sock) override;
-    bool serve_connection(socket_t sock, const std::string& remote_ip, int remote_port);
+    bool serve_connection(socket_t sock, const std::string& remote_ip, int remote_port, int max_requests);
+    // A connection beyond the caps: served when it is a health probe and a
+    // reserved slot is free, else refused with 503.
+    void probe_or_refuse(socket_t sock, const std::string& client, int port);
 
     struct Tracker;
     ConnectionLimits limits_;

@@ -277,7 +277,7 @@ def test_connections_capped_per_client(own_server):
     idle = [connect(s.url) for _ in range(4)]
     time.sleep(0.3)
     with connect(s.url) as sock:
-        sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+        sock.sendall(b"GET /v1/jobs HTTP/1.1\r\nHost: x\r\n\r\n")
         status, headers, body = read_response(sock, timeout=5)
         problem_of(status, headers, body, 503, "overloaded")
         assert int(headers["retry-after"]) >= 1
@@ -285,6 +285,50 @@ def test_connections_capped_per_client(own_server):
         sock.close()
     time.sleep(0.5)
     healthy(s.url)
+
+
+@pytest.mark.parametrize("cap", [["--max-connections-per-client", "4"],
+                                 ["--max-connections", "4", "--max-connections-per-client", "4"]],
+                         ids=["per_client", "in_all"])
+def test_health_probes_answered_beyond_the_connection_caps(own_server, cap):
+    """Slow clients holding every connection (from one address, as behind a balancer, or in all) must not make
+    the health probes fail: an orchestrator would restart a healthy instance. Probes beyond the caps are
+    served in reserved slots, one request each; any other request there still gets 503."""
+    s = own_server(args=cap)
+    idle = [connect(s.url) for _ in range(4)]
+    for sock in idle:
+        sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Slow: ")  # never finished
+    time.sleep(0.3)
+    for path in ("/healthz", "/readyz"):
+        for method in ("GET", "HEAD"):
+            t = time.monotonic()
+            with connect(s.url) as sock:
+                sock.sendall(f"{method} {path} HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+                status, headers, body = read_response(sock, timeout=5) if method == "GET" else head_response(sock)
+                assert status == 200, (method, path, status, body[:200])
+                assert headers.get("connection") == "close"
+            assert time.monotonic() - t < 2
+    r = requests.get(s.url + "/healthz", timeout=5)
+    assert r.status_code == 200
+    with connect(s.url) as sock:
+        sock.sendall(b"GET /v1/jobs HTTP/1.1\r\nHost: x\r\n\r\n")
+        problem_of(*read_response(sock, timeout=5), 503, "overloaded")
+    for sock in idle:
+        sock.close()
+
+
+def head_response(sock, timeout=5):
+    """(status, headers) of the answer to a HEAD request (no body follows)."""
+    sock.settimeout(timeout)
+    data = b""
+    while b"\r\n\r\n" not in data:
+        chunk = sock.recv(65536)
+        if not chunk:
+            raise ConnectionError(f"closed before an answer: {data[:200]!r}")
+        data += chunk
+    lines = data.partition(b"\r\n\r\n")[0].decode("latin-1").split("\r\n")
+    headers = {k.strip().lower(): v.strip() for k, v in (line.split(":", 1) for line in lines[1:])}
+    return int(lines[0].split()[1]), headers, b""
 
 
 def test_keep_alive_answers_without_delay(url):
