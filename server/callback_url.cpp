@@ -37,11 +37,14 @@ bool public_v6(const unsigned char* b) {
     return true;
 }
 
-// The literal address of `host`, when it is one.
+// The literal address of `host`, when it is one. IPv4 in every spelling the
+// resolver (getaddrinfo, so the HTTP client at delivery) takes as an address,
+// which is inet_aton's: 0x7f000001, 2130706433, 0177.0.0.1, 127.1 and 0 are
+// all addresses, not names, and must be judged as such at submission.
 bool literal_address(const std::string& host, sockaddr_storage& out) {
     out = {};
     auto* v4 = reinterpret_cast<sockaddr_in*>(&out);
-    if (inet_pton(AF_INET, host.c_str(), &v4->sin_addr) == 1) {
+    if (inet_aton(host.c_str(), &v4->sin_addr) != 0) {
         v4->sin_family = AF_INET;
         return true;
     }

@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/json_limits.h"
+#include "server/query_values.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -20,22 +21,18 @@ using nlohmann::json;
 
 [[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
 
-// Numbers may arrive as JSON numbers or (from query parameters) as strings.
+// Options take JSON types only: query parameters and form fields were typed
+// at the edge by the option they set (server/query_values.h).
 double number(const json& v, const std::string& key) {
     if (v.is_number()) return v.get<double>();
-    if (v.is_string()) {
-        const std::string s = v.get<std::string>();
-        char* end = nullptr;
-        const double d = std::strtod(s.c_str(), &end);
-        if (!s.empty() && end && *end == '\0' && std::isfinite(d)) return d;
-    }
     bad("option '" + key + "' must be a number");
 }
 
 int integer(const json& v, const std::string& key) {
-    const double d = number(v, key);
-    if (d != std::floor(d) || d < -2147483648.0 || d > 2147483647.0) bad("option '" + key + "' must be an integer");
-    return static_cast<int>(d);
+    if (!v.is_number_integer()) bad("option '" + key + "' must be an integer");
+    const auto n = v.get<long long>();
+    if (n < -2147483648LL || n > 2147483647LL) bad("option '" + key + "' must be an integer");
+    return static_cast<int>(n);
 }
 
 std::string text(const json& v, const std::string& key) {
@@ -43,14 +40,8 @@ std::string text(const json& v, const std::string& key) {
     return v.get<std::string>();
 }
 
-// true/false, or (query parameters) "true"/"false"/"1"/"0".
 bool boolean(const json& v, const std::string& key) {
     if (v.is_boolean()) return v.get<bool>();
-    if (v.is_string()) {
-        const std::string s = v.get<std::string>();
-        if (s == "true" || s == "1") return true;
-        if (s == "false" || s == "0") return false;
-    }
     bad("option '" + key + "' must be true or false");
 }
 
@@ -83,9 +74,14 @@ Vec3 vec3(const json& v, const std::string& key) {
     if (v.is_array() && v.size() == 3 && v[0].is_number() && v[1].is_number() && v[2].is_number()) {
         r = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
     } else if (v.is_string()) {
+        // "x,y,z" (query parameters): three decimal numbers, nothing else.
         const std::string s = v.get<std::string>();
-        char tail = 0;
-        if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &r.x, &r.y, &r.z, &tail) != 3) bad("option '" + key + "' must be x,y,z");
+        const size_t a = s.find(','), b = a == std::string::npos ? a : s.find(',', a + 1);
+        const auto x = decimal_number(std::string_view(s).substr(0, a));
+        const auto y = b == std::string::npos ? std::nullopt : decimal_number(std::string_view(s).substr(a + 1, b - a - 1));
+        const auto z = b == std::string::npos ? std::nullopt : decimal_number(std::string_view(s).substr(b + 1));
+        if (!x || !y || !z) bad("option '" + key + "' must be x,y,z (three decimal numbers)");
+        r = {*x, *y, *z};
     } else {
         bad("option '" + key + "' must be an array of 3 numbers");
     }
@@ -224,6 +220,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
     RenderRequest r;
     std::optional<int> width, height;
     for (const auto& [key, v] : o.items()) {
+        if (v.is_null()) continue;  // null: the option's default, as if it were absent
         if (key == "width" || key == "height") {
             const int n = integer(v, key);
             if (n < 1) bad("option '" + key + "' must be at least 1");
@@ -252,7 +249,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items())
-                if (!camera_field(r, ck, cv))
+                if (!cv.is_null() && !camera_field(r, ck, cv))
                     bad("unknown option " + quoted_name(ck) + " in 'camera' (camera options: " + kCameraOptions + ")");
         } else if (!camera_field(r, key, v)) {
             // Flat camera fields (query parameters) were tried last.

@@ -85,9 +85,7 @@ ServiceError no_such_file(const std::string& id) {
 }
 
 bool parse_bool(const json& v, const char* name) {
-    if (v.is_boolean()) return v.get<bool>();
-    if (v == "true") return true;
-    if (v == "false") return false;
+    if (v.is_boolean()) return v.get<bool>();  // query and form values are typed at the edge (query_values.h)
     throw Error(ErrorCode::invalid_argument, std::string("'") + name + "' must be true or false");
 }
 

@@ -7,6 +7,7 @@
 #include "importer/importer.h"
 #include "core/error.h"
 #include "core/json_limits.h"
+#include "server/query_values.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -74,7 +75,7 @@ void read_multipart(const httplib::Request& req, std::initializer_list<const cha
             throw Error(ErrorCode::invalid_argument, "option '" + name + "' is given more than once");
         if (!is_utf8(part.content))
             throw Error(ErrorCode::invalid_argument, "form field '" + name + "' must be UTF-8 text");
-        options[name] = part.content;
+        options[name] = query_value(name, part.content);
     }
 }
 
@@ -116,7 +117,7 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
         // not UTF-8 names no option and could not be written as JSON.
         if (!is_utf8(k) || !is_utf8(v))
             throw Error(ErrorCode::invalid_argument, "query parameter names and values must be UTF-8 text");
-        options[k] = v;
+        options[k] = query_value(k, v);
     }
 
     Upload up;

@@ -76,7 +76,10 @@ TEST(Webhooks, BadCallbackUrlsAreRefusedWithTheReason) {
     for (const char* url : {"http://127.0.0.1/", "http://10.1.2.3/", "http://169.254.169.254/latest/meta-data",
                             "http://192.168.0.10:8080/", "http://[::1]/", "http://[fd00::1]/",
                             "http://[::ffff:127.0.0.1]/", "http://localhost:8080/", "http://api.localhost/",
-                            "http://0.0.0.0/"}) {
+                            "http://0.0.0.0/",
+                            // Every spelling of an IPv4 address the resolver takes (inet_aton's):
+                            "http://0x7f000001/", "http://2130706433/", "http://0177.0.0.1/", "http://127.1/",
+                            "http://0/", "http://127.000.000.001/", "http://0xa.1.2.3/", "http://3232235530/"}) {
         EXPECT_NE(refusal(url).find("loopback, private or link-local"), std::string::npos) << url;
         EXPECT_EQ(refusal(url, true), "") << url;
     }

@@ -127,3 +127,53 @@ def test_scratch_dir_is_left_empty(url):
         scratch = os.path.join(scratch, names[0])
     assert os.listdir(scratch) == []
     assert oct(os.stat(scratch).st_mode & 0o777) == "0o700"
+
+
+# ---- strict option values ---------------------------------------------------------------------------------------
+# Query parameters and form fields are typed at the edge by the option they set; JSON values must have the JSON
+# type of the option. Before, `?width=0x10` rendered 16 px wide, `?width=1%00` 1 px, and JSON strings were taken
+# for integers and booleans.
+
+def test_query_integers_are_decimal_only(url):
+    for raw in ("width=0x10", "width=1%00", "width=%2B10", "width=10.0", "width=1e2", "width=%2010", "width="):
+        r = requests.post(f"{url}/v1/renders?{raw}&height=10", data=SCREW.read_bytes(),
+                          headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+        body = check_problem(r, 400, "invalid_argument")
+        assert "option 'width' must be a decimal integer" in body["detail"], (raw, body["detail"])
+    for raw in ("edge_width=0x1p1", "edge_width=inf", "edge_width=nan", "fov_deg=%2B30", "eye=0x10,0,0"):
+        r = requests.post(f"{url}/v1/renders?{raw}", data=SCREW.read_bytes(),
+                          headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+        check_problem(r, 400, "invalid_argument")
+    for raw in ("edges=yes", "shadows=TRUE", "edges=2"):
+        r = requests.post(f"{url}/v1/renders?{raw}", data=SCREW.read_bytes(),
+                          headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+        body = check_problem(r, 400, "invalid_argument")
+        assert "must be true, false, 1 or 0" in body["detail"], (raw, body["detail"])
+    # The forms that are meant: decimal integers and numbers, true/false/1/0.
+    r = requests.post(f"{url}/v1/renders?width=64&height=48&edges=1&shadows=false&edge_width=1.5&fov_deg=3e1",
+                      data=SCREW.read_bytes(), headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+
+
+def test_json_option_values_have_json_types(url):
+    for options, name in (({"width": "100"}, "width"), ({"width": 100.5}, "width"), ({"shadows": "true"}, "shadows"),
+                          ({"edges": 1}, "edges"), ({"antialias": "4"}, "antialias"), ({"fov_deg": "30"}, "fov_deg")):
+        r = requests.post(url + "/v1/renders", timeout=TIMEOUT,
+                          files={"file": ("s.step", SCREW.read_bytes()), "options": (None, json.dumps(options))})
+        body = check_problem(r, 400, "invalid_argument")
+        assert f"option '{name}'" in body["detail"], (options, body["detail"])
+
+
+def test_null_means_the_default_in_renders_and_jobs_alike(url):
+    options = {"width": None, "height": 40, "edges": None, "camera": {"view": None}}
+    r = requests.post(url + "/v1/renders", timeout=TIMEOUT,
+                      files={"file": ("s.step", SCREW.read_bytes()), "options": (None, json.dumps(options))})
+    assert r.status_code == 200, r.text[:300]
+    spec = {"outputs": [{"file": 0, "type": "render", "options": options},
+                        {"file": 0, "type": "render", "options": None}]}
+    r = requests.post(url + "/v1/jobs", timeout=TIMEOUT,
+                      files=[("file", ("s.step", SCREW.read_bytes(), "application/octet-stream")),
+                             ("job", (None, json.dumps(spec), "application/json"))])
+    assert r.status_code == 202, r.text[:300]
+    # The job keeps no nulls: its document shows the options that apply.
+    assert [o["options"] for o in r.json()["outputs"]] == [{"height": 40, "camera": {}}, {}]

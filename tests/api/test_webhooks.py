@@ -169,6 +169,9 @@ def test_callback_urls_are_checked_before_202(url, own_server):
         "http://169.254.169.254/latest/meta-data": "loopback, private or link-local",
         "http://[::1]/x": "loopback, private or link-local",
         "http://localhost:9/x": "loopback, private or link-local",
+        # Every spelling of loopback the resolver takes as an address (inet_aton's), refused at submission:
+        **{f"http://{host}:9/x": "loopback, private or link-local"
+           for host in ("0x7f000001", "2130706433", "0177.0.0.1", "127.1", "0", "127.000.000.001")},
     }
     for callback, reason in cases.items():
         body = check_problem(submit(s.url, screw, job_spec(callback)), 400, "invalid_argument")
