@@ -60,6 +60,20 @@ std::optional<long long> decimal_integer(std::string_view s) {
     return n;
 }
 
+std::optional<std::vector<double>> decimal_list(std::string_view text, size_t min_count, size_t max_count) {
+    std::vector<double> out;
+    for (size_t start = 0;;) {
+        const size_t comma = text.find(',', start);
+        const auto d = decimal_number(text.substr(start, comma == std::string_view::npos ? comma : comma - start));
+        if (!d || out.size() == max_count) return std::nullopt;
+        out.push_back(*d);
+        if (comma == std::string_view::npos) break;
+        start = comma + 1;
+    }
+    if (out.size() < min_count) return std::nullopt;
+    return out;
+}
+
 nlohmann::json query_value(const std::string& key, const std::string& text) {
     if (kIntegerOptions.count(key)) {
         if (const auto n = decimal_integer(text)) return *n;

@@ -75,13 +75,9 @@ Vec3 vec3(const json& v, const std::string& key) {
         r = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
     } else if (v.is_string()) {
         // "x,y,z" (query parameters): three decimal numbers, nothing else.
-        const std::string s = v.get<std::string>();
-        const size_t a = s.find(','), b = a == std::string::npos ? a : s.find(',', a + 1);
-        const auto x = decimal_number(std::string_view(s).substr(0, a));
-        const auto y = b == std::string::npos ? std::nullopt : decimal_number(std::string_view(s).substr(a + 1, b - a - 1));
-        const auto z = b == std::string::npos ? std::nullopt : decimal_number(std::string_view(s).substr(b + 1));
-        if (!x || !y || !z) bad("option '" + key + "' must be x,y,z (three decimal numbers)");
-        r = {*x, *y, *z};
+        const auto xyz = decimal_list(v.get<std::string>(), 3, 3);
+        if (!xyz) bad("option '" + key + "' must be x,y,z (three decimal numbers)");
+        r = {(*xyz)[0], (*xyz)[1], (*xyz)[2]};
     } else {
         bad("option '" + key + "' must be an array of 3 numbers");
     }
@@ -274,12 +270,12 @@ const char* aov_name(Aov a) {
 
 Background parse_background(const std::string& s, const std::string& what) {
     if (s == "transparent") return {};
-    double c[4] = {0, 0, 0, 1};
-    char tail = 0;
-    const int n = std::sscanf(s.c_str(), "%lf,%lf,%lf,%lf%c", &c[0], &c[1], &c[2], &c[3], &tail);
-    if (n != 3 && n != 4)
+    auto given = decimal_list(s, 3, 4);
+    if (!given)
         throw Error(ErrorCode::invalid_argument,
                     what + " must be r,g,b or r,g,b,a in [0,1], or transparent (got '" + s.substr(0, 64) + "')");
+    std::vector<double>& c = *given;
+    if (c.size() == 3) c.push_back(1);  // opaque
     for (double x : c)
         if (!(x >= 0 && x <= 1))
             throw Error(ErrorCode::invalid_argument,
@@ -327,15 +323,13 @@ double parse_edge_width(double w, const std::string& what) {
 }
 
 Color parse_rgb(const std::string& s, const std::string& what) {
-    double c[3] = {0, 0, 0};
-    char tail = 0;
-    if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &c[0], &c[1], &c[2], &tail) != 3)
-        throw Error(ErrorCode::invalid_argument, what + " must be r,g,b in [0,1] (got '" + s.substr(0, 64) + "')");
-    for (double x : c)
+    const auto c = decimal_list(s, 3, 3);
+    if (!c) throw Error(ErrorCode::invalid_argument, what + " must be r,g,b in [0,1] (got '" + s.substr(0, 64) + "')");
+    for (double x : *c)
         if (!(x >= 0 && x <= 1))
             throw Error(ErrorCode::invalid_argument,
                         what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
-    return {static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])};
+    return {static_cast<float>((*c)[0]), static_cast<float>((*c)[1]), static_cast<float>((*c)[2])};
 }
 
 void apply_background(const Background& bg, RenderOptions& options) {

@@ -177,3 +177,15 @@ def test_null_means_the_default_in_renders_and_jobs_alike(url):
     assert r.status_code == 202, r.text[:300]
     # The job keeps no nulls: its document shows the options that apply.
     assert [o["options"] for o in r.json()["outputs"]] == [{"height": 40, "camera": {}}, {}]
+
+
+def test_colour_and_point_lists_are_decimal_numbers(url):
+    """"r,g,b" and "x,y,z" texts are decimal numbers separated by commas: no hex floats, spaces or signs '+'."""
+    for raw in ("background=0x1p-1,0,0", "background=%201,1,1", "edge_color=%2B1,0,0", "eye=1,2", "eye=1,2,3,4",
+                "target=1,,3", "background=1,1,1,1,1"):
+        r = requests.post(f"{url}/v1/renders?{raw}", data=SCREW.read_bytes(),
+                          headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+        check_problem(r, 400, "invalid_argument")
+    r = requests.post(f"{url}/v1/renders?width=32&height=24&background=1,1,1,0.5&edge_color=0,0,1e-1&edges=true",
+                      data=SCREW.read_bytes(), headers={"Content-Type": "application/octet-stream"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
