@@ -3,7 +3,6 @@ to completion, artifacts download and decode (images) or re-import with the
 same face count (STEP/IGES); paging; 404s and traversal; every validation
 error before 202; DELETE of a queued and a running job; the job queue bound;
 retention; and recovery after the service is killed (SIGKILL) under a job."""
-import datetime
 import http.client
 import json
 import os
@@ -526,51 +525,53 @@ def test_twice_interrupted_job_fails_with_the_restart_reason(own_server, tmp_pat
     healthy(s3.url)
 
 
-def ms(rfc3339):
-    """Unix ms of an RFC 3339 UTC time as the API writes it."""
-    return round(datetime.datetime.fromisoformat(rfc3339.replace("Z", "+00:00")).timestamp() * 1000)
-
-
 @sqlite_only
 def test_random_sigkills_fail_no_job(own_server, tmp_path):
     """16 jobs of 6 outputs, and the service SIGKILLed 14 times at random moments while they run, restarted
     each time on its data directory: every job succeeds, each output once, none lost. A crash counts only
     against the output it cut short (3 runs each by default), not against its queued or finished siblings: under
-    one budget of 2 runs per job, 12 of 16 such jobs failed `interrupted`, outputs that never started included."""
+    one budget of 2 runs per job, 12 of 16 such jobs failed `interrupted`, outputs that never started included.
+    Each kill comes at a random moment after the restarted service has finished at least one more output, as
+    crashes independent of the work would: a service killed faster than it can finish anything fails an
+    output under any budget, and that is not what this is about."""
     rng = random.Random(46)  # the kill moments vary the same way in every run
     data = tmp_path / "data"
-    # One runner, and kills further apart than the slowest output's run (a first render in a new process
-    # included): a crash then cuts an output short once, never in every run, which is the case the
-    # per-output budget is for. (Kills faster than an output can finish fail it under any budget.)
     args = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
-    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 1000, "height": 750, "edges": True, "shadows": True}},
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 400, "height": 300, "edges": True}},
                         {"file": 0, "type": "conversion", "format": "stl"}] * 3}
     s = own_server(args=args, data_dir=data)
     ids = [accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))["id"] for _ in range(16)]
+
+    def finished_outputs():
+        listed = requests.get(s.url + "/v1/jobs", params={"limit": 100}, timeout=TIMEOUT).json()["jobs"]
+        return sum(o["state"] == "succeeded" for j in listed for o in j["outputs"])
+
     kills = 0
     while kills < 14:
-        time.sleep(rng.uniform(1.0, 1.8))
-        states = [get_job(s.url, i)["state"] for i in ids]
-        if all(st in ("succeeded", "failed") for st in states):
+        since = finished_outputs()
+        deadline = time.monotonic() + 60
+        while (done := finished_outputs()) == since and done < 96:
+            assert time.monotonic() < deadline, "no output finished within 60 s of a restart"
+            time.sleep(0.02)
+        if done == 96:
             break  # all done before the kills ran out: the rest would test nothing
+        time.sleep(rng.uniform(0.0, 0.4))
         s.proc.kill()
         s.proc.wait(timeout=10)
         kills += 1
         s = own_server(args=args, data_dir=data)
     jobs = [wait_finished(s.url, i, timeout=180) for i in ids]
-    durations = sorted(ms(o["finished_at"]) - ms(o["started_at"]) for j in jobs for o in j["outputs"]
-                       if o.get("started_at") and o.get("finished_at"))
-    runs = (f"{kills} kills; output run times p50 {durations[len(durations) // 2]} ms, max {durations[-1]} ms; "
-            f"jobs run {sum(j['attempts'] for j in jobs)} times in all")
+    runs = f"{kills} kills; jobs run {sum(j['attempts'] for j in jobs)} times in all"
     print(runs)
-    assert kills >= 10, f"only {kills} kills happened while jobs ran: the test lost its point ({runs})"
+    assert kills == 14, f"only {kills} kills happened while jobs ran: the test lost its point ({runs})"
     listed = requests.get(s.url + "/v1/jobs", params={"limit": 100}, timeout=TIMEOUT).json()["jobs"]
     assert sorted(j["id"] for j in listed) == sorted(ids)  # none lost, none duplicated
     failed = [(j["id"], j.get("error")) for j in jobs if j["state"] != "succeeded"]
     assert not failed, f"{len(failed)} of 16 jobs failed ({runs}): {failed[:3]}"
     for j in jobs:
         assert [o["state"] for o in j["outputs"]] == ["succeeded"] * 6
-        assert j["attempts"] >= 1
+    cut = sum(j["attempts"] for j in jobs) - 16
+    assert cut >= 10, f"only {cut} kills cut a job short ({runs})"
 
 
 def test_graceful_stop_requeues_without_counting_the_run(own_server, tmp_path):
