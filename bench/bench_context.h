@@ -15,8 +15,8 @@
 #include "importer/importer.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "renderer/scene.h"
-#include "renderer/scene_ops.h"
+#include "core/scene.h"
+#include "core/scene_ops.h"
 
 namespace nurbsrt::bench {
 

@@ -26,7 +26,7 @@
 #include <string>
 
 #include "bench/bench_context.h"
-#include "renderer/heap_tuning.h"
+#include "core/heap_tuning.h"
 #include "renderer/render.h"
 
 namespace {

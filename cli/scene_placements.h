@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene_ops.h"
+#include "core/scene_ops.h"
 
 namespace nurbsrt::cli {
 

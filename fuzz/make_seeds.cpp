@@ -5,8 +5,8 @@
 #include <fstream>
 #include <string>
 
-#include "renderer/scene.h"
-#include "renderer/scene_io.h"
+#include "core/scene.h"
+#include "core/scene_io.h"
 
 using namespace nurbsrt;
 

@@ -21,8 +21,8 @@
 #include <thread>
 
 #include "core/error.h"
-#include "renderer/executable_path.h"
-#include "renderer/scene_io.h"
+#include "core/executable_path.h"
+#include "core/scene_io.h"
 
 namespace nurbsrt {
 namespace {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "renderer/scene_ops.h"
+#include "core/scene_ops.h"
 
 namespace nurbsrt {
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene_ops.h"
-#include "renderer/triangle_mesh.h"
+#include "core/scene_ops.h"
+#include "core/triangle_mesh.h"
 
 namespace nurbsrt {
 

@@ -23,7 +23,7 @@
 #include <Geom_Surface.hxx>
 #include <GeomAdaptor_Curve.hxx>
 
-#include "renderer/vec.h"
+#include "core/vec.h"
 
 namespace nurbsrt::occt {
 

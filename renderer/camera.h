@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene.h"
-#include "renderer/vec.h"
+#include "core/scene.h"
+#include "core/vec.h"
 
 namespace nurbsrt {
 

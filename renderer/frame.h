@@ -23,11 +23,11 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "renderer/heap_tuning.h"
+#include "core/heap_tuning.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render.h"
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "core/error.h"
-#include "renderer/executable_path.h"
+#include "core/executable_path.h"
 #include "renderer/render.h"
 
 namespace nurbsrt {

@@ -10,7 +10,7 @@
 #pragma once
 
 #include "renderer/camera.h"
-#include "renderer/vec.h"
+#include "core/vec.h"
 
 namespace nurbsrt {
 

@@ -53,8 +53,8 @@
 #include <string_view>
 
 #include "renderer/camera.h"
-#include "renderer/nurbs.h"
-#include "renderer/scene.h"
+#include "core/nurbs.h"
+#include "core/scene.h"
 #include "renderer/span_basis.h"
 #include "renderer/surface_patches.h"
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 #include "renderer/passes.h"
 
 namespace nurbsrt {

@@ -7,7 +7,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 #include "renderer/span_basis.h"
 
 namespace nurbsrt {

@@ -45,7 +45,7 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

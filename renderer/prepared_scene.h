@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "renderer/newton.h"
-#include "renderer/scene.h"
-#include "renderer/trim.h"
+#include "core/scene.h"
+#include "core/trim.h"
 
 namespace nurbsrt {
 

@@ -13,7 +13,7 @@
 #include "core/error.h"
 #include "renderer/frame.h"
 #include "renderer/mesh_screen_points.h"
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 #include "renderer/passes.h"
 #include "renderer/pixel_solver.h"
 #include "renderer/shadow_rays.h"

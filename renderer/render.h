@@ -17,7 +17,7 @@
 #include "renderer/newton.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/prepared_scene.h"
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

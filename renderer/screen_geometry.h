@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "renderer/scene.h"
-#include "renderer/vec.h"
+#include "core/scene.h"
+#include "core/vec.h"
 
 namespace nurbsrt::screen {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 
 namespace nurbsrt {
 

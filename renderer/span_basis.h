@@ -24,7 +24,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 
 namespace nurbsrt {
 

@@ -7,8 +7,8 @@
 
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "renderer/scene.h"
-#include "renderer/stage_clock.h"
+#include "core/scene.h"
+#include "core/stage_clock.h"
 
 namespace nurbsrt {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/stage_clock.h"
+#include "core/stage_clock.h"
 #include "server/context.h"
 #include "server/render_options.h"
 

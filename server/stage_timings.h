@@ -1,5 +1,5 @@
 // The stage timings of a render or a conversion answer, from the StageClock
-// (renderer/stage_clock.h) that ran from the start of the request: the
+// (core/stage_clock.h) that ran from the start of the request: the
 // timings_ms object of the JSON answers and the Server-Timing header, with the
 // same stages and the same total, so that both sum to it.
 #pragma once
@@ -10,7 +10,7 @@
 #include <span>
 #include <string>
 
-#include "renderer/stage_clock.h"
+#include "core/stage_clock.h"
 
 namespace nurbsrt {
 struct ConvertReport;

@@ -12,7 +12,7 @@
 
 #include "cli/scene_placements.h"
 #include "core/error.h"
-#include "renderer/scene_io.h"
+#include "core/scene_io.h"
 #include "server/upload.h"
 #include "tests/support/error_code_of.h"
 

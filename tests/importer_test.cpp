@@ -54,9 +54,9 @@
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
 #include "core/error.h"
-#include "renderer/nurbs.h"
-#include "renderer/scene.h"
-#include "renderer/trim.h"
+#include "core/nurbs.h"
+#include "core/scene.h"
+#include "core/trim.h"
 #include "tests/support/fixtures.h"
 
 namespace {

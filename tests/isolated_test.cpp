@@ -12,7 +12,7 @@
 
 #include "importer/isolated.h"
 #include "core/error.h"
-#include "renderer/scene_io.h"
+#include "core/scene_io.h"
 #include "tests/support/error_code_of.h"
 
 namespace {

@@ -1,5 +1,5 @@
-// Analytic checks of the NURBS evaluation core (renderer/nurbs.h).
-#include "renderer/nurbs.h"
+// Analytic checks of the NURBS evaluation core (core/nurbs.h).
+#include "core/nurbs.h"
 
 #include <gtest/gtest.h>
 

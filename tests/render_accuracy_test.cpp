@@ -70,8 +70,8 @@
 #include "renderer/newton.h"
 #include "renderer/preliminary_map.h"
 #include "renderer/render.h"
-#include "renderer/scene.h"
-#include "renderer/trim.h"
+#include "core/scene.h"
+#include "core/trim.h"
 #include "tests/support/fixtures.h"
 #include "tests/support/occt_distance.h"
 

@@ -8,7 +8,7 @@
 
 #include "renderer/camera.h"
 #include "core/error.h"
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 
 using namespace nurbsrt;
 

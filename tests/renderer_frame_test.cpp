@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "renderer/frame.h"
-#include "renderer/heap_tuning.h"
+#include "core/heap_tuning.h"
 
 namespace nurbsrt {
 namespace {

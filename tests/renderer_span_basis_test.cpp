@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "renderer/nurbs.h"
+#include "core/nurbs.h"
 #include "renderer/span_basis.h"
 #include "renderer/surface_patches.h"
 

@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "renderer/render.h"
-#include "renderer/stage_clock.h"
+#include "core/stage_clock.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "renderer/nurbs.h"
-#include "renderer/scene.h"
+#include "core/nurbs.h"
+#include "core/scene.h"
 
 namespace nurbsrt::testing {
 

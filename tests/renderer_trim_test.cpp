@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <random>
 
-#include "renderer/trim.h"
+#include "core/trim.h"
 
 using namespace nurbsrt;
 

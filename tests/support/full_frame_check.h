@@ -38,7 +38,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 class ReferenceIntersector;

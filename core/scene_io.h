@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

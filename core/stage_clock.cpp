@@ -1,4 +1,4 @@
-#include "renderer/stage_clock.h"
+#include "core/stage_clock.h"
 
 #include <algorithm>
 #include <cmath>

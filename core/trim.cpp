@@ -1,5 +1,5 @@
 // Grid-accelerated even-odd trim test (see trim.h).
-#include "renderer/trim.h"
+#include "core/trim.h"
 
 #include <algorithm>
 #include <cmath>

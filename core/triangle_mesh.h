@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "renderer/vec.h"
+#include "core/vec.h"
 
 namespace nurbsrt {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/vec.h"
+#include "core/vec.h"
 
 namespace nurbsrt {
 

@@ -7,7 +7,7 @@
 // a correct but slower path that allocates.
 #pragma once
 
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

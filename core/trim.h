@@ -18,7 +18,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

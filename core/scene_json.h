@@ -12,7 +12,7 @@
 #include <ostream>
 #include <string>
 
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 

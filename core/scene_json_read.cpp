@@ -7,10 +7,10 @@
 
 #include "core/error.h"
 #include "core/json_limits.h"
-#include "renderer/nurbs.h"
-#include "renderer/scene_io.h"
-#include "renderer/scene_json.h"
-#include "renderer/trim.h"
+#include "core/nurbs.h"
+#include "core/scene_io.h"
+#include "core/scene_json.h"
+#include "core/trim.h"
 
 namespace nurbsrt {
 namespace {

@@ -1,4 +1,4 @@
-#include "renderer/scene_ops.h"
+#include "core/scene_ops.h"
 
 #include <cmath>
 

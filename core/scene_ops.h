@@ -4,7 +4,7 @@
 
 #include <array>
 
-#include "renderer/scene.h"
+#include "core/scene.h"
 
 namespace nurbsrt {
 
