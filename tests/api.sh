@@ -34,9 +34,17 @@ if [ ! -s "$TMP/port" ]; then
   echo "api.sh: the server did not start; its log:"; cat "$TMP/server.log"; exit 1
 fi
 
+# NURBSRT_API_TESTS: the test files to run (names in tests/api/, space-separated;
+# scripts/test.sh --fast); default: all of them.
+targets=("$HERE/api")
+if [ -n "${NURBSRT_API_TESTS:-}" ]; then
+  targets=()
+  for f in $NURBSRT_API_TESTS; do targets+=("$HERE/api/$f"); done
+fi
+
 status=0
 NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_BIN="$BIN" NURBSRT_DATA_DIR="$TMP/data" \
-  "$PY" -m pytest -q -rs -p no:cacheprovider "$HERE/api" || status=$?
+  "$PY" -m pytest -q -rs -p no:cacheprovider "${targets[@]}" || status=$?
 
 if ! kill -0 "$SERVER_PID" 2>/dev/null; then
   echo "api.sh: the server died during the tests"; status=1
