@@ -79,7 +79,7 @@ void run_occt(BenchContext& ctx) {
                 if (inner[p]) {
                     dt_interior.push_back(d);
                     // A disagreement beyond the accuracy bound: which one claims the nearer hit
-                    // (OCCT's intersector is known to miss some near roots, STACK.md).
+                    // (OCCT's intersector misses some near roots, on grazing rays over folded faces).
                     if (d > 1e-6) (ours.image.z[p] < h.t ? interior_ours_nearer : interior_occt_nearer)++;
                 }
                 if (d <= 1e-6) ++within_1e6;

@@ -1,5 +1,5 @@
 // Depth-only rasterization of a triangle mesh with OSMesa: the hit distance t
-// (DESIGN.md "Camera and pixel rays") of every pixel's contract ray with the
+// (renderer/camera.h) of every pixel's contract ray with the
 // mesh, as a tessellating renderer sees the model. Used by `nurbsrt bench` to
 // compare exact NURBS hits against meshes of several deflections.
 //

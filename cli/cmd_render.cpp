@@ -1,5 +1,5 @@
 // nurbsrt render MODEL... -o image: direct ray tracing of the models' trimmed
-// NURBS faces, with optional AOV EXR and statistics JSON (DESIGN.md contracts).
+// NURBS faces, with optional AOV EXR and statistics JSON (the renderer's RenderImage and RenderStats).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 

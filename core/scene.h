@@ -1,7 +1,7 @@
 // The Scene: everything the renderer needs from a CAD file, as plain C++ data.
 // No OCCT types; the importer fills it, scene_io.h serializes it, the renderer
-// reads it. One Face per CAD face, numbered by the face-index contract of
-// DESIGN.md (faces[i].index == i + 1; 0 is background).
+// reads it. One Face per CAD face, numbered as the face AOV shows them
+// (faces[i].index == i + 1; 0 is background).
 #pragma once
 
 #include <cstdint>
@@ -77,7 +77,7 @@ struct Body {
     Color color;
 };
 
-// Wall-clock times of the import stages, milliseconds (DESIGN.md statistics contract).
+// Wall-clock times of the import stages, milliseconds (reported in the render statistics).
 struct ImportTimings {
     double read_ms = 0;
     double nurbs_convert_ms = 0;

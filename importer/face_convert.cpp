@@ -228,7 +228,8 @@ UVBox face_uv_box(const ConvertedFace& cf) {
     // Each direction's map is increasing: the box's corners map to the box.
     const Vec2 lo = cf.map.to_surface({b.u0, b.v0}), hi = cf.map.to_surface({b.u1, b.v1});
     b = {lo.x, hi.x, lo.y, hi.y};
-    // pcurves may stray slightly outside the surface's range (STACK.md); the
+    // pcurves may stray slightly outside the surface's range in real files
+    // (whose edges can lie 0.3 mm off their pcurves); the
     // Scene's box must lie inside the knot range.
     b.u0 = std::clamp(b.u0, su0, su1);
     b.u1 = std::clamp(b.u1, su0, su1);
@@ -257,7 +258,8 @@ NurbsSurface to_scene_surface(const Geom_BSplineSurface& s) {
             const gp_Pnt& p = poles(poles.LowerRow() + i, poles.LowerCol() + j);
             const double w =
                 weights != nullptr ? (*weights)(weights->LowerRow() + i, weights->LowerCol() + j) : 1.0;
-            // Rational iff a weight differs from 1: IsURational() alone misleads (STACK.md).
+            // Rational iff a weight differs from 1: IsURational() speaks of one
+            // direction only, so the weights are what tells.
             if (w != 1.0) n.rational = true;
             n.cp[static_cast<size_t>(i) * n.num_v + j] = Vec4{w * p.X(), w * p.Y(), w * p.Z(), w};
         }

@@ -117,7 +117,8 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
     for (int i = 1; i <= n; ++i) faces[static_cast<size_t>(i - 1)] = TopoDS::Face(model.faces.FindKey(i));
 
     try {
-        // NURBS conversion and geometry queries are thread-safe (STACK.md);
+        // NURBS conversion and geometry queries are thread-safe (only STEP/IGES
+        // reading and writing corrupt OCCT's heap when run concurrently);
         // every result lands in its own slot, so the outcome is deterministic.
         std::vector<FaceWork> work(static_cast<size_t>(n));
         const std::vector<size_t> first = first_instances(faces);

@@ -51,8 +51,8 @@ struct ImportOptions {
 
 // Reads `path` (format by content) and builds the Scene. Throws nurbsrt::Error:
 // io, unsupported_format, unreadable_file, no_faces, occt_failure. Thread-safe:
-// STEP/IGES reading is serialized internally (STACK.md: concurrent reads corrupt
-// OCCT's heap); conversion and meshing run outside that lock.
+// STEP/IGES reading is serialized internally (concurrent reads corrupt
+// OCCT's heap: its readers share global state); conversion and meshing run outside that lock.
 Scene import_file(const std::string& path, const ImportOptions& options = {});
 
 // What convert_file can write, chosen by the output file's extension. The CAD

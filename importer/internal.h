@@ -92,8 +92,8 @@ struct DocumentCloser {
 // The TDataStd_Name of an XDE label as UTF-8 ("" when it has none).
 std::string label_name(const TDF_Label& label);
 
-// Serializes STEP/IGES reading, transfer and writing process-wide (STACK.md:
-// concurrent use corrupts OCCT's heap).
+// Serializes STEP/IGES reading, transfer and writing process-wide (concurrent
+// use corrupts OCCT's heap: the readers and writers share global state).
 std::mutex& exchange_mutex();
 
 }  // namespace nurbsrt::occt

@@ -1,5 +1,6 @@
 // Import in a child process, so that a file that crashes, hangs or exhausts
-// memory in OCCT fails only its own request (DESIGN.md, robustness rules).
+// memory in OCCT fails only its own request (bad input loses nothing
+// but its own answer).
 //
 // The child is nurbsrt-worker (cli/worker_main.cpp, a small OCCT-only program
 // beside this one) run as `nurbsrt-worker import-worker IN OUT ...`, or this same

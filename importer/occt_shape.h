@@ -43,7 +43,7 @@ struct OcctModel {
 };
 
 // Reads STEP or IGES (format by content). Serialized by a process-wide mutex
-// (STACK.md: concurrent reads corrupt OCCT's heap). OCCT's console output goes
+// (concurrent reads corrupt OCCT's heap: its STEP/IGES readers share global state). OCCT's console output goes
 // to our log, never to stdout. Throws nurbsrt::Error. keep_document (implies
 // read_attributes) hands the XDE document to the caller in OcctModel::document.
 OcctModel read_model(const std::string& path, bool read_attributes, bool keep_document = false);

@@ -14,7 +14,7 @@ Camera::Camera(const CameraSpec& spec) : spec_(spec) {
     const Vec3 view = spec.target - spec.eye;
     if (!(length(view) > 0) || !std::isfinite(length(view)))
         throw Error(ErrorCode::invalid_argument, "camera: eye and target must differ");
-    // DESIGN.md: f = normalize(target - eye); r = normalize(cross(f, up)); u = cross(r, f)
+    // A right-handed camera frame: f = normalize(target - eye); r = normalize(cross(f, up)); u = cross(r, f)
     f_ = normalize(view);
     const Vec3 side = cross(f_, spec.up);
     if (!(length(side) > 1e-12 * length(spec.up)))

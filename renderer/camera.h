@@ -1,5 +1,5 @@
-// The camera and its pixel rays (DESIGN.md "Camera and pixel rays", fixed
-// contract), the named views fitted to a bounding box, and the paper's
+// The camera and its pixel rays (a fixed contract the
+// AOVs, the bench and the tests rely on), the named views fitted to a bounding box, and the paper's
 // projection of homogeneous control points to the image plane (Sisojevs & Glazs 2010,
 // "Projection to R^2", the x, y, w of eq. 8).
 #pragma once
@@ -99,7 +99,7 @@ public:
     double depth(Vec4 projected) const {
         return perspective() ? projected.z / projected.w : projected.w / projected.z;
     }
-    // Hit distance t (DESIGN.md) of a point on the ray through screen point s,
+    // Hit distance t (along the unit pixel ray) of a point on the ray through screen point s,
     // from its depth along f: perspective t = depth / (f . dir); orthographic t = depth.
     double hit_distance_from_depth(double depth_along_f, ScreenPoint s) const;
 

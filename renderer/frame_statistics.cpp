@@ -1,4 +1,4 @@
-// RenderStats of a frame from its buffers (DESIGN.md "Statistics and timing"):
+// RenderStats of a frame from its buffers (the counters render.h documents):
 // primary solves and their outcome, iterations, rescue by kind, hits and holes.
 #include <algorithm>
 

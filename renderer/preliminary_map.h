@@ -5,7 +5,7 @@
 // Rendering is offscreen with OSMesa (Mesa llvmpipe), OpenGL 4.5 core, into a
 // framebuffer object with GL_R32UI face ids (Face::index, 0 = background),
 // GL_R32F u and v (one attachment each, read straight into the map's arrays)
-// and GL_DEPTH_COMPONENT32F depth (STACK.md: these read back exactly). The paper
+// and GL_DEPTH_COMPONENT32F depth (float attachments read back bit-exact through glReadPixels on llvmpipe). The paper
 // packs the patch number and u, v into 8-bit RGB channels;
 // here ids are 32-bit and u, v float by default, and MapPrecision::rgb8 reproduces
 // the paper's 8-bit quantization of eq. (4) on readback, for comparison.

@@ -1,6 +1,6 @@
 // The frame: preliminary map -> per-pixel Newton from the map's (face, u, v) ->
 // trim test -> rescue from neighbouring pixels -> shading from the exact normal,
-// with the AOVs and statistics of DESIGN.md. Parallel over image rows with
+// with the AOVs and statistics that RenderImage and RenderStats describe below. Parallel over image rows with
 // oneTBB; every pixel's result depends only on the map and the first pass, so
 // the output is identical for any number of threads.
 #pragma once
@@ -144,7 +144,7 @@ RenderResult render(const PreparedScene& scene, const Camera& camera, const Rend
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options);
 
 // Writes by extension: .exr -> channels R, G, B, A, Z (float), face (uint32),
-// N.X, N.Y, N.Z, u, v (float) and iterations (uint32) (DESIGN.md AOVs);
+// N.X, N.Y, N.Z, u, v (float) and iterations (uint32) (the AOVs of RenderImage);
 // .png/.jpg/.tif -> 8-bit RGBA (RGB for jpg), colour sRGB-encoded (IEC 61966-2-1), alpha linear.
 // Throws Error(io) or Error(unsupported_format); Error(internal) when the
 // image writer module (image_module.h) cannot be loaded.

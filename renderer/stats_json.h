@@ -1,5 +1,5 @@
-// The statistics and timing object of a render (DESIGN.md, "Statistics and
-// timing"): the renderer's counters plus the stage timings of whoever ran the
+// The statistics and timing object of a render (RenderStats and the
+// stage timings): the renderer's counters plus the stage timings of whoever ran the
 // frame (import, encoding, a service's request handling).
 #pragma once
 

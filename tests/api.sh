@@ -7,7 +7,7 @@
 set -euo pipefail
 BIN=$(realpath "${1:?usage: tests/api.sh path/to/nurbsrt}")
 HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3   # python3 on PATH is another build without Debian's modules (STACK.md)
+PY=/usr/bin/python3   # python3 on PATH may be another build without Debian's python3-* modules
 
 TMP=$(mktemp -d)
 SERVER_PID=""

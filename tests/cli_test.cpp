@@ -229,8 +229,8 @@ TEST(Cli, ConvertToMeshAndJsonOutputs) {
 
 namespace {
 
-// `render` writes the image, the AOV EXR and the statistics object of the
-// DESIGN.md contract; a JSON scene file places copies of a model.
+// `render` writes the image, the AOV EXR and the statistics object
+// (RenderStats as stats_json writes it); a JSON scene file places copies of a model.
 TEST(CliRender, WritesImageAovAndContractStats) {
     const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-render-" + std::to_string(::getpid()));
     fs::create_directories(dir);

@@ -29,8 +29,8 @@
 //      face id agrees (or a different face at the same t that our hit point lies on:
 //      coincident faces / shared edges) on >= 99.9 %.
 //  * Disputes are settled with BRepExtrema_DistShapeShape from the claimed hit point
-//    to the claimed face (STACK.md: the intersector misses ~0.2 % of near roots on
-//    some models). If our hit lies on our face and is nearer than OCCT's (or OCCT
+//    to the claimed face (the intersector misses ~0.2 % of near roots on some
+//    models, seen on grazing rays over folded B-spline faces). If our hit lies on our face and is nearer than OCCT's (or OCCT
 //    has none), OCCT missed a root: "verified ours", not a failure. If OCCT's claimed
 //    hit does not lie on its face, OCCT's answer is spurious: also not our failure.
 // Printed per model, view and method (stdout and RecordProperty): samples, edge

@@ -1,4 +1,4 @@
-// Camera: DESIGN.md pixel-ray contract, the projection to R^2 and named views.
+// Camera: the pixel-ray contract of renderer/camera.h, the projection to R^2 and named views.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -96,7 +96,7 @@ struct Encodable {
     std::vector<uint8_t> pixels;
 };
 
-// EXR: every AOV as a channel of its own (DESIGN.md AOVs).
+// EXR: every AOV as a channel of its own (RenderImage's AOVs).
 Encodable exr_pixels(const RenderImage& img) {
     const size_t npx = static_cast<size_t>(img.width) * img.height;
     Encodable e;

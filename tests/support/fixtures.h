@@ -8,7 +8,7 @@
 // Generation is fast (all fixtures together well under a second).
 //
 // Not thread-safe with concurrent STEP/IGES reading elsewhere in the process
-// (STACK.md): call these from the test's main thread.
+// (OCCT's STEP/IGES readers share global state): call these from the test's main thread.
 #pragma once
 
 #include <gtest/gtest.h>
