@@ -10,7 +10,7 @@
 #include <string>
 
 #include "core/error.h"
-#include "renderer/gl_context.h"
+#include "renderer/map/gl_context.h"
 
 namespace nurbsrt {
 namespace {

@@ -20,8 +20,8 @@
 #include "renderer/image_module.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
-#include "server/render_options.h"
-#include "server/stage_timings.h"
+#include "server/render/render_options.h"
+#include "server/render/stage_timings.h"
 
 namespace nurbsrt::cli {
 namespace {

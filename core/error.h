@@ -2,7 +2,7 @@
 // model that can reach a user (CLI message, HTTP problem+json body, job error) is
 // an nurbsrt::Error with a stable code, so callers map codes to exit statuses /
 // HTTP statuses in one place each. The service's own conditions (no such route,
-// a full queue, a missing API key) are server/service_error.h's, not these.
+// a full queue, a missing API key) are server/common/service_error.h's, not these.
 #pragma once
 
 #include <stdexcept>

@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "fuzz/fuzz_common.h"
-#include "server/config.h"
-#include "server/job_spec.h"
+#include "server/common/config.h"
+#include "server/jobs/job_spec.h"
 
 using namespace nurbsrt;
 

@@ -2,7 +2,7 @@
 // cpp-httplib's request parsing (request line, headers, query, multipart body)
 // exactly as on a connection, and then through our handling of what it parsed
 // for the three upload routes: picking the `file`, `options` and `job` parts
-// (server/upload.h), refusing duplicate or unknown ones, merging query
+// (server/http/upload.h), refusing duplicate or unknown ones, merging query
 // parameters into the options, and validating those (render options, limits,
 // conversion format, job spec, format detection by content), and a refusal's
 // problem+json body as the routes write it (service paths taken out).
@@ -28,13 +28,13 @@
 
 #include "fuzz/fuzz_common.h"
 #include "importer/importer.h"
-#include "server/config.h"
-#include "server/http_framing.h"
-#include "server/job_spec.h"
-#include "server/problem.h"
-#include "server/redact.h"
-#include "server/render_options.h"
-#include "server/upload.h"
+#include "server/common/config.h"
+#include "server/http/http_framing.h"
+#include "server/jobs/job_spec.h"
+#include "server/http/problem.h"
+#include "server/common/redact.h"
+#include "server/render/render_options.h"
+#include "server/http/upload.h"
 
 using namespace nurbsrt;
 
@@ -140,7 +140,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         if (!has_header(head, "content-length") && !has_header(head, "transfer-encoding"))
             request.insert(end + 2, "Content-Length: " + std::to_string(request.size() - end - 4) + "\r\n");
         // The service checks the head's framing before cpp-httplib reads on
-        // (server/http_framing.h); a refused head gets a problem answer only.
+        // (server/http/http_framing.h); a refused head gets a problem answer only.
         const server::FramingVerdict v = server::check_request_head(std::string_view(request).substr(0, request.find("\r\n\r\n") + 4));
         if (!v.ok()) {
             if (v.status != 400 && v.status != 501) __builtin_trap();

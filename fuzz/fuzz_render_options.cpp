@@ -6,8 +6,8 @@
 
 #include "fuzz/fuzz_common.h"
 #include "renderer/camera.h"
-#include "server/config.h"
-#include "server/render_options.h"
+#include "server/common/config.h"
+#include "server/render/render_options.h"
 
 using namespace nurbsrt;
 

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "renderer/frame.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/preliminary_map.h"
+#include "renderer/frame/frame.h"
+#include "renderer/solve/prepared_data.h"
+#include "renderer/map/preliminary_map.h"
 #include "renderer/render.h"
-#include "renderer/shadow_rays.h"
+#include "renderer/passes/shadow_rays.h"
 
 namespace nurbsrt {
 namespace {

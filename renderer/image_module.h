@@ -1,5 +1,5 @@
 // Image files are written by a module loaded on first use, libnurbsrt_image.so
-// (renderer/image_writer/), not by code linked into the programs: Debian 12
+// (renderer/output/image_writer/), not by code linked into the programs: Debian 12
 // builds OpenImageIO against ~260 shared libraries (OpenCV with its video I/O,
 // FFmpeg, DCMTK, OpenVDB, ...), and relocating them took 0.35-0.4 s of every
 // nurbsrt process's start, before main (an empty program linked with the same

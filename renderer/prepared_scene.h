@@ -16,53 +16,27 @@
 #include <memory>
 #include <vector>
 
-#include "renderer/newton.h"
 #include "core/scene.h"
-#include "core/trim.h"
 
 namespace nurbsrt {
 
-// Camera-independent per-face data of the pixel solves.
-struct PreparedFace {
-    TrimTester trim;
-    SurfaceSpans spans;    // per-span basis tables of the face's surface (span_basis.h)
-    SurfacePatches patches;  // its power-form patches over them (surface_patches.h)
-    UvBox box;             // parameter box with seams (face_uv_box)
-    double near_uv = 0;    // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
-    double trim_uv = 0;    // the trim test's uncertainty: the exact boundary lies within it of the loops
-    // Faces that touch this one (their map meshes share a vertex, see prepare()),
-    // ascending ids. The rescue and the nearer-sheet pass try them where a face
-    // too thin for the map to rasterize lies between the pixel's neighbours' faces.
-    std::vector<uint32_t> adjacent;
-    // Box of the face's map mesh (the rescue's screen search over all faces).
-    BBox mesh_box;
-    // The face lies in one plane (planar_control_net): a light ray leaving it
-    // cannot cross it again (the shadow rays' own-face retry).
-    bool planar = false;
-};
-
-// The preliminary map's mesh: all faces' FaceMesh vertices that have a (u, v),
-// in face order, and their triangles with indices into these arrays (malformed
-// triangles dropped). Positions stay in double: a frame transforms them to clip
-// space relative to the eye before rounding to float (preliminary_map.h).
-struct MapMesh {
-    std::vector<Vec3> xyz;
-    std::vector<float> uv;          // 2 per vertex
-    std::vector<uint32_t> face;     // Face::index per vertex
-    std::vector<uint32_t> indices;  // 3 per triangle
-    size_t triangles() const { return indices.size() / 3; }
-};
+// The renderer's own camera-independent data: solve/prepared_data.h.
+struct PreparedFace;
+struct MapMesh;
+struct PreparedData;
 
 class PreparedScene {
 public:
-    PreparedScene(PreparedScene&&) = default;
-    PreparedScene& operator=(PreparedScene&&) = default;
+    PreparedScene(PreparedScene&&) noexcept;
+    PreparedScene& operator=(PreparedScene&&) noexcept;
+    ~PreparedScene();
     PreparedScene(const PreparedScene&) = delete;
     PreparedScene& operator=(const PreparedScene&) = delete;
 
     const Scene& scene() const { return *scene_; }
-    const std::vector<PreparedFace>& faces() const { return faces_; }
-    const MapMesh& map_mesh() const { return map_; }
+    // Defined in solve/prepared_data.h, which the renderer's rooms include.
+    inline const std::vector<PreparedFace>& faces() const;
+    inline const MapMesh& map_mesh() const;
     // Unique per prepare() call in this process (never reused, unlike an
     // address): lets a GL context keep this scene's map mesh uploaded between frames.
     uint64_t id() const { return id_; }
@@ -73,12 +47,11 @@ public:
 
 private:
     friend struct PreparedSceneBuilder;  // prepared_scene.cpp
-    PreparedScene() = default;
+    PreparedScene();
 
     const Scene* scene_ = nullptr;
     std::shared_ptr<const Scene> owner_;  // set when prepare() was given shared ownership
-    std::vector<PreparedFace> faces_;
-    MapMesh map_;
+    std::unique_ptr<PreparedData> data_;
     uint64_t id_ = 0;
     double prepare_ms_ = 0;
 };

@@ -11,12 +11,12 @@
 #include <thread>
 
 #include "core/error.h"
-#include "renderer/frame.h"
-#include "renderer/mesh_screen_points.h"
+#include "renderer/frame/frame.h"
+#include "renderer/frame/mesh_screen_points.h"
 #include "core/nurbs.h"
-#include "renderer/passes.h"
-#include "renderer/pixel_solver.h"
-#include "renderer/shadow_rays.h"
+#include "renderer/passes/passes.h"
+#include "renderer/frame/pixel_solver.h"
+#include "renderer/passes/shadow_rays.h"
 
 namespace nurbsrt {
 

@@ -13,11 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "renderer/camera.h"
-#include "renderer/newton.h"
-#include "renderer/preliminary_map.h"
-#include "renderer/prepared_scene.h"
 #include "core/scene.h"
+#include "renderer/camera.h"
+#include "renderer/method.h"
+#include "renderer/prepared_scene.h"
 
 namespace nurbsrt {
 

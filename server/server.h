@@ -1,7 +1,7 @@
 // `nurbsrt serve`: the HTTP service (API in api_schema/openapi.json).
 #pragma once
 
-#include "server/config.h"
+#include "server/common/config.h"
 
 namespace nurbsrt::server {
 

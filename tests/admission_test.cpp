@@ -1,4 +1,4 @@
-// The admission gate (server/admission.h) as batch jobs use it: a waiter with
+// The admission gate (server/render/admission.h) as batch jobs use it: a waiter with
 // a give-up condition keeps its place in the order, leaves the queue soon
 // after the condition becomes true, and the waiters behind it go on.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <future>
 #include <thread>
 
-#include "server/admission.h"
+#include "server/render/admission.h"
 
 using nurbsrt::server::AdmissionGate;
 using namespace std::chrono_literals;

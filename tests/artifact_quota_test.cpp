@@ -1,9 +1,9 @@
-// server/artifact_quota.h: the estimate a job is admitted by, and the check
+// server/jobs/artifact_quota.h: the estimate a job is admitted by, and the check
 // both submission and each artifact's write go through.
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "server/artifact_quota.h"
+#include "server/jobs/artifact_quota.h"
 
 using namespace nurbsrt::server;
 

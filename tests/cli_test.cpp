@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/newton.h"
+#include "renderer/solve/newton.h"
 #include "tests/support/fixtures.h"
 
 namespace {

@@ -1,4 +1,4 @@
-// The store of uploaded files (server/file_store.h): content addressing and
+// The store of uploaded files (server/store/file_store.h): content addressing and
 // dedupe, the quota, pinning, paging, removal, expiry and the leftovers of
 // writes cut short, and records surviving a new store on the same directory
 // (a restart, or another instance on a shared data dir).
@@ -14,8 +14,8 @@
 #include <set>
 
 #include "core/error.h"
-#include "server/file_store.h"
-#include "server/service_error.h"
+#include "server/store/file_store.h"
+#include "server/common/service_error.h"
 
 namespace fs = std::filesystem;
 using nurbsrt::Error;

@@ -11,12 +11,12 @@
 #include <string>
 
 #include "core/error.h"
-#include "server/context.h"
-#include "server/cors.h"
-#include "server/etag.h"
-#include "server/problem.h"
-#include "server/route_table.h"
-#include "server/service_error.h"
+#include "server/render/context.h"
+#include "server/common/cors.h"
+#include "server/http/etag.h"
+#include "server/http/problem.h"
+#include "server/routes/route_table.h"
+#include "server/common/service_error.h"
 
 using namespace nurbsrt::server;
 

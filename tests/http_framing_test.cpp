@@ -1,4 +1,4 @@
-// server/http_framing.h: the RFC 9112 framing rules a request head must keep
+// server/http/http_framing.h: the RFC 9112 framing rules a request head must keep
 // before cpp-httplib reads on (request smuggling: one request hiding another).
 // The service's own answers to these heads are tested over sockets in
 // tests/api/test_hostile.py.
@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "server/http_framing.h"
+#include "server/http/http_framing.h"
 
 using nurbsrt::server::BodyFraming;
 using nurbsrt::server::check_request_head;

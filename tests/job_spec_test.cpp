@@ -1,4 +1,4 @@
-// The job description of POST /v1/jobs (server/job_spec.h): outputs numbered
+// The job description of POST /v1/jobs (server/jobs/job_spec.h): outputs numbered
 // with generated artifact names and content types, files by index or name,
 // every mistake rejected with the right code; and the strict name patterns
 // that keep requests from naming anything but a job's own artifacts.
@@ -7,7 +7,7 @@
 #include <functional>
 
 #include "core/error.h"
-#include "server/job_spec.h"
+#include "server/jobs/job_spec.h"
 #include "tests/support/error_code_of.h"
 
 using nurbsrt::Error;

@@ -1,4 +1,4 @@
-// The PostgreSQL job store (server/job_store_pg.h) against a real server:
+// The PostgreSQL job store (server/store/job_store_pg.h) against a real server:
 // claims skip each other's outputs, an expired lease is taken over, the stale
 // holder's updates are fenced off (never completed twice), cancel is seen by
 // the heartbeat, the job finishes on whichever claim ends last, and an output
@@ -11,8 +11,8 @@
 #include <cstdlib>
 #include <thread>
 
-#include "server/job_store_pg.h"
-#include "server/pg_conn.h"
+#include "server/store/job_store_pg.h"
+#include "server/store/pg_conn.h"
 
 using nurbsrt::server::CallbackAttempt;
 using nurbsrt::server::CallbackState;

@@ -1,4 +1,4 @@
-// The persistent job store (server/job_store.h): creation and listing with
+// The persistent job store (server/store/job_store.h): creation and listing with
 // paging, state transitions, recovery of jobs a dead service left running
 // (the database file reopened), the retention query, and clear errors for a
 // corrupt or unwritable database.
@@ -12,7 +12,7 @@
 #include <fstream>
 
 #include "core/error.h"
-#include "server/job_store_sqlite.h"
+#include "server/store/job_store_sqlite.h"
 
 namespace fs = std::filesystem;
 using nurbsrt::Error;

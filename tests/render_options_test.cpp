@@ -4,7 +4,7 @@
 // a name compared as text.
 #include <gtest/gtest.h>
 
-#include "server/render_options.h"
+#include "server/render/render_options.h"
 
 namespace {
 

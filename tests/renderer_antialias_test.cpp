@@ -10,7 +10,7 @@
 #include <functional>
 
 #include "renderer/render.h"
-#include "renderer/sample_pattern.h"
+#include "renderer/passes/sample_pattern.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;

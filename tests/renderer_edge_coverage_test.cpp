@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "renderer/edge_coverage.h"
+#include "renderer/passes/edge_coverage.h"
 
 using namespace nurbsrt;
 

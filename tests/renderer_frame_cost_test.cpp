@@ -7,7 +7,7 @@
 
 #include "renderer/frame_cost.h"
 #include "renderer/prepared_scene.h"
-#include "renderer/shadow_rays.h"
+#include "renderer/passes/shadow_rays.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "renderer/frame.h"
+#include "renderer/frame/frame.h"
 #include "core/heap_tuning.h"
 
 namespace nurbsrt {

@@ -1,4 +1,4 @@
-// MeshScreenPoints (renderer/mesh_screen_points.h): the mesh starts of faces no
+// MeshScreenPoints (renderer/frame/mesh_screen_points.h): the mesh starts of faces no
 // nearby pixel shows, and of sheets of a face in front of a depth. A search
 // bounded to a screen distance gives the unbounded search's answer wherever the
 // mesh comes within the bound, and nothing where it does not; through the first
@@ -11,8 +11,8 @@
 #include <cmath>
 #include <random>
 
-#include "renderer/frame.h"
-#include "renderer/mesh_screen_points.h"
+#include "renderer/frame/frame.h"
+#include "renderer/frame/mesh_screen_points.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;

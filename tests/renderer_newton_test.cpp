@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <random>
 
-#include "renderer/newton.h"
+#include "renderer/solve/newton.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;

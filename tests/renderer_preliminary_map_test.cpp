@@ -7,8 +7,8 @@
 #include <thread>
 
 #include "core/error.h"
-#include "renderer/newton.h"
-#include "renderer/preliminary_map.h"
+#include "renderer/solve/newton.h"
+#include "renderer/map/preliminary_map.h"
 #include "renderer/prepared_scene.h"
 #include "renderer_test_surfaces.h"
 

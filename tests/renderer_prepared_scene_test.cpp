@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/solve/prepared_data.h"
 #include "renderer/render.h"
 #include "renderer_test_surfaces.h"
 #include "tests/support/render_compare.h"

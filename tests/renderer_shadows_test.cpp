@@ -10,8 +10,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "renderer/frame.h"
-#include "renderer/lighting.h"
+#include "renderer/frame/frame.h"
+#include "renderer/passes/lighting.h"
 #include "renderer/render.h"
 #include "renderer_test_surfaces.h"
 

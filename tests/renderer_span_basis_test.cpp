@@ -1,4 +1,4 @@
-// Per-span basis tables (renderer/span_basis.h) against the knot search and
+// Per-span basis tables (renderer/solve/span_basis.h) against the knot search and
 // Cox-de Boor evaluation of nurbs.h (Piegl & Tiller A2.1-A2.3), which the
 // renderer used in every Newton step before: same span, same values to rounding.
 #include <gtest/gtest.h>
@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "core/nurbs.h"
-#include "renderer/span_basis.h"
-#include "renderer/surface_patches.h"
+#include "renderer/solve/span_basis.h"
+#include "renderer/solve/surface_patches.h"
 
 namespace {
 

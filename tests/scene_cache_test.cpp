@@ -8,8 +8,9 @@
 #include <vector>
 
 #include "core/error.h"
-#include "server/sha256.h"
-#include "server/scene_cache.h"
+#include "server/common/sha256.h"
+#include "renderer/solve/prepared_data.h"
+#include "server/render/scene_cache.h"
 
 using namespace nurbsrt;
 using namespace nurbsrt::server;

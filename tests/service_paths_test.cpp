@@ -3,8 +3,8 @@
 
 #include <filesystem>
 
-#include "server/context.h"
-#include "server/http_util.h"
+#include "server/render/context.h"
+#include "server/routes/handler_util.h"
 
 using namespace nurbsrt::server;
 

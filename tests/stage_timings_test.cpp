@@ -1,4 +1,4 @@
-// The timings of a render or conversion answer (server/stage_timings.h): the
+// The timings of a render or conversion answer (server/render/stage_timings.h): the
 // JSON object and the Server-Timing header carry the same stages, every listed
 // stage present, and a total that their sum matches.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <map>
 #include <sstream>
 
-#include "server/stage_timings.h"
+#include "server/render/stage_timings.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// Webhooks (server/webhooks.h, server/callback_url.h): which callback URLs a job may name, which
+// Webhooks (server/jobs/webhooks.h, server/jobs/callback_url.h): which callback URLs a job may name, which
 // addresses a callback may reach, the signature (RFC 4231 vectors) and the
 // back-off. Delivery itself is tested end to end in tests/api/test_webhooks.py.
 #include <gtest/gtest.h>
@@ -7,9 +7,9 @@
 #include <netinet/in.h>
 
 #include "core/error.h"
-#include "server/sha256.h"
-#include "server/callback_url.h"
-#include "server/webhooks.h"
+#include "server/common/sha256.h"
+#include "server/jobs/callback_url.h"
+#include "server/jobs/webhooks.h"
 #include "tests/support/error_code_of.h"
 
 using namespace nurbsrt;

@@ -24,9 +24,9 @@
 
 #include "importer/occt_shape.h"
 #include "importer/reference_intersector.h"
-#include "renderer/newton.h"
-#include "renderer/preliminary_map.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/solve/newton.h"
+#include "renderer/map/preliminary_map.h"
+#include "renderer/solve/prepared_data.h"
 #include "tests/support/occt_distance.h"
 
 namespace nurbsrt::test {

@@ -15,8 +15,8 @@
 
 #include "importer/occt_shape.h"
 #include "importer/reference_intersector.h"
-#include "renderer/frame.h"
-#include "renderer/lighting.h"
+#include "renderer/frame/frame.h"
+#include "renderer/passes/lighting.h"
 
 namespace nurbsrt::test {
 

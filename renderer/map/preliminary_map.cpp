@@ -1,0 +1,349 @@
+// Preliminary map with OSMesa (see preliminary_map.h).
+#include "renderer/map/preliminary_map.h"
+
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <string>
+
+#include "core/error.h"
+#include "renderer/map/gl_context.h"
+#include "renderer/solve/prepared_data.h"
+
+namespace nurbsrt {
+
+
+float quantize_rgb8(float u, double lo, double hi) {
+    const double range = hi - lo;
+    if (!(range > 0)) return static_cast<float>(lo);
+    const double g = std::clamp(std::round(255.0 * (u - lo) / range), 0.0, 255.0);
+    return static_cast<float>(range * g / 255.0 + lo);
+}
+
+namespace {
+
+const char* kVertexShader = R"(#version 450 core
+layout(location = 0) in vec4 a_clip;
+layout(location = 1) in vec2 a_uv;
+layout(location = 2) in uint a_face;
+out vec2 v_uv;
+flat out uint v_face;
+void main() {
+    v_uv = a_uv;
+    v_face = a_face;
+    gl_Position = a_clip;
+}
+)";
+
+const char* kFragmentShader = R"(#version 450 core
+in vec2 v_uv;
+flat in uint v_face;
+layout(location = 0) out uint o_face;
+layout(location = 1) out float o_u;
+layout(location = 2) out float o_v;
+void main() {
+    o_face = v_face;
+    o_u = v_uv.x;
+    o_v = v_uv.y;
+}
+)";
+
+[[noreturn]] void fail(const std::string& what) {
+    throw Error(ErrorCode::internal, "preliminary map: " + what);
+}
+
+}  // namespace
+
+struct MapRenderer::Impl {
+    GlContext gl;
+    GLuint program = 0, vao = 0;
+    // vbo_clip: clip-space positions, rewritten every frame; vbo_uv, vbo_face and
+    // ebo: the map mesh's camera-independent data of PreparedScene `uploaded`.
+    GLuint vbo_clip = 0, vbo_uv = 0, vbo_face = 0, ebo = 0;
+    uint64_t uploaded = 0;  // PreparedScene::id of the static buffers' contents, 0: none
+    // One attachment per map array (face, u, v), so that each is read back
+    // straight into its PreliminaryMap vector, with no interleaved copy to split.
+    GLuint fbo = 0, tex_face = 0, tex_u = 0, tex_v = 0, rb_depth = 0;
+    int fb_w = 0, fb_h = 0;
+
+    Impl() {
+        program = gl.link_program(kVertexShader, kFragmentShader, "preliminary map");
+        glGenVertexArrays(1, &vao);
+        GLuint bufs[4];
+        glGenBuffers(4, bufs);
+        vbo_clip = bufs[0];
+        vbo_uv = bufs[1];
+        vbo_face = bufs[2];
+        ebo = bufs[3];
+        glBindVertexArray(vao);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_clip);
+        glEnableVertexAttribArray(0);
+        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_uv);
+        glEnableVertexAttribArray(1);
+        glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_face);
+        glEnableVertexAttribArray(2);
+        glVertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(uint32_t), nullptr);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);  // part of the VAO's state
+        gl.release_current();
+    }
+
+    // The static buffers of `ps`, uploaded unless they already hold them.
+    void upload_static(const PreparedScene& ps) {
+        if (uploaded == ps.id()) return;
+        const MapMesh& m = ps.map_mesh();
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_uv);
+        glBufferData(GL_ARRAY_BUFFER, m.uv.size() * sizeof(float), m.uv.data(), GL_STATIC_DRAW);
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_face);
+        glBufferData(GL_ARRAY_BUFFER, m.face.size() * sizeof(uint32_t), m.face.data(), GL_STATIC_DRAW);
+        glBindVertexArray(vao);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, m.indices.size() * sizeof(uint32_t), m.indices.data(), GL_STATIC_DRAW);
+        uploaded = ps.id();
+    }
+
+    ~Impl() {
+        make_current();
+        release_fbo();
+        const GLuint bufs[4] = {vbo_clip, vbo_uv, vbo_face, ebo};
+        glDeleteBuffers(4, bufs);
+        glDeleteVertexArrays(1, &vao);
+        glDeleteProgram(program);
+        gl.release_current();
+    }
+
+    void make_current() { gl.make_current(); }
+
+    void release_fbo() {
+        if (!fbo) return;
+        glDeleteFramebuffers(1, &fbo);
+        const GLuint tex[3] = {tex_face, tex_u, tex_v};
+        glDeleteTextures(3, tex);
+        glDeleteRenderbuffers(1, &rb_depth);
+        fbo = tex_face = tex_u = tex_v = rb_depth = 0;
+    }
+
+    void ensure_fbo(int w, int h) {
+        if (fbo && fb_w == w && fb_h == h) return;
+        release_fbo();
+        glGenFramebuffers(1, &fbo);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+        GLuint* const tex[3] = {&tex_face, &tex_u, &tex_v};
+        const GLenum formats[3] = {GL_R32UI, GL_R32F, GL_R32F};
+        for (int a = 0; a < 3; ++a) {
+            glGenTextures(1, tex[a]);
+            glBindTexture(GL_TEXTURE_2D, *tex[a]);
+            glTexStorage2D(GL_TEXTURE_2D, 1, formats[a], w, h);
+            glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + a, GL_TEXTURE_2D, *tex[a], 0);
+        }
+        glGenRenderbuffers(1, &rb_depth);
+        glBindRenderbuffer(GL_RENDERBUFFER, rb_depth);
+        glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
+        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb_depth);
+        const GLenum bufs[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+        glDrawBuffers(3, bufs);
+        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) fail("framebuffer incomplete");
+        fb_w = w;
+        fb_h = h;
+    }
+};
+
+MapRenderer::MapRenderer() : impl_(std::make_unique<Impl>()) {}
+MapRenderer::~MapRenderer() = default;
+
+namespace {
+
+// Near and far depth along f for the map: every mesh vertex's depth with a 1%
+// margin of the depth span, so no triangle is clipped by the depth range
+// (perspective: the near plane stays in front of the eye). far <= near: nothing
+// to draw (empty scene, or all of it behind a perspective eye).
+void depth_range(const Scene& scene, const Camera& camera, double& znear, double& zfar) {
+    double zmin = HUGE_VAL, zmax = -HUGE_VAL;
+    size_t nv = 0;
+    for (const Face& f : scene.faces) {
+        for (const Vec3& p : f.mesh.xyz) {
+            const double z = dot(camera.forward(), p - camera.spec().eye);
+            zmin = std::min(zmin, z);
+            zmax = std::max(zmax, z);
+        }
+        nv += f.mesh.xyz.size();
+    }
+    zfar = znear = 0;
+    if (nv > 0 && zmax > (camera.perspective() ? 0.0 : -HUGE_VAL)) {
+        const double span = std::max(zmax - zmin, 1e-9 * std::max(1.0, std::abs(zmax)));
+        zfar = zmax + 0.01 * span;
+        znear = camera.perspective() ? std::max(zmin - 0.01 * span, 1e-6 * zfar) : zmin - 0.01 * span;
+    }
+}
+
+// Reads the `rows` framebuffer rows of the band whose bottom is GL window row
+// y_lo into the map. GL row 0 is the bottom: the band's rows are the map's rows
+// H - y_lo - rows .. H - y_lo - 1 in reverse order, so each attachment is read
+// straight into that block of its map vector and the block's rows are then
+// swapped end for end (a copy through a read buffer and a per-pixel loop were
+// 2-3 % of a frame). rgb8: eq. (4).
+void read_back_band(PreliminaryMap& map, int y_lo, int rows, const Scene& scene, MapPrecision precision) {
+    const size_t W = static_cast<size_t>(map.width);
+    const size_t first = static_cast<size_t>(map.height - y_lo - rows) * W, npx = W * rows;
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, map.width, rows, GL_RED_INTEGER, GL_UNSIGNED_INT, map.face.data() + first);
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, map.width, rows, GL_RED, GL_FLOAT, map.u.data() + first);
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, map.width, rows, GL_RED, GL_FLOAT, map.v.data() + first);
+    if (glGetError() != GL_NO_ERROR) fail("OpenGL error while rendering");
+    auto flip = [&](auto* block) {
+        for (int r = 0; r < rows / 2; ++r)
+            std::swap_ranges(block + r * W, block + (r + 1) * W, block + (rows - 1 - r) * W);
+    };
+    flip(map.face.data() + first);
+    flip(map.u.data() + first);
+    flip(map.v.data() + first);
+    if (precision != MapPrecision::rgb8) return;
+    for (size_t k = first; k < first + npx; ++k) {
+        const uint32_t id = map.face[k];
+        if (id < 1 || id > scene.faces.size()) continue;
+        const Face& f = scene.faces[id - 1];
+        map.u[k] = quantize_rgb8(map.u[k], f.u_min, f.u_max);
+        map.v[k] = quantize_rgb8(map.v[k], f.v_min, f.v_max);
+    }
+}
+
+// Releases the context on every exit of a frame, so the next user may be another thread.
+struct ReleaseOnExit {
+    GlContext& gl;
+    ~ReleaseOnExit() { gl.release_current(); }
+};
+
+}  // namespace
+
+PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera, MapPrecision precision,
+                                   const MapBands& bands) {
+    const int W = camera.width(), H = camera.height();
+    GLint max_size = 0, max_viewport[2] = {0, 0};
+    impl_->make_current();
+    const ReleaseOnExit release{impl_->gl};
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
+    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_viewport);
+    if (W > std::min(max_size, max_viewport[0]) || H > max_viewport[1])
+        throw Error(ErrorCode::limit_exceeded,
+                    "preliminary map: image larger than " + std::to_string(std::min(max_size, max_viewport[0])));
+    const int band_rows = static_cast<int>(std::clamp<size_t>(
+        bands.rows > 0 ? size_t(bands.rows) : kMapBandPixels / size_t(W), 1, size_t(std::min(H, max_size))));
+    impl_->ensure_fbo(W, band_rows);
+
+    double znear = 0, zfar = 0;
+    depth_range(ps.scene(), camera, znear, zfar);
+    const MapMesh& mesh = ps.map_mesh();
+    const bool draw = zfar > znear && !mesh.indices.empty();
+    last_triangles_ = draw ? mesh.triangles() : 0;
+
+    glBindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    if (draw) {
+        // Positions to clip space on the CPU in double, relative to the eye
+        // (Camera::clip), rounded to float only at the end (see the header).
+        std::vector<float> clip(4 * mesh.xyz.size());
+        for (size_t k = 0; k < mesh.xyz.size(); ++k) {
+            const Vec4 c = camera.clip(mesh.xyz[k], znear, zfar);
+            clip[4 * k] = float(c.x);
+            clip[4 * k + 1] = float(c.y);
+            clip[4 * k + 2] = float(c.z);
+            clip[4 * k + 3] = float(c.w);
+        }
+        impl_->upload_static(ps);
+        glUseProgram(impl_->program);
+        glBindVertexArray(impl_->vao);
+        glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo_clip);
+        glBufferData(GL_ARRAY_BUFFER, clip.size() * sizeof(float), clip.data(), GL_STREAM_DRAW);
+    }
+
+    PreliminaryMap map;
+    map.width = W;
+    map.height = H;
+    const size_t npx = static_cast<size_t>(W) * H;
+    map.face.resize(npx);
+    map.u.resize(npx);
+    map.v.resize(npx);
+    // Bands bottom-up in GL's rows. The whole frame's viewport, shifted so that
+    // the band's bottom row lands on framebuffer row 0: the same integer shift
+    // for every vertex, so each pixel of a band sees the same clip-space
+    // geometry as in one frame-sized draw.
+    for (int y_lo = 0; y_lo < H; y_lo += band_rows) {
+        if (bands.cancel && bands.cancel->load(std::memory_order_relaxed))
+            throw Error(ErrorCode::canceled, "the render was canceled");
+        const int rows = std::min(band_rows, H - y_lo);
+        glViewport(0, -y_lo, W, H);
+        const GLuint zero_u[4] = {0, 0, 0, 0};
+        const GLfloat zero_f[4] = {0, 0, 0, 0};  // u and v where no face is drawn
+        const GLfloat one = 1.0f;
+        glClearBufferuiv(GL_COLOR, 0, zero_u);
+        glClearBufferfv(GL_COLOR, 1, zero_f);
+        glClearBufferfv(GL_COLOR, 2, zero_f);
+        glClearBufferfv(GL_DEPTH, 0, &one);
+        if (draw) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
+        read_back_band(map, y_lo, rows, ps.scene(), precision);
+    }
+    return map;
+}
+
+namespace {
+
+// Idle MapRenderers (see the thread rules in the header). Deliberately never
+// destroyed: contexts outlive every render, and destroying OSMesa contexts from a
+// static destructor would race with Mesa's own teardown at exit.
+class MapRendererPool {
+public:
+    std::unique_ptr<MapRenderer> acquire() {
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (!idle_.empty()) {
+                std::unique_ptr<MapRenderer> r = std::move(idle_.back());
+                idle_.pop_back();
+                return r;
+            }
+        }
+        return std::make_unique<MapRenderer>();
+    }
+    void release(std::unique_ptr<MapRenderer> r) {
+        std::lock_guard<std::mutex> lock(m_);
+        idle_.push_back(std::move(r));
+    }
+
+private:
+    std::mutex m_;
+    std::vector<std::unique_ptr<MapRenderer>> idle_;
+};
+
+MapRendererPool& map_renderer_pool() {
+    static MapRendererPool* pool = new MapRendererPool;
+    return *pool;
+}
+
+}  // namespace
+
+PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
+                                      const MapBands& bands) {
+    MapRendererPool& pool = map_renderer_pool();
+    std::unique_ptr<MapRenderer> renderer = pool.acquire();
+    // A renderer whose frame threw goes back too: every error path leaves its
+    // context released and its state reset by the next frame's set-up.
+    struct GiveBack {
+        MapRendererPool& pool;
+        std::unique_ptr<MapRenderer>& r;
+        ~GiveBack() { pool.release(std::move(r)); }
+    } give_back{pool, renderer};
+    return renderer->render(scene, camera, precision, bands);
+}
+
+PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera, MapPrecision precision) {
+    return render_preliminary_map(prepare(scene), camera, precision);
+}
+
+}  // namespace nurbsrt

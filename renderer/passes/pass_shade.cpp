@@ -1,0 +1,113 @@
+// Shading from the exact normal (the last Newton iteration's partials), and the AOVs.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/nurbs.h"
+#include "renderer/passes/passes.h"
+
+namespace nurbsrt {
+
+namespace {
+
+// Weights of the rig (lighting.h). Key and fill lie about 75 degrees apart, so no
+// normal faces both fully: a face turned between them gets ~0.7 of its colour
+// from the two, plus the ambient term, and stays below saturation; the key's
+// side is the brighter by 2:1, a usual key-to-fill ratio.
+constexpr double kKey = 0.6, kFill = 0.3;
+// Ambient light on faces turned to the camera's up and down; between them it
+// follows the normal (a hemisphere light), so even unlit sides show their form.
+constexpr double kAmbientSky = 0.18, kAmbientGround = 0.06;
+// A white Blinn-Phong highlight of the key light (Blinn 1977): curvature reads
+// from how it stretches along a fillet or a cylinder. Small and tight, so flat
+// faces keep their colour.
+constexpr double kSpecular = 0.12;
+constexpr int kShininess = 40;
+
+// x^N by repeated squaring: std::pow (a log and an exp) took a quarter of the
+// shading pass; the product differs from it in the last bits only.
+template <int N>
+double power(double x) {
+    if constexpr (N == 0) {
+        return 1.0;
+    } else {
+        const double h = power<N / 2>(x);
+        return N % 2 ? h * h * x : h * h;
+    }
+}
+
+}  // namespace
+
+Shader::Shader(const FrameContext& c, const KeyLightShadows* shadows)
+    : scene_(c.scene), rig_(light_rig(c.camera)), shadows_(shadows) {}
+
+Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed) const {
+    const Face& f = scene_.faces[h.face - 1];
+    // The solve's normal (exact at the double-precision hit); the limits of
+    // surface_normal only where its partials were degenerate.
+    n = {h.nx, h.ny, h.nz};
+    if (n.x == 0 && n.y == 0 && n.z == 0) n = surface_normal(f.surface, h.u, h.v, f.reversed);
+    if (dot(n, ray.dir) > 0) n = -n;  // two-sided: light the side facing the viewer
+    Color col = f.color;
+    if (!f.has_color && f.body < scene_.bodies.size() && scene_.bodies[f.body].has_color)
+        col = scene_.bodies[f.body].color;
+    const bool blocked = shadows_ && shadows_->blocked(ray.origin + h.t * ray.dir, n, h.face, h.u, h.v);
+    if (shadowed) *shadowed = blocked;
+    const double key = blocked ? 0.0 : std::max(0.0, dot(n, rig_.key));
+    const double ambient = kAmbientGround + (kAmbientSky - kAmbientGround) * 0.5 * (1 + dot(n, rig_.sky));
+    const double diffuse = ambient + kKey * key + kFill * std::max(0.0, dot(n, rig_.fill));
+    double specular = 0;
+    if (key > 0) {
+        const Vec3 half = normalize(rig_.key - ray.dir);  // between the light and the viewer
+        specular = kSpecular * power<kShininess>(std::max(0.0, dot(n, half)));
+    }
+    return {col.r * diffuse + specular, col.g * diffuse + specular, col.b * diffuse + specular};
+}
+
+void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers& b, RenderImage& img) {
+    const size_t npx = c.pixels();
+    const Camera& camera = c.camera;
+    const RenderOptions& options = c.options;
+    img.width = c.width;
+    img.height = c.height;
+    assign_cancelable(img.rgba, 4 * npx, 0.0f, c);
+    assign_cancelable(img.z, npx, std::numeric_limits<float>::infinity(), c);
+    assign_cancelable(img.normal, 3 * npx, 0.0f, c);
+    assign_cancelable(img.face, npx, uint32_t(0), c);
+    assign_cancelable(img.u, npx, 0.0f, c);
+    assign_cancelable(img.v, npx, 0.0f, c);
+    assign_cancelable(img.iterations, npx, uint8_t(0), c);
+    if (shader.shadows()) assign_cancelable(img.shadow, npx, uint8_t(0), c);
+    parallel_rows(c, true, [&](int j) {
+        for (int i = 0; i < c.width; ++i) {
+            const size_t k = c.map.index(i, j);
+            const PixelHit& h = b.hits[k];
+            float* px = &img.rgba[4 * k];
+            img.iterations[k] = h.iterations;
+            if (!h.face) {
+                px[0] = options.background.r;
+                px[1] = options.background.g;
+                px[2] = options.background.b;
+                px[3] = options.background_alpha;
+                continue;
+            }
+            Vec3 n;
+            bool shadowed = false;
+            const Vec3 rgb = shader.colour(h, camera.pixel_ray(i, j), n, &shadowed);
+            if (shadowed) img.shadow[k] = 1;
+            px[0] = static_cast<float>(rgb.x);
+            px[1] = static_cast<float>(rgb.y);
+            px[2] = static_cast<float>(rgb.z);
+            px[3] = 1.0f;
+            img.z[k] = static_cast<float>(h.t);
+            img.normal[3 * k] = static_cast<float>(n.x);
+            img.normal[3 * k + 1] = static_cast<float>(n.y);
+            img.normal[3 * k + 2] = static_cast<float>(n.z);
+            img.face[k] = h.face;
+            img.u[k] = h.u;
+            img.v[k] = h.v;
+        }
+    });
+}
+
+}  // namespace nurbsrt

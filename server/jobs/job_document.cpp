@@ -1,0 +1,99 @@
+#include "server/jobs/job_document.h"
+
+#include <nlohmann/json.hpp>
+
+#include "server/common/rfc3339.h"
+#include "server/jobs/job_spec.h"
+
+namespace nurbsrt::server {
+namespace {
+
+using nlohmann::json;
+
+// RFC 3339 UTC with milliseconds, or null for "not yet".
+json timestamp(int64_t ms) {
+    if (ms <= 0) return nullptr;
+    return rfc3339_utc(ms);
+}
+
+json span(int64_t from, int64_t to) {
+    if (from <= 0 || to <= 0) return nullptr;
+    return to - from;
+}
+
+json parse_or_null(const std::string& text) {
+    if (text.empty()) return nullptr;
+    json j = json::parse(text, nullptr, false);
+    return j.is_discarded() ? json(nullptr) : j;
+}
+
+json callback_json(const JobRecord& j) {
+    const CallbackStatus& c = j.callback;
+    json out = {{"url", j.callback_url},
+                {"state", callback_state_name(c.state)},
+                {"attempts", c.attempts},
+                {"last_status", c.last_status > 0 ? json(c.last_status) : json(nullptr)},
+                {"last_error", c.last_error.empty() ? json(nullptr) : json(c.last_error)},
+                {"next_attempt_at", c.state == CallbackState::pending ? timestamp(c.due_ms) : json(nullptr)},
+                {"finished_at", timestamp(c.done_ms)}};
+    return out;
+}
+
+}  // namespace
+
+std::string job_url(const std::string& id) { return "/v1/jobs/" + id; }
+
+json job_json(const JobRecord& j) {
+    json files = json::array();
+    for (const JobInput& in : j.inputs)
+        files.push_back({{"index", in.index}, {"filename", in.filename}, {"format", in.format}, {"bytes", in.bytes}});
+    json outputs = json::array();
+    double progress = 0;
+    for (const JobOutput& o : j.outputs) {
+        json out = {{"index", o.index},
+                    {"file", o.file},
+                    {"type", output_kind_name(o.kind)},
+                    {"format", artifact_format(o.artifact)},
+                    {"state", job_state_name(o.state)},
+                    {"progress", o.state == JobState::succeeded ? 1.0 : o.progress},
+                    {"started_at", timestamp(o.started_ms)},
+                    {"finished_at", timestamp(o.finished_ms)},
+                    {"duration_ms", span(o.started_ms, o.finished_ms)}};
+        const json options = parse_or_null(o.options_json);
+        if (o.kind == OutputKind::render) out["options"] = options.is_object() ? options : json::object();
+        if (!o.error_code.empty()) out["error"] = {{"code", o.error_code}, {"message", o.error_message}};
+        if (o.state == JobState::succeeded) {
+            out["artifact"] = {{"name", o.artifact},
+                               {"url", job_url(j.id) + "/artifacts/" + o.artifact},
+                               {"content_type", o.content_type},
+                               {"bytes", o.artifact_bytes}};
+            const json result = parse_or_null(o.result_json);
+            if (result.is_object()) out[o.kind == OutputKind::render ? "statistics" : "report"] = result;
+        }
+        progress += o.state == JobState::succeeded || o.state == JobState::failed ? 1.0 : o.progress;
+        outputs.push_back(std::move(out));
+    }
+    json body = {
+        {"id", j.id},
+        {"url", job_url(j.id)},
+        {"state", job_state_name(j.state)},
+        {"progress", j.outputs.empty() ? 0.0 : progress / static_cast<double>(j.outputs.size())},
+        {"attempts", j.attempts},
+        {"created_at", timestamp(j.created_ms)},
+        {"started_at", timestamp(j.started_ms)},
+        {"finished_at", timestamp(j.finished_ms)},
+        {"timings_ms", {{"queued", span(j.created_ms, j.started_ms)}, {"run", span(j.started_ms, j.finished_ms)}}},
+        {"files", files},
+        {"outputs", outputs}};
+    if (!j.error_code.empty()) body["error"] = {{"code", j.error_code}, {"message", j.error_message}};
+    if (!j.callback_url.empty()) body["callback"] = callback_json(j);
+    return body;
+}
+
+std::string job_webhook_body(const JobRecord& job) {
+    json body = job_json(job);
+    body.erase("callback");
+    return body.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,90 @@
+// Batch jobs at run time: the job store (server/store/job_store.h), the files under
+// DATA_DIR/jobs/<id>/ (input-<n>.cad and the artifacts), the runner threads
+// that take queued jobs from the store in submission order and run their
+// outputs one by one through the same admission gate as synchronous renders
+// and conversions, restart recovery at start, cancellation, and the retention
+// sweep. With a shared store (PostgreSQL) several instances run the same
+// queue: a heartbeat renews the leases of the outputs this one runs and stops
+// a run whose job was canceled elsewhere or whose lease was lost. Free of HTTP
+// and JSON headers.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/store/job_store.h"
+#include "server/jobs/webhooks.h"
+
+namespace nurbsrt::server {
+
+struct ServerContext;
+
+class JobService {
+public:
+    // Opens the job store (--job-store, or DATA_DIR/jobs.db; throws Error(io)
+    // when it cannot), creates DATA_DIR/jobs and checks it is writable. With
+    // SQLite (one process) it also recovers jobs a dead service left running and
+    // removes directories without a job and partial artifacts; a shared store
+    // skips those sweeps (other instances' files are in flight there) and gets
+    // a lost instance's work back by lease expiry. Runs nothing until start().
+    explicit JobService(ServerContext& ctx);
+    ~JobService();  // stop()
+    JobService(const JobService&) = delete;
+    JobService& operator=(const JobService&) = delete;
+
+    void start();
+    // Stops the runners: a running render is canceled and its job goes back to
+    // the queue without counting the run; a conversion child finishes first.
+    void stop();
+
+    // Stores the inputs and queues the job (id and created time are set here).
+    // Throws Error(overloaded) when max_queued_jobs are already waiting.
+    void submit(JobRecord& job, const std::vector<const std::string*>& input_bytes);
+    // DELETE: see JobStore::delete_job; a running job's render is canceled.
+    JobStore::DeleteOutcome remove(const std::string& id);
+    JobStore& store() { return *store_; }
+    // The path of a stored artifact; the name must have passed valid_artifact_name.
+    std::string artifact_path(const std::string& id, const std::string& artifact) const;
+    // Removes expired jobs (and expired stored files, server/store/file_store.h) now;
+    // returns how many jobs.
+    int sweep();
+
+private:
+    void run_loop();
+    void sweep_loop();
+    void heartbeat_loop();
+    void sweep_shared_leftovers();
+    void run_claim(JobClaim& claim);
+    void run_output(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<std::atomic<bool>>& cancel);
+    void end_claim(const JobClaim& claim);
+    void remove_files(const std::string& id) const;
+    std::string job_dir(const std::string& id) const;
+
+    ServerContext& ctx_;
+    std::string jobs_dir_;
+    std::shared_ptr<JobStore> store_;  // shared: a canceled render's thread may report progress late
+    std::string instance_;
+    std::mutex submit_m_;
+
+    std::mutex m_;
+    std::condition_variable cv_;
+    bool stopping_ = false;
+    uint64_t submissions_ = 0;  // jobs submitted here: an idle runner wakes when it changes
+    struct Active {
+        JobClaim claim;
+        std::shared_ptr<std::atomic<bool>> cancel;
+    };
+    std::map<uint64_t, Active> active_;  // claims at work, by a number of their own
+    uint64_t next_active_ = 0;
+    std::vector<std::thread> runners_;
+    std::thread sweeper_, heartbeat_;
+    std::unique_ptr<WebhookSender> webhooks_;  // callbacks of finished jobs (of any instance, with a shared store)
+};
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,37 @@
+// The description of a batch job (the `job` part of POST /v1/jobs), validated
+// against the uploaded files and the configured limits before the job is
+// accepted; the formats of its outputs; and the names the service gives to
+// jobs and artifacts (generated, checked against strict patterns, never a
+// path taken from a request).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "server/common/config.h"
+#include "server/store/job_store.h"
+
+namespace nurbsrt::server {
+
+struct JobSpec {
+    std::vector<JobOutput> outputs;
+    std::string callback_url;  // empty: no webhook
+};
+
+// Parses `job_json` ({"outputs": [{"file": 0 | "name.igs", "type": "render",
+// "options": {...}} | {"file": ..., "type": "conversion", "format": "step"}],
+// "callback_url": "https://..."}) for these inputs. Throws
+// Error(invalid_argument) naming the problem, Error(limit_exceeded) beyond
+// max_job_outputs or the image size limits. The outputs come back numbered,
+// with their artifact names and content types.
+JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs, const ServerConfig& config);
+
+// `<file>-<type>-<output><extension>`, e.g. 0-render-1.png, 1-conversion-0.stl.
+std::string artifact_name(int file, const std::string& type, int output, const std::string& extension);
+bool valid_artifact_name(const std::string& name);
+// The output format named by an artifact's extension (png, exr, step, ...).
+std::string artifact_format(const std::string& name);
+// Job ids are 32 lowercase hex digits.
+bool valid_job_id(const std::string& id);
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,121 @@
+// POST /v1/conversions: one synchronous conversion of a STEP/IGES upload (or
+// of a stored file named by `file_id`, server/store/file_store.h) to
+// STEP, IGES, STL, glb or NURBS JSON, run in a child process
+// (importer/isolated.h) under the import time and memory limits.
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "importer/importer.h"
+#include "importer/isolated.h"
+#include "core/error.h"
+#include "server/common/base64.h"
+#include "server/render/context.h"
+#include "server/http/http_server.h"
+#include "server/routes/handler_util.h"
+#include "server/render/render_options.h"
+#include "server/routes/routes.h"
+#include "server/render/stage_timings.h"
+#include "server/render/work.h"
+
+namespace nurbsrt::server {
+namespace {
+
+// The extension of a download: STEP as .stp, the three-letter form most CAD
+// systems write, like IGES's .igs (the worker's own file keeps .step, which
+// picks its writer).
+const char* download_extension(ConversionFormat f) {
+    return f == ConversionFormat::step ? ".stp" : conversion_format_extension(f);
+}
+
+// Headers bigger than a few KiB are refused by some proxies (nginx's default
+// buffer is 4-8 KiB); the full list is in the JSON answer.
+constexpr size_t kMaxWarningsHeader = 4096;
+
+// "N; [..JSON array..]" in ASCII (a header is no place for UTF-8), cut to
+// whole entries under kMaxWarningsHeader.
+std::string warnings_header(const std::vector<std::string>& warnings) {
+    nlohmann::json list = nlohmann::json::array();
+    const std::string head = std::to_string(warnings.size()) + "; ";
+    for (const std::string& w : warnings) {
+        list.push_back(w);
+        if (head.size() + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).size() + 8 >
+            kMaxWarningsHeader) {
+            list.erase(list.size() - 1);
+            list.push_back("...");
+            break;
+        }
+    }
+    return head + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
+}
+
+void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    // Stages marked end to end from the request's arrival (see
+    // kConversionStages): they sum to the total.
+    StageClock stages(GuardedServer::request_received_at());
+    Upload upload = read_upload(req, {"format"});
+    const ConversionFormat format = parse_conversion_format(upload.options_json);
+    StoredContent stored;
+    if (!upload.file_id.empty()) load_stored_file(ctx, upload, stored);
+    const std::string& bytes = *upload.bytes;
+    if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
+    if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
+        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
+    stages.mark("upload");
+
+    auto ticket = admit(ctx);
+    stages.mark("queue");
+    const TempFile in = ctx.scratch.write("upload", ".cad", bytes);
+    // The worker picks the writer by this extension.
+    const TempFile out = ctx.scratch.create("converted", conversion_format_extension(format));
+    stages.mark("isolation");  // handing the bytes to the child
+    ConvertReport report;
+    IsolationTimings isolated;
+    try {
+        IsolationLimits limits = isolation_limits(ctx);
+        limits.should_stop = GuardedServer::client_gone_check();  // a gone client's conversion is killed
+        report = convert_isolated(in.path(), out.path(), limits, &isolated);
+    } catch (const Error& e) {
+        ctx.metrics.count_import_failure(error_code_name(e.code()));
+        throw;
+    }
+    add_conversion_stages(report, isolated, stages);
+    stages.mark("isolation");
+    const std::string data = read_file_bytes(out.path());
+    ticket.reset();
+    stages.mark("transfer");  // the converted file into this process
+
+    const std::string content_type = conversion_format_content_type(format);
+    if (wants_json(req)) {
+        nlohmann::json body = {{"request_id", request_id(res)},
+                               {"input_format", format_name(report.in_format)},
+                               {"output_format", conversion_format_name(report.output)},
+                               {"faces", report.faces},
+                               {"triangles", report.triangles},
+                               {"unmeshed_faces", report.unmeshed_faces},
+                               {"warnings", report.warnings},
+                               {"content_type", content_type},
+                               {"data_base64", base64_encode(data)}};
+        // The last stage, this answer, ends before its serialization: the text
+        // cannot hold the time it takes to write itself.
+        stages.mark("response");
+        body["timings_ms"] = stage_timings_json(stages, kConversionStages);
+        res.set_header("Server-Timing", server_timing(stages, kConversionStages));
+        res.set_content(body.dump(), kBulkJsonContentType);
+    } else {
+        res.set_header("Content-Disposition", "attachment; filename=\"" +
+                                                  download_name(upload.filename, download_extension(format)) +
+                                                  "\"");
+        if (!report.warnings.empty()) res.set_header("X-Nurbsrt-Warnings", warnings_header(report.warnings));
+        res.set_content(data, content_type.c_str());
+        stages.mark("response");
+        res.set_header("Server-Timing", server_timing(stages, kConversionStages));
+    }
+}
+
+}  // namespace
+
+void add_conversion_routes(httplib::Server& svr, ServerContext& ctx) {
+    svr.Post("/v1/conversions", guarded(ctx, handle_conversion));
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,216 @@
+// Batch jobs: POST /v1/jobs (several STEP/IGES files, uploaded or stored
+// ones named by `file_id` (server/store/file_store.h), each with render and
+// conversion outputs; everything is validated before 202 Accepted), GET
+// /v1/jobs (paged), GET and DELETE /v1/jobs/{id}, and GET
+// /v1/jobs/{id}/artifacts/{name}. The work itself is server/jobs/job_runner.h.
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <ctime>
+#include <fstream>
+
+#include "importer/importer.h"
+#include "core/error.h"
+#include "server/render/context.h"
+#include "server/jobs/artifact_quota.h"
+#include "server/http/etag.h"
+#include "server/routes/handler_util.h"
+#include "server/jobs/job_runner.h"
+#include "server/jobs/job_document.h"
+#include "server/jobs/job_spec.h"
+#include "server/routes/routes.h"
+#include "server/common/service_error.h"
+
+namespace nurbsrt::server {
+namespace {
+
+using nlohmann::json;
+
+// Retry-After of a job that is not done yet (202 on submit or cancel, 200 for
+// a queued or running job), RFC 9110 §10.2.3: a poll a second later follows a
+// typical render of a few hundred milliseconds to seconds closely, and costs
+// one small GET.
+constexpr int kJobPollAfterS = 1;
+
+void send_json(httplib::Response& res, const json& body, int status = 200) {
+    res.status = status;
+    res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
+}
+
+JobService& jobs_of(ServerContext& ctx) {
+    if (!ctx.jobs) throw Error(ErrorCode::internal, "the job service is not running");
+    return *ctx.jobs;
+}
+
+void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    JobUpload up = read_job_upload(req, ctx.config.max_job_files);
+    // Stored files are copied into the job's inputs when it is accepted (as
+    // uploads are): deleting or expiring a stored file later never breaks a job.
+    std::vector<StoredContent> stored;
+    for (size_t i = 0; i < up.inputs.size(); ++i) {
+        if (up.file_ids[i].empty()) continue;
+        stored.push_back(ctx.files.open(up.file_ids[i]));
+        const StoredFile& f = stored.back().file;
+        up.inputs[i].filename = f.filename;
+        up.inputs[i].format = f.format;
+        up.inputs[i].bytes = f.bytes;
+        up.bytes[i] = stored.back().bytes.get();
+    }
+    JobRecord job;
+    job.inputs = std::move(up.inputs);
+    JobSpec spec = parse_job_spec(*up.job_json, job.inputs, ctx.config);
+    job.outputs = std::move(spec.outputs);
+    job.callback_url = std::move(spec.callback_url);
+    int64_t estimate = 0;
+    for (const JobOutput& o : job.outputs)
+        estimate += estimated_artifact_bytes(o, job.inputs[static_cast<size_t>(o.file)].bytes);
+    try {
+        check_artifact_quota(jobs_of(ctx).store().artifact_bytes(), estimate, ctx.config.max_artifact_bytes,
+                             "the job's artifacts, estimated");
+    } catch (const Error& e) {
+        // 507 Insufficient Storage (RFC 4918 §11.5), as for stored files: the
+        // request is fine, the service cannot keep its results now.
+        send_problem_with_status(res, 507, e.code(), e.what());
+        return;
+    }
+    jobs_of(ctx).submit(job, up.bytes);
+    res.set_header("Location", job_url(job.id));
+    res.set_header("Retry-After", std::to_string(kJobPollAfterS));
+    send_json(res, job_json(job), 202);
+}
+
+// Cursors are opaque to clients: the order's letter and the last job's
+// sequence number in hex, so a cursor cannot be used with the other order.
+std::string make_cursor(bool newest_first, int64_t seq) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%c%llx", newest_first ? 'n' : 'o', static_cast<unsigned long long>(seq));
+    return buf;
+}
+
+int64_t parse_cursor(const std::string& c, bool newest_first) {
+    const auto bad = [] {
+        return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
+    };
+    if (c.size() < 2 || c.size() > 17 || c[0] != (newest_first ? 'n' : 'o')) throw bad();
+    int64_t v = 0;
+    for (size_t i = 1; i < c.size(); ++i) {
+        const char ch = c[i];
+        const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+        if (d < 0 || v > (INT64_MAX >> 4)) throw bad();
+        v = v * 16 + d;
+    }
+    return v;
+}
+
+void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const PageQuery q = parse_page_query(req, {"state"});
+    const int limit = q.limit;
+    const bool newest = q.newest;
+    std::optional<JobState> state;
+    if (req.has_param("state")) {
+        state = parse_job_state(req.get_param_value("state"));
+        if (!state)
+            throw Error(ErrorCode::invalid_argument, "'state' must be queued, running, succeeded, failed or canceled");
+    }
+    std::optional<int64_t> after;
+    if (req.has_param("cursor")) after = parse_cursor(req.get_param_value("cursor"), newest);
+    const JobPage page = jobs_of(ctx).store().list(state, newest, limit, after);
+    json list = json::array();
+    for (const JobRecord& j : page.jobs) list.push_back(job_json(j));
+    send_json(res, {{"jobs", list},
+                    {"next_cursor", page.next_after ? json(make_cursor(newest, *page.next_after)) : json(nullptr)}});
+}
+
+std::string checked_id(const std::string& id) {
+    if (!valid_job_id(id)) throw ServiceError(ServiceCode::not_found, "no such job");
+    return id;
+}
+
+void handle_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const std::string id = checked_id(req.matches[1]);
+    const auto job = jobs_of(ctx).store().get(id);
+    if (!job) throw ServiceError(ServiceCode::not_found, "no such job");
+    if (!is_finished(job->state)) res.set_header("Retry-After", std::to_string(kJobPollAfterS));
+    send_json(res, job_json(*job));
+}
+
+void handle_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const std::string id = checked_id(req.matches[1]);
+    switch (jobs_of(ctx).remove(id)) {
+        case JobStore::DeleteOutcome::not_found: throw ServiceError(ServiceCode::not_found, "no such job");
+        case JobStore::DeleteOutcome::removed: res.status = 204; return;
+        case JobStore::DeleteOutcome::canceling: {
+            const auto job = jobs_of(ctx).store().get(id);
+            if (!job) {  // the runner already removed it
+                res.status = 204;
+                return;
+            }
+            res.set_header("Retry-After", std::to_string(kJobPollAfterS));
+            send_json(res, job_json(*job), 202);
+            return;
+        }
+    }
+}
+
+void handle_artifact(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+    const std::string id = checked_id(req.matches[1]);
+    const std::string name = req.matches[2];
+    if (!valid_artifact_name(name)) throw ServiceError(ServiceCode::not_found, "no such artifact");
+    const auto job = jobs_of(ctx).store().get(id);
+    if (!job) throw ServiceError(ServiceCode::not_found, "no such job");
+    for (const JobOutput& o : job->outputs) {
+        if (o.artifact != name) continue;
+        if (o.state != JobState::succeeded)
+            throw ServiceError(ServiceCode::not_found,
+                        "artifact " + name + " is not available: its output is " + job_state_name(o.state));
+        // The path is built from the stored id and name, both generated by the service.
+        const std::string path = jobs_of(ctx).artifact_path(job->id, o.artifact);
+        auto in = std::make_shared<std::ifstream>(path, std::ios::binary);
+        if (!*in) throw ServiceError(ServiceCode::not_found, "artifact " + name + " is gone");
+        in->seekg(0, std::ios::end);
+        const auto size = static_cast<size_t>(in->tellg());
+        in->seekg(0);
+        // An artifact never changes once written: its content hash is a strong
+        // validator, and a client may keep it for as long as the job is kept
+        // (private: it may be behind an API key; immutable: no revalidation
+        // while fresh, RFC 8246).
+        const std::string etag = file_etag(path);
+        res.set_header("ETag", etag);
+        res.set_header("Cache-Control", "private, max-age=" +
+                                            std::to_string(static_cast<long long>(ctx.config.job_retention_s)) +
+                                            ", immutable");
+        if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
+            // 304 without content (RFC 9110 §15.4.5); its Content-Length is the
+            // artifact's (§8.6), else cpp-httplib would add "Content-Length: 0".
+            res.status = 304;
+            res.set_header("Content-Length", std::to_string(size));
+            return;
+        }
+        res.set_header("Content-Disposition", "attachment; filename=\"" + o.artifact + "\"");
+        res.set_content_provider(size, o.content_type.c_str(),
+                                 [in](size_t offset, size_t length, httplib::DataSink& sink) {
+                                     std::vector<char> buf(std::min<size_t>(length, 1 << 16));
+                                     in->seekg(static_cast<std::streamoff>(offset));
+                                     in->read(buf.data(), static_cast<std::streamsize>(buf.size()));
+                                     const auto n = in->gcount();
+                                     if (n <= 0) return false;
+                                     sink.write(buf.data(), static_cast<size_t>(n));
+                                     return true;
+                                 });
+        return;
+    }
+    throw ServiceError(ServiceCode::not_found, "no such artifact");
+}
+
+
+}  // namespace
+
+void add_job_routes(httplib::Server& svr, ServerContext& ctx) {
+    svr.Post("/v1/jobs", guarded(ctx, handle_submit));
+    svr.Get("/v1/jobs", guarded(ctx, handle_list));
+    svr.Get(R"(/v1/jobs/([^/]+))", guarded(ctx, handle_get));
+    svr.Delete(R"(/v1/jobs/([^/]+))", guarded(ctx, handle_delete));
+    svr.Get(R"(/v1/jobs/([^/]+)/artifacts/([^/]+))", guarded(ctx, handle_artifact));
+}
+
+}  // namespace nurbsrt::server

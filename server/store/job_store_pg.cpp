@@ -1,0 +1,354 @@
+// The PostgreSQL job store: connection, schema and its version, submission,
+// reads, deletion and the retention query. Claims, leases and output
+// transitions are in job_store_pg_work.cpp.
+#include "server/store/job_store_pg.h"
+
+#include "core/error.h"
+
+namespace nurbsrt::server {
+namespace {
+
+// 1: jobs, inputs, outputs. 2: the webhook columns of jobs.
+constexpr int kSchemaVersion = 2;
+// Any constant: instances starting together migrate one after the other.
+constexpr const char* kMigrationLock = "7353021";
+
+// Times are Unix ms (BIGINT) as in the SQLite schema; lease expiries are in the
+// database server's clock, so instances whose clocks disagree still agree on
+// when a lease ran out. `completions` counts the final updates of an output:
+// fencing keeps it at 1, and tests read it to prove that.
+const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS jobs (
+  seq BIGSERIAL PRIMARY KEY,
+  id TEXT NOT NULL UNIQUE,
+  state TEXT NOT NULL,
+  created_ms BIGINT NOT NULL,
+  started_ms BIGINT NOT NULL DEFAULT 0,
+  finished_ms BIGINT NOT NULL DEFAULT 0,
+  attempts INTEGER NOT NULL DEFAULT 0,
+  error_code TEXT NOT NULL DEFAULT '',
+  error_message TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);
+CREATE TABLE IF NOT EXISTS job_inputs (
+  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
+  idx INTEGER NOT NULL,
+  filename TEXT NOT NULL,
+  format TEXT NOT NULL,
+  bytes BIGINT NOT NULL,
+  PRIMARY KEY (job_id, idx)
+);
+CREATE TABLE IF NOT EXISTS job_outputs (
+  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
+  idx INTEGER NOT NULL,
+  file INTEGER NOT NULL,
+  kind TEXT NOT NULL,
+  options TEXT NOT NULL,
+  artifact TEXT NOT NULL,
+  content_type TEXT NOT NULL,
+  state TEXT NOT NULL,
+  progress DOUBLE PRECISION NOT NULL DEFAULT 0,
+  error_code TEXT NOT NULL DEFAULT '',
+  error_message TEXT NOT NULL DEFAULT '',
+  artifact_bytes BIGINT NOT NULL DEFAULT 0,
+  started_ms BIGINT NOT NULL DEFAULT 0,
+  finished_ms BIGINT NOT NULL DEFAULT 0,
+  result TEXT NOT NULL DEFAULT '',
+  attempts INTEGER NOT NULL DEFAULT 0,
+  lease_token TEXT NOT NULL DEFAULT '',
+  lease_owner TEXT NOT NULL DEFAULT '',
+  lease_expires_ms BIGINT NOT NULL DEFAULT 0,
+  completions INTEGER NOT NULL DEFAULT 0,
+  PRIMARY KEY (job_id, idx)
+);
+CREATE INDEX IF NOT EXISTS job_outputs_open ON job_outputs(state, lease_expires_ms);
+)sql";
+
+// Version 2: a job's callback URL and its delivery (server/jobs/webhooks.h).
+const char* kSchemaV2 = R"sql(
+ALTER TABLE jobs ADD COLUMN callback_url TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_state TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_attempts INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_due_ms BIGINT NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_status INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN callback_error TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN callback_done_ms BIGINT NOT NULL DEFAULT 0;
+CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
+)sql";
+
+constexpr const char* kJobColumns =
+    "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, callback_url, "
+    "callback_state, callback_attempts, callback_due_ms, callback_status, callback_error, callback_done_ms FROM jobs ";
+
+JobRecord read_job(const PgResult& r, int row) {
+    JobRecord j;
+    j.seq = r.i64(row, 0);
+    j.id = r.text(row, 1);
+    j.state = stored_job_state(r.text(row, 2));
+    j.created_ms = r.i64(row, 3);
+    j.started_ms = r.i64(row, 4);
+    j.finished_ms = r.i64(row, 5);
+    j.attempts = static_cast<int>(r.i64(row, 6));
+    j.error_code = r.text(row, 7);
+    j.error_message = r.text(row, 8);
+    j.callback_url = r.text(row, 9);
+    j.callback.state = parse_callback_state(r.text(row, 10));
+    j.callback.attempts = static_cast<int>(r.i64(row, 11));
+    j.callback.due_ms = r.i64(row, 12);
+    j.callback.last_status = static_cast<int>(r.i64(row, 13));
+    j.callback.last_error = r.text(row, 14);
+    j.callback.done_ms = r.i64(row, 15);
+    return j;
+}
+
+}  // namespace
+
+bool is_postgres_url(const std::string& spec) {
+    return spec.rfind("postgresql://", 0) == 0 || spec.rfind("postgres://", 0) == 0;
+}
+
+std::unique_ptr<JobStore> open_postgres_job_store(const std::string& url, const std::string& instance,
+                                                  double lease_s) {
+    return std::make_unique<PgJobStore>(url, instance, lease_s);
+}
+
+PgJobStore::PgJobStore(const std::string& url, std::string instance, double lease_s)
+    : conn_(std::make_unique<PgConn>(url)),
+      instance_(std::move(instance)),
+      lease_ms_(static_cast<int64_t>(lease_s * 1000)) {
+    migrate();
+}
+
+PgJobStore::~PgJobStore() = default;
+
+void PgJobStore::migrate() {
+    PgConn::Transaction t(*conn_);
+    conn_->exec("SELECT pg_advisory_xact_lock($1)", {kMigrationLock});
+    conn_->exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
+    const PgResult r = conn_->exec("SELECT COALESCE(MAX(version), 0) FROM schema_version");
+    const int version = static_cast<int>(r.i64(0, 0));
+    if (version > kSchemaVersion)
+        throw Error(ErrorCode::io, "job store " + conn_->where() + " has schema version " + std::to_string(version) +
+                                       ", newer than this nurbsrt's " + std::to_string(kSchemaVersion) +
+                                       ": run the newer nurbsrt, or point --job-store at another database");
+    if (version < kSchemaVersion) {
+        if (version < 1) conn_->exec(kSchema);
+        if (version < 2) conn_->exec(kSchemaV2);
+        conn_->exec("DELETE FROM schema_version");
+        conn_->exec("INSERT INTO schema_version(version) VALUES ($1)", {std::to_string(kSchemaVersion)});
+    }
+    t.commit();
+}
+
+void PgJobStore::create(JobRecord& job) {
+    std::lock_guard<std::mutex> lock(m_);
+    PgConn::Transaction t(*conn_);
+    job.callback = {};
+    if (!job.callback_url.empty()) job.callback.state = CallbackState::waiting;
+    const PgResult r = conn_->exec(
+        "INSERT INTO jobs(id, state, created_ms, callback_url, callback_state) VALUES ($1, 'queued', $2, $3, $4) "
+        "RETURNING seq",
+        {job.id, std::to_string(job.created_ms), job.callback_url, callback_state_name(job.callback.state)});
+    job.seq = r.i64(0, 0);
+    job.state = JobState::queued;
+    for (const JobInput& in : job.inputs)
+        conn_->exec("INSERT INTO job_inputs(job_id, idx, filename, format, bytes) VALUES ($1, $2, $3, $4, $5)",
+                    {job.id, std::to_string(in.index), in.filename, in.format, std::to_string(in.bytes)});
+    for (const JobOutput& o : job.outputs)
+        conn_->exec(
+            "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
+            "VALUES ($1, $2, $3, $4, $5, $6, $7, 'queued')",
+            {job.id, std::to_string(o.index), std::to_string(o.file), output_kind_name(o.kind), o.options_json, o.artifact,
+             o.content_type});
+    t.commit();
+}
+
+void PgJobStore::load_children(JobRecord& j) {
+    const PgResult in =
+        conn_->exec("SELECT idx, filename, format, bytes FROM job_inputs WHERE job_id = $1 ORDER BY idx", {j.id});
+    for (int i = 0; i < in.rows(); ++i)
+        j.inputs.push_back({static_cast<int>(in.i64(i, 0)), in.text(i, 1), in.text(i, 2), in.i64(i, 3)});
+    const PgResult r = conn_->exec(
+        "SELECT idx, file, kind, options, artifact, content_type, state, progress, error_code, error_message, "
+        "artifact_bytes, started_ms, finished_ms, result FROM job_outputs WHERE job_id = $1 ORDER BY idx",
+        {j.id});
+    for (int i = 0; i < r.rows(); ++i) {
+        JobOutput o;
+        o.index = static_cast<int>(r.i64(i, 0));
+        o.file = static_cast<int>(r.i64(i, 1));
+        o.kind = stored_output_kind(r.text(i, 2));
+        o.options_json = r.text(i, 3);
+        o.artifact = r.text(i, 4);
+        o.content_type = r.text(i, 5);
+        o.state = stored_job_state(r.text(i, 6));
+        o.progress = r.real(i, 7);
+        o.error_code = r.text(i, 8);
+        o.error_message = r.text(i, 9);
+        o.artifact_bytes = r.i64(i, 10);
+        o.started_ms = r.i64(i, 11);
+        o.finished_ms = r.i64(i, 12);
+        o.result_json = r.text(i, 13);
+        j.outputs.push_back(std::move(o));
+    }
+}
+
+std::optional<JobRecord> PgJobStore::read(const std::string& id) {
+    const PgResult r = conn_->exec((std::string(kJobColumns) + "WHERE id = $1").c_str(), {id});
+    if (r.rows() == 0) return std::nullopt;
+    JobRecord j = read_job(r, 0);
+    load_children(j);
+    return j;
+}
+
+std::optional<JobRecord> PgJobStore::get(const std::string& id) {
+    std::lock_guard<std::mutex> lock(m_);
+    // One snapshot for the job and its outputs: a GET never sees half a transition.
+    PgConn::Transaction t(*conn_);
+    conn_->exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
+    auto j = read(id);
+    t.commit();
+    return j;
+}
+
+bool PgJobStore::exists(const std::string& id) {
+    std::lock_guard<std::mutex> lock(m_);
+    return conn_->exec("SELECT 1 FROM jobs WHERE id = $1", {id}).rows() > 0;
+}
+
+JobPage PgJobStore::list(const std::optional<JobState>& state, bool newest_first, int limit,
+                         std::optional<int64_t> after_seq) {
+    std::lock_guard<std::mutex> lock(m_);
+    const std::string sql =
+        std::string(kJobColumns) +
+        (newest_first ? "WHERE ($1 = '' OR state = $1) AND seq < $2 ORDER BY seq DESC LIMIT $3"
+                      : "WHERE ($1 = '' OR state = $1) AND seq > $2 ORDER BY seq ASC LIMIT $3");
+    PgConn::Transaction t(*conn_);
+    conn_->exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
+    // One more than asked tells whether a next page exists.
+    const PgResult r = conn_->exec(sql.c_str(), {state ? job_state_name(*state) : "",
+                                                 std::to_string(after_seq.value_or(newest_first ? INT64_MAX : 0)),
+                                                 std::to_string(static_cast<int64_t>(limit) + 1)});
+    JobPage page;
+    for (int i = 0; i < r.rows(); ++i) page.jobs.push_back(read_job(r, i));
+    if (page.jobs.size() > static_cast<size_t>(limit)) {
+        page.jobs.resize(static_cast<size_t>(limit));
+        page.next_after = page.jobs.back().seq;
+    }
+    for (JobRecord& j : page.jobs) load_children(j);
+    t.commit();
+    return page;
+}
+
+std::map<JobState, int64_t> PgJobStore::count_by_state() {
+    std::lock_guard<std::mutex> lock(m_);
+    std::map<JobState, int64_t> counts;
+    for (JobState s : kJobStates) counts[s] = 0;
+    const PgResult r = conn_->exec("SELECT state, COUNT(*) FROM jobs GROUP BY state");
+    for (int i = 0; i < r.rows(); ++i) counts[stored_job_state(r.text(i, 0))] = r.i64(i, 1);
+    return counts;
+}
+
+int64_t PgJobStore::artifact_bytes() {
+    std::lock_guard<std::mutex> lock(m_);
+    const PgResult r =
+        conn_->exec("SELECT COALESCE(SUM(artifact_bytes), 0) FROM job_outputs WHERE state = 'succeeded'");
+    return r.i64(0, 0);
+}
+
+void PgJobStore::lock_outputs(const std::string& id) {
+    conn_->exec("SELECT 1 FROM job_outputs WHERE job_id = $1 ORDER BY idx FOR UPDATE", {id});
+}
+
+JobStore::DeleteOutcome PgJobStore::delete_job(const std::string& id, int64_t now_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    PgConn::Transaction t(*conn_);
+    lock_outputs(id);
+    const PgResult r = conn_->exec("SELECT state FROM jobs WHERE id = $1 FOR UPDATE", {id});
+    if (r.rows() == 0) return DeleteOutcome::not_found;
+    const JobState state = stored_job_state(r.text(0, 0));
+    if (state == JobState::canceled) return DeleteOutcome::canceling;
+    if (state == JobState::running) {
+        // The runners see it at their next heartbeat (renew() fails), on whichever instance they are.
+        conn_->exec(
+            "UPDATE jobs SET state = 'canceled', finished_ms = $1, error_code = 'canceled', "
+            "error_message = 'deleted while running; removed once its current step stops' WHERE id = $2",
+            {std::to_string(now_ms), id});
+        conn_->exec(
+            "UPDATE job_outputs SET state = 'canceled', finished_ms = $1 WHERE job_id = $2 AND "
+            "state IN ('queued', 'running')",
+            {std::to_string(now_ms), id});
+        t.commit();
+        return DeleteOutcome::canceling;
+    }
+    conn_->exec("DELETE FROM jobs WHERE id = $1", {id});  // inputs and outputs by ON DELETE CASCADE
+    t.commit();
+    return DeleteOutcome::removed;
+}
+
+bool PgJobStore::remove(const std::string& id) {
+    std::lock_guard<std::mutex> lock(m_);
+    PgConn::Transaction t(*conn_);
+    lock_outputs(id);
+    const bool removed = conn_->exec("DELETE FROM jobs WHERE id = $1", {id}).affected() > 0;
+    t.commit();
+    return removed;
+}
+
+bool PgJobStore::running(const std::string& id) {
+    std::lock_guard<std::mutex> lock(m_);
+    const PgResult r = conn_->exec("SELECT state FROM jobs WHERE id = $1", {id});
+    return r.rows() > 0 && stored_job_state(r.text(0, 0)) == JobState::running;
+}
+
+std::vector<std::string> PgJobStore::finished_before(int64_t before_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    // Canceled jobs are normally removed by their runner; one whose runners all
+    // died (no lease alive any more) is removed here.
+    const PgResult r = conn_->exec(
+        "SELECT id FROM jobs j WHERE (state IN ('succeeded', 'failed') AND finished_ms < $1) OR "
+        "(state = 'canceled' AND NOT EXISTS (SELECT 1 FROM job_outputs o WHERE o.job_id = j.id AND "
+        "o.lease_token <> '' AND o.lease_expires_ms >= (extract(epoch FROM clock_timestamp()) * 1000)::bigint)) "
+        "ORDER BY seq",
+        {std::to_string(before_ms)});
+    std::vector<std::string> ids;
+    for (int i = 0; i < r.rows(); ++i) ids.push_back(r.text(i, 0));
+    return ids;
+}
+
+std::vector<std::string> PgJobStore::all_ids() {
+    std::lock_guard<std::mutex> lock(m_);
+    const PgResult r = conn_->exec("SELECT id FROM jobs ORDER BY seq");
+    std::vector<std::string> ids;
+    for (int i = 0; i < r.rows(); ++i) ids.push_back(r.text(i, 0));
+    return ids;
+}
+
+std::optional<JobRecord> PgJobStore::claim_callback(int64_t now_ms, int64_t hold_ms) {
+    std::lock_guard<std::mutex> lock(m_);
+    PgConn::Transaction t(*conn_);
+    // SKIP LOCKED: instances polling at once each take a different delivery.
+    const PgResult r = conn_->exec(
+        "SELECT id FROM jobs WHERE callback_state = 'pending' AND callback_due_ms <= $1 "
+        "ORDER BY callback_due_ms, seq LIMIT 1 FOR UPDATE SKIP LOCKED",
+        {std::to_string(now_ms)});
+    if (r.rows() == 0) return std::nullopt;
+    const std::string id = r.text(0, 0);
+    conn_->exec("UPDATE jobs SET callback_due_ms = $1 WHERE id = $2", {std::to_string(now_ms + hold_ms), id});
+    auto job = read(id);
+    t.commit();
+    return job;
+}
+
+bool PgJobStore::callback_attempted(const std::string& id, const CallbackAttempt& a) {
+    std::lock_guard<std::mutex> lock(m_);
+    const bool done = a.state != CallbackState::pending;
+    return conn_
+               ->exec("UPDATE jobs SET callback_attempts = callback_attempts + 1, callback_state = $1, "
+                      "callback_due_ms = $2, callback_status = $3, callback_error = $4, callback_done_ms = $5 "
+                      "WHERE id = $6 AND callback_state = 'pending'",
+                      {callback_state_name(a.state), std::to_string(done ? 0 : a.next_ms), std::to_string(a.status),
+                       a.error, std::to_string(done ? a.now_ms : 0), id})
+               .affected() > 0;
+}
+
+}  // namespace nurbsrt::server

@@ -1,0 +1,75 @@
+// The PostgreSQL job store: one queue shared by many service instances.
+// Outputs are claimed one at a time with SELECT ... FOR UPDATE SKIP LOCKED
+// (PostgreSQL manual, "The Locking Clause": rows locked by another claimer
+// are skipped, not waited for) under a lease: a random token and an expiry in
+// the database's clock, renewed by the runner's heartbeat. An output whose
+// lease expired (its instance died) is claimed again by another instance; the
+// final update of an output names the token, so a run that lost its lease can
+// never finish it (fencing). Lock order in every transaction: output rows
+// before the job row, so claims, deletions and finishes cannot deadlock.
+#pragma once
+
+#include <memory>
+#include <mutex>
+
+#include "server/store/job_store.h"
+#include "server/store/pg_conn.h"
+
+namespace nurbsrt::server {
+
+class PgJobStore final : public JobStore {
+public:
+    // Connects, then creates or migrates the schema (one instance at a time,
+    // under an advisory lock). Throws Error(io) as open_postgres_job_store says.
+    PgJobStore(const std::string& url, std::string instance, double lease_s);
+    ~PgJobStore() override;
+
+    void create(JobRecord& job) override;
+    std::optional<JobRecord> get(const std::string& id) override;
+    bool exists(const std::string& id) override;
+    JobPage list(const std::optional<JobState>& state, bool newest_first, int limit,
+                 std::optional<int64_t> after_seq) override;
+    std::map<JobState, int64_t> count_by_state() override;
+    int64_t artifact_bytes() override;
+    std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 3) override;
+    bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;
+    bool output_progress(const std::string& id, int output, double progress, const std::string& lease = {}) override;
+    bool output_succeeded(const std::string& id, int output, int64_t artifact_bytes, const std::string& result_json,
+                          int64_t now_ms, const std::string& lease = {}) override;
+    bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
+                       int64_t now_ms, const std::string& lease = {}) override;
+    std::optional<JobState> finish(const std::string& id, int64_t now_ms) override;
+    void requeue(const JobClaim& claim) override;
+    DeleteOutcome delete_job(const std::string& id, int64_t now_ms) override;
+    bool remove(const std::string& id) override;
+    bool running(const std::string& id) override;
+    bool renew(const JobClaim& claim) override;
+    RecoveryReport recover(int, int64_t) override { return {}; }
+    std::vector<std::string> finished_before(int64_t before_ms) override;
+    std::vector<std::string> all_ids() override;
+    std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) override;
+    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override;
+    bool shared() const override { return true; }
+    int64_t lease_ms() const override { return lease_ms_; }
+    std::string describe() const override { return conn_->where(); }
+
+private:
+    void migrate();
+    // The job and its outputs, inside the caller's transaction.
+    std::optional<JobRecord> read(const std::string& id);
+    void load_children(JobRecord& j);
+    // The job's final state when every output is finished (inside a transaction
+    // holding the job row); "running" while outputs remain; nullopt when gone.
+    std::optional<JobState> finish_locked(const std::string& id, int64_t now_ms);
+    // Fails an output whose lease expired `max_attempts` times (in a transaction).
+    void fail_interrupted(const std::string& id, int output, int max_attempts, int64_t now_ms);
+    std::optional<JobClaim> claim_output(const std::string& id, int output, int attempts, int64_t now_ms);
+    void lock_outputs(const std::string& id);
+
+    std::unique_ptr<PgConn> conn_;
+    std::string instance_;
+    int64_t lease_ms_;
+    std::mutex m_;
+};
+
+}  // namespace nurbsrt::server
