@@ -146,8 +146,7 @@ std::vector<uint8_t> interior_mask(const RenderImage& im) {
             const uint32_t f = im.face[static_cast<size_t>(j) * W + i];
             bool same = f != 0;
             for (int dj = -1; dj <= 1 && same; ++dj)
-                for (int di = -1; di <= 1 && same; ++di)
-                    same = im.face[static_cast<size_t>(j + dj) * W + i + di] == f;
+                for (int di = -1; di <= 1 && same; ++di) same = im.face[static_cast<size_t>(j + dj) * W + i + di] == f;
             m[static_cast<size_t>(j) * W + i] = same;
         }
     return m;

@@ -30,12 +30,12 @@ double process_cpu_ms();
 
 // A scene of the benchmark: one CAD file, placed once or several times.
 struct BenchScene {
-    std::string key;         // JSON key: mobile_phone, machine_component, 27_ducks, ...
-    std::string title;       // the paper's name ("Mobile phone") or the file's
-    std::string file;        // absolute path of the CAD file
-    std::vector<Affine> placements;  // empty: the file as it is
-    Scene scene;             // imported, copies placed
-    double import_ms = 0;    // import_file (read + convert + map mesh) of the one file
+    std::string key;                     // JSON key: mobile_phone, machine_component, 27_ducks, ...
+    std::string title;                   // the paper's name ("Mobile phone") or the file's
+    std::string file;                    // absolute path of the CAD file
+    std::vector<Affine> placements;      // empty: the file as it is
+    Scene scene;                         // imported, copies placed
+    double import_ms = 0;                // import_file (read + convert + map mesh) of the one file
     double convert_and_map_mesh_ms = 0;  // the part of the import a renderer of a loaded model needs
     ImportOptions import_options;        // those the scene was imported with (a grid: scaled deflection)
     // The exact frame the peers are compared with: `proposed`, float map, ctx.size,
@@ -47,7 +47,8 @@ struct BenchScene {
     // frame (as the service's cached renders do). Made again if this BenchScene
     // was moved since (the PreparedScene refers to `scene` by address).
     const PreparedScene& prepared() const {
-        if (!prepared_ || &prepared_->scene() != &scene) prepared_ = std::make_shared<const PreparedScene>(prepare(scene));
+        if (!prepared_ || &prepared_->scene() != &scene)
+            prepared_ = std::make_shared<const PreparedScene>(prepare(scene));
         return *prepared_;
     }
 
@@ -59,23 +60,22 @@ private:
 // paper's "27 Ducks" is n = 3).
 std::vector<Affine> grid_placements(const BBox& one, int n);
 // Imports `file` and places its copies. Throws nurbsrt::Error.
-BenchScene load_bench_scene(const std::string& key, const std::string& title, const std::string& file,
-                            int grid_n);
+BenchScene load_bench_scene(const std::string& key, const std::string& title, const std::string& file, int grid_n);
 
 struct BenchContext {
     BenchOptions opt;
-    int runs = 9;                 // minimum timed runs per figure
-    double min_ms = 0;            // Table 1 / precision: run on until each variant has this much frame time
+    int runs = 9;       // minimum timed runs per figure
+    double min_ms = 0;  // Table 1 / precision: run on until each variant has this much frame time
     int size = 512;
-    std::string models_dir;       // where the scenes came from
-    bool fallback_models = false; // OCCT's sample files instead of ../shared/models
+    std::string models_dir;        // where the scenes came from
+    bool fallback_models = false;  // OCCT's sample files instead of ../shared/models
     std::vector<BenchScene> scenes;
     // The models beside the paper's scenes (extra_scenes()), imported on first use.
     std::vector<BenchScene> extras;
     std::vector<std::string> missing_extras;  // their files not found
     bool extras_loaded = false;
     Clock::time_point t0 = Clock::now();
-    nlohmann::json doc;           // sections write their results here
+    nlohmann::json doc;  // sections write their results here
 
     // The scenes' camera: the iso view fitted to the scene, perspective, size x size.
     CameraSpec camera(const BenchScene& s, int size) const;
@@ -85,8 +85,10 @@ struct BenchContext {
     void say(const char* fmt, A... xs) const {
         if (!opt.progress) return;
         std::fprintf(stderr, "bench: [%7.1f s] ", ms_since(t0) / 1e3);
-        if constexpr (sizeof...(A) == 0) std::fputs(fmt, stderr);
-        else std::fprintf(stderr, fmt, xs...);
+        if constexpr (sizeof...(A) == 0)
+            std::fputs(fmt, stderr);
+        else
+            std::fprintf(stderr, fmt, xs...);
         std::fputc('\n', stderr);
     }
 };

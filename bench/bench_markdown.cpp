@@ -47,14 +47,15 @@ void machine(std::string& o, const json& doc) {
     o += " (1 min).\n\n";
     const json& st = doc["settings"];
     o += "Settings: " + std::to_string(n(st, "width")) + "x" + std::to_string(n(st, "height")) +
-         ", one ray per pixel, iso view (perspective), " + "at least " + std::to_string(n(st, "runs")) + " timed runs per figure, " +
-         std::to_string(n(st, "threads")) + " render thread(s); models from `" + s(st, "models_dir") + "`" +
+         ", one ray per pixel, iso view (perspective), " + "at least " + std::to_string(n(st, "runs")) +
+         " timed runs per figure, " + std::to_string(n(st, "threads")) + " render thread(s); models from `" +
+         s(st, "models_dir") + "`" +
          (st.value("fallback_models", false) ? " (OCCT's samples: ../shared/models was not found)" : "") + ".\n\n";
     o += "| scene | stands for | file | copies | faces | import ms |\n|---|---|---|---:|---:|---:|\n";
     for (const json& sc : doc["scenes"])
         o += "| " + s(sc, "key") + " | " + s(sc, "title") + " | `" + s(sc, "file") + "` | " +
-             std::to_string(n(sc, "copies")) + " | " + std::to_string(n(sc, "faces")) + " | " +
-             ms(d(sc, "import_ms")) + " |\n";
+             std::to_string(n(sc, "copies")) + " | " + std::to_string(n(sc, "faces")) + " | " + ms(d(sc, "import_ms")) +
+             " |\n";
     o += "\n";
 }
 
@@ -65,8 +66,8 @@ void table1(std::string& o, const json& t) {
     o += "## Table 1: proposed (eq. 9-11) vs Martin et al., same preliminary map\n\n";
     o += "Medians of interleaved runs (at least " + std::to_string(n(t, "min_runs")) +
          (d(t, "min_ms") > 0 ? ", more until each method has " + num(d(t, "min_ms") / 1e3, 0) + " s of frames" : "") +
-         "), " + std::to_string(n(t, "width")) + "x" +
-         std::to_string(n(t, "height")) + ", " + std::to_string(n(t, "threads")) +
+         "), " + std::to_string(n(t, "width")) + "x" + std::to_string(n(t, "height")) + ", " +
+         std::to_string(n(t, "threads")) +
          " thread(s). Speed-up as the paper computes it: 100 (t_Martin - t_proposed) / t_Martin, from the medians; "
          "in brackets the middle half (25th..75th percentile) of the speed-ups of each pair of neighbouring runs. "
          "Interference from other work only adds time, so the speed-up of the fastest runs (minima) and of the "
@@ -123,9 +124,11 @@ void precision(std::string& o, const json& t) {
 void occt(std::string& o, const json& t) {
     o += "## Exact peer: OCCT IntCurvesFace_ShapeIntersector on the same pixel rays\n\n";
     o += "A uniform random subset of the frame's pixel rays (interior: those whose 8 neighbours in our frame hit "
-         "the same face, i.e. away from silhouettes and face borders); OCCT's time per ray times the pixel count plus its "
+         "the same face, i.e. away from silhouettes and face borders); OCCT's time per ray times the pixel count plus "
+         "its "
          "set-up (Load) is its frame time. Ours: whole frame (map + Newton + rescue + shading), " +
-         std::to_string(n(t, "threads_ours")) + " thread(s); OCCT: 1 thread. |dt| is the hit distance difference "
+         std::to_string(n(t, "threads_ours")) +
+         " thread(s); OCCT: 1 thread. |dt| is the hit distance difference "
          "over the bounding-box diagonal where both hit.\n\n";
     o += "| scene | rays | OCCT us/ray | OCCT frame ms (extrap.) | ours frame ms | OCCT / ours | hit agreement % | "
          "ours-only / OCCT-only | face agreement % | abs(dt)/diag median / p99 / max | within 1e-6 % | interior "
@@ -137,10 +140,10 @@ void occt(std::string& o, const json& t) {
              " | " + ms(d(r, "occt_frame_ms_extrapolated")) + " | " + ms(d(r, "ours_frame_ms")) + " | " +
              num(d(r, "occt_over_ours"), 1) + "x | " + num(d(r, "hit_agreement_pct"), 2) + " | " +
              std::to_string(n(r, "ours_only_hits")) + " / " + std::to_string(n(r, "occt_only_hits")) + " | " +
-             num(d(r, "face_agreement_pct"), 2) + " | " + sci(d(r, "dt_rel_median")) + " / " +
-             sci(d(r, "dt_rel_p99")) + " / " + sci(d(r, "dt_rel_max")) + " | " + num(d(r, "dt_within_1e-6_pct"), 2) +
-             " | " + std::to_string(n(r, "interior_rays")) + ": " + num(d(r, "interior_hit_agreement_pct"), 2) +
-             " | " + sci(d(r, "interior_dt_rel_p99")) + " / " + sci(d(r, "interior_dt_rel_max")) + " | " +
+             num(d(r, "face_agreement_pct"), 2) + " | " + sci(d(r, "dt_rel_median")) + " / " + sci(d(r, "dt_rel_p99")) +
+             " / " + sci(d(r, "dt_rel_max")) + " | " + num(d(r, "dt_within_1e-6_pct"), 2) + " | " +
+             std::to_string(n(r, "interior_rays")) + ": " + num(d(r, "interior_hit_agreement_pct"), 2) + " | " +
+             sci(d(r, "interior_dt_rel_p99")) + " / " + sci(d(r, "interior_dt_rel_max")) + " | " +
              std::to_string(n(r, "interior_dt_over_1e-6_ours_nearer")) + " / " +
              std::to_string(n(r, "interior_dt_over_1e-6_occt_nearer")) + " |\n";
     o += "\n";
@@ -148,8 +151,7 @@ void occt(std::string& o, const json& t) {
 
 void tessellation(std::string& o, const json& doc, const json& t) {
     const bool embree = t.value("embree", false);
-    o += "## Tessellating peer: BRepMesh + rasterization (OSMesa)" + std::string(embree ? " and Embree" : "") +
-         "\n\n";
+    o += "## Tessellating peer: BRepMesh + rasterization (OSMesa)" + std::string(embree ? " and Embree" : "") + "\n\n";
     o += "Deflection relative to the bounding-box diagonal, angular deflection " +
          num(d(t, "angular_deflection_rad"), 2) +
          " rad. Time = BRepMesh + copying the mesh out + rendering (rasterization: upload, draw, read back). "
@@ -194,9 +196,8 @@ void tessellation(std::string& o, const json& doc, const json& t) {
         if (at_time)
             o += "At equal time the finest mesh (deflection " + sci(d(*at_time, "relative_deflection")) + ", " +
                  ms(d((*at_time)["raster"], "total_ms")) + " ms) has depth error median " +
-                 sci(d((*at_time)["raster"], "dz_rel_median")) + ", p99 " +
-                 sci(d((*at_time)["raster"], "dz_rel_p99")) + " (interior " +
-                 sci(d((*at_time)["raster"], "interior_dz_rel_p99")) + ") x diag. ";
+                 sci(d((*at_time)["raster"], "dz_rel_median")) + ", p99 " + sci(d((*at_time)["raster"], "dz_rel_p99")) +
+                 " (interior " + sci(d((*at_time)["raster"], "interior_dz_rel_p99")) + ") x diag. ";
         else
             o += "Even the coarsest mesh is slower than that. ";
         if (!r["levels"].empty()) {
@@ -207,8 +208,8 @@ void tessellation(std::string& o, const json& doc, const json& t) {
                 o += ", Embree " + ms(d(finest["embree"], "render_ms")) + " ms (+" +
                      ms(d(finest["embree"], "build_ms")) + " ms BVH)";
             o += ". Accuracy of the finest mesh: median " + sci(d(finest["raster"], "dz_rel_median")) + ", p99 " +
-                 sci(d(finest["raster"], "dz_rel_p99")) + " (interior " + sci(d(finest["raster"], "interior_dz_rel_p99")) +
-                 ") x diag";
+                 sci(d(finest["raster"], "dz_rel_p99")) + " (interior " +
+                 sci(d(finest["raster"], "interior_dz_rel_p99")) + ") x diag";
         }
         if (doc.contains("occt"))
             for (const json& q : doc["occt"]["rows"])
@@ -226,12 +227,21 @@ void mesh_tracer(std::string& o, const json& t) {
         return;
     }
     o += "Our exact frame (map + Newton + shading of the prepared model) against Embree tracing the same camera's "
-         "rays through a BRepMesh mesh at " + sci(d(t, "fine_relative_deflection")) + " of the diagonal (trace only, "
-         "BVH built beforehand), " + std::to_string(n(t, "threads")) + " thread(s) each; goal: at most 2x. First "
+         "rays through a BRepMesh mesh at " +
+         sci(d(t, "fine_relative_deflection")) +
+         " of the diagonal (trace only, "
+         "BVH built beforehand), " +
+         std::to_string(n(t, "threads")) +
+         " thread(s) each; goal: at most 2x. First "
          "frame after reading the file: ours (NURBS conversion + map mesh + prepare + frame) against BRepMesh at " +
-         sci(d(t, "coarse_relative_deflection")) + " + mesh copy + BVH + trace; goal: at most 1x. The two sides run "
-         "alternately (frames: " + std::to_string(t["rows"].empty() ? 0 : n(t["rows"][0], "pairs")) + " pairs, first "
-         "frames: " + std::to_string(t["rows"].empty() ? 0 : n(t["rows"][0], "first_frame_pairs")) + "), so that both "
+         sci(d(t, "coarse_relative_deflection")) +
+         " + mesh copy + BVH + trace; goal: at most 1x. The two sides run "
+         "alternately (frames: " +
+         std::to_string(t["rows"].empty() ? 0 : n(t["rows"][0], "pairs")) +
+         " pairs, first "
+         "frames: " +
+         std::to_string(t["rows"].empty() ? 0 : n(t["rows"][0], "first_frame_pairs")) +
+         "), so that both "
          "see the same load of the machine; times are medians, ratios the medians of the pairs' ratios.\n\n";
     o += "| scene | faces | ours frame ms | Embree trace ms | triangles | frame / trace | ours first frame ms | "
          "mesh first frame ms | first / mesh first |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -294,12 +304,14 @@ void scaling(std::string& o, const json& t) {
 void look(std::string& o, const json& t) {
     o += "## Image options: anti-aliasing + feature lines, shadows\n\n";
     o += "Whole-frame times of one prepared scene and camera rendered three ways, interleaved and their order "
-         "rotated from run to run (at least " + std::to_string(n(t, "min_runs")) +
+         "rotated from run to run (at least " +
+         std::to_string(n(t, "min_runs")) +
          (d(t, "min_ms") > 0 ? " runs, more until each variant has " + num(d(t, "min_ms") / 1e3, 0) + " s of frames"
                              : " runs") +
          "), " + std::to_string(n(t, "width")) + "x" + std::to_string(n(t, "height")) + ", " +
          std::to_string(n(t, "threads")) + " thread(s): `plain` (one ray per pixel), `aa_edges` (" +
-         std::to_string(n(t, "antialias_rays")) + " extra samples per edge pixel, exact rays where an edge can cross them, and feature lines), `shadows` "
+         std::to_string(n(t, "antialias_rays")) +
+         " extra samples per edge pixel, exact rays where an edge can cross them, and feature lines), `shadows` "
          "(the key light's map and Newton along light rays). Ratios to `plain` from the medians, in brackets from "
          "the minima (interference from other work only adds time); targets: aa_edges <= " +
          num(d(t, "target_aa_edges_over_plain"), 1) + "x, shadows <= " + num(d(t, "target_shadows_over_plain"), 1) +
@@ -324,7 +336,8 @@ void look(std::string& o, const json& t) {
         for (const char* v : {"plain", "aa_edges", "shadows"}) {
             const json& st = r[v]["stages_ms"];
             o += "| " + s(r, "title") + " | " + v;
-            for (const char* k : {"map", "newton", "shade", "antialias", "edges", "shadow_map"}) o += " | " + ms(d(st, k));
+            for (const char* k : {"map", "newton", "shade", "antialias", "edges", "shadow_map"})
+                o += " | " + ms(d(st, k));
             o += " | " + ms(d(r[v], "frame_ms")) + " |\n";
         }
     o += "\n";

@@ -69,9 +69,12 @@ void run_occt(BenchContext& ctx) {
             }
             const bool hit = ours.image.face[p] != 0;
             if (inner[p]) ++interior, interior_agree += hit == h.hit;
-            if (hit == h.hit) ++agree;
-            else if (hit) ++ours_only;
-            else ++occt_only;
+            if (hit == h.hit)
+                ++agree;
+            else if (hit)
+                ++ours_only;
+            else
+                ++occt_only;
             if (hit && h.hit) {
                 ++both_hit;
                 const double d = std::fabs(static_cast<double>(ours.image.z[p]) - h.t) / diag;
@@ -118,8 +121,11 @@ void run_occt(BenchContext& ctx) {
                         {"interior_dt_over_1e-6_ours_nearer", interior_ours_nearer},
                         {"interior_dt_over_1e-6_occt_nearer", interior_occt_nearer}});
     }
-    ctx.doc["occt"] = {{"width", ctx.size}, {"height", ctx.size}, {"threads_ours", ctx.opt.threads},
-                       {"threads_occt", 1}, {"intersector_tolerance", ReferenceIntersector::kDefaultTolerance},
+    ctx.doc["occt"] = {{"width", ctx.size},
+                       {"height", ctx.size},
+                       {"threads_ours", ctx.opt.threads},
+                       {"threads_occt", 1},
+                       {"intersector_tolerance", ReferenceIntersector::kDefaultTolerance},
                        {"rows", rows}};
 }
 

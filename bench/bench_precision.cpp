@@ -37,14 +37,11 @@ void run_precision(BenchContext& ctx) {
                     frame.push_back(s.total_ms);
                 }
                 const RenderStats& s = runs[m].back();
-                row[map_precision_name(precs[m])] = {{"mean_iterations", s.mean_iterations},
-                                                    {"failures", newton_failures(s)},
-                                                    {"primary_solves", primary_solves(s)},
-                                                    {"rescued", s.fallback},
-                                                    {"pixels_hit", s.pixels_hit},
-                                                    {"newton_ms", median(newton)},
-                                                    {"newton_primary_ms", median(primary)},
-                                                    {"frame_ms", median(frame)}};
+                row[map_precision_name(precs[m])] = {
+                    {"mean_iterations", s.mean_iterations}, {"failures", newton_failures(s)},
+                    {"primary_solves", primary_solves(s)},  {"rescued", s.fallback},
+                    {"pixels_hit", s.pixels_hit},           {"newton_ms", median(newton)},
+                    {"newton_primary_ms", median(primary)}, {"frame_ms", median(frame)}};
             }
             row["newton_time_ratio_rgb8_over_float"] =
                 row["float32"]["newton_ms"].get<double>() > 0
@@ -53,8 +50,8 @@ void run_precision(BenchContext& ctx) {
             rows.push_back(row);
         }
     }
-    ctx.doc["precision"] = {{"width", ctx.size}, {"height", ctx.size}, {"min_runs", ctx.runs}, {"min_ms", ctx.min_ms},
-                            {"threads", ctx.opt.threads}, {"rows", rows}};
+    ctx.doc["precision"] = {{"width", ctx.size},    {"height", ctx.size},         {"min_runs", ctx.runs},
+                            {"min_ms", ctx.min_ms}, {"threads", ctx.opt.threads}, {"rows", rows}};
 }
 
 }  // namespace nurbsrt::bench

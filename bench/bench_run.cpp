@@ -19,9 +19,9 @@ namespace fs = std::filesystem;
 
 struct SceneDef {
     const char* key;
-    const char* title;   // the paper's scene it stands for, or a description
-    const char* file;    // relative to the models directory
-    int grid_n;          // n x n x n copies (1: the file as it is)
+    const char* title;  // the paper's scene it stands for, or a description
+    const char* file;   // relative to the models directory
+    int grid_n;         // n x n x n copies (1: the file as it is)
 };
 
 // The paper's three scenes, mapped onto ../shared/models.
@@ -58,7 +58,9 @@ nlohmann::json run_bench(const BenchOptions& options) {
     std::vector<std::string> sections = options.only.empty() ? kSections : options.only;
     for (const std::string& s : sections)
         if (std::find(kSections.begin(), kSections.end(), s) == kSections.end())
-            throw Error(ErrorCode::invalid_argument, "unknown section '" + s + "' (table1, precision, occt, tessellation, meshtracer, scaling, look)");
+            throw Error(
+                ErrorCode::invalid_argument,
+                "unknown section '" + s + "' (table1, precision, occt, tessellation, meshtracer, scaling, look)");
 
     // Models: --models, else $NURBSRT_MODELS, else ../shared/models from the working
     // directory, else beside the source tree; --quick falls back to OCCT's samples.
@@ -74,7 +76,8 @@ nlohmann::json run_bench(const BenchOptions& options) {
                                            kPaperScenes[1].file + ", " + kPaperScenes[2].file);
     } else {
         // NURBSRT_MODELS (as for build/nurbsrt_bench) replaces the default search.
-        std::vector<fs::path> candidates{fs::path("../shared/models"), fs::path(NURBSRT_SOURCE_DIR) / "../shared/models"};
+        std::vector<fs::path> candidates{fs::path("../shared/models"),
+                                         fs::path(NURBSRT_SOURCE_DIR) / "../shared/models"};
         if (const char* env = std::getenv("NURBSRT_MODELS")) candidates = {fs::path(env)};
         for (const fs::path& c : candidates) {
             looked.push_back(fs::absolute(c).lexically_normal().string());
@@ -103,10 +106,17 @@ nlohmann::json run_bench(const BenchOptions& options) {
     ctx.doc["tool"] = "nurbsrt bench";
     ctx.doc["mode"] = options.quick ? "quick" : "full";
     ctx.doc["machine"] = machine_json();
-    ctx.doc["settings"] = {{"width", ctx.size},   {"height", ctx.size},         {"runs", ctx.runs},
-                           {"min_frame_time_ms_per_variant", ctx.min_ms}, {"threads", ctx.opt.threads}, {"sections", sections}, {"models_dir", ctx.models_dir},
-                           {"fallback_models", ctx.fallback_models}, {"view", "iso"},
-                           {"projection", "perspective"}, {"rays_per_pixel", 1}};
+    ctx.doc["settings"] = {{"width", ctx.size},
+                           {"height", ctx.size},
+                           {"runs", ctx.runs},
+                           {"min_frame_time_ms_per_variant", ctx.min_ms},
+                           {"threads", ctx.opt.threads},
+                           {"sections", sections},
+                           {"models_dir", ctx.models_dir},
+                           {"fallback_models", ctx.fallback_models},
+                           {"view", "iso"},
+                           {"projection", "perspective"},
+                           {"rays_per_pixel", 1}};
 
     nlohmann::json scenes = nlohmann::json::array();
     for (size_t k = 0; k < nuse; ++k) {

@@ -87,8 +87,8 @@ void run_scaling(BenchContext& ctx) {
         row["patches"] = sc.scene.faces.size();
         pat.push_back(row);
     };
-    const auto grid = std::find_if(ctx.scenes.begin(), ctx.scenes.end(),
-                                   [](const BenchScene& s) { return !s.placements.empty(); });
+    const auto grid =
+        std::find_if(ctx.scenes.begin(), ctx.scenes.end(), [](const BenchScene& s) { return !s.placements.empty(); });
     const int grid_n = grid == ctx.scenes.end() ? 0 : static_cast<int>(std::cbrt(grid->placements.size()) + 0.5);
     if (grid != ctx.scenes.end())
         for (int n = 1; n < grid_n; ++n)
@@ -107,7 +107,8 @@ void run_scaling(BenchContext& ctx) {
     for (const BenchScene& sc : ctx.scenes) {
         const Camera cam(ctx.camera(sc, ctx.size));
         Timed t[2];
-        for (int k = 0; k < 2; ++k) render(sc.prepared(), cam, ctx.render_options(NewtonMethod::proposed, MapPrecision::float32, k + 1));
+        for (int k = 0; k < 2; ++k)
+            render(sc.prepared(), cam, ctx.render_options(NewtonMethod::proposed, MapPrecision::float32, k + 1));
         for (int r = 0; r < ctx.runs; ++r)
             for (int k = 0; k < 2; ++k) {
                 const int m = (r % 2 == 0) ? k : 1 - k;
@@ -122,8 +123,11 @@ void run_scaling(BenchContext& ctx) {
                        {"frame_speedup", f2 > 0 ? f1 / f2 : 0.0},
                        {"newton_speedup", n2 > 0 ? n1 / n2 : 0.0}});
     }
-    out["threads_scaling"] = {{"width", ctx.size}, {"height", ctx.size}, {"max_threads", max_threads},
-                              {"hardware_threads", std::thread::hardware_concurrency()}, {"rows", thr}};
+    out["threads_scaling"] = {{"width", ctx.size},
+                              {"height", ctx.size},
+                              {"max_threads", max_threads},
+                              {"hardware_threads", std::thread::hardware_concurrency()},
+                              {"rows", thr}};
     ctx.doc["scaling"] = out;
 }
 

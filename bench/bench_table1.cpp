@@ -59,8 +59,7 @@ nlohmann::json method_json(const std::vector<RenderStats>& runs, const std::vect
 // One scene's row: both methods interleaved, their medians and speed-ups.
 nlohmann::json table1_row(BenchContext& ctx, BenchScene& sc) {
     const Camera cam(ctx.camera(sc, ctx.size));
-    const RenderOptions opt[2] = {ctx.render_options(NewtonMethod::proposed),
-                                  ctx.render_options(NewtonMethod::martin)};
+    const RenderOptions opt[2] = {ctx.render_options(NewtonMethod::proposed), ctx.render_options(NewtonMethod::martin)};
     // One untimed frame per method: first-use costs (GL context, page faults).
     for (const RenderOptions& o : opt) render(sc.prepared(), cam, o);
     std::vector<RenderStats> runs[2];
@@ -90,8 +89,7 @@ nlohmann::json table1_row(BenchContext& ctx, BenchScene& sc) {
     row["martin"] = method_json(runs[1], cpu[1]);
     row["speedup_newton_pct"] = speedup_pct(row["proposed"]["newton_ms"], row["martin"]["newton_ms"]);
     row["speedup_frame_pct"] = speedup_pct(row["proposed"]["frame_ms"], row["martin"]["frame_ms"]);
-    row["speedup_primary_pct"] =
-        speedup_pct(row["proposed"]["newton_primary_ms"], row["martin"]["newton_primary_ms"]);
+    row["speedup_primary_pct"] = speedup_pct(row["proposed"]["newton_primary_ms"], row["martin"]["newton_primary_ms"]);
     row["speedup_newton_min_pct"] = speedup_pct(row["proposed"]["newton_ms_min"], row["martin"]["newton_ms_min"]);
     row["speedup_frame_cpu_pct"] = speedup_pct(row["proposed"]["frame_cpu_ms"], row["martin"]["frame_cpu_ms"]);
     // Per-run ratios of interleaved neighbours: how much of the speed-up is noise.

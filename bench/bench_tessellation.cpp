@@ -25,8 +25,10 @@ nlohmann::json compare(const std::vector<float>& t_mesh, const RenderImage& exac
         if (a && b) {
             err.push_back(std::fabs(static_cast<double>(t_mesh[p]) - exact.z[p]) / diag);
             if (inner[p]) err_inner.push_back(err.back());
-        } else if (a) ++mesh_only;
-        else if (b) ++exact_only;
+        } else if (a)
+            ++mesh_only;
+        else if (b)
+            ++exact_only;
     }
     return {{"both_hit", err.size()},
             {"dz_rel_median", median(err)},
@@ -74,12 +76,9 @@ void run_tessellation(BenchContext& ctx) {
         for (double rel : deflections) {
             ctx.say("tessellation %s: BRepMesh deflection %g x diagonal", sc.key.c_str(), rel);
             const Tessellation t = tess.mesh(rel * diag, angle, false);
-            nlohmann::json lv{{"relative_deflection", rel},
-                              {"triangles", t.mesh.triangle_count()},
-                              {"vertices", t.mesh.xyz.size()},
-                              {"mesh_ms", t.mesh_ms},
-                              {"extract_ms", t.extract_ms},
-                              {"faces_without_triangles", t.faces_without_triangles}};
+            nlohmann::json lv{{"relative_deflection", rel},    {"triangles", t.mesh.triangle_count()},
+                              {"vertices", t.mesh.xyz.size()}, {"mesh_ms", t.mesh_ms},
+                              {"extract_ms", t.extract_ms},    {"faces_without_triangles", t.faces_without_triangles}};
             std::vector<double> raster_ms;
             DepthImage img;
             for (int r = 0; r < std::max(1, ctx.runs / 2); ++r) {
@@ -99,8 +98,8 @@ void run_tessellation(BenchContext& ctx) {
             }
             levels.push_back(lv);
             if (t.mesh_ms > mesh_budget_ms || t.mesh.triangle_count() > max_triangles) {
-                ctx.say("tessellation %s: stopping refinement (mesh %.0f ms, %zu triangles)", sc.key.c_str(),
-                        t.mesh_ms, t.mesh.triangle_count());
+                ctx.say("tessellation %s: stopping refinement (mesh %.0f ms, %zu triangles)", sc.key.c_str(), t.mesh_ms,
+                        t.mesh.triangle_count());
                 break;
             }
         }

@@ -56,9 +56,11 @@ struct MeshRasterizer::Impl {
         glBindBuffer(GL_ARRAY_BUFFER, vbo);
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
         glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<void*>(offsetof(Vertex, clip)));
+        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                              reinterpret_cast<void*>(offsetof(Vertex, clip)));
         glEnableVertexAttribArray(1);
-        glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<void*>(offsetof(Vertex, depth)));
+        glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                              reinterpret_cast<void*>(offsetof(Vertex, depth)));
     }
 
     ~Impl() {
@@ -168,8 +170,7 @@ DepthImage MeshRasterizer::render(const TriangleMesh& mesh, const Camera& camera
         for (int i = 0; i < W; ++i) {
             const float d = along[static_cast<size_t>(H - 1 - j) * W + i];
             out.t[static_cast<size_t>(j) * W + i] =
-                std::isfinite(d) ? static_cast<float>(camera.hit_distance_from_depth(d, camera.pixel_screen(i, j)))
-                                 : d;
+                std::isfinite(d) ? static_cast<float>(camera.hit_distance_from_depth(d, camera.pixel_screen(i, j))) : d;
         }
     return out;
 }

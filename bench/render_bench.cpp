@@ -42,7 +42,7 @@ std::string models_dir() {
 // The paper's three scenes (mapped onto ../shared/models).
 struct BenchScene {
     const char* name;
-    const char* file;   // relative to models_dir()
+    const char* file;     // relative to models_dir()
     int copies_per_axis;  // 3 for "27 Ducks"
 };
 const BenchScene kScenes[] = {
@@ -89,8 +89,7 @@ void BM_NewtonStage(benchmark::State& state, BenchScene s, NewtonMethod method, 
                                               last.max_iterations + last.left_domain + last.behind_eye);
     state.counters["iters/hit"] = last.mean_iterations;
     state.counters["rescue_share"] = last.pixels_hit ? double(last.fallback) / last.pixels_hit : 0.0;
-    state.counters["failed_share"] =
-        solves > 0 ? (solves - last.converged - last.trimmed) / solves : 0.0;
+    state.counters["failed_share"] = solves > 0 ? (solves - last.converged - last.trimmed) / solves : 0.0;
     state.counters["pixels_hit"] = static_cast<double>(last.pixels_hit);
     state.counters["frame_ms"] = frame_ms / static_cast<double>(state.iterations());
 }
@@ -99,8 +98,8 @@ const int kRegistered = [] {
     for (const BenchScene& s : kScenes) {
         for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
             for (MapPrecision p : {MapPrecision::float32, MapPrecision::rgb8}) {
-                const std::string name = std::string("Newton/") + s.name + "/" + newton_method_name(m) + "/" +
-                                         map_precision_name(p);
+                const std::string name =
+                    std::string("Newton/") + s.name + "/" + newton_method_name(m) + "/" + map_precision_name(p);
                 benchmark::RegisterBenchmark(name.c_str(), BM_NewtonStage, s, m, p)
                     ->Arg(1)
                     ->ArgName("threads")

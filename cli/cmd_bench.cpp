@@ -32,16 +32,16 @@ void add_bench_command(CLI::App& app) {
     auto md_path = std::make_shared<std::string>("-");
     auto only = std::make_shared<std::string>();
     auto quiet = std::make_shared<bool>(false);
-    auto* cmd = app.add_subcommand(
-        "bench",
-        "Benchmarks on this machine: the paper's Table 1 (proposed vs Martin et al. on the same\n"
-        "preliminary map), map precision, OCCT's exact intersector and a BRepMesh tessellation as\n"
-        "peers, scaling with resolution, patches and threads, and the frame-time cost of\n"
-        "anti-aliasing + feature lines and of shadows (`look`). Progress goes to stderr.\n"
-        "Examples:\n"
-        "  nurbsrt bench --json docs/bench.json --markdown docs/bench.md\n"
-        "  nurbsrt bench --quick --json out.json\n"
-        "  nurbsrt bench --only table1,precision --runs 7");
+    auto* cmd =
+        app.add_subcommand("bench",
+                           "Benchmarks on this machine: the paper's Table 1 (proposed vs Martin et al. on the same\n"
+                           "preliminary map), map precision, OCCT's exact intersector and a BRepMesh tessellation as\n"
+                           "peers, scaling with resolution, patches and threads, and the frame-time cost of\n"
+                           "anti-aliasing + feature lines and of shadows (`look`). Progress goes to stderr.\n"
+                           "Examples:\n"
+                           "  nurbsrt bench --json docs/bench.json --markdown docs/bench.md\n"
+                           "  nurbsrt bench --quick --json out.json\n"
+                           "  nurbsrt bench --only table1,precision --runs 7");
     cmd->add_flag("--quick", o->quick,
                   "smoke run: 128x128, 2 runs, small budgets (falls back to OCCT's sample files when "
                   "../shared/models is absent)");
@@ -51,13 +51,16 @@ void add_bench_command(CLI::App& app) {
     cmd->add_option("--models", o->models_dir,
                     "the shared models directory (default: $NURBSRT_MODELS, else ../shared/models from the "
                     "working directory, then beside the source tree)");
-    cmd->add_option("--runs", o->runs, "minimum timed runs per figure (default 9, --quick 2); a full run's Table 1 and "
-                    "precision figures go on until each variant has 4 s of frames")->check(CLI::Range(1, 100));
+    cmd->add_option("--runs", o->runs,
+                    "minimum timed runs per figure (default 9, --quick 2); a full run's Table 1 and "
+                    "precision figures go on until each variant has 4 s of frames")
+        ->check(CLI::Range(1, 100));
     cmd->add_option("--threads", o->threads, "render threads for all but the thread-scaling figures")
-        ->check(CLI::Range(1, 1024))->capture_default_str();
-    cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")
-        ->check(CLI::Range(16, 8192));
-    cmd->add_option("--only", *only, "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling,look");
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
+    cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")->check(CLI::Range(16, 8192));
+    cmd->add_option("--only", *only,
+                    "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling,look");
     cmd->add_flag("-q,--quiet", *quiet, "no progress on stderr");
 
     cmd->callback([o, json_path, md_path, only, quiet] {

@@ -11,32 +11,33 @@
 namespace nurbsrt::cli {
 
 void add_convert_command(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "convert",
-        "Convert a STEP or IGES file. The input format is recognised from the content,\n"
-        "the output format from OUT's extension:\n"
-        "  .stp/.step  STEP AP214 (exact geometry) with face colours, names, layers and\n"
-        "              the assembly structure\n"
-        "  .igs/.iges  IGES 5.3, BRep mode (exact geometry) with face colours, names and\n"
-        "              layers; IGES has no assemblies: instances become a flat list\n"
-        "              (STEP/IGES: the written file is read back; what it lost is printed\n"
-        "              as warnings)\n"
-        "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal)\n"
-        "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
-        "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
-        "  .json       the NURBS patches (degrees, knots, homogeneous control points, trim\n"
-        "              loops, face attributes); schema: api_schema/nurbs_scene.schema.json\n"
-        "Examples: nurbsrt convert part.step part.igs\n"
-        "          nurbsrt convert part.igs part.glb");
+    auto* cmd =
+        app.add_subcommand("convert",
+                           "Convert a STEP or IGES file. The input format is recognised from the content,\n"
+                           "the output format from OUT's extension:\n"
+                           "  .stp/.step  STEP AP214 (exact geometry) with face colours, names, layers and\n"
+                           "              the assembly structure\n"
+                           "  .igs/.iges  IGES 5.3, BRep mode (exact geometry) with face colours, names and\n"
+                           "              layers; IGES has no assemblies: instances become a flat list\n"
+                           "              (STEP/IGES: the written file is read back; what it lost is printed\n"
+                           "              as warnings)\n"
+                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal)\n"
+                           "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
+                           "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
+                           "  .json       the NURBS patches (degrees, knots, homogeneous control points, trim\n"
+                           "              loops, face attributes); schema: api_schema/nurbs_scene.schema.json\n"
+                           "Examples: nurbsrt convert part.step part.igs\n"
+                           "          nurbsrt convert part.igs part.glb");
     auto in = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
     cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
-    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")->required()
+    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")
+        ->required()
         ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
     cmd->callback([in, out] {
         const ConvertReport r = convert_file(*in, *out);
-        std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(),
-                     format_name(r.in_format), r.faces, out->c_str(), conversion_format_name(r.output));
+        std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(), format_name(r.in_format),
+                     r.faces, out->c_str(), conversion_format_name(r.output));
         if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
         std::fprintf(stderr, "): read %.1f ms", r.read_ms);
         if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);

@@ -45,8 +45,8 @@ json face_json(const Face& f, const Scene& scene) {
 
 json scene_summary(const Scene& scene, bool per_face, double total_ms) {
     std::map<std::string, int> degrees;
-    size_t rational = 0, reversed = 0, poles = 0, max_poles = 0, loops = 0, inner = 0,
-           triangles = 0, fallback = 0, colored = 0;
+    size_t rational = 0, reversed = 0, poles = 0, max_poles = 0, loops = 0, inner = 0, triangles = 0, fallback = 0,
+           colored = 0;
     for (const Face& f : scene.faces) {
         const NurbsSurface& s = f.surface;
         degrees[std::to_string(s.degree_u) + "x" + std::to_string(s.degree_v)]++;
@@ -66,21 +66,25 @@ json scene_summary(const Scene& scene, bool per_face, double total_ms) {
         {"format", scene.format},
         {"units", scene.units},
         {"coordinates_unit", "mm"},
-        {"bbox", {{"min", vec_json(scene.bbox.lo)}, {"max", vec_json(scene.bbox.hi)},
-                  {"diagonal", scene.bbox.diagonal()}}},
+        {"bbox",
+         {{"min", vec_json(scene.bbox.lo)}, {"max", vec_json(scene.bbox.hi)}, {"diagonal", scene.bbox.diagonal()}}},
         {"faces", scene.faces.size()},
         {"bodies", scene.bodies.size()},
-        {"patches", {{"bspline", scene.faces.size()}, {"rational", rational},
-                     {"polynomial", scene.faces.size() - rational}, {"reversed", reversed},
-                     {"degrees", degrees}}},
+        {"patches",
+         {{"bspline", scene.faces.size()},
+          {"rational", rational},
+          {"polynomial", scene.faces.size() - rational},
+          {"reversed", reversed},
+          {"degrees", degrees}}},
         {"poles", {{"total", poles}, {"max_per_face", max_poles}}},
         {"trim_loops", {{"total", loops}, {"inner", inner}, {"outer", loops - inner}}},
         {"mesh", {{"triangles", triangles}, {"fallback_faces", fallback}}},
         {"colored_faces", colored},
-        {"timings_ms", {{"read", scene.timings.read_ms},
-                        {"nurbs_convert", scene.timings.nurbs_convert_ms},
-                        {"mesh", scene.timings.mesh_ms},
-                        {"total", total_ms}}},
+        {"timings_ms",
+         {{"read", scene.timings.read_ms},
+          {"nurbs_convert", scene.timings.nurbs_convert_ms},
+          {"mesh", scene.timings.mesh_ms},
+          {"total", total_ms}}},
         {"warnings", scene.warnings},
     };
     if (per_face) {
@@ -99,17 +103,16 @@ void print_text(const json& j) {
         return std::string(buf);
     };
     std::printf("file:        %s\n", j["file"].get<std::string>().c_str());
-    std::printf("format:      %s, declared units %s (coordinates in mm)\n",
-                j["format"].get<std::string>().c_str(),
+    std::printf("format:      %s, declared units %s (coordinates in mm)\n", j["format"].get<std::string>().c_str(),
                 j["units"].get<std::string>().empty() ? "unknown" : j["units"].get<std::string>().c_str());
-    std::printf("bbox:        %s .. %s, diagonal %.6g mm\n", v3(j["bbox"]["min"]).c_str(),
-                v3(j["bbox"]["max"]).c_str(), j["bbox"]["diagonal"].get<double>());
+    std::printf("bbox:        %s .. %s, diagonal %.6g mm\n", v3(j["bbox"]["min"]).c_str(), v3(j["bbox"]["max"]).c_str(),
+                j["bbox"]["diagonal"].get<double>());
     const json& p = j["patches"];
-    std::printf("faces:       %zu in %zu bodies (B-spline %zu: rational %zu, polynomial %zu; reversed %zu; "
-                "with a colour of their own %zu)\n",
-                j["faces"].get<size_t>(), j["bodies"].get<size_t>(), p["bspline"].get<size_t>(),
-                p["rational"].get<size_t>(), p["polynomial"].get<size_t>(), p["reversed"].get<size_t>(),
-                j["colored_faces"].get<size_t>());
+    std::printf(
+        "faces:       %zu in %zu bodies (B-spline %zu: rational %zu, polynomial %zu; reversed %zu; "
+        "with a colour of their own %zu)\n",
+        j["faces"].get<size_t>(), j["bodies"].get<size_t>(), p["bspline"].get<size_t>(), p["rational"].get<size_t>(),
+        p["polynomial"].get<size_t>(), p["reversed"].get<size_t>(), j["colored_faces"].get<size_t>());
     std::string degrees;
     for (const auto& [k, v] : p["degrees"].items()) degrees += (degrees.empty() ? "" : ", ") + k + ": " + v.dump();
     std::printf("degrees:     %s\n", degrees.c_str());
@@ -117,16 +120,16 @@ void print_text(const json& j) {
                 j["poles"]["max_per_face"].get<size_t>());
     std::printf("trim loops:  %zu (%zu outer, %zu inner)\n", j["trim_loops"]["total"].get<size_t>(),
                 j["trim_loops"]["outer"].get<size_t>(), j["trim_loops"]["inner"].get<size_t>());
-    std::printf("mesh:        %zu triangles (uv-grid fallback on %zu faces)\n",
-                j["mesh"]["triangles"].get<size_t>(), j["mesh"]["fallback_faces"].get<size_t>());
+    std::printf("mesh:        %zu triangles (uv-grid fallback on %zu faces)\n", j["mesh"]["triangles"].get<size_t>(),
+                j["mesh"]["fallback_faces"].get<size_t>());
     const json& t = j["timings_ms"];
     std::printf("timings:     read %.1f ms, nurbs_convert %.1f ms, mesh %.1f ms, total %.1f ms\n",
                 t["read"].get<double>(), t["nurbs_convert"].get<double>(), t["mesh"].get<double>(),
                 t["total"].get<double>());
     for (const auto& w : j["warnings"]) std::printf("warning:     %s\n", w.get<std::string>().c_str());
     if (j.contains("face_list")) {
-        std::printf("\n%6s %7s %9s %4s %4s %6s %6s  %s\n", "face", "degree", "poles", "rat", "rev",
-                    "loops", "tris", "name");
+        std::printf("\n%6s %7s %9s %4s %4s %6s %6s  %s\n", "face", "degree", "poles", "rat", "rev", "loops", "tris",
+                    "name");
         for (const json& f : j["face_list"]) {
             std::printf("%6u %3dx%-3d %4dx%-4d %4s %4s %6zu %6zu  %s\n", f["index"].get<unsigned>(),
                         f["degree"][0].get<int>(), f["degree"][1].get<int>(), f["poles"][0].get<int>(),
@@ -147,22 +150,22 @@ void add_info_command(CLI::App& app) {
         double time_limit_s = 300;
     };
     auto a = std::make_shared<Args>();
-    auto* cmd = app.add_subcommand(
-        "info",
-        "Import a STEP or IGES file and describe it: format, units, bounding box,\n"
-        "faces, B-spline degrees, poles, trim loops, mesh, and the import's stage times.\n"
-        "Example: nurbsrt info part.step --faces");
+    auto* cmd = app.add_subcommand("info",
+                                   "Import a STEP or IGES file and describe it: format, units, bounding box,\n"
+                                   "faces, B-spline degrees, poles, trim loops, mesh, and the import's stage times.\n"
+                                   "Example: nurbsrt info part.step --faces");
     cmd->add_option("FILE", a->file, "STEP or IGES file (format recognised from its content)")
-        ->required()->check(CLI::ExistingFile);
+        ->required()
+        ->check(CLI::ExistingFile);
     cmd->add_flag("--json", a->json, "print JSON instead of text");
     cmd->add_flag("--faces", a->faces, "list every face (degree, poles, loops, triangles, name)");
-    cmd->add_flag("--isolated", a->isolated,
-                  "import in a child process with a time limit (as the service does)");
+    cmd->add_flag("--isolated", a->isolated, "import in a child process with a time limit (as the service does)");
     cmd->add_option("--time-limit", a->time_limit_s, "seconds allowed for an --isolated import")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--mesh-deflection", a->options.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
-        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
+        ->check(CLI::Range(1e-6, 0.5))
+        ->capture_default_str();
     cmd->add_flag("!--no-attributes", a->options.read_attributes,
                   "skip colours and names (plain readers instead of XDE; faster)");
     cmd->callback([a] {
@@ -178,8 +181,10 @@ void add_info_command(CLI::App& app) {
         const double total_ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         const json j = scene_summary(scene, a->faces, total_ms);
-        if (a->json) std::cout << j.dump(2) << "\n";
-        else print_text(j);
+        if (a->json)
+            std::cout << j.dump(2) << "\n";
+        else
+            print_text(j);
     });
 }
 

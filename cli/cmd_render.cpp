@@ -34,9 +34,9 @@ double ms_since(clock_type::time_point t0) {
 
 // The stages of --stats timings_ms, in the order they run (with --isolated also
 // prescan, isolation and transfer, the child process's share of the import).
-constexpr const char* kCliRenderStages[] = {"read",    "nurbs_convert",   "mesh",   "assemble",   "frame_setup",
-                                            "prepare", "preliminary_map", "newton", "shadow_map", "shade",
-                                            "antialias", "edges",         "statistics", "encode"};
+constexpr const char* kCliRenderStages[] = {"read",      "nurbs_convert",   "mesh",       "assemble",   "frame_setup",
+                                            "prepare",   "preliminary_map", "newton",     "shadow_map", "shade",
+                                            "antialias", "edges",           "statistics", "encode"};
 
 // "x,y,z" -> Vec3 (CLI11 validator + converter).
 Vec3 parse_vec3(const std::string& s, const char* what) {
@@ -79,8 +79,8 @@ CameraSpec base_camera(const Args& a) {
     CameraSpec base;
     server::complete_size(a.width ? std::optional<int>(a.width) : std::nullopt,
                           a.height ? std::optional<int>(a.height) : std::nullopt, base.width, base.height);
-    base.projection = (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic
-                                                                              : Projection::perspective;
+    base.projection =
+        (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic : Projection::perspective;
     if (a.fov > 0) base.fov_deg = a.fov;
     return base;
 }
@@ -120,7 +120,8 @@ void add_output_options(CLI::App* cmd, Args& a) {
     // Checked in the callback, after CLI11 has reported unknown options: with a
     // CLI11 check here, `--widht 100` would be reported as a missing file "100".
     cmd->add_option("MODEL", a.models, "STEP/IGES file(s), NURBS JSON, or a JSON scene file")->required();
-    cmd->add_option("-o,--output", a.output, "image to write: .png, .jpg, .tif or .exr")->required()
+    cmd->add_option("-o,--output", a.output, "image to write: .png, .jpg, .tif or .exr")
+        ->required()
         ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
     cmd->add_option("--aov", a.aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
         ->check(output_file_validator({".exr"}));
@@ -133,22 +134,25 @@ void add_camera_options(CLI::App* cmd, Args& a) {
         ->check(CLI::Range(1, 16384));
     cmd->add_option("--height", a.height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
         ->check(CLI::Range(1, 16384));
-    cmd->add_option("--view", a.view, "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
-                   "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
-        ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))->capture_default_str();
+    cmd->add_option("--view", a.view,
+                    "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
+                    "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
+        ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))
+        ->capture_default_str();
     cmd->add_option("--eye", a.eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
         ->check(vec3_validator());
     cmd->add_option("--target", a.target, "point looked at, x,y,z")->check(vec3_validator());
     cmd->add_option("--up", a.up, "up vector x,y,z")->check(vec3_validator());
-    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")
-        ->check(CLI::Range(0.01, 179.0));
+    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")->check(CLI::Range(0.01, 179.0));
     cmd->add_option("--ortho-height", a.ortho_height, "orthographic view height in model units (implies orthographic)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--fit-margin", a.fit_margin,
                     "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
-        ->check(CLI::Range(0.0, kMaxFitMargin))->capture_default_str();
+        ->check(CLI::Range(0.0, kMaxFitMargin))
+        ->capture_default_str();
     cmd->add_option("--projection", a.projection, "perspective or orthographic")
-        ->check(CLI::IsMember({"perspective", "orthographic"}))->capture_default_str();
+        ->check(CLI::IsMember({"perspective", "orthographic"}))
+        ->capture_default_str();
 }
 
 // The API's parsers as CLI11 checks, so that both accept and refuse the same values.
@@ -170,22 +174,27 @@ CLI::Validator shared_check(Parse parse, const char* description) {
 
 void add_solver_options(CLI::App* cmd, Args& a) {
     cmd->add_option("--method", a.method, "Newton method: proposed (paper eq. 9-11) or martin (Martin et al. 2000)")
-        ->check(CLI::IsMember({"proposed", "martin"}))->capture_default_str();
+        ->check(CLI::IsMember({"proposed", "martin"}))
+        ->capture_default_str();
     cmd->add_option("--map-precision", a.map_precision,
                     "preliminary map: float (32-bit id, float u,v) or rgb8 (u,v quantized as paper eq. 4)")
-        ->check(CLI::IsMember({"float", "rgb8"}))->capture_default_str();
-    cmd->add_option("--threads", a.threads, "worker threads (0: all cores)")->check(CLI::Range(0, 1024))
+        ->check(CLI::IsMember({"float", "rgb8"}))
+        ->capture_default_str();
+    cmd->add_option("--threads", a.threads, "worker threads (0: all cores)")
+        ->check(CLI::Range(0, 1024))
         ->capture_default_str();
     cmd->add_option("--tolerance", a.tolerance,
                     "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
                     "the bounding-box diagonal (same for both methods)")
-        ->check(CLI::Range(1e-15, 1e-3))->capture_default_str();
+        ->check(CLI::Range(1e-15, 1e-3))
+        ->capture_default_str();
 }
 
 void add_import_options(CLI::App* cmd, Args& a) {
     cmd->add_option("--mesh-deflection", a.load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
-        ->check(CLI::Range(1e-6, 0.5))->capture_default_str();
+        ->check(CLI::Range(1e-6, 0.5))
+        ->capture_default_str();
     cmd->add_flag("--isolated", a.load.isolated, "import in a child process with a time limit");
     cmd->add_flag("-q,--quiet", a.quiet, "no progress messages on stderr");
 }
@@ -196,10 +205,12 @@ void add_look_options(CLI::App* cmd, Args& a) {
                     "opaque white for JPEG)")
         ->check(shared_check([](const std::string& s) { server::parse_background(s, "the value"); },
                              "R,G,B[,A]|transparent"));
-    cmd->add_option("--antialias", a.antialias,
-                    "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
-                    "can cross them; 0: off "
-                    "(default: " + std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
+    cmd->add_option(
+           "--antialias", a.antialias,
+           "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
+           "can cross them; 0: off "
+           "(default: " +
+               std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
         ->check(shared_check([](const std::string& s) { server::parse_antialias(std::stod(s), "the value"); }, "N"));
     cmd->add_flag("--edges", a.edges, "draw feature lines: silhouettes, face borders and creases");
     cmd->add_option("--edge-color", a.edge_color, "feature line colour r,g,b in [0,1] (default 0.02,0.02,0.02)")

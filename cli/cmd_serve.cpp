@@ -29,69 +29,113 @@ struct ServeArgs {
 void add_listen_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--host", a.c.host, "address to listen on")->envname("NURBSRT_HOST")->capture_default_str();
     cmd->add_option("--port", a.c.port, "TCP port (0: any free port, see --port-file)")
-        ->envname("NURBSRT_PORT")->check(CLI::Range(0, 65535))->capture_default_str();
+        ->envname("NURBSRT_PORT")
+        ->check(CLI::Range(0, 65535))
+        ->capture_default_str();
     cmd->add_option("--port-file", a.c.port_file, "write the bound port to this file once listening")
         ->envname("NURBSRT_PORT_FILE");
-    cmd->add_option("--data-dir", a.c.data_dir, "data directory (uploads staged in DATA_DIR/tmp; jobs in DATA_DIR/jobs.db, DATA_DIR/jobs/)")
-        ->envname("NURBSRT_DATA_DIR")->capture_default_str();
+    cmd->add_option("--data-dir", a.c.data_dir,
+                    "data directory (uploads staged in DATA_DIR/tmp; jobs in DATA_DIR/jobs.db, DATA_DIR/jobs/)")
+        ->envname("NURBSRT_DATA_DIR")
+        ->capture_default_str();
 }
 
 // How much work runs at once, and how long work may wait.
 void add_capacity_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--workers", a.c.workers, "imports/conversions running at once")
-        ->envname("NURBSRT_WORKERS")->check(CLI::Range(1, 256))->capture_default_str();
+        ->envname("NURBSRT_WORKERS")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
     cmd->add_option("--max-queue", a.c.max_queue, "requests waiting for a worker; beyond: 503 + Retry-After")
-        ->envname("NURBSRT_MAX_QUEUE")->check(CLI::Range(0, 10000))->capture_default_str();
+        ->envname("NURBSRT_MAX_QUEUE")
+        ->check(CLI::Range(0, 10000))
+        ->capture_default_str();
     cmd->add_option("--queue-timeout", a.c.queue_timeout_s, "longest wait for a worker, seconds; then 503")
-        ->envname("NURBSRT_QUEUE_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_QUEUE_TIMEOUT")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--retry-after", a.c.retry_after_s, "Retry-After seconds on 503")
-        ->envname("NURBSRT_RETRY_AFTER")->check(CLI::Range(1, 3600))->capture_default_str();
+        ->envname("NURBSRT_RETRY_AFTER")
+        ->check(CLI::Range(1, 3600))
+        ->capture_default_str();
     cmd->add_option("--render-threads", a.c.render_threads, "threads per render (0: all cores)")
-        ->envname("NURBSRT_RENDER_THREADS")->check(CLI::Range(0, 1024))->capture_default_str();
+        ->envname("NURBSRT_RENDER_THREADS")
+        ->check(CLI::Range(0, 1024))
+        ->capture_default_str();
     cmd->add_option("--max-renders", a.c.max_renders, "renders at once, sharing the cores (cheap ones first)")
-        ->envname("NURBSRT_MAX_RENDERS")->check(CLI::Range(1, 256))->capture_default_str();
+        ->envname("NURBSRT_MAX_RENDERS")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
     cmd->add_option("--memory-budget-mb", a.budget_mb,
                     "memory of the whole service, MiB: renders wait (or 503) rather than exceed it "
                     "(0: 3/4 of RAM or of the cgroup limit)")
-        ->envname("NURBSRT_MEMORY_BUDGET_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->envname("NURBSRT_MEMORY_BUDGET_MB")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
 }
 
 // The largest render and upload one request may ask for.
 void add_render_limit_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--max-render-mb", a.render_mb, "largest estimated memory of one render, MiB (422 beyond)")
-        ->envname("NURBSRT_MAX_RENDER_MB")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_RENDER_MB")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--max-render-cost", a.c.max_render_cost_s,
                     "largest estimated work of one render, core-seconds (422 beyond)")
-        ->envname("NURBSRT_MAX_RENDER_COST")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_RENDER_COST")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--max-upload-mb", a.upload_mb, "largest upload, MiB (413 beyond)")
-        ->envname("NURBSRT_MAX_UPLOAD_MB")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_UPLOAD_MB")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--max-dimension", a.c.max_dimension, "largest image width or height, pixels")
-        ->envname("NURBSRT_MAX_DIMENSION")->check(CLI::Range(1, 16384))->capture_default_str();
+        ->envname("NURBSRT_MAX_DIMENSION")
+        ->check(CLI::Range(1, 16384))
+        ->capture_default_str();
     cmd->add_option("--max-pixels", a.c.max_pixels, "largest image, width x height")
-        ->envname("NURBSRT_MAX_PIXELS")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_PIXELS")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--max-faces", a.c.max_faces, "most faces a rendered model may have")
-        ->envname("NURBSRT_MAX_FACES")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_FACES")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--render-timeout", a.c.render_timeout_s, "time limit of a render, seconds (504 beyond)")
-        ->envname("NURBSRT_RENDER_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_RENDER_TIMEOUT")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
 }
 
 // The bounds of an import or conversion (its own process), and the scene cache.
 void add_import_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--import-timeout", a.c.import_timeout_s, "time limit of an import or conversion, seconds")
-        ->envname("NURBSRT_IMPORT_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_IMPORT_TIMEOUT")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--import-memory-mb", a.import_memory_mb, "memory limit of an import/conversion process, MiB")
-        ->envname("NURBSRT_IMPORT_MEMORY_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->envname("NURBSRT_IMPORT_MEMORY_MB")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--import-max-entities", a.c.import_max_entities,
                     "most entities a STEP/IGES upload may hold (checked before it is parsed; 422 beyond)")
-        ->envname("NURBSRT_IMPORT_MAX_ENTITIES")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_IMPORT_MAX_ENTITIES")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--import-max-list-items", a.c.import_max_list_items,
                     "most items in one STEP list or IGES parameter list of an upload (422 beyond)")
-        ->envname("NURBSRT_IMPORT_MAX_LIST_ITEMS")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_IMPORT_MAX_LIST_ITEMS")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--import-max-nesting", a.c.import_max_nesting,
                     "deepest nesting of parentheses in a STEP upload (422 beyond)")
-        ->envname("NURBSRT_IMPORT_MAX_NESTING")->check(CLI::Range(1, 10000))->capture_default_str();
+        ->envname("NURBSRT_IMPORT_MAX_NESTING")
+        ->check(CLI::Range(1, 10000))
+        ->capture_default_str();
     cmd->add_option("--cache-mb", a.cache_mb, "scene cache capacity, MiB (0: no cache)")
-        ->envname("NURBSRT_CACHE_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->envname("NURBSRT_CACHE_MB")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
 }
 
 // Connections: slow clients, how many, who may call.
@@ -99,15 +143,23 @@ void add_connection_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--header-timeout", a.c.header_timeout_s,
                     "seconds for a request's line and headers to arrive (408 beyond); also the grace\n"
                     "before --min-body-rate-kib applies")
-        ->envname("NURBSRT_HEADER_TIMEOUT")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_HEADER_TIMEOUT")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--min-body-rate-kib", a.body_rate_kib,
                     "KiB/s a request body must arrive at on average after the grace (408 below)")
-        ->envname("NURBSRT_MIN_BODY_RATE_KIB")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_MIN_BODY_RATE_KIB")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--max-connections", a.c.max_connections, "open connections at once; beyond: 503")
-        ->envname("NURBSRT_MAX_CONNECTIONS")->check(CLI::Range(1, 100000))->capture_default_str();
+        ->envname("NURBSRT_MAX_CONNECTIONS")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
     cmd->add_option("--max-connections-per-client", a.c.max_connections_per_client,
                     "open connections from one client address; beyond: 503")
-        ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")->check(CLI::Range(1, 100000))->capture_default_str();
+        ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
     cmd->add_option("--api-keys-file", a.c.api_keys_file,
                     "require 'Authorization: Bearer <key>' (or 'X-Api-Key: <key>') with a key from this\n"
                     "file (one per line, '#' comments, at least 16 characters) on every route but\n"
@@ -117,34 +169,51 @@ void add_connection_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--cors-origin", a.c.cors_origins,
                     "a web origin (scheme://host[:port]) whose pages may call the API from a browser;\n"
                     "repeat for several (the environment variable: comma-separated). None: no CORS headers")
-        ->envname("NURBSRT_CORS_ORIGIN")->delimiter(',');
+        ->envname("NURBSRT_CORS_ORIGIN")
+        ->delimiter(',');
 }
 
 // Batch jobs and stored files, and the queue they share between instances.
 void add_job_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--job-runners", a.c.job_runners, "batch jobs running at once (their work shares --workers)")
-        ->envname("NURBSRT_JOB_RUNNERS")->check(CLI::Range(1, 256))->capture_default_str();
+        ->envname("NURBSRT_JOB_RUNNERS")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
     cmd->add_option("--max-queued-jobs", a.c.max_queued_jobs, "batch jobs waiting to run; beyond: 503 + Retry-After")
-        ->envname("NURBSRT_MAX_QUEUED_JOBS")->check(CLI::Range(1, 1000000))->capture_default_str();
+        ->envname("NURBSRT_MAX_QUEUED_JOBS")
+        ->check(CLI::Range(1, 1000000))
+        ->capture_default_str();
     cmd->add_option("--max-job-files", a.c.max_job_files, "most files in one batch job")
-        ->envname("NURBSRT_MAX_JOB_FILES")->check(CLI::Range(1, 10000))->capture_default_str();
+        ->envname("NURBSRT_MAX_JOB_FILES")
+        ->check(CLI::Range(1, 10000))
+        ->capture_default_str();
     cmd->add_option("--max-job-outputs", a.c.max_job_outputs, "most outputs (renders + conversions) of one batch job")
-        ->envname("NURBSRT_MAX_JOB_OUTPUTS")->check(CLI::Range(1, 10000))->capture_default_str();
+        ->envname("NURBSRT_MAX_JOB_OUTPUTS")
+        ->check(CLI::Range(1, 10000))
+        ->capture_default_str();
     cmd->add_option("--max-output-attempts", a.c.max_output_attempts,
                     "runs of one job output that a crash of the service (or a lost instance) may cut\n"
                     "short before the output fails with code interrupted; a graceful stop does not count")
-        ->envname("NURBSRT_MAX_OUTPUT_ATTEMPTS")->check(CLI::Range(1, 100))->capture_default_str();
+        ->envname("NURBSRT_MAX_OUTPUT_ATTEMPTS")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
     cmd->add_option("--job-retention", a.c.job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
-        ->envname("NURBSRT_JOB_RETENTION")->check(CLI::PositiveNumber)->capture_default_str();
+        ->envname("NURBSRT_JOB_RETENTION")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--max-stored-mb", a.stored_mb,
                     "stored files (POST /v1/files) together, MiB (507 beyond); unpinned ones expire\n"
                     "with --job-retention")
-        ->envname("NURBSRT_MAX_STORED_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_STORED_MB")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--max-artifacts-mb", a.artifacts_mb,
                     "job artifacts of all kept jobs together, MiB: a job beyond it is refused (507), an\n"
                     "output whose artifact would pass it fails; 0: half the data directory's file system")
-        ->envname("NURBSRT_MAX_ARTIFACTS_MB")->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->envname("NURBSRT_MAX_ARTIFACTS_MB")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--job-store", a.c.job_store,
                     "where batch jobs are queued: empty = SQLite in DATA_DIR/jobs.db (one instance);\n"
                     "postgresql://user[:password]@host[:port]/db = one queue for every instance started\n"
@@ -154,7 +223,9 @@ void add_job_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--lease-seconds", a.c.lease_s,
                     "PostgreSQL job store: an output a dead instance was running is taken over by another\n"
                     "this long after its last heartbeat (renewed every third of it)")
-        ->envname("NURBSRT_LEASE_SECONDS")->check(CLI::Range(1.0, 86400.0))->capture_default_str();
+        ->envname("NURBSRT_LEASE_SECONDS")
+        ->check(CLI::Range(1.0, 86400.0))
+        ->capture_default_str();
     cmd->add_option("--instance-id", a.c.instance_id,
                     "this instance's name in leases, logs and metrics (default: host name + random suffix)")
         ->envname("NURBSRT_INSTANCE_ID");
@@ -171,12 +242,18 @@ void add_webhook_options(CLI::App* cmd, ServeArgs& a) {
                   "an upload must not make the service call into the network it runs in)")
         ->envname("NURBSRT_WEBHOOK_ALLOW_PRIVATE");
     cmd->add_option("--webhook-attempts", a.c.webhook_attempts, "attempts per job callback before it is given up")
-        ->envname("NURBSRT_WEBHOOK_ATTEMPTS")->check(CLI::Range(1, 100))->capture_default_str();
+        ->envname("NURBSRT_WEBHOOK_ATTEMPTS")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
     cmd->add_option("--webhook-backoff", a.c.webhook_backoff_s,
                     "seconds before the second attempt of a callback; doubled after each (at most an hour)")
-        ->envname("NURBSRT_WEBHOOK_BACKOFF")->check(CLI::Range(0.01, 3600.0))->capture_default_str();
+        ->envname("NURBSRT_WEBHOOK_BACKOFF")
+        ->check(CLI::Range(0.01, 3600.0))
+        ->capture_default_str();
     cmd->add_option("--webhook-timeout", a.c.webhook_timeout_s, "seconds a callback receiver has to connect and answer")
-        ->envname("NURBSRT_WEBHOOK_TIMEOUT")->check(CLI::Range(0.1, 300.0))->capture_default_str();
+        ->envname("NURBSRT_WEBHOOK_TIMEOUT")
+        ->check(CLI::Range(0.1, 300.0))
+        ->capture_default_str();
 }
 
 void run_serve(ServeArgs& a) {
@@ -200,14 +277,13 @@ void run_serve(ServeArgs& a) {
 
 void add_serve_command(CLI::App& app) {
     auto a = std::make_shared<ServeArgs>();
-    auto* cmd = app.add_subcommand(
-        "serve",
-        "Run the HTTP service: POST /v1/renders, POST /v1/conversions, /v1/jobs (batch\n"
-        "jobs, kept in DATA_DIR/jobs.db and DATA_DIR/jobs/), GET /healthz, /readyz,\n"
-        "/metrics, /v1/openapi.json (the API document). Logs one JSON line per request\n"
-        "on stderr. Every option can also be set by the environment variable shown,\n"
-        "e.g. NURBSRT_PORT=9000. Stop with SIGINT or SIGTERM.\n"
-        "Example: nurbsrt serve --host 127.0.0.1 --port 8080 --data-dir ./data");
+    auto* cmd = app.add_subcommand("serve",
+                                   "Run the HTTP service: POST /v1/renders, POST /v1/conversions, /v1/jobs (batch\n"
+                                   "jobs, kept in DATA_DIR/jobs.db and DATA_DIR/jobs/), GET /healthz, /readyz,\n"
+                                   "/metrics, /v1/openapi.json (the API document). Logs one JSON line per request\n"
+                                   "on stderr. Every option can also be set by the environment variable shown,\n"
+                                   "e.g. NURBSRT_PORT=9000. Stop with SIGINT or SIGTERM.\n"
+                                   "Example: nurbsrt serve --host 127.0.0.1 --port 8080 --data-dir ./data");
     add_listen_options(cmd, *a);
     add_capacity_options(cmd, *a);
     add_render_limit_options(cmd, *a);

@@ -57,8 +57,7 @@ Scene import_one(const std::string& path, const LoadOptions& options, IsolationT
 
 }  // namespace
 
-Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options,
-                  IsolationTimings* isolation) {
+Scene load_models(const std::vector<std::string>& inputs, const LoadOptions& options, IsolationTimings* isolation) {
     std::vector<Placement> placements;
     for (const std::string& in : inputs) {
         std::string text;

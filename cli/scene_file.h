@@ -17,8 +17,8 @@ namespace nurbsrt::cli {
 
 struct LoadOptions {
     ImportOptions import;
-    bool isolated = false;       // import each file in a child process
-    double time_limit_s = 300;   // per file, when isolated
+    bool isolated = false;      // import each file in a child process
+    double time_limit_s = 300;  // per file, when isolated
 };
 
 // Throws nurbsrt::Error (invalid_argument for a malformed scene file).

@@ -24,8 +24,9 @@ int main(int argc, char** argv) {
     // Exit status 2 for a malformed command line, as `nurbsrt` uses; the parent
     // reads the error file the worker entry points write, or the status alone.
     if (argc < 4) {
-        std::fprintf(stderr, "usage: nurbsrt-worker import-worker IN OUT [name=value ...]\n"
-                             "       nurbsrt-worker convert-worker IN OUT REPORT\n");
+        std::fprintf(stderr,
+                     "usage: nurbsrt-worker import-worker IN OUT [name=value ...]\n"
+                     "       nurbsrt-worker convert-worker IN OUT REPORT\n");
         return 2;
     }
     const std::string command = argv[1];

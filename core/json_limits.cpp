@@ -20,23 +20,35 @@ JsonProblem measure(std::string_view text, const JsonLimits& limits, Measure& m)
     m.values = text.empty() ? 0 : 1;
     for (const char c : text) {
         if (in_string) {
-            if (escaped) escaped = false;
-            else if (c == '\\') escaped = true;
-            else if (c == '"') in_string = false;
+            if (escaped)
+                escaped = false;
+            else if (c == '\\')
+                escaped = true;
+            else if (c == '"')
+                in_string = false;
             continue;
         }
         switch (c) {
-            case '"': in_string = true; break;
-            case '[': case '{':
+            case '"':
+                in_string = true;
+                break;
+            case '[':
+            case '{':
                 ++m.values;
                 if (++depth > limits.max_depth) {
                     m.depth = depth;
                     return JsonProblem::too_deep;
                 }
                 break;
-            case ']': case '}': --depth; break;
-            case ',': ++m.values; break;
-            default: break;
+            case ']':
+            case '}':
+                --depth;
+                break;
+            case ',':
+                ++m.values;
+                break;
+            default:
+                break;
         }
         if (limits.max_values && m.values > limits.max_values) return JsonProblem::too_many_values;
     }

@@ -14,9 +14,9 @@
 namespace nurbsrt {
 
 struct JsonLimits {
-    size_t max_bytes = 0;      // 0: no bound on the text's size
-    int max_depth = 64;        // nested arrays and objects
-    size_t max_values = 0;     // 0: no bound on the number of values
+    size_t max_bytes = 0;   // 0: no bound on the text's size
+    int max_depth = 64;     // nested arrays and objects
+    size_t max_values = 0;  // 0: no bound on the number of values
 };
 
 // Options, job specs and small request bodies: far above what any real one
@@ -29,9 +29,9 @@ inline constexpr JsonLimits kDocumentJsonLimits{0, 64, 0};
 enum class JsonProblem { none, not_json, too_large, too_deep, too_many_values };
 
 struct BoundedJson {
-    nlohmann::json value;        // discarded unless problem == none
+    nlohmann::json value;  // discarded unless problem == none
     JsonProblem problem = JsonProblem::none;
-    std::string detail;          // what is wrong, naming the limit ("nested deeper than 64 levels")
+    std::string detail;  // what is wrong, naming the limit ("nested deeper than 64 levels")
     bool ok() const { return problem == JsonProblem::none; }
 };
 

@@ -29,8 +29,7 @@ inline double clamp_param(double t, double lo, double hi) {
 // Denominators are >= knots[s+1] - knots[s] > 0 for a non-empty span s.
 // left/right must hold p+1 values.
 template <bool kDerivs>
-inline void basis_core(int s, int p, double t, const double* U, double* N, double* dN,
-                       double* left, double* right) {
+inline void basis_core(int s, int p, double t, const double* U, double* N, double* dN, double* left, double* right) {
     N[0] = 1.0;
     if (p == 0) {
         if constexpr (kDerivs) dN[0] = 0.0;
@@ -144,8 +143,10 @@ int find_span(int n, int p, double t, const double* knots) {
     int low = p, high = n;
     int mid = (low + high) / 2;
     while (t < U[mid] || t >= U[mid + 1]) {
-        if (t < U[mid]) high = mid;
-        else low = mid;
+        if (t < U[mid])
+            high = mid;
+        else
+            low = mid;
         mid = (low + high) / 2;
     }
     return mid;
@@ -166,9 +167,7 @@ SurfaceDerivs evaluate_d1(const NurbsSurface& s, double u, double v) {
     return {h.S, h.Su, h.Sv};
 }
 
-Vec4 evaluate(const NurbsSurface& s, double u, double v) {
-    return eval_dispatch<0>(s, u, v).S;
-}
+Vec4 evaluate(const NurbsSurface& s, double u, double v) { return eval_dispatch<0>(s, u, v).S; }
 
 CartesianDerivs cartesian_d1(const NurbsSurface& s, double u, double v) {
     const Cart2 c = to_cartesian(eval_dispatch<1>(s, u, v), false);
@@ -241,7 +240,7 @@ Vec3 surface_normal(const NurbsSurface& s, double u, double v, bool reversed) {
             const double h_sign = (v - v0 <= v1 - v) ? 1.0 : -1.0;
             m = h_sign * cross(c.Puv, c.Pv);
             ref = length(c.Puv) * length(c.Pv);
-        } else {       // P_v vanishes: the edge u = const collapsed
+        } else {  // P_v vanishes: the edge u = const collapsed
             const double h_sign = (u - u0 <= u1 - u) ? 1.0 : -1.0;
             m = h_sign * cross(c.Pu, c.Puv);
             ref = length(c.Pu) * length(c.Puv);

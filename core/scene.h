@@ -19,11 +19,11 @@ namespace nurbsrt {
 // cp[i * num_v + j] for i in [0, num_u), j in [0, num_v).
 struct NurbsSurface {
     int degree_u = 0, degree_v = 0;
-    int num_u = 0, num_v = 0;          // control points in u and v
-    std::vector<double> knots_u;       // num_u + degree_u + 1 values, clamped
-    std::vector<double> knots_v;       // num_v + degree_v + 1 values, clamped
-    std::vector<Vec4> cp;              // num_u * num_v homogeneous control points
-    bool rational = false;             // false: every weight is 1
+    int num_u = 0, num_v = 0;     // control points in u and v
+    std::vector<double> knots_u;  // num_u + degree_u + 1 values, clamped
+    std::vector<double> knots_v;  // num_v + degree_v + 1 values, clamped
+    std::vector<Vec4> cp;         // num_u * num_v homogeneous control points
+    bool rational = false;        // false: every weight is 1
 
     const Vec4& at(int i, int j) const { return cp[static_cast<size_t>(i) * num_v + j]; }
     double u_begin() const { return knots_u[degree_u]; }
@@ -46,8 +46,8 @@ struct TrimLoop {
 struct FaceMesh {
     std::vector<Vec2> uv;
     std::vector<Vec3> xyz;
-    std::vector<uint32_t> triangles;   // 3 indices per triangle, into uv/xyz
-    bool fallback_grid = false;        // true when BRepMesh failed and a trimmed uv grid was used
+    std::vector<uint32_t> triangles;  // 3 indices per triangle, into uv/xyz
+    bool fallback_grid = false;       // true when BRepMesh failed and a trimmed uv grid was used
 };
 
 struct Color {
@@ -55,18 +55,18 @@ struct Color {
 };
 
 struct Face {
-    uint32_t index = 0;                // 1..N, the face-index contract
-    NurbsSurface surface;              // the face's converted surface, instance transform baked in
-    double u_min = 0, u_max = 0;       // parameter box of the face (BRepTools::UVBounds of the
-    double v_min = 0, v_max = 0;       // converted face), inside the surface's knot range
-    bool reversed = false;             // face orientation REVERSED: outward normal is -(S_u x S_v)
-    std::vector<TrimLoop> loops;       // empty: untrimmed, the whole parameter box
-    double trim_tolerance_uv = 0;      // uv distance within which the trim test is uncertain
+    uint32_t index = 0;            // 1..N, the face-index contract
+    NurbsSurface surface;          // the face's converted surface, instance transform baked in
+    double u_min = 0, u_max = 0;   // parameter box of the face (BRepTools::UVBounds of the
+    double v_min = 0, v_max = 0;   // converted face), inside the surface's knot range
+    bool reversed = false;         // face orientation REVERSED: outward normal is -(S_u x S_v)
+    std::vector<TrimLoop> loops;   // empty: untrimmed, the whole parameter box
+    double trim_tolerance_uv = 0;  // uv distance within which the trim test is uncertain
     FaceMesh mesh;
     bool has_color = false;
     Color color;
-    std::string name;                  // face or, failing that, its body's name; may be empty
-    uint32_t body = 0;                 // index into Scene::bodies (source solid/shell instance)
+    std::string name;   // face or, failing that, its body's name; may be empty
+    uint32_t body = 0;  // index into Scene::bodies (source solid/shell instance)
 };
 
 // A source body: a solid, shell or free face group of the file, one per assembly
@@ -85,14 +85,14 @@ struct ImportTimings {
 };
 
 struct Scene {
-    std::string source_name;           // file name as given (no directories needed)
-    std::string format;                // "STEP" or "IGES"
-    std::string units;                 // length unit declared by the file ("mm", "inch", ...); coordinates are mm
-    BBox bbox;                         // of all faces (surfaces' trimmed extent, via the meshes)
+    std::string source_name;  // file name as given (no directories needed)
+    std::string format;       // "STEP" or "IGES"
+    std::string units;        // length unit declared by the file ("mm", "inch", ...); coordinates are mm
+    BBox bbox;                // of all faces (surfaces' trimmed extent, via the meshes)
     std::vector<Face> faces;
     std::vector<Body> bodies;
     ImportTimings timings;
-    std::vector<std::string> warnings; // things the import worked around (mesh fallback, healed loops, ...)
+    std::vector<std::string> warnings;  // things the import worked around (mesh fallback, healed loops, ...)
 };
 
 }  // namespace nurbsrt

@@ -78,7 +78,11 @@ public:
     void vec2(Vec2 v) { f64s({v.x, v.y}); }
     void vec3(Vec3 v) { f64s({v.x, v.y, v.z}); }
     void vec4(Vec4 v) { f64s({v.x, v.y, v.z, v.w}); }
-    void color(Color c) { raw(c.r); raw(c.g); raw(c.b); }
+    void color(Color c) {
+        raw(c.r);
+        raw(c.g);
+        raw(c.b);
+    }
     void doubles(const std::vector<double>& v) {
         u64(v.size());
         for (double d : v) f64(d);
@@ -121,9 +125,7 @@ void write_face(Writer& w, const Face& f) {
 
 // ---- reader ------------------------------------------------------------------
 
-[[noreturn]] void corrupt(const std::string& what) {
-    throw Error(ErrorCode::corrupt_scene, "corrupt scene: " + what);
-}
+[[noreturn]] void corrupt(const std::string& what) { throw Error(ErrorCode::corrupt_scene, "corrupt scene: " + what); }
 
 // Bounds-checked cursor over the payload. Every read checks the remaining bytes;
 // count() checks that count * min_element_size bytes remain before anything is allocated.
@@ -148,8 +150,8 @@ public:
     bool boolean(const char* what) {
         const auto b = raw<uint8_t>(what);
         if (b > 1) {
-            corrupt(std::string("invalid boolean ") + std::to_string(b) + " for " + what +
-                    " at payload offset " + std::to_string(offset() - 1));
+            corrupt(std::string("invalid boolean ") + std::to_string(b) + " for " + what + " at payload offset " +
+                    std::to_string(offset() - 1));
         }
         return b != 0;
     }
@@ -173,12 +175,34 @@ public:
         p_ += n;
         return s;
     }
-    Vec2 vec2(const char* w) { Vec2 v; v.x = f64(w); v.y = f64(w); return v; }
-    Vec3 vec3(const char* w) { Vec3 v; v.x = f64(w); v.y = f64(w); v.z = f64(w); return v; }
-    Vec4 vec4(const char* w) {
-        Vec4 v; v.x = f64(w); v.y = f64(w); v.z = f64(w); v.w = f64(w); return v;
+    Vec2 vec2(const char* w) {
+        Vec2 v;
+        v.x = f64(w);
+        v.y = f64(w);
+        return v;
     }
-    Color color(const char* w) { Color c; c.r = f32(w); c.g = f32(w); c.b = f32(w); return c; }
+    Vec3 vec3(const char* w) {
+        Vec3 v;
+        v.x = f64(w);
+        v.y = f64(w);
+        v.z = f64(w);
+        return v;
+    }
+    Vec4 vec4(const char* w) {
+        Vec4 v;
+        v.x = f64(w);
+        v.y = f64(w);
+        v.z = f64(w);
+        v.w = f64(w);
+        return v;
+    }
+    Color color(const char* w) {
+        Color c;
+        c.r = f32(w);
+        c.g = f32(w);
+        c.b = f32(w);
+        return c;
+    }
 
 private:
     const char* p_;
@@ -186,9 +210,7 @@ private:
     const char* begin_;
 };
 
-std::string face_ctx(size_t i, const char* what) {
-    return "face " + std::to_string(i) + ": " + what;
-}
+std::string face_ctx(size_t i, const char* what) { return "face " + std::to_string(i) + ": " + what; }
 
 void read_knots(Reader& r, std::vector<double>& knots, int n, int p, const char* dir, size_t fi) {
     const size_t c = r.count("knots", 8);
@@ -215,8 +237,8 @@ void read_surface(Reader& r, NurbsSurface& s, size_t fi) {
     s.num_u = r.i32("num_u");
     s.num_v = r.i32("num_v");
     if (s.degree_u < 1 || s.degree_v < 1) {
-        corrupt(face_ctx(fi, "surface degrees ") + std::to_string(s.degree_u) + "," +
-                std::to_string(s.degree_v) + " (must be >= 1)");
+        corrupt(face_ctx(fi, "surface degrees ") + std::to_string(s.degree_u) + "," + std::to_string(s.degree_v) +
+                " (must be >= 1)");
     }
     // num <= degree, not num < degree + 1: a degree of INT_MAX overflowed there.
     if (s.num_u <= s.degree_u || s.num_v <= s.degree_v) {
@@ -229,8 +251,8 @@ void read_surface(Reader& r, NurbsSurface& s, size_t fi) {
     const size_t c = r.count("control points", 32);
     const uint64_t expected = static_cast<uint64_t>(s.num_u) * static_cast<uint64_t>(s.num_v);
     if (c != expected) {
-        corrupt(face_ctx(fi, "surface has ") + std::to_string(c) + " control points, expected num_u * num_v = " +
-                std::to_string(expected));
+        corrupt(face_ctx(fi, "surface has ") + std::to_string(c) +
+                " control points, expected num_u * num_v = " + std::to_string(expected));
     }
     s.cp.resize(c);
     for (Vec4& p : s.cp) p = r.vec4("control point");
@@ -260,14 +282,15 @@ void read_face(Reader& r, Face& f, size_t fi) {
                 std::to_string(f.mesh.xyz.size()) + " xyz vertices");
     }
     const size_t nt = r.count("mesh triangle indices", 4);
-    if (nt % 3 != 0) corrupt(face_ctx(fi, "mesh triangle index count ") + std::to_string(nt) + " is not a multiple of 3");
+    if (nt % 3 != 0)
+        corrupt(face_ctx(fi, "mesh triangle index count ") + std::to_string(nt) + " is not a multiple of 3");
     f.mesh.triangles.resize(nt);
     const size_t nv = f.mesh.uv.size();
     for (size_t k = 0; k < nt; ++k) {
         const uint32_t t = r.u32("mesh triangle index");
         if (t >= nv) {
-            corrupt(face_ctx(fi, "mesh triangle index ") + std::to_string(t) + " out of range (" +
-                    std::to_string(nv) + " vertices)");
+            corrupt(face_ctx(fi, "mesh triangle index ") + std::to_string(t) + " out of range (" + std::to_string(nv) +
+                    " vertices)");
         }
         f.mesh.triangles[k] = t;
     }

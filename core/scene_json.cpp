@@ -69,10 +69,9 @@ json scene_json(const Scene& scene) {
     for (const Body& b : scene.bodies) bodies.push_back({{"name", b.name}, {"color", color(b.has_color, b.color)}});
     json faces = json::array();
     for (const Face& f : scene.faces) faces.push_back(face_json(f));
-    const json bbox = scene.bbox.empty()
-                          ? json(nullptr)
-                          : json{{"min", vec({scene.bbox.lo.x, scene.bbox.lo.y, scene.bbox.lo.z})},
-                                 {"max", vec({scene.bbox.hi.x, scene.bbox.hi.y, scene.bbox.hi.z})}};
+    const json bbox = scene.bbox.empty() ? json(nullptr)
+                                         : json{{"min", vec({scene.bbox.lo.x, scene.bbox.lo.y, scene.bbox.lo.z})},
+                                                {"max", vec({scene.bbox.hi.x, scene.bbox.hi.y, scene.bbox.hi.z})}};
     return {{"format", kSceneJsonFormat},
             {"version", kSceneJsonVersion},
             {"source", {{"name", scene.source_name}, {"format", scene.format}, {"declared_units", scene.units}}},

@@ -168,7 +168,8 @@ Scene scene_from_json(const std::string& text) {
     for (size_t b = 0; b < bodies.size(); ++b) {
         Body body;
         body.name = string_field(bodies[b], "name");
-        read_color(field(bodies[b], "color", "bodies"), body.has_color, body.color, "bodies[" + std::to_string(b) + "]");
+        read_color(field(bodies[b], "color", "bodies"), body.has_color, body.color,
+                   "bodies[" + std::to_string(b) + "]");
         scene.bodies.push_back(std::move(body));
     }
     for (size_t i = 0; i < faces.size(); ++i) scene.faces.push_back(read_face(faces[i], i));

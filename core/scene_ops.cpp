@@ -48,8 +48,7 @@ Vec3 Affine::apply(Vec3 p) const {
 }
 
 Vec4 Affine::apply_h(Vec4 q) const {
-    return {m[0] * q.x + m[1] * q.y + m[2] * q.z + m[3] * q.w,
-            m[4] * q.x + m[5] * q.y + m[6] * q.z + m[7] * q.w,
+    return {m[0] * q.x + m[1] * q.y + m[2] * q.z + m[3] * q.w, m[4] * q.x + m[5] * q.y + m[6] * q.z + m[7] * q.w,
             m[8] * q.x + m[9] * q.y + m[10] * q.z + m[11] * q.w, q.w};
 }
 

@@ -16,8 +16,7 @@ inline double orient(double ax, double ay, double bx, double by, double cx, doub
 // (separating axes: the box's two axes and the segment's normal)
 inline bool segment_overlaps_box(double ax, double ay, double bx, double by, double x0, double y0, double x1,
                                  double y1) {
-    if (std::max(ax, bx) < x0 || std::min(ax, bx) > x1 || std::max(ay, by) < y0 || std::min(ay, by) > y1)
-        return false;
+    if (std::max(ax, bx) < x0 || std::min(ax, bx) > x1 || std::max(ay, by) < y0 || std::min(ay, by) > y1) return false;
     const double s0 = orient(ax, ay, bx, by, x0, y0), s1 = orient(ax, ay, bx, by, x1, y0);
     const double s2 = orient(ax, ay, bx, by, x0, y1), s3 = orient(ax, ay, bx, by, x1, y1);
     return !((s0 > 0 && s1 > 0 && s2 > 0 && s3 > 0) || (s0 < 0 && s1 < 0 && s2 < 0 && s3 < 0));
@@ -194,8 +193,8 @@ void TrimTester::settle_reference_points(const std::vector<TrimLoop>& loops) {
         }
         return false;
     };
-    static const double kAlt[][2] = {{0.3137, 0.6911}, {0.7219, 0.2683}, {0.1871, 0.1429}, {0.8377, 0.8621},
-                                     {0.4423, 0.3089}, {0.6047, 0.5813}};
+    static const double kAlt[][2] = {{0.3137, 0.6911}, {0.7219, 0.2683}, {0.1871, 0.1429},
+                                     {0.8377, 0.8621}, {0.4423, 0.3089}, {0.6047, 0.5813}};
     for (int j = 0; j < nv; ++j)
         for (int i = 0; i < nu; ++i) {
             const size_t c = static_cast<size_t>(j) * nu + i;

@@ -64,7 +64,7 @@ private:
     std::vector<uint32_t> cell_start_;  // nu*nv + 1 offsets into cell_edges_
     std::vector<uint32_t> cell_edges_;
     std::vector<uint8_t> centre_inside_;  // inside state of each cell's reference point
-    std::vector<Vec2> ref_;               // the cell centre, or another point of the cell if an edge passes too near the centre
+    std::vector<Vec2> ref_;  // the cell centre, or another point of the cell if an edge passes too near the centre
 };
 
 // Reference: even-odd crossing count over every edge of every loop (slow).

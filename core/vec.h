@@ -30,11 +30,12 @@ inline Vec3 operator-(Vec3 a) { return {-a.x, -a.y, -a.z}; }
 inline Vec3 operator*(double s, Vec3 a) { return {s * a.x, s * a.y, s * a.z}; }
 inline Vec3 operator*(Vec3 a, double s) { return s * a; }
 inline Vec3 operator/(Vec3 a, double s) { return {a.x / s, a.y / s, a.z / s}; }
-inline Vec3& operator+=(Vec3& a, Vec3 b) { a = a + b; return a; }
-inline double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline Vec3 cross(Vec3 a, Vec3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+inline Vec3& operator+=(Vec3& a, Vec3 b) {
+    a = a + b;
+    return a;
 }
+inline double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline double length(Vec3 a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(Vec3 a) {
     const double l = length(a);
@@ -44,7 +45,10 @@ inline Vec3 normalize(Vec3 a) {
 inline Vec4 operator+(Vec4 a, Vec4 b) { return {a.x + b.x, a.y + b.y, a.z + b.z, a.w + b.w}; }
 inline Vec4 operator-(Vec4 a, Vec4 b) { return {a.x - b.x, a.y - b.y, a.z - b.z, a.w - b.w}; }
 inline Vec4 operator*(double s, Vec4 a) { return {s * a.x, s * a.y, s * a.z, s * a.w}; }
-inline Vec4& operator+=(Vec4& a, Vec4 b) { a = a + b; return a; }
+inline Vec4& operator+=(Vec4& a, Vec4 b) {
+    a = a + b;
+    return a;
+}
 
 // Cartesian point of a homogeneous one (divides by w).
 inline Vec3 project(Vec4 h) { return {h.x / h.w, h.y / h.w, h.z / h.w}; }
@@ -60,7 +64,10 @@ struct BBox {
         hi = {std::fmax(hi.x, p.x), std::fmax(hi.y, p.y), std::fmax(hi.z, p.z)};
     }
     void extend(const BBox& b) {
-        if (!b.empty()) { extend(b.lo); extend(b.hi); }
+        if (!b.empty()) {
+            extend(b.lo);
+            extend(b.hi);
+        }
     }
     Vec3 center() const { return 0.5 * (lo + hi); }
     double diagonal() const { return empty() ? 0.0 : length(hi - lo); }

@@ -23,8 +23,7 @@ template <class Body>
 void expect_only_errors(Body&& body) {
     try {
         body();
-    } catch (const Error&) {
-    }
+    } catch (const Error&) {}
 }
 
 }  // namespace nurbsrt::fuzz

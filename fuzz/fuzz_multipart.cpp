@@ -106,8 +106,8 @@ private:
             body();
             res.status = 200;
         } catch (const Error& e) {
-            const std::string detail =
-                server::without_prefixes(server::with_scratch_files_named(e.what(), "/var/nurbsrt/tmp"), {"/var/nurbsrt/"});
+            const std::string detail = server::without_prefixes(
+                server::with_scratch_files_named(e.what(), "/var/nurbsrt/tmp"), {"/var/nurbsrt/"});
             const server::Problem p = server::make_problem(e.code(), detail, "0123456789abcdef");
             if (!nlohmann::json::accept(p.body)) __builtin_trap();  // a problem body is always JSON
             res.status = p.status;
@@ -141,10 +141,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             request.insert(end + 2, "Content-Length: " + std::to_string(request.size() - end - 4) + "\r\n");
         // The service checks the head's framing before cpp-httplib reads on
         // (server/http/http_framing.h); a refused head gets a problem answer only.
-        const server::FramingVerdict v = server::check_request_head(std::string_view(request).substr(0, request.find("\r\n\r\n") + 4));
+        const server::FramingVerdict v =
+            server::check_request_head(std::string_view(request).substr(0, request.find("\r\n\r\n") + 4));
         if (!v.ok()) {
             if (v.status != 400 && v.status != 501) __builtin_trap();
-            if (!nlohmann::json::accept(server::make_problem(v.code, v.detail, "0123456789abcdef").body)) __builtin_trap();
+            if (!nlohmann::json::accept(server::make_problem(v.code, v.detail, "0123456789abcdef").body))
+                __builtin_trap();
             return 0;
         }
     }

@@ -35,8 +35,7 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
     r.out_format = cad_format_of(r.output);
     if (r.output == ConversionFormat::unknown)
         throw Error(ErrorCode::unsupported_format,
-                    "output '" + out_path +
-                        "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb or .json)");
+                    "output '" + out_path + "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb or .json)");
     const std::filesystem::path out_dir = std::filesystem::path(out_path).parent_path();
     std::error_code ec;
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))
@@ -44,11 +43,20 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
 
     switch (r.output) {
         case ConversionFormat::step:
-        case ConversionFormat::iges: occt::write_cad(in_path, out_path, r); break;
-        case ConversionFormat::stl: occt::write_stl(in_path, out_path, r); break;
-        case ConversionFormat::glb: occt::write_glb(in_path, out_path, r); break;
-        case ConversionFormat::nurbs_json: write_nurbs_json(in_path, out_path, r); break;
-        case ConversionFormat::unknown: break;
+        case ConversionFormat::iges:
+            occt::write_cad(in_path, out_path, r);
+            break;
+        case ConversionFormat::stl:
+            occt::write_stl(in_path, out_path, r);
+            break;
+        case ConversionFormat::glb:
+            occt::write_glb(in_path, out_path, r);
+            break;
+        case ConversionFormat::nurbs_json:
+            write_nurbs_json(in_path, out_path, r);
+            break;
+        case ConversionFormat::unknown:
+            break;
     }
     return r;
 }

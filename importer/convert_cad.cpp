@@ -44,13 +44,13 @@ constexpr size_t kNamesListed = 8;
 // What a model's XDE document carries, counted the same way for the input and
 // the written file.
 struct XdeContent {
-    int faces = 0;           // face occurrences (an instanced part's faces per instance)
-    int coloured_faces = 0;  // of those, with a surface colour
+    int faces = 0;                               // face occurrences (an instanced part's faces per instance)
+    int coloured_faces = 0;                      // of those, with a surface colour
     std::vector<std::pair<Color, int>> colours;  // distinct colour -> coloured faces
-    std::set<std::string> names;  // of parts, assemblies, components and named sub-shapes
-    int assemblies = 0;  // distinct assembly definitions
-    int components = 0;  // component labels: placements of a part or sub-assembly
-    int instances = 0;   // part occurrences in the expanded tree
+    std::set<std::string> names;                 // of parts, assemblies, components and named sub-shapes
+    int assemblies = 0;                          // distinct assembly definitions
+    int components = 0;                          // component labels: placements of a part or sub-assembly
+    int instances = 0;                           // part occurrences in the expanded tree
 };
 
 bool same_colour(const Color& a, const Color& b) {
@@ -106,8 +106,7 @@ XdeContent content_of(const OcctModel& m) {
     shapes->GetFreeShapes(roots);
     TDF_LabelMap seen;
     for (const TDF_Label& root : roots) walk_definitions(root, seen, c);
-    for (XCAFPrs_DocumentExplorer ex(m.document, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More();
-         ex.Next())
+    for (XCAFPrs_DocumentExplorer ex(m.document, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More(); ex.Next())
         ++c.instances;
     return c;
 }
@@ -140,15 +139,14 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     // writes each free shape of the document as one compound with the
     // placements applied (measured: one root named as the top assembly).
     if (out_format == CadFormat::iges && in.components > 0)
-        w.push_back("IGES has no assembly structure: " + std::to_string(in.instances) +
-                    " part instance(s) (" + std::to_string(in.components) + " component(s) in " +
-                    std::to_string(in.assemblies) + " assembly(ies)) written as a flat list of shapes");
+        w.push_back("IGES has no assembly structure: " + std::to_string(in.instances) + " part instance(s) (" +
+                    std::to_string(in.components) + " component(s) in " + std::to_string(in.assemblies) +
+                    " assembly(ies)) written as a flat list of shapes");
     else if (in.assemblies != out.assemblies || in.components != out.components || in.instances != out.instances)
-        w.push_back("assembly structure changed: the input has " + std::to_string(in.assemblies) +
-                    " assembly(ies), " + std::to_string(in.components) + " component(s), " +
-                    std::to_string(in.instances) + " part instance(s); the written " + fmt + " file " +
-                    std::to_string(out.assemblies) + ", " + std::to_string(out.components) + ", " +
-                    std::to_string(out.instances));
+        w.push_back("assembly structure changed: the input has " + std::to_string(in.assemblies) + " assembly(ies), " +
+                    std::to_string(in.components) + " component(s), " + std::to_string(in.instances) +
+                    " part instance(s); the written " + fmt + " file " + std::to_string(out.assemblies) + ", " +
+                    std::to_string(out.components) + ", " + std::to_string(out.instances));
     if (out.faces != in.faces)
         w.push_back("the written " + fmt + " file holds " + std::to_string(out.faces) + " face(s), the input " +
                     std::to_string(in.faces));
@@ -167,7 +165,7 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
 
 // The document written by OCCT's XDE writers; callers hold exchange_mutex and
 // catch Standard_Failure.
-void write_document(const Handle(TDocStd_Document)& doc, const std::string& out_path, CadFormat out_format) {
+void write_document(const Handle(TDocStd_Document) & doc, const std::string& out_path, CadFormat out_format) {
     if (out_format == CadFormat::iges) {
         IGESControl_Controller::Init();
         // The XDE writer takes unit and mode from these statics. BRep mode
@@ -181,8 +179,7 @@ void write_document(const Handle(TDocStd_Document)& doc, const std::string& out_
         writer.SetLayerMode(Standard_True);
         if (!writer.Transfer(doc)) throw Error(ErrorCode::occt_failure, "IGES writer: transfer failed");
         writer.ComputeModel();
-        if (!writer.Write(out_path.c_str()))
-            throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
+        if (!writer.Write(out_path.c_str())) throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
     } else {
         STEPCAFControl_Writer writer;
         writer.SetColorMode(Standard_True);

@@ -49,9 +49,9 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
     try {
         RWGltf_CafWriter writer(out_path.c_str(), /*binary=*/Standard_True);
         RWMesh_CoordinateSystemConverter& cs = writer.ChangeCoordinateSystemConverter();
-        cs.SetInputLengthUnit(0.001);                            // OCCT's readers deliver mm
+        cs.SetInputLengthUnit(0.001);  // OCCT's readers deliver mm
         cs.SetInputCoordinateSystem(RWMesh_CoordinateSystem_Zup);
-        cs.SetOutputLengthUnit(1.0);                             // glTF: metres
+        cs.SetOutputLengthUnit(1.0);                                 // glTF: metres
         cs.SetOutputCoordinateSystem(RWMesh_CoordinateSystem_glTF);  // Y-up
         TColStd_IndexedDataMapOfStringString info;
         info.Add("generator", "nurbsrt");

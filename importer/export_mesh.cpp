@@ -43,13 +43,15 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
     for (int i = 1; i <= faces.Extent(); ++i) {
         TopLoc_Location loc;
         const Handle(Poly_Triangulation) t = BRep_Tool::Triangulation(TopoDS::Face(faces(i)), loc);
-        if (t.IsNull() || t->NbTriangles() == 0) ++r.unmeshed_faces;
-        else r.triangles += t->NbTriangles();
+        if (t.IsNull() || t->NbTriangles() == 0)
+            ++r.unmeshed_faces;
+        else
+            r.triangles += t->NbTriangles();
     }
     r.mesh_ms = ms_since(t0);
     if (r.triangles == 0)
-        throw Error(ErrorCode::occt_failure, "BRepMesh produced no triangles for any of the " +
-                                                 std::to_string(faces.Extent()) + " faces");
+        throw Error(ErrorCode::occt_failure,
+                    "BRepMesh produced no triangles for any of the " + std::to_string(faces.Extent()) + " faces");
     return params.Deflection;
 }
 

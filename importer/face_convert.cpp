@@ -64,7 +64,6 @@ void unperiodize(Geom_BSplineSurface& s, double fu0, double fu1, double fv0, dou
     if (s.IsVPeriodic()) s.SetVNotPeriodic();
 }
 
-
 // The last steps of every conversion: non-periodic over the face's box (in the
 // surface's parameters), clamped, and moved by the face's location.
 Handle(Geom_BSplineSurface) finish_surface(Handle(Geom_BSplineSurface) bs, double fu0, double fu1, double fv0,
@@ -94,7 +93,7 @@ TopoDS_Face copied_face(const TopoDS_Face& face) {
 // and the swept ones (a curve revolved or extruded: the sweep's parameter and
 // the curve's each map alone). Whether GeomConvert was exact for the curve
 // there is what UVMap::between checks.
-Handle(Geom_Surface) separable_surface(const Handle(Geom_Surface)& g) {
+Handle(Geom_Surface) separable_surface(const Handle(Geom_Surface) & g) {
     Handle(Geom_Surface) basis = g;
     if (const auto rts = Handle(Geom_RectangularTrimmedSurface)::DownCast(g); !rts.IsNull())
         basis = rts->BasisSurface();
@@ -140,7 +139,7 @@ bool convertible_range(bool periodic, double period, double lo, double hi, doubl
 // which re-fits every pcurve of the face (most of an import's time on
 // mechanical parts). Empty when that map cannot be had; the caller then
 // converts the whole face.
-std::optional<ConvertedFace> convert_surface_alone(const TopoDS_Face& face, const Handle(Geom_Surface)& g,
+std::optional<ConvertedFace> convert_surface_alone(const TopoDS_Face& face, const Handle(Geom_Surface) & g,
                                                    const TopLoc_Location& loc) {
     const Handle(Geom_Surface) basis = separable_surface(g);
     if (basis.IsNull()) return std::nullopt;
@@ -207,8 +206,10 @@ ConvertedFace convert_face(const TopoDS_Face& face) {
         // NurbsConvert leaves B-splines as they are but may wrap others (e.g. a
         // trimmed B-spline); GeomConvert gives a fresh copy either way, which we
         // need because the surface may be shared and we modify it below.
-        if (bs.IsNull()) bs = GeomConvert::SurfaceToBSplineSurface(g);
-        else bs = Handle(Geom_BSplineSurface)::DownCast(bs->Copy());
+        if (bs.IsNull())
+            bs = GeomConvert::SurfaceToBSplineSurface(g);
+        else
+            bs = Handle(Geom_BSplineSurface)::DownCast(bs->Copy());
         if (bs.IsNull()) throw Error(ErrorCode::occt_failure, "surface is not convertible to a B-spline");
 
         double fu0 = 0, fu1 = 0, fv0 = 0, fv1 = 0;
@@ -235,8 +236,14 @@ UVBox face_uv_box(const ConvertedFace& cf) {
     b.u1 = std::clamp(b.u1, su0, su1);
     b.v0 = std::clamp(b.v0, sv0, sv1);
     b.v1 = std::clamp(b.v1, sv0, sv1);
-    if (!(b.u1 > b.u0)) { b.u0 = su0; b.u1 = su1; }
-    if (!(b.v1 > b.v0)) { b.v0 = sv0; b.v1 = sv1; }
+    if (!(b.u1 > b.u0)) {
+        b.u0 = su0;
+        b.u1 = su1;
+    }
+    if (!(b.v1 > b.v0)) {
+        b.v0 = sv0;
+        b.v1 = sv1;
+    }
     return b;
 }
 
@@ -256,8 +263,7 @@ NurbsSurface to_scene_surface(const Geom_BSplineSurface& s) {
     for (int i = 0; i < n.num_u; ++i) {
         for (int j = 0; j < n.num_v; ++j) {
             const gp_Pnt& p = poles(poles.LowerRow() + i, poles.LowerCol() + j);
-            const double w =
-                weights != nullptr ? (*weights)(weights->LowerRow() + i, weights->LowerCol() + j) : 1.0;
+            const double w = weights != nullptr ? (*weights)(weights->LowerRow() + i, weights->LowerCol() + j) : 1.0;
             // Rational iff a weight differs from 1: IsURational() speaks of one
             // direction only, so the weights are what tells.
             if (w != 1.0) n.rational = true;

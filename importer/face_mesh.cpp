@@ -65,16 +65,14 @@ bool mesh_from_triangulation(const ConvertedFace& cf, FaceMesh& out) {
         int a, b, c;
         tri->Triangle(t).Get(a, b, c);
         if (a < 1 || b < 1 || c < 1 || a > n || b > n || c > n) return false;
-        m.triangles.insert(m.triangles.end(), {static_cast<uint32_t>(a - 1),
-                                               static_cast<uint32_t>(b - 1),
-                                               static_cast<uint32_t>(c - 1)});
+        m.triangles.insert(m.triangles.end(),
+                           {static_cast<uint32_t>(a - 1), static_cast<uint32_t>(b - 1), static_cast<uint32_t>(c - 1)});
     }
     out = std::move(m);
     return true;
 }
 
-FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
-                           const std::vector<TrimLoop>& loops, int cells) {
+FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box, const std::vector<TrimLoop>& loops, int cells) {
     FaceMesh m;
     m.fallback_grid = true;
     const int n = cells + 1;
@@ -143,11 +141,13 @@ size_t fill_untriangulated(const ConvertedFace& cf, const UVBox& box, const std:
         const int i0 = cell(std::min({a.x, b.x, c.x}), box.u0, cu), i1 = cell(std::max({a.x, b.x, c.x}), box.u0, cu);
         const int j0 = cell(std::min({a.y, b.y, c.y}), box.v0, cv), j1 = cell(std::max({a.y, b.y, c.y}), box.v0, cv);
         for (int i = i0; i <= i1; ++i)
-            for (int j = j0; j <= j1; ++j) bucket[static_cast<size_t>(i) * cells + j].push_back(static_cast<uint32_t>(t));
+            for (int j = j0; j <= j1; ++j)
+                bucket[static_cast<size_t>(i) * cells + j].push_back(static_cast<uint32_t>(t));
     }
     auto covered = [&](Vec2 p) {
         for (const uint32_t t : bucket[static_cast<size_t>(cell(p.x, box.u0, cu)) * cells + cell(p.y, box.v0, cv)]) {
-            const Vec2 &a = m.uv[m.triangles[3 * t]], &b = m.uv[m.triangles[3 * t + 1]], &c = m.uv[m.triangles[3 * t + 2]];
+            const Vec2 &a = m.uv[m.triangles[3 * t]], &b = m.uv[m.triangles[3 * t + 1]],
+                       &c = m.uv[m.triangles[3 * t + 2]];
             const double d0 = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
             const double d1 = (c.x - b.x) * (p.y - b.y) - (c.y - b.y) * (p.x - b.x);
             const double d2 = (a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x);
@@ -179,19 +179,19 @@ size_t fill_untriangulated(const ConvertedFace& cf, const UVBox& box, const std:
 }  // namespace
 
 void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
-                const std::vector<const std::vector<TrimLoop>*>& loops,
-                const std::vector<double>& face_sizes, const std::vector<uint32_t>& numbers, const MeshParams& p,
-                std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings) {
+                const std::vector<const std::vector<TrimLoop>*>& loops, const std::vector<double>& face_sizes,
+                const std::vector<uint32_t>& numbers, const MeshParams& p, std::vector<FaceMesh>& meshes,
+                std::vector<std::string>& warnings) {
     const size_t n = faces.size();
     meshes.assign(n, FaceMesh{});
     const Clock::time_point start = Clock::now();
-    const auto budget = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(std::max(0.0, p.time_limit_s)));
+    const auto budget =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, p.time_limit_s)));
     const Clock::time_point deadline = start + budget;
     // One face may not eat the whole budget (iges/bug22869_Spring.igs: BRepMesh
     // never finishes one face), so the others still get their real meshes.
-    const auto face_budget = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(std::max(0.0, p.face_time_limit_s)));
+    const auto face_budget =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, p.face_time_limit_s)));
     enum Outcome : char { ok, failed, timed_out, skipped };
     std::vector<char> outcome(n, ok);
     std::vector<std::string> errors(n);
@@ -228,8 +228,8 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
                 if (mesh_from_triangulation(faces[i], meshes[i])) {
                     outcome[i] = ok;
                     if (has_unused_nodes(meshes[i]))
-                        filled[i] = fill_untriangulated(faces[i], boxes[i], *loops[i],
-                                                        kFillRefinement * p.grid_cells, meshes[i]);
+                        filled[i] = fill_untriangulated(faces[i], boxes[i], *loops[i], kFillRefinement * p.grid_cells,
+                                                        meshes[i]);
                     break;
                 }
                 outcome[i] = failed;
@@ -250,8 +250,7 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
         switch (outcome[i]) {
             case failed:
                 warnings.push_back(face + ": BRepMesh gave no triangulation" +
-                                   (errors[i].empty() ? "" : " (" + errors[i] + ")") +
-                                   "; using a trimmed (u,v) grid");
+                                   (errors[i].empty() ? "" : " (" + errors[i] + ")") + "; using a trimmed (u,v) grid");
                 break;
             case timed_out:
                 warnings.push_back(face + ": BRepMesh ran out of time; using a trimmed (u,v) grid");

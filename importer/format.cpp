@@ -26,8 +26,10 @@ bool looks_like_iges_record(std::string_view rec) {
     bool digit = false;
     for (size_t i = 73; i < std::min<size_t>(rec.size(), 80); ++i) {
         const char c = rec[i];
-        if (std::isdigit(static_cast<unsigned char>(c))) digit = true;
-        else if (c != ' ') return false;
+        if (std::isdigit(static_cast<unsigned char>(c)))
+            digit = true;
+        else if (c != ' ')
+            return false;
     }
     return digit || rec.size() == 73;
 }
@@ -67,8 +69,7 @@ CadFormat detect_format_bytes(const char* data, size_t size) {
     if (first != std::string_view::npos) {
         std::string_view rest = s.substr(first);
         if (rest.substr(0, 12) == "ISO-10303-21") return CadFormat::step;
-        if (rest.substr(0, 2) == "/*" && s.find("ISO-10303-21") != std::string_view::npos)
-            return CadFormat::step;
+        if (rest.substr(0, 2) == "/*" && s.find("ISO-10303-21") != std::string_view::npos) return CadFormat::step;
     }
     if (looks_like_iges_record(first_record(s))) return CadFormat::iges;
     return CadFormat::unknown;
@@ -84,9 +85,12 @@ CadFormat detect_format(const std::string& path) {
 
 const char* format_name(CadFormat f) {
     switch (f) {
-        case CadFormat::step: return "STEP";
-        case CadFormat::iges: return "IGES";
-        case CadFormat::unknown: break;
+        case CadFormat::step:
+            return "STEP";
+        case CadFormat::iges:
+            return "IGES";
+        case CadFormat::unknown:
+            break;
     }
     return "unknown";
 }
@@ -101,9 +105,12 @@ CadFormat format_from_extension(const std::string& path) {
 ConversionFormat conversion_format_from_extension(const std::string& path) {
     const std::string ext = lower_extension(path);
     switch (format_from_extension(path)) {
-        case CadFormat::step: return ConversionFormat::step;
-        case CadFormat::iges: return ConversionFormat::iges;
-        case CadFormat::unknown: break;
+        case CadFormat::step:
+            return ConversionFormat::step;
+        case CadFormat::iges:
+            return ConversionFormat::iges;
+        case CadFormat::unknown:
+            break;
     }
     if (ext == "stl") return ConversionFormat::stl;
     if (ext == "glb") return ConversionFormat::glb;
@@ -122,48 +129,72 @@ ConversionFormat conversion_format_from_name(const std::string& name) {
 
 const char* conversion_format_short_name(ConversionFormat f) {
     switch (f) {
-        case ConversionFormat::step: return "step";
-        case ConversionFormat::iges: return "iges";
-        case ConversionFormat::stl: return "stl";
-        case ConversionFormat::glb: return "glb";
-        case ConversionFormat::nurbs_json: return "json";
-        case ConversionFormat::unknown: break;
+        case ConversionFormat::step:
+            return "step";
+        case ConversionFormat::iges:
+            return "iges";
+        case ConversionFormat::stl:
+            return "stl";
+        case ConversionFormat::glb:
+            return "glb";
+        case ConversionFormat::nurbs_json:
+            return "json";
+        case ConversionFormat::unknown:
+            break;
     }
     return "";
 }
 
 const char* conversion_format_name(ConversionFormat f) {
     switch (f) {
-        case ConversionFormat::step: return "STEP";
-        case ConversionFormat::iges: return "IGES";
-        case ConversionFormat::stl: return "STL";
-        case ConversionFormat::glb: return "GLB";
-        case ConversionFormat::nurbs_json: return "NURBS-JSON";
-        case ConversionFormat::unknown: break;
+        case ConversionFormat::step:
+            return "STEP";
+        case ConversionFormat::iges:
+            return "IGES";
+        case ConversionFormat::stl:
+            return "STL";
+        case ConversionFormat::glb:
+            return "GLB";
+        case ConversionFormat::nurbs_json:
+            return "NURBS-JSON";
+        case ConversionFormat::unknown:
+            break;
     }
     return "unknown";
 }
 
 const char* conversion_format_extension(ConversionFormat f) {
     switch (f) {
-        case ConversionFormat::step: return ".step";
-        case ConversionFormat::iges: return ".igs";
-        case ConversionFormat::stl: return ".stl";
-        case ConversionFormat::glb: return ".glb";
-        case ConversionFormat::nurbs_json: return ".json";
-        case ConversionFormat::unknown: break;
+        case ConversionFormat::step:
+            return ".step";
+        case ConversionFormat::iges:
+            return ".igs";
+        case ConversionFormat::stl:
+            return ".stl";
+        case ConversionFormat::glb:
+            return ".glb";
+        case ConversionFormat::nurbs_json:
+            return ".json";
+        case ConversionFormat::unknown:
+            break;
     }
     return "";
 }
 
 const char* conversion_format_content_type(ConversionFormat f) {
     switch (f) {
-        case ConversionFormat::step: return "model/step";
-        case ConversionFormat::iges: return "model/iges";
-        case ConversionFormat::stl: return "model/stl";
-        case ConversionFormat::glb: return "model/gltf-binary";
-        case ConversionFormat::nurbs_json: return "application/json";
-        case ConversionFormat::unknown: break;
+        case ConversionFormat::step:
+            return "model/step";
+        case ConversionFormat::iges:
+            return "model/iges";
+        case ConversionFormat::stl:
+            return "model/stl";
+        case ConversionFormat::glb:
+            return "model/gltf-binary";
+        case ConversionFormat::nurbs_json:
+            return "application/json";
+        case ConversionFormat::unknown:
+            break;
     }
     return "application/octet-stream";
 }

@@ -64,8 +64,8 @@ std::vector<size_t> first_instances(const std::vector<TopoDS_Face>& faces) {
     std::map<std::pair<const TopoDS_TShape*, int>, size_t> first;
     std::vector<size_t> out(faces.size());
     for (size_t i = 0; i < faces.size(); ++i)
-        out[i] = first.try_emplace({faces[i].TShape().get(), static_cast<int>(faces[i].Orientation())}, i)
-                     .first->second;
+        out[i] =
+            first.try_emplace({faces[i].TShape().get(), static_cast<int>(faces[i].Orientation())}, i).first->second;
     return out;
 }
 
@@ -179,7 +179,8 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
         occt::mesh_faces(cfs, boxes, loops, first_sizes, numbers, mp, first_meshes, mesh_warnings);
         for (size_t q = 0; q < numbers.size(); ++q) meshes[numbers[q] - 1] = std::move(first_meshes[q]);
         for (size_t i = 0; i < work.size(); ++i)
-            if (first[i] != i) meshes[i] = instance_mesh(meshes[first[i]], relative_placement(faces[i], faces[first[i]]));
+            if (first[i] != i)
+                meshes[i] = instance_mesh(meshes[first[i]], relative_placement(faces[i], faces[first[i]]));
         scene.timings.mesh_ms = occt::ms_since(t_mesh);
         // Assembling the Scene's patches from the converted faces ends the conversion.
         const auto t_assemble = Clock::now();
@@ -200,8 +201,7 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
             }
             const std::string label = "face " + std::to_string(i + 1);
             if (!w.error.empty() || w.cf.surface.IsNull()) {
-                scene.warnings.push_back(label + ": NURBS conversion failed (" + w.error +
-                                         "); the face is left empty");
+                scene.warnings.push_back(label + ": NURBS conversion failed (" + w.error + "); the face is left empty");
                 f.surface = placeholder_surface(geometric.empty() ? Vec3{} : geometric.center());
                 f.u_min = f.v_min = 0;
                 f.u_max = f.v_max = 1;

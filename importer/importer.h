@@ -81,15 +81,15 @@ CadFormat cad_format_of(ConversionFormat f);
 // for an unknown extension, io, unreadable_file, no_faces, occt_failure).
 struct ConvertReport {
     CadFormat in_format = CadFormat::unknown;
-    CadFormat out_format = CadFormat::unknown;     // STEP/IGES outputs; unknown for mesh and JSON outputs
+    CadFormat out_format = CadFormat::unknown;            // STEP/IGES outputs; unknown for mesh and JSON outputs
     ConversionFormat output = ConversionFormat::unknown;  // every output, including STEP/IGES
     int faces = 0;
-    long long triangles = 0;                       // STL and glb: triangles written; 0 otherwise
-    int unmeshed_faces = 0;                        // STL and glb: faces BRepMesh left empty (missing)
-    double read_ms = 0, mesh_ms = 0, write_ms = 0; // mesh_ms: BRepMesh (STL, glb) or the import's
-                                                   // conversion + meshing (JSON); 0 for STEP/IGES
-    double verify_ms = 0;                          // STEP/IGES: reading the written file back and
-                                                   // comparing it (see warnings); 0 otherwise
+    long long triangles = 0;                        // STL and glb: triangles written; 0 otherwise
+    int unmeshed_faces = 0;                         // STL and glb: faces BRepMesh left empty (missing)
+    double read_ms = 0, mesh_ms = 0, write_ms = 0;  // mesh_ms: BRepMesh (STL, glb) or the import's
+                                                    // conversion + meshing (JSON); 0 for STEP/IGES
+    double verify_ms = 0;                           // STEP/IGES: reading the written file back and
+                                                    // comparing it (see warnings); 0 otherwise
     // STEP/IGES outputs: what the written file, read back with XDE, does not
     // carry of the input (colours, names, assembly structure, faces), one
     // sentence each without line breaks; empty when all of it was kept.

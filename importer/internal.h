@@ -26,8 +26,7 @@ std::string failure_text(const Standard_Failure& f);
 
 // Milliseconds since `t0` on the steady clock.
 inline double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-        .count();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // The B-spline surface as Scene data: homogeneous poles u-major, flat clamped knots.
@@ -61,8 +60,8 @@ bool mesh_from_triangulation(const ConvertedFace& cf, FaceMesh& out);
 
 // Regular (u,v) grid over the box, triangles kept where their centroid lies
 // inside the trim loops; xyz evaluated on the surface.
-FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
-                           const std::vector<TrimLoop>& loops, int cells_per_side);
+FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box, const std::vector<TrimLoop>& loops,
+                           int cells_per_side);
 
 // Meshes every face (BRepMesh per face, in parallel, under the time limits);
 // faces without a usable triangulation get trimmed_grid_mesh (warning each), and
@@ -71,16 +70,16 @@ FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box,
 // face_sizes[i]: 3D bounding-box diagonal of face i (caps its deflection);
 // numbers[i]: its face number in the scene (the warnings name it).
 struct MeshParams {
-    double deflection = 0.1;         // absolute linear deflection, model units
-    double angle = 0.35;             // angular deflection, radians
-    double time_limit_s = 60;        // all faces together
-    double face_time_limit_s = 15;   // one face
-    int grid_cells = 48;             // fallback grid cells per side
+    double deflection = 0.1;        // absolute linear deflection, model units
+    double angle = 0.35;            // angular deflection, radians
+    double time_limit_s = 60;       // all faces together
+    double face_time_limit_s = 15;  // one face
+    int grid_cells = 48;            // fallback grid cells per side
 };
 void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox>& boxes,
-                const std::vector<const std::vector<TrimLoop>*>& loops,
-                const std::vector<double>& face_sizes, const std::vector<uint32_t>& numbers, const MeshParams& p,
-                std::vector<FaceMesh>& meshes, std::vector<std::string>& warnings);
+                const std::vector<const std::vector<TrimLoop>*>& loops, const std::vector<double>& face_sizes,
+                const std::vector<uint32_t>& numbers, const MeshParams& p, std::vector<FaceMesh>& meshes,
+                std::vector<std::string>& warnings);
 
 // Closes an XDE document (registered with the process-wide application until
 // closed) on every exit path of its user.

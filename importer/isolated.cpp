@@ -119,10 +119,8 @@ std::vector<std::string> import_options_to_args(const ImportOptions& o) {
         s << v;
         return s.str();
     };
-    return {"--mesh-deflection=" + num(o.mesh_relative_deflection),
-            "--mesh-angle=" + num(o.mesh_angular_deflection),
-            "--mesh-time-limit=" + num(o.mesh_time_limit_s),
-            "--trim-tolerance=" + num(o.trim_relative_tolerance),
+    return {"--mesh-deflection=" + num(o.mesh_relative_deflection), "--mesh-angle=" + num(o.mesh_angular_deflection),
+            "--mesh-time-limit=" + num(o.mesh_time_limit_s), "--trim-tolerance=" + num(o.trim_relative_tolerance),
             std::string("--attributes=") + (o.read_attributes ? "1" : "0")};
 }
 
@@ -136,12 +134,18 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args) {
         const double v = std::strtod(value.c_str(), &end);
         if (end == value.c_str() || *end != '\0')
             throw Error(ErrorCode::invalid_argument, "bad worker option value: " + a);
-        if (key == "--mesh-deflection") o.mesh_relative_deflection = v;
-        else if (key == "--mesh-angle") o.mesh_angular_deflection = v;
-        else if (key == "--mesh-time-limit") o.mesh_time_limit_s = v;
-        else if (key == "--trim-tolerance") o.trim_relative_tolerance = v;
-        else if (key == "--attributes") o.read_attributes = v != 0;
-        else throw Error(ErrorCode::invalid_argument, "unknown worker option: " + a);
+        if (key == "--mesh-deflection")
+            o.mesh_relative_deflection = v;
+        else if (key == "--mesh-angle")
+            o.mesh_angular_deflection = v;
+        else if (key == "--mesh-time-limit")
+            o.mesh_time_limit_s = v;
+        else if (key == "--trim-tolerance")
+            o.trim_relative_tolerance = v;
+        else if (key == "--attributes")
+            o.read_attributes = v != 0;
+        else
+            throw Error(ErrorCode::invalid_argument, "unknown worker option: " + a);
     }
     return o;
 }
@@ -228,8 +232,8 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
         std::ostringstream msg;
         msg << what << " process died of signal " << sig << " (" << strsignal(sig) << ")";
         if (sig == SIGKILL || sig == SIGABRT || sig == SIGSEGV)
-            msg << "; the file may be malformed or exceed the memory limit of "
-                << (limits.memory_limit_bytes >> 20) << " MiB";
+            msg << "; the file may be malformed or exceed the memory limit of " << (limits.memory_limit_bytes >> 20)
+                << " MiB";
         throw Error(ErrorCode::import_crashed, msg.str());
     }
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -252,7 +256,8 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
 void apply_fault_hook() {
     if (const char* fault = std::getenv("NURBSRT_IMPORT_WORKER_FAULT")) {
         if (std::strcmp(fault, "crash") == 0) raise(SIGSEGV);
-        if (std::strcmp(fault, "hang") == 0) for (;;) pause();
+        if (std::strcmp(fault, "hang") == 0)
+            for (;;) pause();
     }
 }
 
@@ -327,16 +332,15 @@ Scene import_isolated(const std::string& path, const ImportOptions& options, con
     return scene;
 }
 
-ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
-                               const IsolationLimits& limits, IsolationTimings* timings) {
+ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path, const IsolationLimits& limits,
+                               IsolationTimings* timings) {
     const auto t0 = Clock::now();
     prescan_input(in_path, limits);
     const auto t_child = Clock::now();
     const std::string exe = worker_executable(limits);
     ScratchFiles scratch;  // here: the worker's report (and its error file)
     make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-convert");
-    run_worker({exe, "convert-worker", in_path, out_path, scratch.scene}, limits, scratch.error, "conversion",
-               in_path);
+    run_worker({exe, "convert-worker", in_path, out_path, scratch.scene}, limits, scratch.error, "conversion", in_path);
     const auto t_read = Clock::now();
     ConvertReport r = parse_convert_report(read_small_file(scratch.scene));
     scratch.remove();  // inside the transfer stage: the stages cover the whole call
@@ -377,8 +381,7 @@ int run_convert_worker(const std::string& in_path, const std::string& out_path, 
     return 1;
 }
 
-int run_import_worker(const std::string& in_path, const std::string& out_path,
-                      const ImportOptions& options) {
+int run_import_worker(const std::string& in_path, const std::string& out_path, const ImportOptions& options) {
     apply_fault_hook();
     auto write_error = [&](ErrorCode code, const std::string& message) {
         write_error_file(out_path + ".error", code, message);

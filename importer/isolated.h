@@ -24,10 +24,10 @@
 namespace nurbsrt {
 
 struct IsolationLimits {
-    double time_limit_s = 300.0;                      // wall clock, whole import
-    size_t memory_limit_bytes = size_t(8) << 30;      // RLIMIT_AS of the child; 0 = none
-    std::string worker_executable;                    // empty: nurbsrt-worker beside this binary, else this binary
-    std::string scratch_dir;                          // empty: $TMPDIR or /tmp
+    double time_limit_s = 300.0;                  // wall clock, whole import
+    size_t memory_limit_bytes = size_t(8) << 30;  // RLIMIT_AS of the child; 0 = none
+    std::string worker_executable;                // empty: nurbsrt-worker beside this binary, else this binary
+    std::string scratch_dir;                      // empty: $TMPDIR or /tmp
     // Polled about every kStopPollMs while the child runs; when it returns true
     // the child is killed and the call throws Error(canceled) (a deleted job,
     // a client that went away). Empty: never.
@@ -41,19 +41,19 @@ struct IsolationLimits {
 // itself (Scene::timings; ConvertReport's read, mesh, write and verify): with
 // them, the whole call.
 struct IsolationTimings {
-    double prescan_ms = 0;    // the pre-scan of the input's text, in this process
+    double prescan_ms = 0;  // the pre-scan of the input's text, in this process
     // The child process less its own stages: creating it, loading the program and
     // its libraries, writing its result for this process, and its exit.
     double isolation_ms = 0;
-    double transfer_ms = 0;   // reading the child's result (scene, report) into this process
+    double transfer_ms = 0;  // reading the child's result (scene, report) into this process
 };
 
 // Runs import_file(path, options) in a child process. Throws nurbsrt::Error with
 // the child's own error (io, unreadable_file, no_faces, ...), or import_timeout
 // when it ran over, or import_crashed when it died (signal, out of memory).
 // `timings`, when given, gets this call's time beside scene.timings.
-Scene import_isolated(const std::string& path, const ImportOptions& options,
-                      const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr);
+Scene import_isolated(const std::string& path, const ImportOptions& options, const IsolationLimits& limits = {},
+                      IsolationTimings* timings = nullptr);
 
 // Runs convert_file(in_path, out_path) in a child process (`nurbsrt
 // convert-worker IN OUT REPORT`) under the same limits, with the same errors.
@@ -67,8 +67,7 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args);
 
 // Entry point of the worker: imports IN and writes the scene to OUT, or writes
 // the error to OUT + ".error" (code name, newline, message). Returns the exit status.
-int run_import_worker(const std::string& in_path, const std::string& out_path,
-                      const ImportOptions& options);
+int run_import_worker(const std::string& in_path, const std::string& out_path, const ImportOptions& options);
 
 // Entry point of the conversion worker: converts IN to OUT and writes a one-line
 // report to REPORT, or the error to REPORT + ".error". Returns the exit status.

@@ -38,8 +38,7 @@ void route_occt_messages() {
         messenger->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
         // NURBSRT_OCCT_VERBOSE=1 shows OCCT's info/trace messages too (debugging imports).
         const char* verbose = std::getenv("NURBSRT_OCCT_VERBOSE");
-        const Message_Gravity threshold =
-            (verbose != nullptr && verbose[0] == '1') ? Message_Trace : Message_Fail;
+        const Message_Gravity threshold = (verbose != nullptr && verbose[0] == '1') ? Message_Trace : Message_Fail;
         messenger->AddPrinter(new StderrPrinter(threshold));
     });
 }

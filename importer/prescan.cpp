@@ -15,7 +15,8 @@ constexpr size_t kChunkBytes = 1 << 16;
 
 // `what` holds the limit: "more than 500000 items".
 [[noreturn]] void refuse(const std::string& what) {
-    throw Error(ErrorCode::unreadable_file, "the file holds " + what + " (the limit); it is refused before it is parsed");
+    throw Error(ErrorCode::unreadable_file,
+                "the file holds " + what + " (the limit); it is refused before it is parsed");
 }
 
 std::string more_than(size_t limit, const char* unit) { return "more than " + std::to_string(limit) + " " + unit; }
@@ -55,13 +56,16 @@ private:
         }
         if (!open_.empty() && !std::isspace(static_cast<unsigned char>(c)) && c != ')') open_.back().content = true;
         switch (c) {
-            case '\'': in_string_ = true; break;
+            case '\'':
+                in_string_ = true;
+                break;
             case '(':
                 open_.push_back({});
                 if (static_cast<int>(open_.size()) > report_.deepest_nesting) {
                     report_.deepest_nesting = static_cast<int>(open_.size());
                     if (report_.deepest_nesting > limits_.max_nesting)
-                        refuse("parentheses nested " + more_than(static_cast<size_t>(limits_.max_nesting), "levels deep"));
+                        refuse("parentheses nested " +
+                               more_than(static_cast<size_t>(limits_.max_nesting), "levels deep"));
                 }
                 break;
             case ',':
@@ -77,7 +81,8 @@ private:
                 if (open_.empty() && ++report_.entities > limits_.max_entities)
                     refuse(more_than(limits_.max_entities, "entities"));
                 break;
-            default: break;
+            default:
+                break;
         }
     }
 
@@ -165,7 +170,8 @@ private:
             field_start_ = true;
             if (++items_ > report_.longest_list) {
                 report_.longest_list = items_;
-                if (items_ > limits_.max_list_items) refuse("an entity with " + more_than(limits_.max_list_items, "parameters"));
+                if (items_ > limits_.max_list_items)
+                    refuse("an entity with " + more_than(limits_.max_list_items, "parameters"));
             }
         } else if (c == record_) {
             field_start_ = true;

@@ -42,18 +42,22 @@ namespace {
 
 const char* status_name(IFSelect_ReturnStatus s) {
     switch (s) {
-        case IFSelect_RetVoid: return "void (nothing read)";
-        case IFSelect_RetDone: return "done";
-        case IFSelect_RetError: return "error";
-        case IFSelect_RetFail: return "fail";
-        case IFSelect_RetStop: return "stop";
+        case IFSelect_RetVoid:
+            return "void (nothing read)";
+        case IFSelect_RetDone:
+            return "done";
+        case IFSelect_RetError:
+            return "error";
+        case IFSelect_RetFail:
+            return "fail";
+        case IFSelect_RetStop:
+            return "stop";
     }
     return "?";
 }
 
 std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return s;
 }
 
@@ -82,8 +86,7 @@ std::string step_units(STEPControl_Reader& reader) {
     std::vector<std::string> names;
     for (int i = 1; i <= lengths.Length(); ++i) {
         const std::string n = unit_short_name(lengths.Value(i).ToCString());
-        if (!n.empty() && std::find(names.begin(), names.end(), n) == names.end())
-            names.push_back(n);
+        if (!n.empty() && std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
     }
     std::string out;
     for (const auto& n : names) out += (out.empty() ? "" : ",") + n;
@@ -97,24 +100,34 @@ std::string iges_units(const IGESControl_Reader& reader) {
     const Handle(TCollection_HAsciiString) name = gs.UnitName();
     if (!name.IsNull() && name->Length() > 0) return unit_short_name(name->ToCString());
     switch (gs.UnitFlag()) {  // IGES 5.3 global parameter 14
-        case 1: return "inch";
-        case 2: return "mm";
-        case 4: return "foot";
-        case 5: return "mile";
-        case 6: return "m";
-        case 7: return "km";
-        case 8: return "mil";
-        case 9: return "micron";
-        case 10: return "cm";
-        case 11: return "microinch";
-        default: return {};
+        case 1:
+            return "inch";
+        case 2:
+            return "mm";
+        case 4:
+            return "foot";
+        case 5:
+            return "mile";
+        case 6:
+            return "m";
+        case 7:
+            return "km";
+        case 8:
+            return "mil";
+        case 9:
+            return "micron";
+        case 10:
+            return "cm";
+        case 11:
+            return "microinch";
+        default:
+            return {};
     }
 }
 
 Color to_color(const Quantity_Color& c) {
     // Quantity_Color stores linear RGB in OCCT 7.6, as the Scene wants.
-    return Color{static_cast<float>(c.Red()), static_cast<float>(c.Green()),
-                 static_cast<float>(c.Blue())};
+    return Color{static_cast<float>(c.Red()), static_cast<float>(c.Green()), static_cast<float>(c.Blue())};
 }
 
 // Bodies by topology: every solid, then every shell outside solids, then all
@@ -137,19 +150,17 @@ void assign_bodies(OcctModel& m) {
         if (any) m.bodies.push_back(Body{});
     };
     for (TopExp_Explorer ex(m.shape, TopAbs_SOLID); ex.More(); ex.Next()) claim(ex.Current());
-    for (TopExp_Explorer ex(m.shape, TopAbs_SHELL, TopAbs_SOLID); ex.More(); ex.Next())
-        claim(ex.Current());
+    for (TopExp_Explorer ex(m.shape, TopAbs_SHELL, TopAbs_SOLID); ex.More(); ex.Next()) claim(ex.Current());
     if (std::find(done.begin(), done.end(), false) != done.end()) claim(m.shape);
 }
 
 // Names and colours from the XDE document, matched to our faces by located
 // TShape. Follows what RWMesh_FaceIterator does for glTF export: the node's
 // style is the default; styles of sub-shapes (faces, solids) of the part override it.
-void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document)& doc) {
+void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document) & doc) {
     size_t unmatched = 0;
     std::vector<bool> body_named(m.bodies.size(), false);
-    for (XCAFPrs_DocumentExplorer ex(doc, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More();
-         ex.Next()) {
+    for (XCAFPrs_DocumentExplorer ex(doc, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More(); ex.Next()) {
         const XCAFPrs_DocumentNode& node = ex.Current();
         TopoDS_Shape part;
         if (!XCAFDoc_ShapeTool::GetShape(node.RefLabel, part) || part.IsNull()) continue;
@@ -184,7 +195,10 @@ void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document)& doc) {
 
         for (TopExp_Explorer fe(part, TopAbs_FACE); fe.More(); fe.Next()) {
             const int i = m.faces.FindIndex(fe.Current());
-            if (i == 0) { ++unmatched; continue; }
+            if (i == 0) {
+                ++unmatched;
+                continue;
+            }
             FaceAttributes& a = m.attributes[static_cast<size_t>(i - 1)];
             if (const Quantity_Color* c = face_color.Seek(fe.Current())) {
                 a.has_color = true;
@@ -193,8 +207,10 @@ void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document)& doc) {
                 a.has_color = true;
                 a.color = to_color(style.GetColorSurf());
             }
-            if (const std::string* fn = face_name.Seek(fe.Current())) a.name = *fn;
-            else a.name = name;
+            if (const std::string* fn = face_name.Seek(fe.Current()))
+                a.name = *fn;
+            else
+                a.name = name;
             if (a.body < m.bodies.size() && a.has_color && !m.bodies[a.body].has_color) {
                 // Colour set on the solid or its faces only: the body takes its first face's.
                 m.bodies[a.body].has_color = true;
@@ -219,9 +235,7 @@ void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document)& doc) {
 
 // Compound of all transferred roots, as OneShape() would build it (a single
 // root stays itself, which gives the same MapShapes order).
-TopoDS_Shape all_roots(XSControl_Reader& reader) {
-    return reader.OneShape();
-}
+TopoDS_Shape all_roots(XSControl_Reader& reader) { return reader.OneShape(); }
 
 // The file status after ReadFile, as the user's error: `format` names the reader.
 void check_read_status(IFSelect_ReturnStatus st, const std::string& format) {
@@ -259,8 +273,10 @@ void transfer_model(XSControl_Reader& reader, CafReader& caf, bool attributes, b
     assign_bodies(m);
     if (attributes && !doc.IsNull()) {
         apply_xde_attributes(m, doc);
-        if (keep_document) m.document = doc;
-        else XCAFApp_Application::GetApplication()->Close(doc);
+        if (keep_document)
+            m.document = doc;
+        else
+            XCAFApp_Application::GetApplication()->Close(doc);
     }
 }
 
@@ -332,8 +348,10 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
         std::lock_guard<std::mutex> lock(exchange_mutex());
         const char* who = m.format == CadFormat::step ? "STEP reader: " : "IGES reader: ";
         try {
-            if (m.format == CadFormat::step) read_step(path, read_attributes, keep_document, m);
-            else read_iges(path, read_attributes, keep_document, m);
+            if (m.format == CadFormat::step)
+                read_step(path, read_attributes, keep_document, m);
+            else
+                read_iges(path, read_attributes, keep_document, m);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure, who + failure_text(f));
         } catch (const std::bad_alloc&) {
@@ -342,9 +360,8 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
     }
     m.read_ms = ms_since(t0);
     if (m.faces.Extent() == 0)
-        throw Error(ErrorCode::no_faces,
-                    std::string(format_name(m.format)) + " file read, but it holds no faces (" +
-                        "only curves, points or empty shapes)");
+        throw Error(ErrorCode::no_faces, std::string(format_name(m.format)) + " file read, but it holds no faces (" +
+                                             "only curves, points or empty shapes)");
     return m;
 }
 

@@ -35,8 +35,7 @@ gp_Trsf to_trsf(const Affine& a) {
     bool rigid = a.determinant() > 0;
     for (int i = 0; i < 3 && rigid; ++i)
         for (int j = 0; j < 3 && rigid; ++j) rigid = std::abs(dot(c[i], c[j]) - (i == j ? 1.0 : 0.0)) < 1e-9;
-    if (!rigid)
-        throw Error(ErrorCode::invalid_argument, "reference intersector: a placement must be a rigid motion");
+    if (!rigid) throw Error(ErrorCode::invalid_argument, "reference intersector: a placement must be a rigid motion");
     gp_Trsf t;
     t.SetValues(m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9], m[10], m[11]);
     return t;
@@ -92,8 +91,8 @@ ReferenceIntersector::~ReferenceIntersector() = default;
 ReferenceHit ReferenceIntersector::cast(const Ray& r, double t_max) {
     ReferenceHit h;
     try {
-        impl_->inter.Perform(gp_Lin(gp_Pnt(r.origin.x, r.origin.y, r.origin.z), gp_Dir(r.dir.x, r.dir.y, r.dir.z)),
-                             0.0, t_max);
+        impl_->inter.Perform(gp_Lin(gp_Pnt(r.origin.x, r.origin.y, r.origin.z), gp_Dir(r.dir.x, r.dir.y, r.dir.z)), 0.0,
+                             t_max);
     } catch (const Standard_Failure&) {
         // Seen: Standard_NullObject on a few rays of trj8. No reference for this
         // ray; reload so that a possibly inconsistent state is not reused.

@@ -24,7 +24,7 @@ struct ReferenceHit {
     bool error = false;  // the intersector threw on this ray: no reference for it
     bool hit = false;
     double t = std::numeric_limits<double>::infinity();  // nearest hit distance along the ray
-    int face = 0;        // face index of the contract (copies numbered as append_scene does)
+    int face = 0;  // face index of the contract (copies numbered as append_scene does)
 };
 
 class ReferenceIntersector {

@@ -79,9 +79,9 @@ Tessellation Tessellator::mesh(double deflection, double angle_rad, bool paralle
             int a, b, c;
             tri->Triangle(t).Get(a, b, c);
             if (a < 1 || b < 1 || c < 1 || a > n || b > n || c > n) continue;
-            one.triangles.insert(one.triangles.end(), {base + static_cast<uint32_t>(a - 1),
-                                                       base + static_cast<uint32_t>(b - 1),
-                                                       base + static_cast<uint32_t>(c - 1)});
+            one.triangles.insert(one.triangles.end(),
+                                 {base + static_cast<uint32_t>(a - 1), base + static_cast<uint32_t>(b - 1),
+                                  base + static_cast<uint32_t>(c - 1)});
         }
     }
     out.faces_without_triangles *= static_cast<int>(impl_->placements.size());

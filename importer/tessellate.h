@@ -14,9 +14,9 @@
 namespace nurbsrt {
 
 struct Tessellation {
-    TriangleMesh mesh;  // every face's triangles, instance transforms and placements applied
-    double mesh_ms = 0;     // BRepMesh_IncrementalMesh on the whole shape (wall clock)
-    double extract_ms = 0;  // copying the triangulations (and the placed copies) out of OCCT
+    TriangleMesh mesh;                // every face's triangles, instance transforms and placements applied
+    double mesh_ms = 0;               // BRepMesh_IncrementalMesh on the whole shape (wall clock)
+    double extract_ms = 0;            // copying the triangulations (and the placed copies) out of OCCT
     int faces_without_triangles = 0;  // faces BRepMesh left empty (drawn as holes)
 };
 

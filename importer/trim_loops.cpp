@@ -22,7 +22,7 @@
 namespace nurbsrt::occt {
 namespace {
 
-constexpr int kMaxDepth = 18;             // 2^18 pieces per initial interval at most
+constexpr int kMaxDepth = 18;  // 2^18 pieces per initial interval at most
 constexpr size_t kMaxPointsPerEdge = 200000;
 
 double dist_to_chord(Vec2 p, Vec2 a, Vec2 b) {
@@ -50,8 +50,8 @@ Vec2 at(const MappedCurve& m, double t) {
 // which catches S-shaped pieces whose midpoint happens to lie on the chord.
 // `mid`: the point at the middle of (t0, t1] when known (a halved piece's quarter
 // point is its half's middle: passed down, not evaluated again).
-void refine(const MappedCurve& c, double t0, Vec2 p0, double t1, Vec2 p1, double tol,
-            int depth, std::vector<Vec2>& out, const Vec2* mid = nullptr) {
+void refine(const MappedCurve& c, double t0, Vec2 p0, double t1, Vec2 p1, double tol, int depth, std::vector<Vec2>& out,
+            const Vec2* mid = nullptr) {
     if (depth < kMaxDepth && out.size() < kMaxPointsPerEdge) {
         const double tm = 0.5 * (t0 + t1);
         const Vec2 pm = mid ? *mid : at(c, tm);
@@ -70,16 +70,17 @@ void refine(const MappedCurve& c, double t0, Vec2 p0, double t1, Vec2 p1, double
 // so that a single span's curvature is seen), a handful otherwise.
 int initial_pieces(const Geom2dAdaptor_Curve& c) {
     switch (c.GetType()) {
-        case GeomAbs_Line: return 1;
+        case GeomAbs_Line:
+            return 1;
         case GeomAbs_BSplineCurve:
         case GeomAbs_BezierCurve:
             return std::clamp(2 * c.NbIntervals(GeomAbs_C2), 4, 4096);
-        default: return 8;
+        default:
+            return 8;
     }
 }
 
-std::vector<Vec2> sample_pcurve(const Handle(Geom2d_Curve)& pc, double f, double l, double tol,
-                                const UVMap& map) {
+std::vector<Vec2> sample_pcurve(const Handle(Geom2d_Curve) & pc, double f, double l, double tol, const UVMap& map) {
     const Geom2dAdaptor_Curve curve(pc, f, l);
     const MappedCurve c{curve, map};
     const int n = initial_pieces(curve);
@@ -124,9 +125,15 @@ std::vector<std::vector<Vec2>> chain(std::vector<std::vector<Vec2>> pieces, doub
                 // A reversed match must be clearly better: edge orientation is
                 // normally right, and a closed edge matches both ways.
                 const double d_rev = dist(end, pieces[k].back());
-                if (d_fwd < best_d) { best_d = d_fwd; best = k; best_reversed = false; }
+                if (d_fwd < best_d) {
+                    best_d = d_fwd;
+                    best = k;
+                    best_reversed = false;
+                }
                 if (d_rev < 0.5 * best_d && d_rev < 0.5 * d_fwd) {
-                    best_d = d_rev; best = k; best_reversed = true;
+                    best_d = d_rev;
+                    best = k;
+                    best_reversed = true;
                 }
             }
             // Close this loop when its start is nearer than any remaining piece.
@@ -220,8 +227,8 @@ TrimResult sample_trim_loops(const ConvertedFace& cf, const UVBox& box, double r
                              " edge(s) without a usable pcurve skipped in the trim loops");
     if (max_gap > 0.05 * diag) {
         char buf[160];
-        std::snprintf(buf, sizeof(buf), "trim loop gap of %.3g in (u,v) (%.1f%% of the box) closed",
-                      max_gap, 100.0 * max_gap / diag);
+        std::snprintf(buf, sizeof(buf), "trim loop gap of %.3g in (u,v) (%.1f%% of the box) closed", max_gap,
+                      100.0 * max_gap / diag);
         r.warnings.emplace_back(buf);
     }
     // Uncertainty of the trim test: the sampling deviation plus the edges' 3D
@@ -242,8 +249,7 @@ bool inside_loops(const std::vector<TrimLoop>& loops, Vec2 p) {
         const size_t n = pts.size();
         for (size_t i = 0, j = n - 1; i < n; j = i++) {
             const Vec2 a = pts[i], b = pts[j];
-            if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x)
-                inside = !inside;
+            if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) inside = !inside;
         }
     }
     return inside;

@@ -117,9 +117,9 @@ Vec2 UVMap::to_surface(Vec2 uv) const { return {u_.to_surface(uv.x), v_.to_surfa
 
 Vec2 UVMap::to_face(Vec2 uv) const { return {u_.to_face(uv.x), v_.to_face(uv.y)}; }
 
-std::optional<UVMap> UVMap::between(const Handle(Geom_Surface)& face_surface,
-                                    const Handle(Geom_BSplineSurface)& converted, double u0, double u1,
-                                    double v0, double v1) {
+std::optional<UVMap> UVMap::between(const Handle(Geom_Surface) & face_surface,
+                                    const Handle(Geom_BSplineSurface) & converted, double u0, double u1, double v0,
+                                    double v1) {
     if (face_surface.IsNull() || converted.IsNull() || !(u1 > u0) || !(v1 > v0)) return std::nullopt;
     double s0, s1, t0, t1;
     converted->Bounds(s0, s1, t0, t1);

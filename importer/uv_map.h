@@ -37,9 +37,9 @@ public:
     // transformed). Empty when the parameters do not separate into one
     // function per direction, or when the check over the box fails: the caller
     // then converts with the face's edges instead.
-    static std::optional<UVMap> between(const Handle(Geom_Surface)& face_surface,
-                                        const Handle(Geom_BSplineSurface)& converted, double u0, double u1,
-                                        double v0, double v1);
+    static std::optional<UVMap> between(const Handle(Geom_Surface) & face_surface,
+                                        const Handle(Geom_BSplineSurface) & converted, double u0, double u1, double v0,
+                                        double v1);
 
     bool identity() const { return !u_.active; }
     Vec2 to_surface(Vec2 face_uv) const;

@@ -23,8 +23,8 @@ struct CameraSpec {
     Vec3 target{0, 0, 0};
     Vec3 up{0, 1, 0};
     Projection projection = Projection::perspective;
-    double fov_deg = 40;        // vertical field of view, perspective
-    double ortho_height = 1;    // view height in model units, orthographic
+    double fov_deg = 40;      // vertical field of view, perspective
+    double ortho_height = 1;  // view height in model units, orthographic
     int width = 512;
     int height = 512;
 };
@@ -49,9 +49,9 @@ public:
     int width() const { return spec_.width; }
     int height() const { return spec_.height; }
     bool perspective() const { return spec_.projection == Projection::perspective; }
-    Vec3 forward() const { return f_; }   // f
-    Vec3 right() const { return r_; }     // r
-    Vec3 up() const { return u_; }        // u = r x f
+    Vec3 forward() const { return f_; }  // f
+    Vec3 right() const { return r_; }    // r
+    Vec3 up() const { return u_; }       // u = r x f
     double aspect() const { return aspect_; }
     double tan_half_fov() const { return tan_half_; }
 
@@ -96,9 +96,7 @@ public:
     void model_partials(const Vec4& P, const Vec4& Pu, const Vec4& Pv, Vec3& Cu, Vec3& Cv) const;
 
     // Depth along f of a projected homogeneous point (any point of the projected surface).
-    double depth(Vec4 projected) const {
-        return perspective() ? projected.z / projected.w : projected.w / projected.z;
-    }
+    double depth(Vec4 projected) const { return perspective() ? projected.z / projected.w : projected.w / projected.z; }
     // Hit distance t (along the unit pixel ray) of a point on the ray through screen point s,
     // from its depth along f: perspective t = depth / (f . dir); orthographic t = depth.
     double hit_distance_from_depth(double depth_along_f, ScreenPoint s) const;

@@ -82,8 +82,8 @@ FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int heig
     const double eval_cost = total_weight > 0 ? weighted / total_weight : kBicubicEvalCost;
 
     FrameCost c;
-    const double per_pixel = kImageBytesPerPixel + kSolveBytesPerPixel + kRescueBytesPerPixel + kMapBytesPerPixel +
-                             kEncodeBytesPerPixel;
+    const double per_pixel =
+        kImageBytesPerPixel + kSolveBytesPerPixel + kRescueBytesPerPixel + kMapBytesPerPixel + kEncodeBytesPerPixel;
     const auto band_pixels = [](double px) { return std::min(px, double(kMapBandPixels)); };
     // Every term above is already a worst case (all candidate lists full), so no slack factor:
     // measured peaks were 0.4-0.65 of this at 1024x768 and more.
@@ -100,8 +100,7 @@ FrameCost estimate_frame_cost(const PreparedScene& prepared, int width, int heig
         // the surfaces projected for it) and the shadow AOV.
         const double light = double(light_map_size(width, height));
         extra_bytes += light * light * kMapBytesPerPixel + band_pixels(light * light) * kFramebufferBytesPerPixel +
-                       projected_bytes +
-                       double(map.xyz.size()) * kBytesPerMapVertex + pixels * kShadowBytesPerPixel;
+                       projected_bytes + double(map.xyz.size()) * kBytesPerMapVertex + pixels * kShadowBytesPerPixel;
         work_factor *= 1 + kShadowWork;
     }
     c.memory_bytes = kFixedBytes + static_cast<size_t>(bytes + extra_bytes);

@@ -11,9 +11,7 @@ double default_newton_eps(const BBox& box, double relative) {
     return relative * (d > 0 ? d : 1.0);
 }
 
-const char* newton_method_name(NewtonMethod m) {
-    return m == NewtonMethod::proposed ? "proposed" : "martin";
-}
+const char* newton_method_name(NewtonMethod m) { return m == NewtonMethod::proposed ? "proposed" : "martin"; }
 
 std::optional<NewtonMethod> parse_newton_method(std::string_view name) {
     for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin})

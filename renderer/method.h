@@ -21,10 +21,10 @@ std::optional<NewtonMethod> parse_newton_method(std::string_view name);
 // Termination of every solve; the criteria are Sisojevs & Glazs 2010, eq. (12)-(14)
 // (solve/newton.h says how each is measured).
 struct NewtonParams {
-    double eps = 0;           // (12), model units, must be > 0 (see default_newton_eps)
-    double eps_det = 1e-12;   // (14), relative
+    double eps = 0;          // (12), model units, must be > 0 (see default_newton_eps)
+    double eps_det = 1e-12;  // (14), relative
     int max_iterations = 8;
-    bool robust = false;      // clamp-and-continue at the box, backtracking on (13); see solve/newton.h
+    bool robust = false;  // clamp-and-continue at the box, backtracking on (13); see solve/newton.h
     // robust: halvings of a step that raises the residual before (13) declares
     // divergence. Four shrink the step to 1/16: enough to get back under an
     // overshoot near a silhouette (a light ray grazing an occluder needs them).

@@ -23,9 +23,7 @@ namespace nurbsrt {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // The rescue's solves may take more steps than the primary ones: they start
 // farther from the root (a neighbour's (u, v), a mesh vertex) and backtrack.
@@ -42,9 +40,12 @@ constexpr int kRescueBacktracks = 2;
 
 tbb::task_arena::priority arena_priority(RenderPriority p) {
     switch (p) {
-        case RenderPriority::low: return tbb::task_arena::priority::low;
-        case RenderPriority::high: return tbb::task_arena::priority::high;
-        case RenderPriority::normal: break;
+        case RenderPriority::low:
+            return tbb::task_arena::priority::low;
+        case RenderPriority::high:
+            return tbb::task_arena::priority::high;
+        case RenderPriority::normal:
+            break;
     }
     return tbb::task_arena::priority::normal;
 }
@@ -65,8 +66,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     const auto t_total = Clock::now();
     const Scene& scene = prepared.scene();
     const int W = camera.width(), H = camera.height();
-    const int threads = options.threads > 0 ? options.threads
-                                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const int threads =
+        options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     tbb::task_arena arena(threads, 1, arena_priority(options.priority));
 
     RenderResult res;
@@ -90,7 +91,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
 
     // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
     throw_if_canceled(options);
-    const PreliminaryMap map = render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()});
+    const PreliminaryMap map =
+        render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()});
     throw_if_canceled(options);
     st.preliminary_map_ms = lap();
 
@@ -98,8 +100,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     // Progress units: rows of the per-pixel passes (Newton, rescue, shading, and
     // anti-aliasing when asked for).
     Progress progress(options.progress, (options.antialias > 0 ? 4 : 3) * static_cast<int64_t>(H));
-    const FrameContext ctx{prepared, scene, camera, map, options, arena, progress, W, H,
-                           static_cast<uint32_t>(scene.faces.size())};
+    const FrameContext ctx{prepared, scene,    camera, map, options,
+                           arena,    progress, W,      H,   static_cast<uint32_t>(scene.faces.size())};
     FrameBuffers buf(ctx);
     st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of

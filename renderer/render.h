@@ -25,9 +25,9 @@ enum class RenderPriority : uint8_t { low, normal, high };
 struct RenderOptions {
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
-    int threads = 0;           // 0: all hardware threads
-    NewtonParams newton;       // newton.eps <= 0 (the default): default_newton_eps(scene.bbox)
-    bool rescue = true;        // retry failed pixels with their neighbours' faces (pass_rescue.cpp)
+    int threads = 0;      // 0: all hardware threads
+    NewtonParams newton;  // newton.eps <= 0 (the default): default_newton_eps(scene.bbox)
+    bool rescue = true;   // retry failed pixels with their neighbours' faces (pass_rescue.cpp)
     // Share of the cores against other frames rendering at the same time: the
     // frame's work runs in its own oneTBB arena of this priority, and the
     // process's one worker pool serves higher-priority arenas first (a service
@@ -46,8 +46,8 @@ struct RenderOptions {
     // Exact shadows of the key light (shadow_rays.h): a second preliminary map
     // from the light, and Newton along the light ray of every shaded sample.
     bool shadows = false;
-    Color background{0, 0, 0}; // of pixels no face covers
-    float background_alpha = 0; // their alpha: 0 transparent, 1 opaque
+    Color background{0, 0, 0};   // of pixels no face covers
+    float background_alpha = 0;  // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
     // at a time, fractions increasing), about every 2% of the frame's rows and once
     // with 1.0 at the end. Must be cheap; has no effect on the output.
@@ -61,12 +61,12 @@ struct RenderOptions {
 // Per-pixel buffers, row-major, row 0 = top (contract row j = 0).
 struct RenderImage {
     int width = 0, height = 0;
-    std::vector<float> rgba;        // 4 per pixel, linear
-    std::vector<float> z;           // hit distance t, +inf for background
-    std::vector<float> normal;      // 3 per pixel: world-space shading normal (facing the viewer), 0 background
-    std::vector<uint32_t> face;     // face index, 0 background
-    std::vector<float> u, v;        // parameters of the hit
-    std::vector<uint8_t> iterations;// Newton iterations of the pixel's final solve
+    std::vector<float> rgba;          // 4 per pixel, linear
+    std::vector<float> z;             // hit distance t, +inf for background
+    std::vector<float> normal;        // 3 per pixel: world-space shading normal (facing the viewer), 0 background
+    std::vector<uint32_t> face;       // face index, 0 background
+    std::vector<float> u, v;          // parameters of the hit
+    std::vector<uint8_t> iterations;  // Newton iterations of the pixel's final solve
     // 1 where the key light is blocked at the pixel-centre hit (RenderOptions::shadows;
     // empty without shadows). Points facing away from the key light are 0: their
     // darkness is their orientation, not a cast shadow.
@@ -78,7 +78,7 @@ struct RenderStats {
     int width = 0, height = 0, threads = 0;
     size_t faces = 0, patches = 0, map_triangles = 0;
     size_t pixels_hit = 0;
-    double tolerance = 0;                       // (12) stop tolerance used, model units
+    double tolerance = 0;  // (12) stop tolerance used, model units
     // Primary (map-started) solves, one per pixel the map covers: the sum of
     // iteration_histogram, and of the outcome counts below.
     uint64_t solves = 0;
@@ -90,7 +90,7 @@ struct RenderStats {
     // (max_iterations: how many reached iteration_limit unconverged, not the limit).
     uint64_t converged = 0, diverged = 0, singular = 0, max_iterations = 0, left_domain = 0, behind_eye = 0,
              trimmed = 0;
-    uint64_t fallback = 0;        // pixels whose hit came from the rescue (any kind below)
+    uint64_t fallback = 0;  // pixels whose hit came from the rescue (any kind below)
     // Rescue, by kind (they sum to `fallback`): a pixel whose map face failed, hit
     // from its 8 neighbours' faces and starts; a map-background pixel next to hits,
     // hit the same way (the exact silhouette is not the mesh's); a pixel hit only
@@ -102,7 +102,7 @@ struct RenderStats {
     // neighbour's face and (u, v) where the pixel was a depth spike (a surface folded
     // over itself within the map mesh's deflection). Not part of `fallback`.
     uint64_t rescue_nearer = 0;
-    uint64_t holes = 0;           // diagnostic: background pixels whose 4 neighbours are all hit
+    uint64_t holes = 0;  // diagnostic: background pixels whose 4 neighbours are all hit
     // Anti-aliasing: extra samples per edge pixel (RenderOptions::antialias), the
     // edge pixels that got them, and the samples traced as exact rays.
     int antialias = 0;

@@ -18,9 +18,12 @@ struct ViewDef {
 
 constexpr double kInvSqrt3 = 0.57735026918962576451;
 const ViewDef kViews[] = {
-    {"front", {0, 1, 0}, {0, 0, 1}},  {"back", {0, -1, 0}, {0, 0, 1}},
-    {"left", {1, 0, 0}, {0, 0, 1}},   {"right", {-1, 0, 0}, {0, 0, 1}},
-    {"top", {0, 0, -1}, {0, 1, 0}},   {"bottom", {0, 0, 1}, {0, 1, 0}},
+    {"front", {0, 1, 0}, {0, 0, 1}},
+    {"back", {0, -1, 0}, {0, 0, 1}},
+    {"left", {1, 0, 0}, {0, 0, 1}},
+    {"right", {-1, 0, 0}, {0, 0, 1}},
+    {"top", {0, 0, -1}, {0, 1, 0}},
+    {"bottom", {0, 0, 1}, {0, 1, 0}},
     {"iso", {-kInvSqrt3, -kInvSqrt3, -kInvSqrt3}, {0, 0, 1}},
 };
 
@@ -201,8 +204,7 @@ std::vector<Vec3> fit_points_of(const Scene& scene, double& slack) {
 // An eye given without a target: look at the centre of the points' box; the
 // up of the named view unless it is (nearly) along the view, then +Y or +X; an
 // orthographic height not given fits the points around that axis.
-CameraSpec look_from_eye(const ViewRequest& rq, const std::vector<Vec3>& points, double slack,
-                         const CameraSpec& base) {
+CameraSpec look_from_eye(const ViewRequest& rq, const std::vector<Vec3>& points, double slack, const CameraSpec& base) {
     BBox box;
     for (const Vec3& p : points) box.extend(p);
     CameraSpec spec = base;
@@ -256,8 +258,8 @@ CameraSpec named_view(const std::string& name, const BBox& box, const CameraSpec
     return fit_points(find_view(name), corners(box), base, margin, 0);
 }
 
-CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, const CameraSpec& base,
-                      double margin, double slack) {
+CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, const CameraSpec& base, double margin,
+                      double slack) {
     return fit_points(find_view(name), points, base, margin, slack);
 }
 

@@ -45,13 +45,21 @@ constexpr auto kStartPoll = std::chrono::milliseconds(5);
 
 ProblemCode code_for_status(int status) {
     switch (status) {
-        case 404: return ServiceCode::not_found;
-        case 405: return ServiceCode::method_not_allowed;
-        case 408: return ServiceCode::request_timeout;
-        case 413: case 431: return ErrorCode::limit_exceeded;
-        case 415: return ErrorCode::unsupported_format;
-        case 503: return ServiceCode::overloaded;
-        default: return status < 500 ? ErrorCode::invalid_argument : ErrorCode::internal;
+        case 404:
+            return ServiceCode::not_found;
+        case 405:
+            return ServiceCode::method_not_allowed;
+        case 408:
+            return ServiceCode::request_timeout;
+        case 413:
+        case 431:
+            return ErrorCode::limit_exceeded;
+        case 415:
+            return ErrorCode::unsupported_format;
+        case 503:
+            return ServiceCode::overloaded;
+        default:
+            return status < 500 ? ErrorCode::invalid_argument : ErrorCode::internal;
     }
 }
 
@@ -93,10 +101,10 @@ std::optional<EarlyAnswer> check_route(const httplib::Request& req) {
     const std::string route = route_of(req.path);
     if (route == "other") return EarlyAnswer{404, ServiceCode::not_found, "no such resource"};
     if (!allows_method(route, req.method))
-        return EarlyAnswer{405, ServiceCode::method_not_allowed,
-                           "method " + req.method + " is not allowed on " + route + " (allowed: " +
-                               allowed_methods(route) + ")",
-                           allowed_methods(route)};
+        return EarlyAnswer{
+            405, ServiceCode::method_not_allowed,
+            "method " + req.method + " is not allowed on " + route + " (allowed: " + allowed_methods(route) + ")",
+            allowed_methods(route)};
     return std::nullopt;
 }
 
@@ -202,7 +210,7 @@ void install_early_answers(GuardedServer& svr, const ServerConfig& config, const
     // handler when the client expects one, else here.
     svr.set_pre_routing_handler([answer_early](const httplib::Request& req, httplib::Response& res) {
         return answer_early(req, res, false) ? httplib::Server::HandlerResponse::Handled
-                                      : httplib::Server::HandlerResponse::Unhandled;
+                                             : httplib::Server::HandlerResponse::Unhandled;
     });
     // curl and browsers send large uploads with "Expect: 100-continue": answer
     // those that will be refused before the client sends the body at all.
@@ -215,62 +223,60 @@ void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
     // Statuses set by cpp-httplib itself (404 no route, 413 payload, 400 bad
     // request line, a body read that failed) get a problem body too; handlers'
     // own problems are kept. The body's status is always the response's.
-    svr.set_error_handler(httplib::Server::HandlerWithResponse([cfg = &config](const httplib::Request& req,
-                                                                              httplib::Response& res) {
-        const ServerConfig& config = *cfg;
-        if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
-        if (!res.has_header("X-Request-Id")) res.set_header("X-Request-Id", new_request_id());
-        // cpp-httplib caps form-urlencoded bodies at 8 KiB and answers 413 itself;
-        // a CAD file sent that way has the wrong content type, not the wrong size.
-        if (res.status == 413 &&
-            req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {
-            send_problem(res, ErrorCode::unsupported_format,
-                         "form-urlencoded bodies are not accepted: send the file raw "
-                         "(application/octet-stream) or as multipart/form-data");
+    svr.set_error_handler(
+        httplib::Server::HandlerWithResponse([cfg = &config](const httplib::Request& req, httplib::Response& res) {
+            const ServerConfig& config = *cfg;
+            if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+            if (!res.has_header("X-Request-Id")) res.set_header("X-Request-Id", new_request_id());
+            // cpp-httplib caps form-urlencoded bodies at 8 KiB and answers 413 itself;
+            // a CAD file sent that way has the wrong content type, not the wrong size.
+            if (res.status == 413 &&
+                req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {
+                send_problem(res, ErrorCode::unsupported_format,
+                             "form-urlencoded bodies are not accepted: send the file raw "
+                             "(application/octet-stream) or as multipart/form-data");
+                return httplib::Server::HandlerResponse::Handled;
+            }
+            const ReadFailure failure = GuardedServer::current_read_failure();
+            if (failure == ReadFailure::bad_framing) {
+                // Where this request ends is unknown or disputed: answer and close.
+                const FramingVerdict framing = GuardedServer::current_framing();
+                send_problem_with_status(res, framing.status, framing.code, framing.detail);
+                res.set_header("Connection", "close");
+                return httplib::Server::HandlerResponse::Handled;
+            }
+            if (failure == ReadFailure::header_timeout) {
+                send_problem(res, ServiceCode::request_timeout,
+                             "the request headers did not arrive within " + format_seconds(config.header_timeout_s));
+                return httplib::Server::HandlerResponse::Handled;
+            }
+            if (failure == ReadFailure::body_timeout) {
+                send_problem(res, ServiceCode::request_timeout,
+                             "the request body did not arrive in time (at least " +
+                                 std::to_string(static_cast<long long>(config.min_body_rate_bytes / 1024)) +
+                                 " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");
+                return httplib::Server::HandlerResponse::Handled;
+            }
+            // (A method a known resource does not answer got its 405 before routing.)
+            const int status = failure == ReadFailure::body_too_large     ? 413
+                               : failure == ReadFailure::header_too_large ? 431
+                                                                          : res.status;
+            const std::string detail =
+                status == 413 ? "the upload exceeds the limit of " + std::to_string(config.max_upload_bytes) + " bytes"
+                : status == 404 ? "no such resource"
+                : status == 414 ? "the request target is too long"
+                : status == 431 ? "the request headers exceed " + std::to_string(kMaxRequestHeaderBytes) + " bytes"
+                                : "the request could not be handled";
+            send_problem_with_status(res, status, code_for_status(status), detail);
             return httplib::Server::HandlerResponse::Handled;
-        }
-        const ReadFailure failure = GuardedServer::current_read_failure();
-        if (failure == ReadFailure::bad_framing) {
-            // Where this request ends is unknown or disputed: answer and close.
-            const FramingVerdict framing = GuardedServer::current_framing();
-            send_problem_with_status(res, framing.status, framing.code, framing.detail);
-            res.set_header("Connection", "close");
-            return httplib::Server::HandlerResponse::Handled;
-        }
-        if (failure == ReadFailure::header_timeout) {
-            send_problem(res, ServiceCode::request_timeout,
-                         "the request headers did not arrive within " + format_seconds(config.header_timeout_s));
-            return httplib::Server::HandlerResponse::Handled;
-        }
-        if (failure == ReadFailure::body_timeout) {
-            send_problem(res, ServiceCode::request_timeout,
-                         "the request body did not arrive in time (at least " +
-                             std::to_string(static_cast<long long>(config.min_body_rate_bytes / 1024)) +
-                             " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");
-            return httplib::Server::HandlerResponse::Handled;
-        }
-        // (A method a known resource does not answer got its 405 before routing.)
-        const int status = failure == ReadFailure::body_too_large     ? 413
-                           : failure == ReadFailure::header_too_large ? 431
-                                                                      : res.status;
-        const std::string detail = status == 413   ? "the upload exceeds the limit of " +
-                                                       std::to_string(config.max_upload_bytes) + " bytes"
-                                   : status == 404 ? "no such resource"
-                                   : status == 414 ? "the request target is too long"
-                                   : status == 431 ? "the request headers exceed " +
-                                                         std::to_string(kMaxRequestHeaderBytes) + " bytes"
-                                                   : "the request could not be handled";
-        send_problem_with_status(res, status, code_for_status(status), detail);
-        return httplib::Server::HandlerResponse::Handled;
-    }));
+        }));
     svr.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
         std::string what = "unexpected exception";
         try {
             if (ep) std::rethrow_exception(ep);
         } catch (const std::exception& e) {
             what = e.what();
-        } catch (...) {
-        }
+        } catch (...) {}
         send_problem(res, ErrorCode::internal, what);
     });
 }
@@ -310,7 +316,8 @@ int run_server(const ServerConfig& given) {
     given.validate();
     ServerConfig config = given;
     if (config.instance_id.empty()) config.instance_id = default_instance_id();
-    if (!config.webhook_secret_file.empty()) config.webhook_secret = read_webhook_secret_file(config.webhook_secret_file);
+    if (!config.webhook_secret_file.empty())
+        config.webhook_secret = read_webhook_secret_file(config.webhook_secret_file);
     if (!config.webhook_secret.empty()) check_webhook_secret(config.webhook_secret);
     // SIGINT/SIGTERM are taken by a waiting thread (blocked everywhere else,
     // before any thread starts); a peer closing its socket must not kill us.

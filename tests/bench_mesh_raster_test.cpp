@@ -23,8 +23,8 @@ double plane_t(const Ray& r, double h) { return (h - r.origin.z) / r.dir.z; }
 
 void check_camera(const CameraSpec& spec) {
     TriangleMesh mesh;
-    add_square(mesh, 1.0, 0.0);   // far plane, large
-    add_square(mesh, 0.3, 0.5);   // nearer, small: occludes the middle
+    add_square(mesh, 1.0, 0.0);  // far plane, large
+    add_square(mesh, 0.3, 0.5);  // nearer, small: occludes the middle
     const Camera cam(spec);
     MeshRasterizer raster;
     const DepthImage img = raster.render(mesh, cam);

@@ -108,8 +108,8 @@ TEST(Cli, OnlyCommandsThatWriteImagesLoadTheImageLibraries) {
     EXPECT_EQ(info.err.find("libOpenImageIO"), std::string::npos);
     EXPECT_EQ(info.err.find("libnurbsrt_image"), std::string::npos);
     const fs::path png = fs::temp_directory_path() / ("nurbsrt-cli-libs-" + std::to_string(::getpid()) + ".png");
-    const CliRun render = run_nurbsrt("render " + kScrew + " -o " + png.string() + " --width 64 --height 48 --quiet",
-                                      "LD_DEBUG=files");
+    const CliRun render =
+        run_nurbsrt("render " + kScrew + " -o " + png.string() + " --width 64 --height 48 --quiet", "LD_DEBUG=files");
     ASSERT_EQ(render.status, 0) << render.err.substr(0, 2000);
     EXPECT_NE(render.err.find("libnurbsrt_image.so"), std::string::npos);
     EXPECT_NE(render.err.find("libOpenImageIO"), std::string::npos);
@@ -126,8 +126,8 @@ TEST(Cli, MissingImageModuleIsAClearError) {
     fs::copy_file(NURBSRT_BINARY, bin, fs::copy_options::overwrite_existing);
     const CliRun info = run_nurbsrt("info --json " + kScrew, "", bin.string());
     EXPECT_EQ(info.status, 0) << info.err;
-    const CliRun render = run_nurbsrt("render " + kScrew + " -o " + (dir / "x.png").string() + " --width 64 --quiet",
-                                      "", bin.string());
+    const CliRun render =
+        run_nurbsrt("render " + kScrew + " -o " + (dir / "x.png").string() + " --width 64 --quiet", "", bin.string());
     EXPECT_NE(render.status, 0);
     EXPECT_NE(render.err.find("cannot load the image writer module"), std::string::npos) << render.err;
     EXPECT_NE(render.err.find("libnurbsrt_image.so"), std::string::npos) << render.err;
@@ -186,8 +186,7 @@ TEST(Cli, ConvertPrintsWhatTheOutputLoses) {
     const std::string dir = nurbsrt::test::fixture_dir();
     const CliRun igs = run_nurbsrt("convert " + in + " " + dir + "/cli-assembly.igs");
     ASSERT_EQ(igs.status, 0) << igs.err;
-    EXPECT_NE(igs.err.find("nurbsrt: warning: IGES has no assembly structure: 2 part instance(s)"),
-              std::string::npos)
+    EXPECT_NE(igs.err.find("nurbsrt: warning: IGES has no assembly structure: 2 part instance(s)"), std::string::npos)
         << igs.err;
     const CliRun stp = run_nurbsrt("convert " + in + " " + dir + "/cli-assembly.stp");
     ASSERT_EQ(stp.status, 0) << stp.err;
@@ -220,8 +219,7 @@ TEST(Cli, ConvertToMeshAndJsonOutputs) {
     EXPECT_EQ(doc["patches"].get<int>(), 10);
     EXPECT_EQ(doc["faces"].size(), 10u);
     const CliRun help = run_nurbsrt("convert --help");
-    for (const char* ext : {".stl", ".glb", ".json", "Y-up"})
-        EXPECT_NE(help.out.find(ext), std::string::npos) << ext;
+    for (const char* ext : {".stl", ".glb", ".json", "Y-up"}) EXPECT_NE(help.out.find(ext), std::string::npos) << ext;
     fs::remove_all(dir);
 }
 
@@ -234,8 +232,7 @@ namespace {
 TEST(CliRender, WritesImageAovAndContractStats) {
     const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-render-" + std::to_string(::getpid()));
     fs::create_directories(dir);
-    const std::string png = (dir / "s.png").string(), exr = (dir / "s.exr").string(),
-                      stats = (dir / "s.json").string();
+    const std::string png = (dir / "s.png").string(), exr = (dir / "s.exr").string(), stats = (dir / "s.json").string();
     const CliRun r = run_nurbsrt("render " + kScrew + " -o " + png + " --aov " + exr + " --stats " + stats +
                                  " --width 96 --height 64 --view front -q");
     ASSERT_EQ(r.status, 0) << r.err;
@@ -243,11 +240,11 @@ TEST(CliRender, WritesImageAovAndContractStats) {
     EXPECT_GT(fs::file_size(exr), 100u);
     std::ifstream in(stats);
     const auto j = nlohmann::json::parse(in);
-    for (const char* k : {"method", "width", "height", "threads", "faces", "patches", "pixels_hit", "newton",
-                          "timings_ms"})
+    for (const char* k :
+         {"method", "width", "height", "threads", "faces", "patches", "pixels_hit", "newton", "timings_ms"})
         EXPECT_TRUE(j.contains(k)) << k;
-    for (const char* k : {"mean_iterations", "converged", "diverged", "singular", "max_iterations", "trimmed",
-                          "fallback"})
+    for (const char* k :
+         {"mean_iterations", "converged", "diverged", "singular", "max_iterations", "trimmed", "fallback"})
         EXPECT_TRUE(j["newton"].contains(k)) << k;
     for (const char* k : {"read", "nurbs_convert", "mesh", "preliminary_map", "newton", "shade", "encode", "total"})
         EXPECT_TRUE(j["timings_ms"].contains(k)) << k;
@@ -270,7 +267,8 @@ TEST(CliRender, SceneFilePlacesCopies) {
     fs::create_directories(dir);
     const std::string scene = (dir / "two.json").string(), stats = (dir / "s.json").string();
     std::ofstream(scene) << R"({"models": [{"file": ")" << kScrew << R"("},
-        {"file": ")" << kScrew << R"(", "translate": [60, 0, 0], "rotate_deg": [0, 0, 90], "scale": 0.5}]})";
+        {"file": ")" << kScrew
+                         << R"(", "translate": [60, 0, 0], "rotate_deg": [0, 0, 90], "scale": 0.5}]})";
     const CliRun r = run_nurbsrt("render " + scene + " -o " + (dir / "two.png").string() + " --stats " + stats +
                                  " --width 64 --height 48 -q");
     ASSERT_EQ(r.status, 0) << r.err;
@@ -450,7 +448,11 @@ TEST(CliRender, AntialiasDefaultsAndEdgesInStats) {
         std::string file, args;
         int rays;
     } cases[] = {
-        {"a.png", "", 4}, {"b.jpg", "", 4}, {"c.exr", "", 0}, {"d.png", "--antialias 0", 0}, {"e.exr", "--antialias 8", 8},
+        {"a.png", "", 4},
+        {"b.jpg", "", 4},
+        {"c.exr", "", 0},
+        {"d.png", "--antialias 0", 0},
+        {"e.exr", "--antialias 8", 8},
     };
     for (const auto& c : cases) {
         const CliRun r = run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --edges --stats - -o " +

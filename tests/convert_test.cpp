@@ -87,7 +87,8 @@ Box3 exact_box(const std::string& path) {
     const nurbsrt::occt::OcctModel m = nurbsrt::occt::read_model(path, false);
     Bnd_Box b;
     for (int i = 1; i <= m.faces.Extent(); ++i)
-        BRepBndLib::AddOptimal(m.faces(i), b, /*useTriangulation=*/Standard_False, /*useShapeTolerance=*/Standard_False);
+        BRepBndLib::AddOptimal(m.faces(i), b, /*useTriangulation=*/Standard_False,
+                               /*useShapeTolerance=*/Standard_False);
     return to_box(b);
 }
 
@@ -135,7 +136,8 @@ TEST(ConvertNames, ExtensionsNamesAndContentTypes) {
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::nurbs_json), "application/json");
     for (ConversionFormat f : {ConversionFormat::step, ConversionFormat::iges, ConversionFormat::stl,
                                ConversionFormat::glb, ConversionFormat::nurbs_json})
-        EXPECT_EQ(nurbsrt::conversion_format_from_extension(std::string("x") + nurbsrt::conversion_format_extension(f)), f);
+        EXPECT_EQ(nurbsrt::conversion_format_from_extension(std::string("x") + nurbsrt::conversion_format_extension(f)),
+                  f);
     EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::stl), nurbsrt::CadFormat::unknown);
     EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::iges), nurbsrt::CadFormat::iges);
 }

@@ -96,7 +96,8 @@ std::string coloured_assembly() {
         colors->SetColor(shapes->AddSubShape(plate, faces[5]), to_quantity(kPlateTop), XCAFDoc_ColorSurf);
         colors->SetColor(shapes->AddSubShape(plate, faces[0]), to_quantity(kPlateSide), XCAFDoc_ColorSurf);
 
-        const TDF_Label pin = named(shapes->AddShape(BRepPrimAPI_MakeCylinder(3.0, 15.0).Shape(), Standard_False), "pin");
+        const TDF_Label pin =
+            named(shapes->AddShape(BRepPrimAPI_MakeCylinder(3.0, 15.0).Shape(), Standard_False), "pin");
         colors->SetColor(pin, to_quantity(kPin), XCAFDoc_ColorSurf);
 
         const TDF_Label pins = named(shapes->NewShape(), "pin_group");
@@ -126,21 +127,21 @@ std::string name_of(const TDF_Label& l) {
 
 // What a file holds, read with OCCT's XDE readers.
 struct Xde {
-    int faces = 0;                      // face occurrences
-    std::vector<Rgb> coloured;          // colour of each coloured face occurrence, sorted
-    std::set<std::string> names;        // all names on shape labels (parts, assemblies, components)
-    std::set<std::string> sub_names;    // names on sub-shape labels of parts (a flat IGES
-                                        // compound's solids carry the instance names there)
+    int faces = 0;                    // face occurrences
+    std::vector<Rgb> coloured;        // colour of each coloured face occurrence, sorted
+    std::set<std::string> names;      // all names on shape labels (parts, assemblies, components)
+    std::set<std::string> sub_names;  // names on sub-shape labels of parts (a flat IGES
+                                      // compound's solids carry the instance names there)
     std::set<std::string> all_names() const {
         std::set<std::string> all = names;
         all.insert(sub_names.begin(), sub_names.end());
         return all;
     }
-    std::string tree;                   // the product tree, children sorted
-    int assemblies = 0, components = 0; // over the expanded tree
+    std::string tree;                    // the product tree, children sorted
+    int assemblies = 0, components = 0;  // over the expanded tree
 };
 
-bool colour_of(const Handle(XCAFDoc_ColorTool)& colors, const TDF_Label& l, Quantity_Color& c) {
+bool colour_of(const Handle(XCAFDoc_ColorTool) & colors, const TDF_Label& l, Quantity_Color& c) {
     return colors->GetColor(l, XCAFDoc_ColorSurf, c) || colors->GetColor(l, XCAFDoc_ColorGen, c);
 }
 
@@ -249,8 +250,10 @@ void expect_lost_names_listed(const Xde& in, const Xde& out, const std::vector<s
                               const std::string& what) {
     const std::set<std::string> kept = out.all_names();
     for (const std::string& n : in.all_names()) {
-        if (kept.count(n)) EXPECT_FALSE(mentions(warnings, "'" + n + "'")) << what << ": " << n << joined(warnings);
-        else EXPECT_TRUE(mentions(warnings, "'" + n + "'")) << what << ": " << n << joined(warnings);
+        if (kept.count(n))
+            EXPECT_FALSE(mentions(warnings, "'" + n + "'")) << what << ": " << n << joined(warnings);
+        else
+            EXPECT_TRUE(mentions(warnings, "'" + n + "'")) << what << ": " << n << joined(warnings);
     }
 }
 
@@ -260,8 +263,7 @@ TEST(ConvertXde, FixtureHasWhatItClaims) {
     EXPECT_EQ(static_cast<int>(in.coloured.size()), kFixtureColouredFaces);
     EXPECT_EQ(in.assemblies, 2);
     EXPECT_EQ(in.components, 4);
-    EXPECT_EQ(in.tree,
-              "fixture_top{pins_1:pin_group{pin_1:pin;};plate_lower:plate;plate_upper:plate;}\n");
+    EXPECT_EQ(in.tree, "fixture_top{pins_1:pin_group{pin_1:pin;};plate_lower:plate;plate_upper:plate;}\n");
 }
 
 TEST(ConvertXde, StepToStepKeepsColoursNamesAndTree) {

@@ -20,9 +20,9 @@
 namespace fs = std::filesystem;
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
+using nurbsrt::server::FileStore;
 using nurbsrt::server::ServiceCode;
 using nurbsrt::server::ServiceError;
-using nurbsrt::server::FileStore;
 using nurbsrt::server::sha256_hex;
 using nurbsrt::server::StoredFile;
 
@@ -60,7 +60,7 @@ TEST(Sha256, KnownVector) {
 TEST(FileStoreIds, OnlySha256Hex) {
     EXPECT_TRUE(FileStore::valid_id(sha256_hex("x")));
     EXPECT_FALSE(FileStore::valid_id(""));
-    EXPECT_FALSE(FileStore::valid_id(std::string(64, 'A')));       // uppercase
+    EXPECT_FALSE(FileStore::valid_id(std::string(64, 'A')));          // uppercase
     EXPECT_FALSE(FileStore::valid_id("../" + std::string(61, 'a')));  // never a path
     EXPECT_FALSE(FileStore::valid_id(std::string(63, 'a')));
 }

@@ -39,7 +39,7 @@ TEST(RouteTable, TemplatesAndAllowedMethods) {
     EXPECT_TRUE(allows_method("/v1/renders", "POST"));
     EXPECT_TRUE(allows_method("/v1/renders", "OPTIONS"));
     EXPECT_FALSE(allows_method("/v1/renders", "GET"));
-    EXPECT_FALSE(allows_method("/v1/renders", "POS"));   // whole names only
+    EXPECT_FALSE(allows_method("/v1/renders", "POS"));  // whole names only
     EXPECT_FALSE(allows_method("/v1/renders", "POST, OPTIONS"));
     EXPECT_FALSE(allows_method("/v1/renders", ""));
     EXPECT_TRUE(allows_method("/v1/jobs/{id}", "DELETE"));

@@ -70,7 +70,8 @@ TEST(Tessellator, MeshLiesOnTheSphereWithinTheDeflection) {
         for (const Vec3& p : t.mesh.xyz) EXPECT_NEAR(length(p), kR, 1e-6);  // nodes on the surface
         for (size_t i = 0; i + 2 < t.mesh.triangles.size(); i += 3) {
             const Vec3 c = (t.mesh.xyz[t.mesh.triangles[i]] + t.mesh.xyz[t.mesh.triangles[i + 1]] +
-                            t.mesh.xyz[t.mesh.triangles[i + 2]]) / 3.0;
+                            t.mesh.xyz[t.mesh.triangles[i + 2]]) /
+                           3.0;
             max_sag[k] = std::max(max_sag[k], kR - length(c));
         }
         // BRepMesh bounds the sag of its edges and checks faces at sample points;

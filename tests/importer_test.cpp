@@ -71,9 +71,9 @@ using nurbsrt::Scene;
 // Test names are computed at discovery time, so nothing may be generated there.
 // ---------------------------------------------------------------------------------
 struct Model {
-    std::string name;     // gtest parameter name
-    std::string fixture;  // fixture name, or
-    std::string file;     // absolute path
+    std::string name;          // gtest parameter name
+    std::string fixture;       // fixture name, or
+    std::string file;          // absolute path
     bool placeholder = false;  // "shared models absent": the test skips visibly
 
     std::string path() const { return fixture.empty() ? file : T::fixture_by_name(fixture); }
@@ -97,7 +97,9 @@ Model shared(const std::string& rel) {
     const fs::path p(rel);
     return file_model(p.parent_path().string(), T::shared_model(rel));
 }
-Model occt_data(const std::string& rel) { return file_model("occt_data_" + fs::path(rel).parent_path().string(), kOcctData + "/" + rel); }
+Model occt_data(const std::string& rel) {
+    return file_model("occt_data_" + fs::path(rel).parent_path().string(), kOcctData + "/" + rel);
+}
 
 std::vector<Model> dedup(std::vector<Model> v) {
     std::vector<Model> out;
@@ -107,9 +109,9 @@ std::vector<Model> dedup(std::vector<Model> v) {
     return out;
 }
 
-#define SKIP_IF_PLACEHOLDER(m)                                                              \
-    do {                                                                                   \
-        if ((m).placeholder) NURBSRT_REQUIRE_SHARED_MODELS();                              \
+#define SKIP_IF_PLACEHOLDER(m)                                \
+    do {                                                      \
+        if ((m).placeholder) NURBSRT_REQUIRE_SHARED_MODELS(); \
     } while (0)
 
 // Files that OCCT meshes very slowly (SOURCES.md: bug22869_Spring did not finish
@@ -293,8 +295,8 @@ void expect_valid_scene(const Scene& scene, const std::string& what) {
                   << " faces invalid per BRepCheck have no mesh (warned)\n";
     const nurbsrt::BBox& b = scene.bbox;
     EXPECT_FALSE(b.empty()) << what << ": empty scene box";
-    EXPECT_TRUE(std::isfinite(b.lo.x) && std::isfinite(b.lo.y) && std::isfinite(b.lo.z) &&
-                std::isfinite(b.hi.x) && std::isfinite(b.hi.y) && std::isfinite(b.hi.z))
+    EXPECT_TRUE(std::isfinite(b.lo.x) && std::isfinite(b.lo.y) && std::isfinite(b.lo.z) && std::isfinite(b.hi.x) &&
+                std::isfinite(b.hi.y) && std::isfinite(b.hi.z))
         << what << ": non-finite scene box";
     EXPECT_GT(b.diagonal(), 0.0) << what;
     if (!scene.bodies.empty()) {
@@ -361,9 +363,8 @@ TEST_P(ImportGood, FaceCountMatchesPlainReaderAndFacesAreValid) {
     RecordProperty("fallback_meshes", fallback);
     RecordProperty("warnings", static_cast<int>(scene.warnings.size()));
     std::cout << "[ import   ] " << fs::path(path).filename().string() << ": " << scene.faces.size()
-              << " faces (reference " << expected << "), " << fallback << " fallback meshes, "
-              << scene.warnings.size() << " warnings; import " << import_s << " s, reference read "
-              << ref_s << " s\n";
+              << " faces (reference " << expected << "), " << fallback << " fallback meshes, " << scene.warnings.size()
+              << " warnings; import " << import_s << " s, reference read " << ref_s << " s\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, ImportGood, testing::ValuesIn(good_models()), model_name);
@@ -400,15 +401,15 @@ TEST_P(ImportBroken, TypedErrorOrValidScene) {
         // may be nothing to warn about.
         ASSERT_FALSE(scene.faces.empty()) << "a scene without faces must be no_faces instead";
         expect_valid_scene(scene, path);
-        std::cout << "[ broken   ] " << fs::path(path).filename().string() << ": scene with "
-                  << scene.faces.size() << " faces, " << scene.warnings.size() << " warnings"
+        std::cout << "[ broken   ] " << fs::path(path).filename().string() << ": scene with " << scene.faces.size()
+                  << " faces, " << scene.warnings.size() << " warnings"
                   << (scene.warnings.empty() ? "" : " (first: " + scene.warnings.front() + ")") << "; "
                   << seconds_since(t0) << " s\n";
     } catch (const nurbsrt::Error& e) {
         EXPECT_TRUE(is_content_error(e.code())) << nurbsrt::error_code_name(e.code()) << ": " << e.what();
         EXPECT_FALSE(std::string(e.what()).empty());
-        std::cout << "[ broken   ] " << fs::path(path).filename().string() << ": "
-                  << nurbsrt::error_code_name(e.code()) << ": " << e.what() << "; " << seconds_since(t0) << " s\n";
+        std::cout << "[ broken   ] " << fs::path(path).filename().string() << ": " << nurbsrt::error_code_name(e.code())
+                  << ": " << e.what() << "; " << seconds_since(t0) << " s\n";
     }
 }
 
@@ -456,9 +457,7 @@ const char* kStepHeader =
     "FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\n";
 
 // A path that does not exist, or is a directory, is an I/O problem, not a content one.
-TEST(Hostile, NonExistentPathIsIo) {
-    EXPECT_EQ(import_error(T::fixture_dir() + "/does_not_exist.step"), "io");
-}
+TEST(Hostile, NonExistentPathIsIo) { EXPECT_EQ(import_error(T::fixture_dir() + "/does_not_exist.step"), "io"); }
 
 TEST(Hostile, DirectoryIsIo) { EXPECT_EQ(import_error(T::fixture_dir()), "io"); }
 
@@ -509,8 +508,8 @@ TEST(Hostile, StepWithEmptyDataIsNoFaces) {
 
 // A complete STEP file with a lone point (valid, transferable content, no faces): no_faces.
 TEST(Hostile, StepWithoutFacesIsNoFaces) {
-    TempFile f("point_only.step", std::string(kStepHeader) +
-                                      "DATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\nENDSEC;\nEND-ISO-10303-21;\n");
+    TempFile f("point_only.step",
+               std::string(kStepHeader) + "DATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\nENDSEC;\nEND-ISO-10303-21;\n");
     EXPECT_EQ(import_error(f.path), "no_faces");
 }
 
@@ -541,9 +540,8 @@ TEST(Hostile, TruncatedIgesIsUnreadableOrNoFaces) {
 // ---------------------------------------------------------------------------------
 std::vector<Model> eval_models() {
     std::vector<Model> v;
-    for (const char* f : {"box_with_holes", "filleted_box", "cylinder", "sphere", "cone", "torus",
-                          "freeform_bspline", "freeform_rational", "assembly", "freeform_rational_iges",
-                          "torus_iges"})
+    for (const char* f : {"box_with_holes", "filleted_box", "cylinder", "sphere", "cone", "torus", "freeform_bspline",
+                          "freeform_rational", "assembly", "freeform_rational_iges", "torus_iges"})
         v.push_back(fixture_model(f));
     for (const char* rel : {"step/trj8_b1-ec-214.stp", "step/bug27693_cornetta-step.stp", "iges/torus.igs",
                             "duck/duck_from_glscene.igs", "step/as1-oc-214.stp", "step/as1_motor.step"})
@@ -625,12 +623,12 @@ TEST_P(Eval, CartesianD1MatchesGeomBSplineSurfaceD1) {
         if (!(v1 > v0)) v0 = sv0, v1 = sv1;
         // The scene's face box is the same UVBounds (scene.h): rounding-level agreement.
         const double bu = 1e-9 * (su1 - su0), bv = 1e-9 * (sv1 - sv0);
-        if (std::fabs(face.u_min - u0) > bu || std::fabs(face.u_max - u1) > bu ||
-            std::fabs(face.v_min - v0) > bv || std::fabs(face.v_max - v1) > bv) {
+        if (std::fabs(face.u_min - u0) > bu || std::fabs(face.u_max - u1) > bu || std::fabs(face.v_min - v0) > bv ||
+            std::fabs(face.v_max - v1) > bv) {
             if (++box_mismatch <= 3)
                 ADD_FAILURE() << "face " << i << ": scene uv box [" << face.u_min << "," << face.u_max << "]x["
-                              << face.v_min << "," << face.v_max << "] vs UVBounds [" << u0 << "," << u1 << "]x["
-                              << v0 << "," << v1 << "]";
+                              << face.v_min << "," << face.v_max << "] vs UVBounds [" << u0 << "," << u1 << "]x[" << v0
+                              << "," << v1 << "]";
         }
         if (face.reversed != (cf.face.Orientation() == TopAbs_REVERSED)) ++orientation_mismatch;
 
@@ -654,10 +652,10 @@ TEST_P(Eval, CartesianD1MatchesGeomBSplineSurfaceD1) {
             worst_v = std::max(worst_v, ev / tv);
             const bool ok = std::isfinite(ep + eu + ev) && ep <= tol_p && eu <= tu && ev <= tv;
             if (!ok && ++bad <= 5)
-                ADD_FAILURE() << path << " face " << i << " at (u,v)=(" << u << "," << v << "): |dP|=" << ep
-                              << " (tol " << tol_p << "), |dPu|=" << eu << " (tol " << tu << "), |dPv|=" << ev
-                              << " (tol " << tv << "); OCCT P=(" << P.X() << "," << P.Y() << "," << P.Z()
-                              << ") ours=(" << ours.P.x << "," << ours.P.y << "," << ours.P.z << ")";
+                ADD_FAILURE() << path << " face " << i << " at (u,v)=(" << u << "," << v << "): |dP|=" << ep << " (tol "
+                              << tol_p << "), |dPu|=" << eu << " (tol " << tu << "), |dPv|=" << ev << " (tol " << tv
+                              << "); OCCT P=(" << P.X() << "," << P.Y() << "," << P.Z() << ") ours=(" << ours.P.x << ","
+                              << ours.P.y << "," << ours.P.z << ")";
         }
     }
     EXPECT_EQ(bad, 0) << bad << " of " << n * kSamples << " samples out of tolerance";
@@ -668,8 +666,8 @@ TEST_P(Eval, CartesianD1MatchesGeomBSplineSurfaceD1) {
     RecordProperty("worst_du_error_over_tol", std::to_string(worst_u));
     RecordProperty("worst_dv_error_over_tol", std::to_string(worst_v));
     std::cout << "[ eval     ] " << fs::path(path).filename().string() << ": " << n << " faces x " << kSamples
-              << " samples; max |dP| = " << max_abs_p << " mm (diag " << D << "), worst error/tolerance: P "
-              << worst_p << ", Pu " << worst_u << ", Pv " << worst_v << "; " << seconds_since(t0) << " s\n";
+              << " samples; max |dP| = " << max_abs_p << " mm (diag " << D << "), worst error/tolerance: P " << worst_p
+              << ", Pu " << worst_u << ", Pv " << worst_v << "; " << seconds_since(t0) << " s\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, Eval, testing::ValuesIn(eval_models()), model_name);
@@ -815,7 +813,8 @@ INSTANTIATE_TEST_SUITE_P(Models, Trim, testing::ValuesIn(trim_models()), model_n
 // ---------------------------------------------------------------------------------
 std::vector<Model> round_trip_models() {
     std::vector<Model> v;
-    for (const char* f : {"box_with_holes", "filleted_box", "freeform_rational", "torus"}) v.push_back(fixture_model(f));
+    for (const char* f : {"box_with_holes", "filleted_box", "freeform_rational", "torus"})
+        v.push_back(fixture_model(f));
     v.push_back(occt_data("step/screw.step"));
     v.push_back(occt_data("iges/hammer.iges"));
     return v;

@@ -56,9 +56,9 @@ TEST_P(IsolatedImport, ChildErrorsKeepTheirCode) {
               nurbsrt::ErrorCode::io);
     // Per process: ctest runs the two instances of this test at once, and a shared
     // name let one remove the file while the other's child read it (io, not unsupported_format).
-    const std::string junk = (std::filesystem::temp_directory_path() /
-                              ("nurbsrt-isolated-junk-" + std::to_string(::getpid()) + ".igs"))
-                                 .string();
+    const std::string junk =
+        (std::filesystem::temp_directory_path() / ("nurbsrt-isolated-junk-" + std::to_string(::getpid()) + ".igs"))
+            .string();
     std::ofstream(junk) << "this is not a CAD file\n";
     EXPECT_EQ(code_of([&, this] { nurbsrt::import_isolated(junk, {}, limits(60)); }),
               nurbsrt::ErrorCode::unsupported_format);

@@ -30,12 +30,13 @@ TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
         {"file": 0, "type": "conversion", "format": "glb"},
         {"file": 1, "type": "conversion", "format": "json"},
         {"file": 1, "type": "conversion", "format": "step"}]})",
-                                     two_inputs(), config).outputs;
+                                     two_inputs(), config)
+                          .outputs;
     ASSERT_EQ(outs.size(), 7u);
     const std::vector<std::string> names = {"0-render-0.png",     "1-render-1.exr",     "1-conversion-2.igs",
                                             "0-conversion-3.stl", "0-conversion-4.glb", "1-conversion-5.json",
                                             "1-conversion-6.step"};
-    const std::vector<std::string> types = {"image/png",  "image/x-exr",       "model/iges",      "model/stl",
+    const std::vector<std::string> types = {"image/png",         "image/x-exr",      "model/iges", "model/stl",
                                             "model/gltf-binary", "application/json", "model/step"};
     for (size_t i = 0; i < outs.size(); ++i) {
         EXPECT_EQ(outs[i].index, static_cast<int>(i));
@@ -86,8 +87,9 @@ TEST(JobSpec, MistakesAreRejected) {
     // A filename shared by two parts is ambiguous.
     std::vector<JobInput> same = {{0, "a.step", "STEP", 1}, {1, "a.step", "STEP", 1}};
     EXPECT_EQ(code_of([&] {
-                  parse_job_spec(R"({"outputs": [{"file": "a.step", "type": "render"}, {"file": 1, "type": "render"}]})",
-                                 same, config);
+                  parse_job_spec(
+                      R"({"outputs": [{"file": "a.step", "type": "render"}, {"file": 1, "type": "render"}]})", same,
+                      config);
               }),
               ErrorCode::invalid_argument);
 }

@@ -18,11 +18,11 @@ using nurbsrt::server::CallbackAttempt;
 using nurbsrt::server::CallbackState;
 using nurbsrt::server::JobClaim;
 using nurbsrt::server::JobOutput;
-using nurbsrt::server::JobState;
-using nurbsrt::server::OutputKind;
-using nurbsrt::server::output_kind_name;
 using nurbsrt::server::JobRecord;
+using nurbsrt::server::JobState;
 using nurbsrt::server::JobStore;
+using nurbsrt::server::output_kind_name;
+using nurbsrt::server::OutputKind;
 using nurbsrt::server::PgJobStore;
 
 namespace {
@@ -172,21 +172,24 @@ TEST_F(PgJobStoreTest, AVersion1SchemaIsMigrated) {
         nurbsrt::server::PgConn c(url());
         c.exec("DROP TABLE IF EXISTS job_outputs, job_inputs, jobs, schema_version");
         c.exec("CREATE TABLE schema_version (version INTEGER NOT NULL); INSERT INTO schema_version VALUES (1)");
-        c.exec("CREATE TABLE jobs (seq BIGSERIAL PRIMARY KEY, id TEXT NOT NULL UNIQUE, state TEXT NOT NULL, "
-               "created_ms BIGINT NOT NULL, started_ms BIGINT NOT NULL DEFAULT 0, finished_ms BIGINT NOT NULL "
-               "DEFAULT 0, attempts INTEGER NOT NULL DEFAULT 0, error_code TEXT NOT NULL DEFAULT '', "
-               "error_message TEXT NOT NULL DEFAULT '')");
-        c.exec("CREATE TABLE job_inputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER "
-               "NOT NULL, filename TEXT NOT NULL, format TEXT NOT NULL, bytes BIGINT NOT NULL, "
-               "PRIMARY KEY (job_id, idx))");
-        c.exec("CREATE TABLE job_outputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER "
-               "NOT NULL, file INTEGER NOT NULL, kind TEXT NOT NULL, options TEXT NOT NULL, artifact TEXT NOT NULL, "
-               "content_type TEXT NOT NULL, state TEXT NOT NULL, progress DOUBLE PRECISION NOT NULL DEFAULT 0, "
-               "error_code TEXT NOT NULL DEFAULT '', error_message TEXT NOT NULL DEFAULT '', artifact_bytes BIGINT "
-               "NOT NULL DEFAULT 0, started_ms BIGINT NOT NULL DEFAULT 0, finished_ms BIGINT NOT NULL DEFAULT 0, "
-               "result TEXT NOT NULL DEFAULT '', attempts INTEGER NOT NULL DEFAULT 0, lease_token TEXT NOT NULL "
-               "DEFAULT '', lease_owner TEXT NOT NULL DEFAULT '', lease_expires_ms BIGINT NOT NULL DEFAULT 0, "
-               "completions INTEGER NOT NULL DEFAULT 0, PRIMARY KEY (job_id, idx))");
+        c.exec(
+            "CREATE TABLE jobs (seq BIGSERIAL PRIMARY KEY, id TEXT NOT NULL UNIQUE, state TEXT NOT NULL, "
+            "created_ms BIGINT NOT NULL, started_ms BIGINT NOT NULL DEFAULT 0, finished_ms BIGINT NOT NULL "
+            "DEFAULT 0, attempts INTEGER NOT NULL DEFAULT 0, error_code TEXT NOT NULL DEFAULT '', "
+            "error_message TEXT NOT NULL DEFAULT '')");
+        c.exec(
+            "CREATE TABLE job_inputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER "
+            "NOT NULL, filename TEXT NOT NULL, format TEXT NOT NULL, bytes BIGINT NOT NULL, "
+            "PRIMARY KEY (job_id, idx))");
+        c.exec(
+            "CREATE TABLE job_outputs (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE, idx INTEGER "
+            "NOT NULL, file INTEGER NOT NULL, kind TEXT NOT NULL, options TEXT NOT NULL, artifact TEXT NOT NULL, "
+            "content_type TEXT NOT NULL, state TEXT NOT NULL, progress DOUBLE PRECISION NOT NULL DEFAULT 0, "
+            "error_code TEXT NOT NULL DEFAULT '', error_message TEXT NOT NULL DEFAULT '', artifact_bytes BIGINT "
+            "NOT NULL DEFAULT 0, started_ms BIGINT NOT NULL DEFAULT 0, finished_ms BIGINT NOT NULL DEFAULT 0, "
+            "result TEXT NOT NULL DEFAULT '', attempts INTEGER NOT NULL DEFAULT 0, lease_token TEXT NOT NULL "
+            "DEFAULT '', lease_owner TEXT NOT NULL DEFAULT '', lease_expires_ms BIGINT NOT NULL DEFAULT 0, "
+            "completions INTEGER NOT NULL DEFAULT 0, PRIMARY KEY (job_id, idx))");
         c.exec("INSERT INTO jobs(id, state, created_ms) VALUES ($1, 'succeeded', 1000)", {std::string(32, '9')});
     }
     PgJobStore store(url(), "test-migrate", 1.0);

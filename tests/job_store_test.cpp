@@ -17,15 +17,15 @@
 namespace fs = std::filesystem;
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
-using nurbsrt::server::JobOutput;
-using nurbsrt::server::JobState;
-using nurbsrt::server::OutputKind;
-using nurbsrt::server::output_kind_name;
-using nurbsrt::server::JobRecord;
-using nurbsrt::server::JobStore;
-using nurbsrt::server::SqliteJobStore;
 using nurbsrt::server::CallbackAttempt;
 using nurbsrt::server::CallbackState;
+using nurbsrt::server::JobOutput;
+using nurbsrt::server::JobRecord;
+using nurbsrt::server::JobState;
+using nurbsrt::server::JobStore;
+using nurbsrt::server::output_kind_name;
+using nurbsrt::server::OutputKind;
+using nurbsrt::server::SqliteJobStore;
 
 namespace {
 
@@ -56,7 +56,8 @@ protected:
             o.file = 0;
             o.kind = i % 2 ? OutputKind::conversion : OutputKind::render;
             o.options_json = i % 2 ? R"({"format":"iges"})" : R"({"width":32})";
-            o.artifact = std::string("0-") + output_kind_name(o.kind) + "-" + std::to_string(i) + (i % 2 ? ".igs" : ".png");
+            o.artifact =
+                std::string("0-") + output_kind_name(o.kind) + "-" + std::to_string(i) + (i % 2 ? ".igs" : ".png");
             o.content_type = i % 2 ? "model/iges" : "image/png";
             j.outputs.push_back(o);
         }
@@ -423,8 +424,8 @@ TEST_F(JobStoreTest, AVersion1DatabaseIsMigrated) {
         " error_code TEXT NOT NULL DEFAULT '', error_message TEXT NOT NULL DEFAULT '',"
         " artifact_bytes INTEGER NOT NULL DEFAULT 0, started_ms INTEGER NOT NULL DEFAULT 0,"
         " finished_ms INTEGER NOT NULL DEFAULT 0, result TEXT NOT NULL DEFAULT '', PRIMARY KEY (job_id, idx));"
-        "INSERT INTO jobs(id, state, created_ms, finished_ms) VALUES ('" + std::string(32, 'e') +
-        "', 'succeeded', 1000, 2000);";
+        "INSERT INTO jobs(id, state, created_ms, finished_ms) VALUES ('" +
+        std::string(32, 'e') + "', 'succeeded', 1000, 2000);";
     const std::string cmd = "sqlite3 '" + db_ + "' \"" + v1 + "\"";
     if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "sqlite3 shell not available";
     SqliteJobStore store(db_);

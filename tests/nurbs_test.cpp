@@ -14,8 +14,8 @@ namespace {
 const double kS = std::sqrt(2.0) / 2.0;  // weight of a quarter-circle's middle control point
 
 // Builds a surface from Cartesian control points and weights (u-major, [i * nv + j]).
-NurbsSurface make_surface(int p, int q, std::vector<double> ku, std::vector<double> kv,
-                          const std::vector<Vec3>& pts, const std::vector<double>& w = {}) {
+NurbsSurface make_surface(int p, int q, std::vector<double> ku, std::vector<double> kv, const std::vector<Vec3>& pts,
+                          const std::vector<double>& w = {}) {
     NurbsSurface s;
     s.degree_u = p;
     s.degree_v = q;
@@ -72,8 +72,7 @@ NurbsSurface make_sphere(double R, Vec3 c) {
             pts.push_back(c + R * Vec3{cx[i] * mr[j], cy[i] * mr[j], mz[j]});
             w.push_back(cw[i] * mw[j]);
         }
-    return make_surface(2, 2, {0, 0, 0, .25, .25, .5, .5, .75, .75, 1, 1, 1},
-                        {0, 0, 0, .5, .5, 1, 1, 1}, pts, w);
+    return make_surface(2, 2, {0, 0, 0, .25, .25, .5, .5, .75, .75, 1, 1, 1}, {0, 0, 0, .5, .5, 1, 1, 1}, pts, w);
 }
 
 // 1D de Casteljau on homogeneous points (degree = pts.size() - 1).
@@ -198,8 +197,10 @@ TEST(Basis, PartitionOfUnityAndDerivativeSumZero) {
             }
         }
     }
-    std::printf("[ figures  ] basis: max |sum N - 1| = %.3g, max |sum dN|/max|dN| = %.3g, "
-                "max rel |dN - FD| = %.3g\n", worst_sum, worst_dsum, worst_fd);
+    std::printf(
+        "[ figures  ] basis: max |sum N - 1| = %.3g, max |sum dN|/max|dN| = %.3g, "
+        "max rel |dN - FD| = %.3g\n",
+        worst_sum, worst_dsum, worst_fd);
 }
 
 TEST(Basis, EndKnotValuesAreExact) {
@@ -272,8 +273,8 @@ TEST(Surface, PlanarControlNet) {
     EXPECT_TRUE(planar_control_net(bent, 1e-5));
     // Rational: a quarter cylinder (weights != 1) and a sphere are curved.
     const std::vector<Vec3> cyl = {{1, 0, 0}, {1, 0, 2}, {1, 1, 0}, {1, 1, 2}, {0, 1, 0}, {0, 1, 2}};
-    EXPECT_FALSE(planar_control_net(make_surface(2, 1, {0, 0, 0, 1, 1, 1}, {0, 0, 1, 1}, cyl, {1, 1, kS, kS, 1, 1}),
-                                    1e-9));
+    EXPECT_FALSE(
+        planar_control_net(make_surface(2, 1, {0, 0, 0, 1, 1, 1}, {0, 0, 1, 1}, cyl, {1, 1, kS, kS, 1, 1}), 1e-9));
     EXPECT_FALSE(planar_control_net(make_sphere(2.0, Vec3{0, 0, 0}), 1e-9));
     // A degenerate net (all points on one line) counts as planar.
     const std::vector<Vec3> diagonal = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}};
@@ -320,8 +321,10 @@ TEST(Surface, RationalQuarterCylinder) {
     const Vec3 m = project(evaluate(s, 0.5, 0));
     EXPECT_NEAR(m.x, kS, 1e-15);
     EXPECT_NEAR(m.y, kS, 1e-15);
-    std::printf("[ figures  ] quarter cylinder: max |r - 1| = %.3g, max |partial - FD| = %.3g, "
-                "max |n - n_exact| = %.3g\n", worst_r, worst_fd, worst_n);
+    std::printf(
+        "[ figures  ] quarter cylinder: max |r - 1| = %.3g, max |partial - FD| = %.3g, "
+        "max |n - n_exact| = %.3g\n",
+        worst_r, worst_fd, worst_n);
 }
 
 TEST(Surface, RationalSphereRadiusPartialsAndNormals) {
@@ -354,8 +357,10 @@ TEST(Surface, RationalSphereRadiusPartialsAndNormals) {
                 EXPECT_LT(e, 1e-8);
             }
         }
-    std::printf("[ figures  ] sphere: max |r - R|/R = %.3g, max rel |partial - FD| = %.3g, "
-                "max |n - n_exact| (incl. poles) = %.3g\n", worst_r, worst_fd, worst_n);
+    std::printf(
+        "[ figures  ] sphere: max |r - R|/R = %.3g, max rel |partial - FD| = %.3g, "
+        "max |n - n_exact| (incl. poles) = %.3g\n",
+        worst_r, worst_fd, worst_n);
 }
 
 TEST(Surface, SpherePoleNormal) {
@@ -384,8 +389,7 @@ TEST(Surface, SpherePoleNormal) {
         }
         EXPECT_LT(dist(surface_normal(s, u, 1.5, false), Vec3{0, 0, 1}), 1e-14);
     }
-    std::printf("[ figures  ] sphere pole: max |n - n_exact| within 1e-15..1e-5 of the pole = %.3g\n",
-                worst_near);
+    std::printf("[ figures  ] sphere pole: max |n - n_exact| within 1e-15..1e-5 of the pole = %.3g\n", worst_near);
     // The same sphere with u and v swapped: now P_v vanishes on the edges u = 0, 1,
     // and the orientation flips (P_v x P_u): normals point inward.
     const NurbsSurface t = transpose(s);
@@ -422,8 +426,7 @@ TEST(Surface, CollapsedEdgeNonSphere) {
 TEST(Surface, HighDegreeBezierMatchesDeCasteljau) {
     std::mt19937_64 rng(42);
     std::uniform_real_distribution<double> coord(-1, 1), weight(0.5, 2);
-    for (auto [p, q] : {std::pair{15, 15}, std::pair{15, 3}, std::pair{20, 20}, std::pair{20, 2},
-                        std::pair{3, 20}}) {
+    for (auto [p, q] : {std::pair{15, 15}, std::pair{15, 3}, std::pair{20, 20}, std::pair{20, 2}, std::pair{3, 20}}) {
         std::vector<Vec3> pts;
         std::vector<double> w;
         for (int k = 0; k < (p + 1) * (q + 1); ++k) {
@@ -438,15 +441,16 @@ TEST(Surface, HighDegreeBezierMatchesDeCasteljau) {
                 const SurfaceDerivs d = evaluate_d1(s, u, v);
                 const SurfaceDerivs ref = bezier_reference(s, u, v);
                 worst_s = std::fmax(worst_s, max_abs_diff(d.S, ref.S));
-                worst_d = std::fmax(worst_d, std::fmax(max_abs_diff(d.Su, ref.Su), max_abs_diff(d.Sv, ref.Sv)) /
-                                                 std::max(p, q));
+                worst_d = std::fmax(worst_d,
+                                    std::fmax(max_abs_diff(d.Su, ref.Su), max_abs_diff(d.Sv, ref.Sv)) / std::max(p, q));
                 EXPECT_EQ(evaluate(s, u, v).w, d.S.w);  // same basis code for both entry points
             }
         EXPECT_LT(worst_s, 1e-13) << p << "x" << q;
         EXPECT_LT(worst_d, 1e-12) << p << "x" << q;
-        std::printf("[ figures  ] Bezier %dx%d (%s path): max |S - deCasteljau| = %.3g, "
-                    "max |dS - ref| / degree = %.3g\n", p, q,
-                    std::max(p, q) <= kMaxFastDegree ? "fast" : "slow", worst_s, worst_d);
+        std::printf(
+            "[ figures  ] Bezier %dx%d (%s path): max |S - deCasteljau| = %.3g, "
+            "max |dS - ref| / degree = %.3g\n",
+            p, q, std::max(p, q) <= kMaxFastDegree ? "fast" : "slow", worst_s, worst_d);
     }
 }
 
@@ -477,8 +481,8 @@ TEST(Surface, GeneralPartialsMatchFiniteDifferences) {
         const CartesianDerivs d = cartesian_d1(s, u, v);
         Vec3 fu, fv;
         fd_partials(s, u, v, h, fu, fv);
-        const double e = std::fmax(dist(fu, d.Pu) / std::fmax(1.0, length(d.Pu)),
-                                   dist(fv, d.Pv) / std::fmax(1.0, length(d.Pv)));
+        const double e =
+            std::fmax(dist(fu, d.Pu) / std::fmax(1.0, length(d.Pu)), dist(fv, d.Pv) / std::fmax(1.0, length(d.Pv)));
         worst = std::fmax(worst, e);
         EXPECT_LT(e, 1e-7) << u << " " << v;
         EXPECT_LT(dist(d.P, project(evaluate(s, u, v))), 1e-14);

@@ -69,8 +69,8 @@ TEST(Prescan, StepRefusesHugeListsDeepNestingAndTooManyEntities) {
     limits.max_list_items = 5000;
     EXPECT_EQ(prescan_cad_file(list, CadFormat::step, limits).longest_list, 2001u);
 
-    const std::string deep = write_temp("deep.step", step_with_data("#1=A(" + std::string(100, '(') +
-                                                                    std::string(101, ')') + ";\n"));
+    const std::string deep =
+        write_temp("deep.step", step_with_data("#1=A(" + std::string(100, '(') + std::string(101, ')') + ";\n"));
     EXPECT_EQ(refusal(deep, CadFormat::step, {}), ErrorCode::unreadable_file);
 
     std::string many;
@@ -96,14 +96,15 @@ TEST(Prescan, ImportIsolatedRefusesBeforeAnyChildStarts) {
         FAIL() << "not refused";
     } catch (const Error& e) {
         EXPECT_EQ(e.code(), ErrorCode::unreadable_file);
-        EXPECT_NE(std::string(e.what()).find("a list of more than 1000 items (the limit)"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("a list of more than 1000 items (the limit)"), std::string::npos)
+            << e.what();
     }
     std::filesystem::remove(path);
 }
 
 TEST(Prescan, RealFilesPass) {
-    for (const char* file : {"/usr/share/opencascade/data/step/screw.step",
-                             "/usr/share/opencascade/data/iges/bearing.iges"}) {
+    for (const char* file :
+         {"/usr/share/opencascade/data/step/screw.step", "/usr/share/opencascade/data/iges/bearing.iges"}) {
         const bool iges = std::string(file).find(".iges") != std::string::npos;
         const PrescanReport r = prescan_cad_file(file, iges ? CadFormat::iges : CadFormat::step, {});
         EXPECT_GT(r.entities, 50u) << file;

@@ -211,9 +211,11 @@ std::vector<int> choose_samples(const RenderImage& im, uint64_t seed) {
         }
     };
     if (!pool.empty())
-        draw(kSamplesNearHits, [&] { return pool[static_cast<size_t>(rng.below(static_cast<int>(pool.size())))]; },
-             static_cast<int>(pool.size()));
-    draw(kSamplesWholeImage, [&] { return rng.below(W * H); }, W * H);
+        draw(
+            kSamplesNearHits, [&] { return pool[static_cast<size_t>(rng.below(static_cast<int>(pool.size())))]; },
+            static_cast<int>(pool.size()));
+    draw(
+        kSamplesWholeImage, [&] { return rng.below(W * H); }, W * H);
     return out;
 }
 
@@ -230,8 +232,10 @@ bool near_edge(const RenderImage& im, int i, int j) {
             const int a = i + di, b = j + dj;
             if (a < 0 || b < 0 || a >= im.width || b >= im.height) continue;
             const uint32_t n = im.face[static_cast<size_t>(b) * im.width + a];
-            if (count++ == 0) first = n;
-            else if (n != first) uniform = false;
+            if (count++ == 0)
+                first = n;
+            else if (n != first)
+                uniform = false;
             if (n != c) differs = true;
         }
     if (!differs) return false;
@@ -243,30 +247,41 @@ using OcctHit = ReferenceHit;
 
 enum class Verdict {
     both_miss,
-    match,                    // both hit, |dt| within bound, same face
-    face_coincident,          // both hit, |dt| within bound, other face; our point lies on ours
-    verified_occt_missed,     // ours nearer (or OCCT none), our point on our face
-    verified_occt_spurious,   // OCCT's claimed point not on its face; ours (if any) on ours
-    fail_we_missed,           // OCCT hit on its face, we have none
-    fail_our_spurious,        // we hit, OCCT none, our point not on our face
-    fail_dt,                  // both hit, |dt| too large, not settled in our favour
-    fail_face,                // same t, different face, our point not on our face
-    unsettled,                // dispute beyond the settlement cap
-    edge_disagree,            // edge band, hit/miss differ (reported, not judged)
+    match,                   // both hit, |dt| within bound, same face
+    face_coincident,         // both hit, |dt| within bound, other face; our point lies on ours
+    verified_occt_missed,    // ours nearer (or OCCT none), our point on our face
+    verified_occt_spurious,  // OCCT's claimed point not on its face; ours (if any) on ours
+    fail_we_missed,          // OCCT hit on its face, we have none
+    fail_our_spurious,       // we hit, OCCT none, our point not on our face
+    fail_dt,                 // both hit, |dt| too large, not settled in our favour
+    fail_face,               // same t, different face, our point not on our face
+    unsettled,               // dispute beyond the settlement cap
+    edge_disagree,           // edge band, hit/miss differ (reported, not judged)
 };
 const char* verdict_name(Verdict v) {
     switch (v) {
-        case Verdict::both_miss: return "both_miss";
-        case Verdict::match: return "match";
-        case Verdict::face_coincident: return "face_coincident";
-        case Verdict::verified_occt_missed: return "verified_ours(occt_missed_root)";
-        case Verdict::verified_occt_spurious: return "verified_ours(occt_spurious)";
-        case Verdict::fail_we_missed: return "FAIL_we_missed";
-        case Verdict::fail_our_spurious: return "FAIL_our_spurious_hit";
-        case Verdict::fail_dt: return "FAIL_dt";
-        case Verdict::fail_face: return "FAIL_face";
-        case Verdict::unsettled: return "FAIL_unsettled";
-        case Verdict::edge_disagree: return "edge_band_disagree(not judged)";
+        case Verdict::both_miss:
+            return "both_miss";
+        case Verdict::match:
+            return "match";
+        case Verdict::face_coincident:
+            return "face_coincident";
+        case Verdict::verified_occt_missed:
+            return "verified_ours(occt_missed_root)";
+        case Verdict::verified_occt_spurious:
+            return "verified_ours(occt_spurious)";
+        case Verdict::fail_we_missed:
+            return "FAIL_we_missed";
+        case Verdict::fail_our_spurious:
+            return "FAIL_our_spurious_hit";
+        case Verdict::fail_dt:
+            return "FAIL_dt";
+        case Verdict::fail_face:
+            return "FAIL_face";
+        case Verdict::unsettled:
+            return "FAIL_unsettled";
+        case Verdict::edge_disagree:
+            return "edge_band_disagree(not judged)";
     }
     return "?";
 }
@@ -279,8 +294,8 @@ struct Sample {
     int i = 0, j = 0;
     bool edge = false;
     bool edge_by_occt = false;  // failed, but within one pixel of an edge of OCCT's image
-    uint32_t face = 0;  // ours
-    double t = kInf;    // ours
+    uint32_t face = 0;          // ours
+    double t = kInf;            // ours
     int iterations = 0;
     OcctHit occt;
     Verdict verdict = Verdict::both_miss;
@@ -364,19 +379,32 @@ void judge(const Context& c, Sample& s, int& settlements, bool settle) {
     const bool ours = s.face != 0, theirs = s.occt.hit;
     const double dt_tol = kDtRel * c.diag;
     const Ray ray = c.camera.pixel_ray(s.i, s.j);
-    if (!ours && !theirs) { s.verdict = Verdict::both_miss; return; }
+    if (!ours && !theirs) {
+        s.verdict = Verdict::both_miss;
+        return;
+    }
     if (ours && theirs && std::fabs(s.t - s.occt.t) <= dt_tol) {
-        if (static_cast<int>(s.face) == s.occt.face) { s.verdict = Verdict::match; return; }
-        if (!settle || settlements >= kMaxSettlements) { s.verdict = Verdict::unsettled; return; }
+        if (static_cast<int>(s.face) == s.occt.face) {
+            s.verdict = Verdict::match;
+            return;
+        }
+        if (!settle || settlements >= kMaxSettlements) {
+            s.verdict = Verdict::unsettled;
+            return;
+        }
         ++settlements;
         const gp_Pnt p = at(ray, s.t);
         s.d_ours = dist_face(c, static_cast<int>(s.face), p);
         s.d_ours_to_occt_face = dist_face(c, s.occt.face, p);
-        s.verdict = s.d_ours <= on_face_tol(c, static_cast<int>(s.face)) ? Verdict::face_coincident : Verdict::fail_face;
+        s.verdict =
+            s.d_ours <= on_face_tol(c, static_cast<int>(s.face)) ? Verdict::face_coincident : Verdict::fail_face;
         return;
     }
     // A dispute: hit/miss, or both hit at different t.
-    if (!settle || settlements >= kMaxSettlements) { s.verdict = Verdict::unsettled; return; }
+    if (!settle || settlements >= kMaxSettlements) {
+        s.verdict = Verdict::unsettled;
+        return;
+    }
     ++settlements;
     bool ours_ok = false, theirs_ok = false;
     if (ours) {
@@ -408,8 +436,8 @@ struct Summary {
     long dt_fail = 0, face_mismatch = 0, face_coincident = 0, face_fail = 0;
     long verified_missed = 0, verified_spurious = 0, unsettled = 0;
     long edge_disagree = 0, edge_both_hit = 0, edge_dt_over = 0;
-    long occt_errors = 0;  // samples without a reference (intersector threw)
-    long edge_by_occt = 0; // of `edge`: failing samples moved there by near_true_edge
+    long occt_errors = 0;    // samples without a reference (intersector threw)
+    long edge_by_occt = 0;   // of `edge`: failing samples moved there by near_true_edge
     std::vector<double> dt;  // |dt|/diag over non-edge both-hit samples
     double edge_dt_max = 0;
 };
@@ -419,7 +447,10 @@ Summary summarize(const Context& c, std::vector<Sample>& samples) {
     int settlements = 0;
     for (Sample& s : samples) {
         ++m.samples;
-        if (s.occt.error) { ++m.occt_errors; continue; }
+        if (s.occt.error) {
+            ++m.occt_errors;
+            continue;
+        }
         const bool ours = s.face != 0, theirs = s.occt.hit;
         if (!s.edge) {
             judge(c, s, settlements, true);
@@ -447,16 +478,29 @@ Summary summarize(const Context& c, std::vector<Sample>& samples) {
             if (static_cast<int>(s.face) != s.occt.face) ++m.face_mismatch;
         }
         switch (s.verdict) {
-            case Verdict::verified_occt_missed: ++m.verified_missed; break;
-            case Verdict::verified_occt_spurious: ++m.verified_spurious; break;
-            case Verdict::face_coincident: ++m.face_coincident; break;
-            case Verdict::fail_face: ++m.face_fail; break;
-            case Verdict::unsettled: ++m.unsettled; break;
-            default: break;
+            case Verdict::verified_occt_missed:
+                ++m.verified_missed;
+                break;
+            case Verdict::verified_occt_spurious:
+                ++m.verified_spurious;
+                break;
+            case Verdict::face_coincident:
+                ++m.face_coincident;
+                break;
+            case Verdict::fail_face:
+                ++m.face_fail;
+                break;
+            case Verdict::unsettled:
+                ++m.unsettled;
+                break;
+            default:
+                break;
         }
         if (is_fail(s.verdict) && s.verdict != Verdict::fail_face) {  // fail_face counted above
-            if (ours && theirs) ++m.dt_fail;
-            else ++m.hit_fail;
+            if (ours && theirs)
+                ++m.dt_fail;
+            else
+                ++m.hit_fail;
         }
     }
     std::sort(m.dt.begin(), m.dt.end());
@@ -475,11 +519,10 @@ std::string diagnose(const Context& c, const RenderImage& im, const PreliminaryM
     auto run = [&](uint32_t id, double u0, double v0) {
         const Face& f = c.scene.faces[id - 1];
         const UvBox box = face_uv_box(f.surface, f.u_min, f.u_max, f.v_min, f.v_max, 1e-7 * c.scene.bbox.diagonal());
-        const NewtonResult r =
-            method == NewtonMethod::proposed
-                ? newton_proposed(project_surface(c.camera, f.surface), c.camera, c.camera.pixel_screen(s.i, s.j), u0,
-                                  v0, box, params)
-                : newton_martin(f.surface, c.camera.pixel_ray(s.i, s.j), u0, v0, box, params);
+        const NewtonResult r = method == NewtonMethod::proposed
+                                   ? newton_proposed(project_surface(c.camera, f.surface), c.camera,
+                                                     c.camera.pixel_screen(s.i, s.j), u0, v0, box, params)
+                                   : newton_martin(f.surface, c.camera.pixel_ray(s.i, s.j), u0, v0, box, params);
         std::ostringstream q;
         q << newton_status_name(r.status) << " it=" << r.iterations << " uv=(" << r.u << "," << r.v << ")";
         if (r.status == NewtonStatus::converged)
@@ -554,8 +597,10 @@ std::string neighbourhood(const RenderImage& im, int i, int j) {
     for (int dj = -1; dj <= 1; ++dj) {
         for (int di = -1; di <= 1; ++di) {
             const int a = i + di, b = j + dj;
-            if (a < 0 || b < 0 || a >= im.width || b >= im.height) o << "-";
-            else o << im.face[static_cast<size_t>(b) * im.width + a];
+            if (a < 0 || b < 0 || a >= im.width || b >= im.height)
+                o << "-";
+            else
+                o << im.face[static_cast<size_t>(b) * im.width + a];
             if (di < 1) o << " ";
         }
         if (dj < 1) o << " / ";
@@ -568,11 +613,15 @@ std::string describe(const Context& c, const RenderImage& im, const Sample& s) {
     std::ostringstream o;
     o << c.label << " px(" << s.i << "," << s.j << ")" << (s.edge ? " [edge]" : "") << " aov3x3 "
       << neighbourhood(im, s.i, s.j) << " ours: ";
-    if (s.face) o << "face " << s.face << " t=" << std::setprecision(12) << s.t << " it=" << s.iterations;
-    else o << "miss";
+    if (s.face)
+        o << "face " << s.face << " t=" << std::setprecision(12) << s.t << " it=" << s.iterations;
+    else
+        o << "miss";
     o << " | occt: ";
-    if (s.occt.hit) o << "face " << s.occt.face << " t=" << std::setprecision(12) << s.occt.t;
-    else o << "miss";
+    if (s.occt.hit)
+        o << "face " << s.occt.face << " t=" << std::setprecision(12) << s.occt.t;
+    else
+        o << "miss";
     if (s.face && s.occt.hit) o << " | dt/diag=" << sci(s.dt_rel() / c.diag);
     if (s.d_ours >= 0) o << " | d(our pt, our face)=" << sci(s.d_ours);
     if (s.d_occt >= 0) o << " d(occt pt, occt face)=" << sci(s.d_occt);
@@ -612,8 +661,8 @@ TEST_P(RenderAccuracy, PixelRaysMatchIntCurvesFace) {
     ReferenceIntersector inter(model, kIntersectorTol);
 
     std::cout << "[ accuracy ] " << a.name << ": " << scene.faces.size() << " faces, diag " << diag
-              << " mm, import+read " << std::fixed << std::setprecision(2) << import_s << " s"
-              << std::defaultfloat << "\n";
+              << " mm, import+read " << std::fixed << std::setprecision(2) << import_s << " s" << std::defaultfloat
+              << "\n";
 
     for (const ViewSpec& vs : a.views) {
         CameraSpec base;
@@ -684,14 +733,13 @@ TEST_P(RenderAccuracy, PixelRaysMatchIntCurvesFace) {
                 << "             both hit " << m.both_hit << ": |dt|/diag p50 " << sci(percentile(m.dt, 0.5)) << " p90 "
                 << sci(percentile(m.dt, 0.9)) << " p99 " << sci(percentile(m.dt, 0.99)) << " p99.9 "
                 << sci(percentile(m.dt, 0.999)) << " max " << sci(m.dt.empty() ? 0 : m.dt.back())
-                << "; within 1e-6 (after settlement) " << pct(dt_ok, m.both_hit) << " (failures " << m.dt_fail
-                << ")\n"
+                << "; within 1e-6 (after settlement) " << pct(dt_ok, m.both_hit) << " (failures " << m.dt_fail << ")\n"
                 << "             face mismatches " << m.face_mismatch << " (coincident, same t: " << m.face_coincident
                 << ", bad: " << m.face_fail << "); face agreement " << pct(face_ok, m.both_hit) << "\n"
                 << "             edge band: " << m.edge << " samples, hit/miss agreement (raw) "
                 << pct(m.edge - m.edge_disagree, m.edge) << " (" << m.edge_disagree << " disagree), both hit "
-                << m.edge_both_hit << " of which |dt| > 1e-6 diag: " << m.edge_dt_over << " (max "
-                << sci(m.edge_dt_max) << ")\n"
+                << m.edge_both_hit << " of which |dt| > 1e-6 diag: " << m.edge_dt_over << " (max " << sci(m.edge_dt_max)
+                << ")\n"
                 << "             time: render " << std::fixed << std::setprecision(0) << renders[mi].stats.total_ms
                 << " ms, occt rays " << std::setprecision(2) << occt_s << " s (" << pix.size()
                 << " rays, shared by methods), settlement " << judge_s << " s" << std::defaultfloat << "\n";
@@ -702,8 +750,10 @@ TEST_P(RenderAccuracy, PixelRaysMatchIntCurvesFace) {
             const Sample* worst_dt = nullptr;
             for (const Sample& s : samples) {
                 if (!s.edge && is_fail(s.verdict)) fails.push_back(&s);
-                if (s.edge_by_occt) out << "   at an edge of OCCT's image (excluded): " << describe(ctx, im, s) << "\n";
-                else if (s.edge && (s.face != 0) != s.occt.hit) edge_dis.push_back(&s);
+                if (s.edge_by_occt)
+                    out << "   at an edge of OCCT's image (excluded): " << describe(ctx, im, s) << "\n";
+                else if (s.edge && (s.face != 0) != s.occt.hit)
+                    edge_dis.push_back(&s);
                 if (!s.edge && s.face && s.occt.hit && (!worst_dt || s.dt_rel() > worst_dt->dt_rel())) worst_dt = &s;
             }
             std::sort(fails.begin(), fails.end(), [](const Sample* x, const Sample* y) {
@@ -714,8 +764,8 @@ TEST_P(RenderAccuracy, PixelRaysMatchIntCurvesFace) {
             if (!fails.empty()) {
                 const PreliminaryMap map = render_preliminary_map(scene, camera);
                 for (size_t k = 0; k < fails.size() && k < 12; ++k)
-                    out << "   fail: " << describe(ctx, im, *fails[k]) << "\n         why: "
-                        << diagnose(ctx, im, map, methods[mi], *fails[k]) << "\n";
+                    out << "   fail: " << describe(ctx, im, *fails[k])
+                        << "\n         why: " << diagnose(ctx, im, map, methods[mi], *fails[k]) << "\n";
             }
             if (fails.size() > 12) out << "   ... " << fails.size() - 12 << " more failures\n";
             if (worst_dt) out << "   worst |dt|: " << describe(ctx, im, *worst_dt) << "\n";

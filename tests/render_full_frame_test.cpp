@@ -262,16 +262,11 @@ const KnownShadow kKnownShadowDisagreements[] = {
     // end face's own other part in front of a point whose map starts all lead
     // to the point itself (front: the coil lit at cosine 0.06, the end face
     // at 0.46, where the own-sheet retry, for grazing light only, does not run).
-    {"iges/bug22869_Spring.igs", "iso", 0, 2},
-    {"iges/bug22869_Spring.igs", "front", 0, 2},
-    {"step/ec_turbine-A.stp", "front", 0, 1},
-    {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
-    {"step/trj8_b1-ec-214.stp", "front", 0, 1},
-    {"iges/bearing.iges", "iso", 0, 3},
-    {"iges/heartValve.igs", "iso", 0, 1},
-    {"iges/marsCapsule.igs", "iso", 0, 2},
-    {"iges/ship_kcs.igs", "iso", 0, 3},
-    {"iges/ship_part5.igs", "iso", 0, 1},
+    {"iges/bug22869_Spring.igs", "iso", 0, 2},  {"iges/bug22869_Spring.igs", "front", 0, 2},
+    {"step/ec_turbine-A.stp", "front", 0, 1},   {"step/trj8_b1-ec-214.stp", "iso", 0, 4},
+    {"step/trj8_b1-ec-214.stp", "front", 0, 1}, {"iges/bearing.iges", "iso", 0, 3},
+    {"iges/heartValve.igs", "iso", 0, 1},       {"iges/marsCapsule.igs", "iso", 0, 2},
+    {"iges/ship_kcs.igs", "iso", 0, 3},         {"iges/ship_part5.igs", "iso", 0, 1},
 };
 
 const KnownShadow* known_shadow(const std::string& rel, const std::string& view) {
@@ -329,8 +324,8 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
     ReferenceIntersector inter(model);
     const PreparedScene prepared = prepare(scene);
     std::cout << "[ full-frame ] " << c.name << ": " << scene.faces.size() << " faces, import+read+prepare "
-              << std::fixed << std::setprecision(2) << std::chrono::duration<double>(Clock::now() - t0).count()
-              << " s" << std::defaultfloat << "\n";
+              << std::fixed << std::setprecision(2) << std::chrono::duration<double>(Clock::now() - t0).count() << " s"
+              << std::defaultfloat << "\n";
 
     for (const View& view : kViews) {
         CameraSpec base;
@@ -354,11 +349,11 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         RecordProperty(std::string(view.name) + "_unchecked", static_cast<int>(rep.unchecked));
         const Known* known = known_remaining(c.rel.empty() ? c.fixture : c.rel, view.name);
         if (known)
-            std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles
-                      << " speckles (" << known->cause << ")\n";
+            std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles << " speckles ("
+                      << known->cause << ")\n";
         if (rep.unchecked)
-            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within "
-                      << budget << " s\n";
+            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within " << budget
+                      << " s\n";
         EXPECT_LE(rep.holes, known ? known->holes : 0)
             << label << ": background pixels where the exact ray hits a face";
         EXPECT_LE(rep.speckles, known ? known->speckles : 0)

@@ -59,7 +59,8 @@ Coverage exact_coverage(const Covered& covered, const Camera& cam) {
     const int W = cam.width(), H = cam.height();
     std::vector<double> coarse(static_cast<size_t>(W) * H);
     for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) coarse[static_cast<size_t>(j) * W + i] = grid_fraction(covered, cam, i, j, kCoarseGrid);
+        for (int i = 0; i < W; ++i)
+            coarse[static_cast<size_t>(j) * W + i] = grid_fraction(covered, cam, i, j, kCoarseGrid);
     Coverage c;
     c.fraction = coarse;
     for (int j = 0; j < H; ++j)
@@ -87,8 +88,8 @@ Scene holed_cylinder(AnalyticPatch& cylinder) {
     outer.outer = true;
     outer.points = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     for (int k = 0; k < 256; ++k)
-        hole.points.push_back({0.5 + kHoleRadius * std::cos(2 * M_PI * k / 256),
-                               0.5 + kHoleRadius * std::sin(2 * M_PI * k / 256)});
+        hole.points.push_back(
+            {0.5 + kHoleRadius * std::cos(2 * M_PI * k / 256), 0.5 + kHoleRadius * std::sin(2 * M_PI * k / 256)});
     f.loops = {outer, hole};
     f.color = {0.8f, 0.5f, 0.2f};
     f.has_color = true;
@@ -167,8 +168,7 @@ BorderCounts count_changes(const RenderResult& off, const RenderResult& on, int 
                     hi = std::max(hi, g);
                 }
             const size_t k = static_cast<size_t>(j) * W + i;
-            const bool changed =
-                !std::equal(&off.image.rgba[4 * k], &off.image.rgba[4 * k + 4], &on.image.rgba[4 * k]);
+            const bool changed = !std::equal(&off.image.rgba[4 * k], &off.image.rgba[4 * k + 4], &on.image.rgba[4 * k]);
             if (background && hit) {
                 n.ring++, n.ring_changed += changed;
             } else if (other_face) {
@@ -178,7 +178,6 @@ BorderCounts count_changes(const RenderResult& off, const RenderResult& on, int 
         }
     return n;
 }
-
 
 }  // namespace
 
@@ -210,8 +209,7 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
     AnalyticPatch sphere, plane;
     const Scene scene = sphere_and_holed_plane(sphere, plane);
     const Camera cam(iso_view(scene, 120, 90));
-    const Coverage exact =
-        exact_coverage([&](ScreenPoint sp) { return covered(sphere, plane, cam, sp); }, cam);
+    const Coverage exact = exact_coverage([&](ScreenPoint sp) { return covered(sphere, plane, cam, sp); }, cam);
     RenderOptions off, few, on, fine;
     few.antialias = 4;
     on.antialias = 8;
@@ -219,16 +217,18 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOfEdgePixels) {
     const RenderResult a = render(scene, cam, off), b = render(scene, cam, on), c = render(scene, cam, fine);
     const RenderResult d = render(scene, cam, few);
 
-    const CoverageError e1 = coverage_error(exact, a), e4 = coverage_error(exact, d, &a), e8 = coverage_error(exact, b, &a),
-                        e16 = coverage_error(exact, c, &a);
+    const CoverageError e1 = coverage_error(exact, a), e4 = coverage_error(exact, d, &a),
+                        e8 = coverage_error(exact, b, &a), e16 = coverage_error(exact, c, &a);
     const int partial = e1.partial;
     ASSERT_GT(partial, 200);  // the sphere's silhouette, the plane's border and hole
-    std::printf("[ antialias ] %d pixels partly covered: mean |alpha - coverage| %.3f with 1 ray, %.3f with 1 + 4, %.3f with 1 + 8, "
-                "%.3f with 1 + 16; %llu edge pixels, %llu of their 8 x %llu samples traced (the rest between four "
-                "equal centres), %.1f ms (shade %.1f ms)\n",
-                partial, e1.mean, e4.mean, e8.mean, e16.mean, (unsigned long long)b.stats.antialias_pixels,
-                (unsigned long long)b.stats.antialias_rays, (unsigned long long)b.stats.antialias_pixels,
-                b.stats.antialias_ms, b.stats.shade_ms);
+    std::printf(
+        "[ antialias ] %d pixels partly covered: mean |alpha - coverage| %.3f with 1 ray, %.3f with 1 + 4, %.3f with 1 "
+        "+ 8, "
+        "%.3f with 1 + 16; %llu edge pixels, %llu of their 8 x %llu samples traced (the rest between four "
+        "equal centres), %.1f ms (shade %.1f ms)\n",
+        partial, e1.mean, e4.mean, e8.mean, e16.mean, (unsigned long long)b.stats.antialias_pixels,
+        (unsigned long long)b.stats.antialias_rays, (unsigned long long)b.stats.antialias_pixels, b.stats.antialias_ms,
+        b.stats.shade_ms);
     // One ray per pixel gives 0 or 1, off by ~0.2 on average. The box average of
     // 5, 9 and 17 samples was off by 0.071, 0.048 and 0.030; the coverage of the
     // straight edge between the two sides' samples (edge_coverage.h) measured
@@ -288,11 +288,12 @@ TEST(RendererAntialias, AlphaApproachesTheExactCoverageOnAHoledCylinder) {
     const RenderResult a = render(scene, cam, off), b = render(scene, cam, few), c = render(scene, cam, fine);
     const CoverageError e1 = coverage_error(exact, a), e4 = coverage_error(exact, b, &a),
                         e16 = coverage_error(exact, c, &a);
-    std::printf("[ antialias ] holed cylinder: %d pixels partly covered: mean |alpha - coverage| %.3f with 1 ray, "
-                "%.3f with 1 + 4, %.3f with 1 + 16\n",
-                e1.partial, e1.mean, e4.mean, e16.mean);
+    std::printf(
+        "[ antialias ] holed cylinder: %d pixels partly covered: mean |alpha - coverage| %.3f with 1 ray, "
+        "%.3f with 1 + 4, %.3f with 1 + 16\n",
+        e1.partial, e1.mean, e4.mean, e16.mean);
     ASSERT_GT(e1.partial, 150);  // the silhouette, the ends and the hole
-    EXPECT_LT(e4.mean, 0.07);  // measured 0.062 (0.058 on the sphere and plane)
+    EXPECT_LT(e4.mean, 0.07);    // measured 0.062 (0.058 on the sphere and plane)
     // 0.03: under 8 of 255 output steps per edge pixel on average, well below
     // the box average of 17 samples (0.030 on the sphere and plane is its level).
     EXPECT_LE(e16.mean, 0.03);
@@ -348,9 +349,10 @@ TEST(RendererAntialias, FlatFaceBordersGetNoExtraRays) {
     on.antialias = 4;
     const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
     const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
-    std::printf("[ antialias ] two coplanar faces: %d border pixels (%d changed), %d silhouette pixels (%d changed), "
-                "%llu refined\n",
-                n.border, n.border_changed, n.ring, n.ring_changed, (unsigned long long)b.stats.antialias_pixels);
+    std::printf(
+        "[ antialias ] two coplanar faces: %d border pixels (%d changed), %d silhouette pixels (%d changed), "
+        "%llu refined\n",
+        n.border, n.border_changed, n.ring, n.ring_changed, (unsigned long long)b.stats.antialias_pixels);
     ASSERT_GT(n.border, 40);
     EXPECT_EQ(n.border_changed, 0);
     EXPECT_GT(n.ring_changed, n.ring / 4);
@@ -376,9 +378,10 @@ TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
     on.antialias = 4;
     const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
     const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
-    std::printf("[ antialias ] two tangent half-cylinders: %d seam pixels (%d with a colour change over 1/255 in "
-                "their 3x3, %d changed), %d silhouette pixels (%d changed)\n",
-                n.border, n.sloped, n.border_changed, n.ring, n.ring_changed);
+    std::printf(
+        "[ antialias ] two tangent half-cylinders: %d seam pixels (%d with a colour change over 1/255 in "
+        "their 3x3, %d changed), %d silhouette pixels (%d changed)\n",
+        n.border, n.sloped, n.border_changed, n.ring, n.ring_changed);
     ASSERT_GT(n.border, 40);
     EXPECT_GT(n.sloped, n.border / 2);
     EXPECT_EQ(n.border_changed, 0);
@@ -408,8 +411,8 @@ TEST(RendererAntialias, SamplePatternIsAStratifiedNetForEverySeed) {
                 for (int s = 0; s < n; ++s)
                     ++count[static_cast<int>(x[s] * cols) * rows + static_cast<int>(y[s] * rows)];
                 for (int b = 0; b < n; ++b)
-                    ASSERT_EQ(count[b], 1) << "n " << n << " pixel " << pixel << " box " << b << " of " << cols
-                                           << " x " << rows;
+                    ASSERT_EQ(count[b], 1)
+                        << "n " << n << " pixel " << pixel << " box " << b << " of " << cols << " x " << rows;
             }
         }
     }

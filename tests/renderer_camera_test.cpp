@@ -199,8 +199,7 @@ TEST(RendererCamera, NamedViewsContainTheBox) {
                 const double a = cam.aspect();
                 double max_extent = 0;
                 for (int c = 0; c < 8; ++c) {
-                    const Vec3 p{c & 1 ? box.hi.x : box.lo.x, c & 2 ? box.hi.y : box.lo.y,
-                                 c & 4 ? box.hi.z : box.lo.z};
+                    const Vec3 p{c & 1 ? box.hi.x : box.lo.x, c & 2 ? box.hi.y : box.lo.y, c & 4 ? box.hi.z : box.lo.z};
                     const Vec4 P = cam.project_h({p.x, p.y, p.z, 1});
                     ASSERT_GT(cam.depth(P), 0) << name;
                     const double sx = P.x / P.z, sy = P.y / P.z;

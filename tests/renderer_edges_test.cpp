@@ -64,8 +64,8 @@ TEST(RendererEdges, LinesAlongEveryBoundaryAndNowhereElse) {
             stray += !near;
             saturated += b.image.rgba[4 * k] > 0.95f && b.image.rgba[4 * k + 1] < 0.05f;
         }
-    std::printf("[ edges ] %d face/background boundaries, %d pixels drawn (%d pure line colour), %.1f ms\n",
-                boundaries, changed, saturated, b.stats.edges_ms);
+    std::printf("[ edges ] %d face/background boundaries, %d pixels drawn (%d pure line colour), %.1f ms\n", boundaries,
+                changed, saturated, b.stats.edges_ms);
     ASSERT_GT(boundaries, 300);
     EXPECT_EQ(unmarked, 0);
     EXPECT_EQ(stray, 0);

@@ -65,5 +65,6 @@ TEST(PopulatePages, KeepsTheContents) {
     EXPECT_EQ(nurbsrt::populate_pages(written.data() + 7, kBytes - 7), supported);
     for (size_t k = 0; k < kBytes; ++k)
         ASSERT_EQ(written[k], static_cast<uint8_t>(k * 2654435761u >> 24)) << "byte " << k;
-    if (!supported) std::printf("[ populate ] madvise(MADV_POPULATE_WRITE) is not supported here: buffers fill on one thread\n");
+    if (!supported)
+        std::printf("[ populate ] madvise(MADV_POPULATE_WRITE) is not supported here: buffers fill on one thread\n");
 }

@@ -36,8 +36,8 @@ struct TestFrame {
           prepared(prepare(scene, 1)),
           arena(1),
           progress(options.progress, 1),
-          c{prepared, scene, cam, map, options, arena, progress, cam.width(), cam.height(),
-            static_cast<uint32_t>(scene.faces.size())} {}
+          c{prepared, scene,    cam,         map,          options,
+            arena,    progress, cam.width(), cam.height(), static_cast<uint32_t>(scene.faces.size())} {}
     Scene scene;
     Camera cam;
     PreparedScene prepared;

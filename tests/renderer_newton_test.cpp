@@ -101,7 +101,8 @@ TEST(RendererNewton, HitsMatchAnalyticIntersection) {
                         const Vec2 st = grid.nearest(ray.origin + *ta * ray.dir);
                         const NewtonResult r =
                             method == NewtonMethod::proposed
-                                ? newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params)
+                                ? newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface),
+                                                  params)
                                 : newton_martin(p.surface, ray, st.x, st.y, full_box(p.surface), params);
                         if (r.status != NewtonStatus::converged) continue;
                         ++tl.converged;
@@ -127,11 +128,12 @@ TEST(RendererNewton, HitsMatchAnalyticIntersection) {
                 EXPECT_GT(tl.hits, 300) << p.name;
                 EXPECT_GE(tl.converged, tl.hits * 0.99) << p.name;
                 EXPECT_LE(tl.other_root, tl.hits * 0.005) << p.name;
-                std::printf("[ %-8s %-11s %-5s ] hits %4d conv %4d other root %d mean it %.2f max |dt|/diag %.2g "
-                            "(x cos %.2g), %d over 1e-9\n",
-                            newton_method_name(method), p.name.c_str(), cam.perspective() ? "persp" : "ortho",
-                            tl.hits, tl.converged, tl.other_root, double(tl.iterations) / std::max(1, tl.converged),
-                            tl.max_t_err, tl.max_t_err_cos, tl.over_1e9);
+                std::printf(
+                    "[ %-8s %-11s %-5s ] hits %4d conv %4d other root %d mean it %.2f max |dt|/diag %.2g "
+                    "(x cos %.2g), %d over 1e-9\n",
+                    newton_method_name(method), p.name.c_str(), cam.perspective() ? "persp" : "ortho", tl.hits,
+                    tl.converged, tl.other_root, double(tl.iterations) / std::max(1, tl.converged), tl.max_t_err,
+                    tl.max_t_err_cos, tl.over_1e9);
                 all.hits += tl.hits;
                 all.converged += tl.converged;
                 all.iterations += tl.iterations;
@@ -139,9 +141,11 @@ TEST(RendererNewton, HitsMatchAnalyticIntersection) {
                 all.over_1e9 += tl.over_1e9;
                 all.other_root += tl.other_root;
             }
-        std::printf("[ %-8s all ] hits %d converged %d other root %d mean iterations %.3f max |dt|/diag %.2g, "
-                    "%d over 1e-9\n", newton_method_name(method), all.hits, all.converged, all.other_root,
-                    double(all.iterations) / all.converged, all.max_t_err, all.over_1e9);
+        std::printf(
+            "[ %-8s all ] hits %d converged %d other root %d mean iterations %.3f max |dt|/diag %.2g, "
+            "%d over 1e-9\n",
+            newton_method_name(method), all.hits, all.converged, all.other_root, double(all.iterations) / all.converged,
+            all.max_t_err, all.over_1e9);
     }
 }
 
@@ -160,7 +164,8 @@ TEST(RendererNewton, ProposedAndMartinAgree) {
                 const std::optional<double> ta = p.hit(ray);
                 if (!ta) continue;
                 const Vec2 st = grid.nearest(ray.origin + *ta * ray.dir);
-                const NewtonResult a = newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
+                const NewtonResult a =
+                    newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
                 const NewtonResult b = newton_martin(p.surface, ray, st.x, st.y, full_box(p.surface), params);
                 if (a.status != NewtonStatus::converged || b.status != NewtonStatus::converged) continue;
                 if (std::abs(a.t - *ta) > 1e-6 || std::abs(b.t - *ta) > 1e-6) continue;  // another root
@@ -174,7 +179,8 @@ TEST(RendererNewton, ProposedAndMartinAgree) {
             }
     }
     EXPECT_GT(compared, 1000);
-    std::printf("[ proposed vs martin ] %d pixels, max |duv| %.2g, max |dt| |cos|/diag %.2g\n", compared, max_duv, max_dt);
+    std::printf("[ proposed vs martin ] %d pixels, max |duv| %.2g, max |dt| |cos|/diag %.2g\n", compared, max_duv,
+                max_dt);
 }
 
 // Rays passing within a hair of the sphere octant's pole (a collapsed row of
@@ -198,7 +204,8 @@ TEST(RendererNewton, DegeneratePole) {
                 if (!ta) continue;
                 ++hits;
                 const Vec2 st = grid.nearest(ray.origin + *ta * ray.dir);
-                const NewtonResult a = newton_proposed(ps, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
+                const NewtonResult a =
+                    newton_proposed(ps, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
                 const NewtonResult b = newton_martin(p.surface, ray, st.x, st.y, full_box(p.surface), params);
                 for (const NewtonResult& r : {a, b}) {
                     if (r.status != NewtonStatus::converged) continue;
@@ -209,7 +216,8 @@ TEST(RendererNewton, DegeneratePole) {
             }
         EXPECT_GT(hits, 100);
         EXPECT_GE(conv, 2 * hits * 0.98);
-        std::printf("[ pole %s ] hits %d, converged %d of %d runs\n", cam.perspective() ? "persp" : "ortho", hits, conv, 2 * hits);
+        std::printf("[ pole %s ] hits %d, converged %d of %d runs\n", cam.perspective() ? "persp" : "ortho", hits, conv,
+                    2 * hits);
     }
 }
 
@@ -238,8 +246,9 @@ TEST(RendererNewton, TerminationCriteria) {
     const NurbsSurface ps2 = project_surface(cam2, p.surface);
     const Ray miss = cam2.pixel_ray(cam2.width() / 2, cam2.height() / 2);
     ASSERT_FALSE(p.hit(miss));
-    for (const NewtonResult& r : {newton_proposed(ps2, cam2, cam2.pixel_screen(cam2.width() / 2, cam2.height() / 2), 0.5, 0.1, box, params),
-                                  newton_martin(p.surface, miss, 0.5, 0.1, box, params)}) {
+    for (const NewtonResult& r :
+         {newton_proposed(ps2, cam2, cam2.pixel_screen(cam2.width() / 2, cam2.height() / 2), 0.5, 0.1, box, params),
+          newton_martin(p.surface, miss, 0.5, 0.1, box, params)}) {
         EXPECT_NE(r.status, NewtonStatus::converged);
         std::printf("[ miss ] status %s after %d iterations\n", newton_status_name(r.status), r.iterations);
     }
@@ -254,7 +263,8 @@ TEST(RendererNewton, TerminationCriteria) {
     EXPECT_EQ(again.iterations, 0);
     // Behind the eye: from an origin moved past the hit, the same line's root lies
     // behind the ray's origin (both systems describe the whole line).
-    const NewtonResult b = newton_martin(p.surface, Ray{ray.origin + (ta + 5) * ray.dir, ray.dir}, first.u, first.v, box, params);
+    const NewtonResult b =
+        newton_martin(p.surface, Ray{ray.origin + (ta + 5) * ray.dir, ray.dir}, first.u, first.v, box, params);
     EXPECT_EQ(b.status, NewtonStatus::behind_eye);
 }
 
@@ -275,7 +285,8 @@ TEST(RendererNewton, ToleranceCost) {
                     const std::optional<double> ta = p.hit(ray);
                     if (!ta) continue;
                     const Vec2 st = grid.nearest(ray.origin + *ta * ray.dir);
-                    const NewtonResult r = newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
+                    const NewtonResult r =
+                        newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
                     if (r.status != NewtonStatus::converged) continue;
                     it += r.iterations;
                     ++n;
@@ -300,14 +311,15 @@ TEST(RendererNewton, StepAcrossSeamWraps) {
     s.knots_v = {0, 0, 1, 1};
     s.rational = true;
     const double w = std::sqrt(0.5);
-    const Vec3 circle[9] = {{1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 1, 0}, {-1, 0, 0},
+    const Vec3 circle[9] = {{1, 0, 0},   {1, 1, 0},  {0, 1, 0},  {-1, 1, 0}, {-1, 0, 0},
                             {-1, -1, 0}, {0, -1, 0}, {1, -1, 0}, {1, 0, 0}};
     for (int i = 0; i < 9; ++i)
-        for (int j = 0; j < 2; ++j) s.cp.push_back(nurbsrt::testing::hpt(circle[i] + Vec3{0, 0, double(j)}, i % 2 ? w : 1.0));
+        for (int j = 0; j < 2; ++j)
+            s.cp.push_back(nurbsrt::testing::hpt(circle[i] + Vec3{0, 0, double(j)}, i % 2 ? w : 1.0));
 
     const UvBox box = face_uv_box(s, 0, 1, 0, 1, 1e-9);
     EXPECT_TRUE(box.wrap_u);
-    EXPECT_FALSE(box.wrap_v);  // the circles z = 0 and z = 1 are distinct
+    EXPECT_FALSE(box.wrap_v);                                 // the circles z = 0 and z = 1 are distinct
     EXPECT_FALSE(face_uv_box(s, 0, 0.5, 0, 1, 1e-9).wrap_u);  // half a cylinder has no seam
 
     const double y = std::sin(0.05), x = std::cos(0.05);
@@ -356,7 +368,9 @@ struct SolveSetup {
     UvBox box;
     NewtonParams params;
     explicit SolveSetup(const AnalyticPatch& p)
-        : cam(p.view), proj(project_surface(cam, p.surface)), spans(make_surface_spans(p.surface)),
+        : cam(p.view),
+          proj(project_surface(cam, p.surface)),
+          spans(make_surface_spans(p.surface)),
           box(full_box(p.surface)) {
         params.eps = default_newton_eps(p.box);
     }

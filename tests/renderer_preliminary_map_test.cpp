@@ -129,7 +129,8 @@ TEST(RendererPreliminaryMap, CurvedPatchStartsNearExactHit) {
             const size_t k = map.index(i, j);
             if (!map.face[k]) continue;
             ++n;
-            const NewtonResult r = newton_proposed(proj, cam, cam.pixel_screen(i, j), map.u[k], map.v[k], {0, 1, 0, 1}, params);
+            const NewtonResult r =
+                newton_proposed(proj, cam, cam.pixel_screen(i, j), map.u[k], map.v[k], {0, 1, 0, 1}, params);
             if (r.status != NewtonStatus::converged) continue;
             ++conv;
             its += r.iterations;

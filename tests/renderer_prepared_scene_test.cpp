@@ -57,7 +57,6 @@ std::vector<Camera> cameras(const Scene& s) {
     return out;
 }
 
-
 }  // namespace
 
 TEST(PreparedScene, ManyViewsGiveTheImagesOfFreshRenders) {

@@ -32,7 +32,10 @@ TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
                 // Expected: nearest of sphere / plane-outside-hole.
                 uint32_t want = 0;
                 double tw = HUGE_VAL;
-                if (ts) { want = 1; tw = *ts; }
+                if (ts) {
+                    want = 1;
+                    tw = *ts;
+                }
                 if (tp && *tp < tw) {
                     // plane params: via Newton-free affine inverse
                     const Vec3 o = project(plane.surface.at(0, 0)), e1 = project(plane.surface.at(1, 0)) - o,
@@ -41,7 +44,10 @@ TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
                     const double a = dot(cross(q, e2), n) / dot(n, n), b = dot(cross(e1, q), n) / dot(n, n);
                     const double rr = std::hypot(a - 0.5, b - 0.5);
                     if (std::abs(rr - 0.2) < 0.01) continue;  // near the hole's polygon: ambiguous
-                    if (rr > 0.2) { want = 2; tw = *tp; }
+                    if (rr > 0.2) {
+                        want = 2;
+                        tw = *tp;
+                    }
                 }
                 const size_t k = static_cast<size_t>(j) * cam.width() + i;
                 if (r.image.face[k] == want) {
@@ -51,15 +57,16 @@ TEST(RendererRender, HitsMatchExactIntersectionsAndTrim) {
                     ++disagree;
                 }
             }
-        std::printf("[ frame %s ] agree %d disagree %d (silhouette pixels), max rel Z err %.2g; hit %zu, "
-                    "mean it %.2f, conv %llu trimmed %llu div %llu sing %llu maxit %llu left %llu fallback %llu\n",
-                    newton_method_name(m), agree, disagree, max_z, r.stats.pixels_hit, r.stats.mean_iterations,
-                    (unsigned long long)r.stats.converged, (unsigned long long)r.stats.trimmed,
-                    (unsigned long long)r.stats.diverged, (unsigned long long)r.stats.singular,
-                    (unsigned long long)r.stats.max_iterations, (unsigned long long)r.stats.left_domain,
-                    (unsigned long long)r.stats.fallback);
+        std::printf(
+            "[ frame %s ] agree %d disagree %d (silhouette pixels), max rel Z err %.2g; hit %zu, "
+            "mean it %.2f, conv %llu trimmed %llu div %llu sing %llu maxit %llu left %llu fallback %llu\n",
+            newton_method_name(m), agree, disagree, max_z, r.stats.pixels_hit, r.stats.mean_iterations,
+            (unsigned long long)r.stats.converged, (unsigned long long)r.stats.trimmed,
+            (unsigned long long)r.stats.diverged, (unsigned long long)r.stats.singular,
+            (unsigned long long)r.stats.max_iterations, (unsigned long long)r.stats.left_domain,
+            (unsigned long long)r.stats.fallback);
         EXPECT_LT(disagree, agree / 200);
-        EXPECT_LT(max_z, 1e-6);  // Z is float
+        EXPECT_LT(max_z, 1e-6);            // Z is float
         EXPECT_GT(r.stats.trimmed, 100u);  // the hole's pixels converge on the plane, then trim away
     }
 }
@@ -155,11 +162,12 @@ TEST(RendererRender, RescueClosesCracksBetweenAdjacentFaces) {
         const SphereCheck c = check_sphere(r, cam, sphere);
         opt.rescue = false;
         const SphereCheck c0 = check_sphere(render(scene, cam, opt), cam, sphere);
-        std::printf("[ split sphere %s ] expected %d: missed %d extra %d holes %d (without rescue: missed %d holes %d); "
-                    "rescue neighbour %llu silhouette %llu general %llu trim_tolerance %llu\n",
-                    newton_method_name(m), c.expected_hits, c.missed, c.extra, c.holes, c0.missed, c0.holes,
-                    (unsigned long long)r.stats.rescue_neighbour, (unsigned long long)r.stats.rescue_silhouette,
-                    (unsigned long long)r.stats.rescue_general, (unsigned long long)r.stats.rescue_trim_tolerance);
+        std::printf(
+            "[ split sphere %s ] expected %d: missed %d extra %d holes %d (without rescue: missed %d holes %d); "
+            "rescue neighbour %llu silhouette %llu general %llu trim_tolerance %llu\n",
+            newton_method_name(m), c.expected_hits, c.missed, c.extra, c.holes, c0.missed, c0.holes,
+            (unsigned long long)r.stats.rescue_neighbour, (unsigned long long)r.stats.rescue_silhouette,
+            (unsigned long long)r.stats.rescue_general, (unsigned long long)r.stats.rescue_trim_tolerance);
         EXPECT_GT(c0.missed, 20);  // the setup does crack and lose silhouette pixels without the rescue
         EXPECT_EQ(c.missed, 0);
         EXPECT_EQ(c.extra, 0);
@@ -193,8 +201,9 @@ TEST(RendererRender, NearerSheetReplacesAFartherHit) {
     const size_t mid = 4 * 9 + 4;
     a.mesh.xyz[mid] = a.mesh.xyz[mid] + 0.3 * cam.forward();
     AnalyticPatch back = front;
-    for (Vec4& c : back.surface.cp) c = Vec4{c.x + gap * cam.forward().x * c.w, c.y + gap * cam.forward().y * c.w,
-                                             c.z + gap * cam.forward().z * c.w, c.w};
+    for (Vec4& c : back.surface.cp)
+        c = Vec4{c.x + gap * cam.forward().x * c.w, c.y + gap * cam.forward().y * c.w,
+                 c.z + gap * cam.forward().z * c.w, c.w};
     back.box = BBox{};
     finish_box(back);
     scene.faces = {a, make_face(back, 2, 8)};
@@ -245,10 +254,10 @@ TEST(RendererRender, SilhouetteMatchesAnalyticSphere) {
             opt.method = m;
             const RenderResult r = render(scene, cam, opt);
             const SphereCheck c = check_sphere(r, cam, sphere);
-            std::printf("[ coarse sphere %s %s ] expected %d: missed %d extra %d; silhouette rescue %llu general %llu\n",
-                        proj == Projection::perspective ? "persp" : "ortho", newton_method_name(m), c.expected_hits,
-                        c.missed, c.extra, (unsigned long long)r.stats.rescue_silhouette,
-                        (unsigned long long)r.stats.rescue_general);
+            std::printf(
+                "[ coarse sphere %s %s ] expected %d: missed %d extra %d; silhouette rescue %llu general %llu\n",
+                proj == Projection::perspective ? "persp" : "ortho", newton_method_name(m), c.expected_hits, c.missed,
+                c.extra, (unsigned long long)r.stats.rescue_silhouette, (unsigned long long)r.stats.rescue_general);
             EXPECT_GT(r.stats.rescue_silhouette, 0u);
             EXPECT_EQ(c.missed, 0);
             EXPECT_EQ(c.extra, 0);
@@ -325,7 +334,9 @@ TEST(RendererRender, WritesExrWithAovsAndPng) {
     std::vector<std::string> names(spec.channelnames.begin(), spec.channelnames.end());
     for (const char* c : {"R", "G", "B", "A", "Z", "face", "N.X", "N.Y", "N.Z", "u", "v", "iterations"})
         EXPECT_NE(std::find(names.begin(), names.end(), c), names.end()) << c;
-    auto channel = [&](const char* c) { return static_cast<int>(std::find(names.begin(), names.end(), c) - names.begin()); };
+    auto channel = [&](const char* c) {
+        return static_cast<int>(std::find(names.begin(), names.end(), c) - names.begin());
+    };
     const int fc = channel("face"), ic = channel("iterations");
     EXPECT_EQ(spec.channelformat(fc), OIIO::TypeDesc::UINT32);
     EXPECT_EQ(spec.channelformat(ic), OIIO::TypeDesc::UINT32);
@@ -376,9 +387,10 @@ TEST(RendererRender, MethodTiming) {
             double& best = ms[m == NewtonMethod::martin];
             best = rep == 0 ? t : std::min(best, t);
             if (rep == 2)
-                std::printf("[ 512x512 %s ] newton %.1f ms (best of 3), map %.1f ms, shade %.1f ms, hits %zu, mean it %.2f\n",
-                            newton_method_name(m), best, r.stats.preliminary_map_ms, r.stats.shade_ms,
-                            r.stats.pixels_hit, r.stats.mean_iterations);
+                std::printf(
+                    "[ 512x512 %s ] newton %.1f ms (best of 3), map %.1f ms, shade %.1f ms, hits %zu, mean it %.2f\n",
+                    newton_method_name(m), best, r.stats.preliminary_map_ms, r.stats.shade_ms, r.stats.pixels_hit,
+                    r.stats.mean_iterations);
         }
     std::printf("[ 512x512 ] proposed / martin newton time = %.3f\n", ms[0] / ms[1]);
 }

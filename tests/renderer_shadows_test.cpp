@@ -134,13 +134,14 @@ TEST(RendererShadows, BoundaryOnThePlateMatchesTheAnalyticShadow) {
             }
             (edge ? near_boundary : wrong) += 1;
             if (!edge && wrong <= 5)
-                ADD_FAILURE() << "pixel (" << i << ", " << j << "): shadow " << int(r.image.shadow[k])
-                              << ", analytic " << int(truth[k]) << ", more than a pixel from the boundary";
+                ADD_FAILURE() << "pixel (" << i << ", " << j << "): shadow " << int(r.image.shadow[k]) << ", analytic "
+                              << int(truth[k]) << ", more than a pixel from the boundary";
         }
-    std::printf("[ shadows ] plate pixels: %ld agree, %ld differ within 1 px of the boundary (of %ld there), %ld "
-                "differ farther; %ld analytically shadowed; %llu light rays, map %d px\n",
-                agree, near_boundary, boundary, wrong, shadowed, static_cast<unsigned long long>(r.stats.shadow_rays),
-                r.stats.shadow_map_size);
+    std::printf(
+        "[ shadows ] plate pixels: %ld agree, %ld differ within 1 px of the boundary (of %ld there), %ld "
+        "differ farther; %ld analytically shadowed; %llu light rays, map %d px\n",
+        agree, near_boundary, boundary, wrong, shadowed, static_cast<unsigned long long>(r.stats.shadow_rays),
+        r.stats.shadow_map_size);
     EXPECT_GT(shadowed, 1000) << "the shadow must be large enough to judge";
     // The boundary matches the analytic one within one pixel everywhere...
     EXPECT_EQ(wrong, 0);

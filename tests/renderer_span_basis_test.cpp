@@ -76,11 +76,11 @@ Compared compare_with_a22(const KnotSpans& spans, int n, int p, const std::vecto
 }
 
 TEST(SpanBasis, SameSpanAndBasisAsA22) {
-    const Case cases[] = {{2, 1, 0, 1}, {4, 2, 0, 1}, {9, 3, 0, 1}, {12, 3, 1000, 0.01}, {7, 4, -5, 2},
-                          {11, 5, 0, 1}, {10, 7, 0, 1}, {30, 3, 0, 1e-3}, {9, 8, 0, 1},
-                          {20, 8, -3, 0.5}, {24, 8, 100, 0.1}, {10, 9, 0, 1}, {12, 10, 0, 1},
-                          {12, 11, 0, 1}, {24, 11, -3, 0.5}, {30, 11, 100, 0.1}, {14, 13, 0, 1},
-                          {40, 13, 1000, 0.01}, {16, 15, 0, 1}, {33, 15, -7, 3}};
+    const Case cases[] = {{2, 1, 0, 1},   {4, 2, 0, 1},         {9, 3, 0, 1},      {12, 3, 1000, 0.01},
+                          {7, 4, -5, 2},  {11, 5, 0, 1},        {10, 7, 0, 1},     {30, 3, 0, 1e-3},
+                          {9, 8, 0, 1},   {20, 8, -3, 0.5},     {24, 8, 100, 0.1}, {10, 9, 0, 1},
+                          {12, 10, 0, 1}, {12, 11, 0, 1},       {24, 11, -3, 0.5}, {30, 11, 100, 0.1},
+                          {14, 13, 0, 1}, {40, 13, 1000, 0.01}, {16, 15, 0, 1},    {33, 15, -7, 3}};
     std::mt19937 rng(7);
     double worst_N[kMaxTableDegree + 1] = {}, worst_dN[kMaxTableDegree + 1] = {};
     for (const Case& c : cases) {
@@ -109,7 +109,8 @@ TEST(SpanBasis, SameSpanAndBasisAsA22) {
         }
     }
     for (int p = 1; p <= kMaxTableDegree; ++p)
-        std::printf("degree %2d: max |N - N_A2.2| %.1e, max |dN - dN_A2.2| / max |dN| %.1e\n", p, worst_N[p], worst_dN[p]);
+        std::printf("degree %2d: max |N - N_A2.2| %.1e, max |dN - dN_A2.2| / max |dN| %.1e\n", p, worst_N[p],
+                    worst_dN[p]);
 }
 
 // Knot vectors of equal (or within 1 % equal) spans: the span of a parameter
@@ -151,11 +152,10 @@ TEST(SpanBasis, SurfaceEvaluationMatches) {
     const struct {
         int p, q;
         bool rational;
-    } degrees[] = {{1, 1, false}, {1, 2, true}, {2, 1, true}, {2, 2, true}, {3, 2, true}, {2, 3, true},
-                   {3, 3, false}, {1, 3, false}, {3, 1, true},  {5, 5, false}, {5, 1, false}, {1, 8, false},
-                   {8, 1, false}, {4, 7, true},  {8, 11, false}, {11, 3, true}, {12, 12, false},
-                   {1, 11, true}, {11, 1, false}, {7, 7, true},  {11, 11, false}, {1, 12, false}, {12, 1, true},
-                   {12, 5, false}};
+    } degrees[] = {{1, 1, false},  {1, 2, true},  {2, 1, true},    {2, 2, true},   {3, 2, true},    {2, 3, true},
+                   {3, 3, false},  {1, 3, false}, {3, 1, true},    {5, 5, false},  {5, 1, false},   {1, 8, false},
+                   {8, 1, false},  {4, 7, true},  {8, 11, false},  {11, 3, true},  {12, 12, false}, {1, 11, true},
+                   {11, 1, false}, {7, 7, true},  {11, 11, false}, {1, 12, false}, {12, 1, true},   {12, 5, false}};
     std::mt19937 rng(11);
     for (const auto& d : degrees) {
         SCOPED_TRACE("degrees " + std::to_string(d.p) + " x " + std::to_string(d.q));

@@ -40,7 +40,7 @@ TEST(StageClock, MarksRunEndToEndAndSumToTheTotal) {
 TEST(StageClock, NestedStagesAreTakenOutOfTheirEnclosingStage) {
     const auto t0 = Clock::now();
     StageClock c(t0);
-    c.add("child", 4.0);  // measured elsewhere, inside the running stage
+    c.add("child", 4.0);   // measured elsewhere, inside the running stage
     c.add("other", -1.0);  // nonsense counts as nothing
     c.add("nan", std::nan(""));
     EXPECT_DOUBLE_EQ(c.mark("call", at(t0, 2)), 2.0);
@@ -76,8 +76,8 @@ TEST(StageClock, RealTimeMarksAddUp) {
 namespace {
 
 double frame_stage_sum(const RenderStats& s) {
-    return s.prepare_ms + s.setup_ms + s.preliminary_map_ms + s.newton_ms + s.shadow_map_ms + s.shade_ms + s.antialias_ms +
-           s.edges_ms + s.statistics_ms;
+    return s.prepare_ms + s.setup_ms + s.preliminary_map_ms + s.newton_ms + s.shadow_map_ms + s.shade_ms +
+           s.antialias_ms + s.edges_ms + s.statistics_ms;
 }
 
 void expect_newton_statistics_add_up(const RenderStats& s) {

@@ -18,9 +18,9 @@ namespace nurbsrt::testing {
 struct AnalyticPatch {
     std::string name;
     NurbsSurface surface;
-    BBox box;                                               // of the patch
-    std::function<std::optional<double>(const Ray&)> hit;   // nearest t > 0 on the patch
-    CameraSpec view;                                        // a camera that sees the patch
+    BBox box;                                              // of the patch
+    std::function<std::optional<double>(const Ray&)> hit;  // nearest t > 0 on the patch
+    CameraSpec view;                                       // a camera that sees the patch
 };
 
 inline Vec4 hpt(Vec3 p, double w) { return {w * p.x, w * p.y, w * p.z, w}; }
@@ -178,8 +178,7 @@ struct Term {
     double c;
     int a, b;
 };
-inline AnalyticPatch graph_patch(const std::string& name, int nu, int nv, std::vector<Term> terms,
-                                 CameraSpec view) {
+inline AnalyticPatch graph_patch(const std::string& name, int nu, int nv, std::vector<Term> terms, CameraSpec view) {
     AnalyticPatch p;
     p.name = name;
     NurbsSurface& s = p.surface;
@@ -208,7 +207,8 @@ inline AnalyticPatch graph_patch(const std::string& name, int nu, int nv, std::v
     p.hit = [f](const Ray& r) -> std::optional<double> {
         // g(t) = z(t) - f(x(t), y(t)) on the part of the ray over [-1,1]^2; first sign change.
         auto g = [&](long double t) {
-            return (long double)r.origin.z + t * r.dir.z - f(double(r.origin.x + t * r.dir.x), double(r.origin.y + t * r.dir.y));
+            return (long double)r.origin.z + t * r.dir.z -
+                   f(double(r.origin.x + t * r.dir.x), double(r.origin.y + t * r.dir.y));
         };
         auto inside = [&](long double t) {
             const double x = double(r.origin.x + t * r.dir.x), y = double(r.origin.y + t * r.dir.y);
@@ -240,8 +240,7 @@ inline AnalyticPatch graph_patch(const std::string& name, int nu, int nv, std::v
 
 // Monkey saddle z = x^3 - 3 x y^2, bicubic.
 inline AnalyticPatch saddle_patch() {
-    return graph_patch("saddle", 3, 3, {{1, 3, 0}, {-3, 1, 2}},
-                       look({0.8, -3.5, 6.0}, {0, 0, 0}, {0, 0, 1}, 35));
+    return graph_patch("saddle", 3, 3, {{1, 3, 0}, {-3, 1, 2}}, look({0.8, -3.5, 6.0}, {0, 0, 0}, {0, 0, 1}, 35));
 }
 
 // A high-degree patch: degree (9, 7), z = 0.4 x^7 y^2 - 0.3 x y^6 + 0.5 x^2 + 0.2 y^5 x^3.
@@ -314,7 +313,8 @@ inline Scene sphere_and_holed_plane(AnalyticPatch& sphere, AnalyticPatch& plane)
     plane = plane_patch();
     // Move the plane beside the sphere, scaled up, so both are well in view.
     const Vec3 off{-1.5, 1.5, -0.5};
-    for (Vec4& c : plane.surface.cp) c = Vec4{1.5 * c.x + off.x * c.w, 1.5 * c.y + off.y * c.w, 1.5 * c.z + off.z * c.w, c.w};
+    for (Vec4& c : plane.surface.cp)
+        c = Vec4{1.5 * c.x + off.x * c.w, 1.5 * c.y + off.y * c.w, 1.5 * c.z + off.z * c.w, c.w};
     plane.box = BBox{};
     finish_box(plane);
     const auto hit = plane.hit;

@@ -76,8 +76,8 @@ TEST(RendererTrim, AxisAlignedLoopsOnALattice) {
                 for (size_t k = 0, m = l.points.size() - 1; k < l.points.size(); m = k++) {
                     const Vec2 a = l.points[m], b = l.points[k];
                     const double cr = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-                    if (cr == 0 && p.x >= std::min(a.x, b.x) && p.x <= std::max(a.x, b.x) && p.y >= std::min(a.y, b.y) &&
-                        p.y <= std::max(a.y, b.y))
+                    if (cr == 0 && p.x >= std::min(a.x, b.x) && p.x <= std::max(a.x, b.x) &&
+                        p.y >= std::min(a.y, b.y) && p.y <= std::max(a.y, b.y))
                         on_edge = true;
                 }
             if (on_edge) continue;
@@ -86,14 +86,15 @@ TEST(RendererTrim, AxisAlignedLoopsOnALattice) {
         }
     EXPECT_GT(checked, 1000);
     EXPECT_TRUE(t.inside({0.25, 0.25}));
-    EXPECT_FALSE(t.inside({1, 1}));     // in the first hole
+    EXPECT_FALSE(t.inside({1, 1}));      // in the first hole
     EXPECT_FALSE(t.inside({1.5, 2.5}));  // in the notch
-    EXPECT_FALSE(t.inside({5, 1}));     // outside the grid
+    EXPECT_FALSE(t.inside({5, 1}));      // outside the grid
 }
 
 TEST(RendererTrim, GridIsFasterThanBruteForce) {
     std::mt19937_64 rng(5);
-    std::vector<TrimLoop> loops{star({0.5, 0.5}, 0.3, 0.5, 4000, rng, true), star({0.5, 0.5}, 0.05, 0.1, 1000, rng, false)};
+    std::vector<TrimLoop> loops{star({0.5, 0.5}, 0.3, 0.5, 4000, rng, true),
+                                star({0.5, 0.5}, 0.05, 0.1, 1000, rng, false)};
     const TrimTester t(loops);
     std::uniform_real_distribution<double> U(0, 1);
     std::vector<Vec2> pts(20000);

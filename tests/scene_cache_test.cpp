@@ -86,7 +86,13 @@ TEST(SceneCache, SimultaneousMissesLoadOnce) {
     }
     EXPECT_EQ(loaded, 1);
     SceneCache::Source s;
-    cache.get_or_load("key", [&] { ++loads; return scene_with_faces(1); }, s);
+    cache.get_or_load(
+        "key",
+        [&] {
+            ++loads;
+            return scene_with_faces(1);
+        },
+        s);
     EXPECT_EQ(s, SceneCache::Source::hit);
     EXPECT_EQ(loads.load(), 1);
 }
@@ -117,7 +123,14 @@ TEST(SceneCache, FailedLoadReachesEveryWaiterAndIsNotCached) {
     EXPECT_EQ(cache.get("bad"), nullptr);
     SceneCache::Source s;
     const int before = loads.load();
-    EXPECT_NE(cache.get_or_load("bad", [&] { ++loads; return scene_with_faces(1); }, s), nullptr);
+    EXPECT_NE(cache.get_or_load(
+                  "bad",
+                  [&] {
+                      ++loads;
+                      return scene_with_faces(1);
+                  },
+                  s),
+              nullptr);
     EXPECT_EQ(s, SceneCache::Source::loaded);  // tried again, not a cached failure
     EXPECT_EQ(loads.load(), before + 1);
 }

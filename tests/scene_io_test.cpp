@@ -26,12 +26,26 @@ bool bits_equal(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 #define EXPECT_BITS(a, b) EXPECT_TRUE(bits_equal((a), (b))) << #a << ": " << (a) << " vs " << (b)
 
-void expect_same(Vec2 a, Vec2 b) { EXPECT_BITS(a.x, b.x); EXPECT_BITS(a.y, b.y); }
-void expect_same(Vec3 a, Vec3 b) { EXPECT_BITS(a.x, b.x); EXPECT_BITS(a.y, b.y); EXPECT_BITS(a.z, b.z); }
-void expect_same(Vec4 a, Vec4 b) {
-    EXPECT_BITS(a.x, b.x); EXPECT_BITS(a.y, b.y); EXPECT_BITS(a.z, b.z); EXPECT_BITS(a.w, b.w);
+void expect_same(Vec2 a, Vec2 b) {
+    EXPECT_BITS(a.x, b.x);
+    EXPECT_BITS(a.y, b.y);
 }
-void expect_same(Color a, Color b) { EXPECT_BITS(a.r, b.r); EXPECT_BITS(a.g, b.g); EXPECT_BITS(a.b, b.b); }
+void expect_same(Vec3 a, Vec3 b) {
+    EXPECT_BITS(a.x, b.x);
+    EXPECT_BITS(a.y, b.y);
+    EXPECT_BITS(a.z, b.z);
+}
+void expect_same(Vec4 a, Vec4 b) {
+    EXPECT_BITS(a.x, b.x);
+    EXPECT_BITS(a.y, b.y);
+    EXPECT_BITS(a.z, b.z);
+    EXPECT_BITS(a.w, b.w);
+}
+void expect_same(Color a, Color b) {
+    EXPECT_BITS(a.r, b.r);
+    EXPECT_BITS(a.g, b.g);
+    EXPECT_BITS(a.b, b.b);
+}
 void expect_same(double a, double b) { EXPECT_BITS(a, b); }
 void expect_same(uint32_t a, uint32_t b) { EXPECT_EQ(a, b); }
 void expect_same(const std::string& a, const std::string& b) { EXPECT_EQ(a, b); }
@@ -142,7 +156,11 @@ Face make_face(uint32_t index, bool variant) {
     f.mesh.fallback_grid = variant;
     f.has_color = variant;
     f.color = variant ? Color{0.1f, 0.2f, 0.3f} : Color{};
-    f.name = variant ? std::string("Fl\xc3\xa4" "che\0 #2", 12) : std::string();
+    f.name = variant ? std::string(
+                           "Fl\xc3\xa4"
+                           "che\0 #2",
+                           12)
+                     : std::string();
     f.body = variant ? 1 : 0;
     return f;
 }
@@ -308,7 +326,11 @@ TEST(SceneIo, SanityChecksOnValidChecksum) {
         {"decreasing knots", [](Face& f) { f.surface.knots_u[1] = 0.5; }, "non-decreasing"},
         {"NaN knot", [](Face& f) { f.surface.knots_u[0] = std::nan(""); }, "non-decreasing"},
         {"cp count", [](Face& f) { f.surface.cp.pop_back(); }, "expected num_u * num_v"},
-        {"cp count vs num", [](Face& f) { f.surface.num_v = 4; f.surface.knots_v.push_back(1); },
+        {"cp count vs num",
+         [](Face& f) {
+             f.surface.num_v = 4;
+             f.surface.knots_v.push_back(1);
+         },
          "expected num_u * num_v"},
         {"triangle index", [](Face& f) { f.mesh.triangles[4] = 4; }, "triangle index 4 out of range"},
         {"triangle count", [](Face& f) { f.mesh.triangles.pop_back(); }, "multiple of 3"},

@@ -91,8 +91,10 @@ TEST(UVMap, MappedParametersGiveTheSamePointAndInvert) {
         }
         EXPECT_LE(worst_point, 1e-12 * size * 100);
         EXPECT_LE(worst_round_trip, 1e-12);
-        if (c.circular) EXPECT_GT(largest_change, 1e-3) << "a circle's rational parameter is not its angle";
-        else EXPECT_LE(largest_change, 1e-12);
+        if (c.circular)
+            EXPECT_GT(largest_change, 1e-3) << "a circle's rational parameter is not its angle";
+        else
+            EXPECT_LE(largest_change, 1e-12);
         // Points just outside the box (pcurves stray by their tolerance) map onto the surface too.
         const Vec2 out = map->to_surface({c.u1 + 1e-7, c.v0 - 1e-7});
         EXPECT_LE(bs->Value(out.x, out.y).Distance(c.surface->Value(c.u1 + 1e-7, c.v0 - 1e-7)), 1e-9 * size);
@@ -133,9 +135,8 @@ TEST(UVMap, ConvertFaceConvertsAnalyticSurfacesAlone) {
     // some CAD systems): Convert_CylinderToBSplineSurface refuses that box, so
     // it is cut to one period, and the face still takes the fast path.
     const double start = -4.8316906031686813e-13;
-    const TopoDS_Face closed =
-        BRepBuilderAPI_MakeFace(new Geom_CylindricalSurface(gp_Ax3(gp::XOY()), 2.5), start, start + 2 * M_PI + 9e-13,
-                                -1, 4, 1e-7);
+    const TopoDS_Face closed = BRepBuilderAPI_MakeFace(new Geom_CylindricalSurface(gp_Ax3(gp::XOY()), 2.5), start,
+                                                       start + 2 * M_PI + 9e-13, -1, 4, 1e-7);
     const nurbsrt::occt::ConvertedFace cf = nurbsrt::occt::convert_face(closed);
     ASSERT_FALSE(cf.surface.IsNull());
     EXPECT_FALSE(cf.map.identity());

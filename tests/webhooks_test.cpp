@@ -73,13 +73,13 @@ TEST(Webhooks, BadCallbackUrlsAreRefusedWithTheReason) {
     EXPECT_NE(refusal("https://example.com:99999/").find("port"), std::string::npos);
     EXPECT_NE(refusal("https://[zz::1]/").find("host"), std::string::npos);
     EXPECT_NE(refusal("https://example.com/" + std::string(3000, 'a')).find("at most 2048"), std::string::npos);
-    for (const char* url : {"http://127.0.0.1/", "http://10.1.2.3/", "http://169.254.169.254/latest/meta-data",
-                            "http://192.168.0.10:8080/", "http://[::1]/", "http://[fd00::1]/",
-                            "http://[::ffff:127.0.0.1]/", "http://localhost:8080/", "http://api.localhost/",
-                            "http://0.0.0.0/",
-                            // Every spelling of an IPv4 address the resolver takes (inet_aton's):
-                            "http://0x7f000001/", "http://2130706433/", "http://0177.0.0.1/", "http://127.1/",
-                            "http://0/", "http://127.000.000.001/", "http://0xa.1.2.3/", "http://3232235530/"}) {
+    for (const char* url :
+         {"http://127.0.0.1/", "http://10.1.2.3/", "http://169.254.169.254/latest/meta-data",
+          "http://192.168.0.10:8080/", "http://[::1]/", "http://[fd00::1]/", "http://[::ffff:127.0.0.1]/",
+          "http://localhost:8080/", "http://api.localhost/", "http://0.0.0.0/",
+          // Every spelling of an IPv4 address the resolver takes (inet_aton's):
+          "http://0x7f000001/", "http://2130706433/", "http://0177.0.0.1/", "http://127.1/", "http://0/",
+          "http://127.000.000.001/", "http://0xa.1.2.3/", "http://3232235530/"}) {
         EXPECT_NE(refusal(url).find("loopback, private or link-local"), std::string::npos) << url;
         EXPECT_EQ(refusal(url, true), "") << url;
     }
@@ -91,13 +91,34 @@ TEST(Webhooks, BadCallbackUrlsAreRefusedWithTheReason) {
 }
 
 TEST(Webhooks, PublicAddressRanges) {
-    for (const char* a : {"8.8.8.8", "1.1.1.1", "172.32.0.1", "100.128.0.1", "2001:4860:4860::8888",
-                          "64:ff9b::808:808", "::ffff:8.8.4.4"})
+    for (const char* a : {"8.8.8.8", "1.1.1.1", "172.32.0.1", "100.128.0.1", "2001:4860:4860::8888", "64:ff9b::808:808",
+                          "::ffff:8.8.4.4"})
         EXPECT_TRUE(public_address(a)) << a;
-    for (const char* a : {"0.0.0.0", "10.0.0.1", "100.64.0.1", "127.0.0.1", "127.255.255.254", "169.254.169.254",
-                          "172.16.0.1", "172.31.255.255", "192.0.0.8", "192.0.2.1", "192.168.1.1", "198.18.0.1",
-                          "198.51.100.7", "203.0.113.9", "224.0.0.1", "240.0.0.1", "255.255.255.255", "::", "::1",
-                          "fc00::1", "fdff::1", "fe80::1", "ff02::1", "2001:db8::1", "::ffff:10.0.0.1",
+    for (const char* a : {"0.0.0.0",
+                          "10.0.0.1",
+                          "100.64.0.1",
+                          "127.0.0.1",
+                          "127.255.255.254",
+                          "169.254.169.254",
+                          "172.16.0.1",
+                          "172.31.255.255",
+                          "192.0.0.8",
+                          "192.0.2.1",
+                          "192.168.1.1",
+                          "198.18.0.1",
+                          "198.51.100.7",
+                          "203.0.113.9",
+                          "224.0.0.1",
+                          "240.0.0.1",
+                          "255.255.255.255",
+                          "::",
+                          "::1",
+                          "fc00::1",
+                          "fdff::1",
+                          "fe80::1",
+                          "ff02::1",
+                          "2001:db8::1",
+                          "::ffff:10.0.0.1",
                           "64:ff9b::a00:1"})
         EXPECT_FALSE(public_address(a)) << a;
 }

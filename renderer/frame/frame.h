@@ -38,7 +38,7 @@ void throw_if_canceled(const RenderOptions& o);
 
 // Per-pixel solve result of a pass.
 struct PixelHit {
-    uint32_t face = 0;       // 0: no hit
+    uint32_t face = 0;  // 0: no hit
     float u = 0, v = 0;
     // Unit shading normal (oriented by the face) from the solve's last partials;
     // (0, 0, 0) where they were degenerate: shading then takes surface_normal's limits.
@@ -171,7 +171,8 @@ class PixelArray {
 
 public:
     explicit PixelArray(size_t n)
-        : n_(n), data_(static_cast<T*>(::operator new(std::max<size_t>(n, 1) * sizeof(T), std::align_val_t(alignof(T))))) {}
+        : n_(n),
+          data_(static_cast<T*>(::operator new(std::max<size_t>(n, 1) * sizeof(T), std::align_val_t(alignof(T))))) {}
     ~PixelArray() { ::operator delete(data_, std::align_val_t(alignof(T))); }
     PixelArray(const PixelArray&) = delete;
     PixelArray& operator=(const PixelArray&) = delete;

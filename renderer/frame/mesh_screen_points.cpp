@@ -137,19 +137,24 @@ void MeshScreenPoints::build_grid(uint32_t id, Entry& e) const {
     }
 
     // Entries ascending per cell.
-    compressed_rows(ncells, ranges.size(), [&](size_t q, auto&& add) {
-        const Cells& r = ranges[q];
-        for (int y = r.y0; y <= r.y1; ++y)
-            for (int x = r.x0; x <= r.x1; ++x) add(static_cast<size_t>(y) * g.nx + x, r.t);
-    }, g.tri_begin, g.tris);
-    compressed_rows(ncells, pts.size(), [&](size_t m, auto&& add) {
-        if (!std::isnan(pts[m].s.x))
-            add(static_cast<size_t>(g.cell_y(pts[m].s.y)) * g.nx + g.cell_x(pts[m].s.x), static_cast<uint32_t>(m));
-    }, g.vtx_begin, g.vtxs);
+    compressed_rows(
+        ncells, ranges.size(),
+        [&](size_t q, auto&& add) {
+            const Cells& r = ranges[q];
+            for (int y = r.y0; y <= r.y1; ++y)
+                for (int x = r.x0; x <= r.x1; ++x) add(static_cast<size_t>(y) * g.nx + x, r.t);
+        },
+        g.tri_begin, g.tris);
+    compressed_rows(
+        ncells, pts.size(),
+        [&](size_t m, auto&& add) {
+            if (!std::isnan(pts[m].s.x))
+                add(static_cast<size_t>(g.cell_y(pts[m].s.y)) * g.nx + g.cell_x(pts[m].s.x), static_cast<uint32_t>(m));
+        },
+        g.vtx_begin, g.vtxs);
 }
 
-int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2,
-                                      double max_d2) const {
+int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], double* screen_d2, double max_d2) const {
     const Entry& e = projected(id);
     const std::vector<Projected>& pts = e.pts;
     const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
@@ -192,9 +197,11 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
         const double dx = pts[m].s.x - p.x, dy = pts[m].s.y - p.y;
         vertex.offer(dx * dx + dy * dy, pts[m].depth, mesh.uv[m], m);
     };
-    for_near_cells(g, p, [&] { return best.d2; }, [&](size_t cell) {
-        for (uint32_t q = g.tri_begin[cell]; q < g.tri_begin[cell + 1]; ++q) test_triangle(g.tris[q]);
-    });
+    for_near_cells(
+        g, p, [&] { return best.d2; },
+        [&](size_t cell) {
+            for (uint32_t q = g.tri_begin[cell]; q < g.tri_begin[cell + 1]; ++q) test_triangle(g.tris[q]);
+        });
     const bool any_triangle = !g.tris.empty();
     if (bounded && !best.found) {
         // The mesh lies farther than the bound (its vertices belong to its
@@ -203,9 +210,11 @@ int MeshScreenPoints::nearest_starts(uint32_t id, ScreenPoint sp, Vec2 out[2], d
         if (any_triangle) return none();
         vertex.d2 = best.d2;
     }
-    for_near_cells(g, p, [&] { return vertex.d2; }, [&](size_t cell) {
-        for (uint32_t q = g.vtx_begin[cell]; q < g.vtx_begin[cell + 1]; ++q) test_vertex(g.vtxs[q]);
-    });
+    for_near_cells(
+        g, p, [&] { return vertex.d2; },
+        [&](size_t cell) {
+            for (uint32_t q = g.vtx_begin[cell]; q < g.vtx_begin[cell + 1]; ++q) test_vertex(g.vtxs[q]);
+        });
     int n = 0;
     for (const NearestPoint* q : {&best, &vertex})
         if (q->found && (n == 0 || out[0].x != q->uv.x || out[0].y != q->uv.y)) out[n++] = q->uv;
@@ -282,13 +291,16 @@ const MeshScreenPoints::BoxGrid& MeshScreenPoints::box_grid() const {
         g.x0 = -a, g.y0 = -1;
         g.inv_cw = g.n / (2 * a), g.inv_ch = g.n / 2.0;
         // Face ids ascending per cell; those around the eye apart.
-        compressed_rows(static_cast<size_t>(g.n) * g.n, boxes.size(), [&](size_t q, auto&& add) {
-            const ScreenBox& b = boxes[q];
-            if (b.empty || b.around) return;
-            for (int y = g.cell_y(b.lo.y); y <= g.cell_y(b.hi.y); ++y)
-                for (int x = g.cell_x(b.lo.x); x <= g.cell_x(b.hi.x); ++x)
-                    add(static_cast<size_t>(y) * g.n + x, static_cast<uint32_t>(q + 1));
-        }, g.begin, g.ids);
+        compressed_rows(
+            static_cast<size_t>(g.n) * g.n, boxes.size(),
+            [&](size_t q, auto&& add) {
+                const ScreenBox& b = boxes[q];
+                if (b.empty || b.around) return;
+                for (int y = g.cell_y(b.lo.y); y <= g.cell_y(b.hi.y); ++y)
+                    for (int x = g.cell_x(b.lo.x); x <= g.cell_x(b.hi.x); ++x)
+                        add(static_cast<size_t>(y) * g.n + x, static_cast<uint32_t>(q + 1));
+            },
+            g.begin, g.ids);
         for (uint32_t id = 1; id <= c_.nfaces; ++id)
             if (!boxes[id - 1].empty && boxes[id - 1].around) g.around.push_back(id);
     });
@@ -453,9 +465,8 @@ bool MeshScreenPoints::pixels_near(uint32_t id, double pixels, size_t max_tested
     }
     // One per pixel: the frontmost.
     const auto begin = out.begin() + static_cast<std::ptrdiff_t>(first);
-    std::sort(begin, out.end(), [](const MeshPixel& x, const MeshPixel& y) {
-        return x.k < y.k || (x.k == y.k && x.depth < y.depth);
-    });
+    std::sort(begin, out.end(),
+              [](const MeshPixel& x, const MeshPixel& y) { return x.k < y.k || (x.k == y.k && x.depth < y.depth); });
     out.erase(std::unique(begin, out.end(), [](const MeshPixel& x, const MeshPixel& y) { return x.k == y.k; }),
               out.end());
     return true;

@@ -54,7 +54,8 @@ bool MeshScreenPoints::frontmost_point(uint32_t id, ScreenPoint sp, double max_d
         if (inside_triangle(rim, A, B, C, l))
             front.offer(interpolated_depth(l, z3), 0, interpolated_uv(l, mesh, idx), 4 * uint64_t(t) + 3);
     };
-    for_triangles_near(id, p, [&] { return max_d2; }, test_triangle);
+    for_triangles_near(
+        id, p, [&] { return max_d2; }, test_triangle);
     if (!front.found) return false;
     uv = front.uv;
     depth = front.d2;
@@ -121,7 +122,8 @@ int MeshScreenPoints::starts_in_front(uint32_t id, ScreenPoint sp, double max_d2
             best.offer(d2, a.z + w * (b.z - a.z), lerp(a.uv, b.uv, w), 4 * uint64_t(t) + k);
         }
     };
-    for_triangles_near(id, p, [&] { return best.d2; }, test_triangle);
+    for_triangles_near(
+        id, p, [&] { return best.d2; }, test_triangle);
     if (!best.found) return 0;
     if (covers.empty()) {
         out[0] = best.uv;
@@ -131,8 +133,9 @@ int MeshScreenPoints::starts_in_front(uint32_t id, ScreenPoint sp, double max_d2
               [](const Cover& x, const Cover& y) { return x.z < y.z || (x.z == y.z && x.key < y.key); });
     // A triangle listed in several grid cells that the search visits (sp on a
     // cell border) covers sp once: one start per sheet, whatever the grid.
-    covers.erase(std::unique(covers.begin(), covers.end(), [](const Cover& x, const Cover& y) { return x.key == y.key; }),
-                 covers.end());
+    covers.erase(
+        std::unique(covers.begin(), covers.end(), [](const Cover& x, const Cover& y) { return x.key == y.key; }),
+        covers.end());
     const int n = std::min(static_cast<int>(covers.size()), max_out);
     for (int k = 0; k < n; ++k) out[k] = covers[k].uv;
     return n;

@@ -80,21 +80,26 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
     const Camera& camera = ctx.camera;
     const NurbsSurface& surface = iterated_surface(id);
     const SurfacePatches* patches = iterated_patches(id);
-    const NewtonResult r =
-        ctx.options.method == NewtonMethod::proposed
-            ? newton_proposed(surface, camera, sp, u0, v0, ff.box, p, &ff.spans, start, patches)
-            : newton_martin(surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start, patches);
+    const NewtonResult r = ctx.options.method == NewtonMethod::proposed
+                               ? newton_proposed(surface, camera, sp, u0, v0, ff.box, p, &ff.spans, start, patches)
+                               : newton_martin(surface, camera.ray(sp), u0, v0, ff.box, p, &ff.spans, start, patches);
     hit.iterations = static_cast<uint8_t>(std::min(r.iterations, 255));
     if (near && r.status != NewtonStatus::converged && r.status != NewtonStatus::behind_eye &&
         border_gap_hit(id, sp, r, hit))
         return kNearTrim;
     switch (r.status) {
-        case NewtonStatus::converged: break;
-        case NewtonStatus::diverged: return kDiverged;
-        case NewtonStatus::singular: return kSingular;
-        case NewtonStatus::max_iterations: return kMaxIter;
-        case NewtonStatus::left_domain: return kLeftDomain;
-        case NewtonStatus::behind_eye: return kBehind;
+        case NewtonStatus::converged:
+            break;
+        case NewtonStatus::diverged:
+            return kDiverged;
+        case NewtonStatus::singular:
+            return kSingular;
+        case NewtonStatus::max_iterations:
+            return kMaxIter;
+        case NewtonStatus::left_domain:
+            return kLeftDomain;
+        case NewtonStatus::behind_eye:
+            return kBehind;
     }
     if (crossing) *crossing = r.t;
     Outcome o = kConverged;
@@ -129,8 +134,7 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
     // stops on trj8's iso frame (8.7k of them went on to the evaluation, 5.7k now).
     if (!(r.t_bound > 0) || r.gap_bound > (1 + kBoundRounding) * kMaxBorderGapPixels * ctx.pixel_footprint(r.t_bound))
         return false;
-    if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv))
-        return false;
+    if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return false;
     const SurfaceEvaluation eval(ctx.scene.faces[id - 1].surface, &ff.spans, &ff.patches);
     const CartesianDerivs c = eval.cartesian(r.u, r.v);
     const Ray ray = ctx.camera.ray(sp);

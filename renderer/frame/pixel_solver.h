@@ -23,8 +23,8 @@ ProjectedFaces project_faces(const FrameContext& ctx);
 struct Solver {
     const FrameContext& ctx;
     const ProjectedFaces& projected;
-    NewtonParams params;                         // the primary solves (the paper's criteria)
-    NewtonParams robust;                         // the rescue's solves (NewtonParams::robust)
+    NewtonParams params;  // the primary solves (the paper's criteria)
+    NewtonParams robust;  // the rescue's solves (NewtonParams::robust)
 
     // One Newton solve of face id at the centre of pixel (i, j) from (u0, v0); hit if converged and
     // inside the trim. With `near`, a hit converged outside the trim but within the
@@ -32,8 +32,8 @@ struct Solver {
     // two faces sharing an edge are each only within that tolerance of the true edge,
     // so a ray through the sliver between the two polylines is rejected by both (a crack).
     // `crossing`: as below.
-    Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near,
-                  PixelHit& hit, double* crossing = nullptr) const {
+    Outcome solve(uint32_t id, int i, int j, double u0, double v0, const NewtonParams& p, bool near, PixelHit& hit,
+                  double* crossing = nullptr) const {
         return solve(id, ctx.camera.pixel_screen(i, j), u0, v0, p, near, hit, nullptr, crossing);
     }
     Outcome solve(uint32_t id, int i, int j, double u0, double v0, PixelHit& hit) const {
@@ -43,8 +43,8 @@ struct Solver {
     // `start`: start_derivs(id, u0, v0), when several rays are solved from that start.
     // `crossing`: where Newton converged, inside the trim or not, the distance
     // along the ray at which it meets the surface (else left as it is).
-    Outcome solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
-                  PixelHit& hit, const SurfaceDerivs* start = nullptr, double* crossing = nullptr) const;
+    Outcome solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near, PixelHit& hit,
+                  const SurfaceDerivs* start = nullptr, double* crossing = nullptr) const;
     // The derivatives the method's Newton iteration evaluates first when it
     // starts face id at (u0, v0) (newton.h, `start`): of the frame's projected
     // surface for proposed, of the model surface for martin.

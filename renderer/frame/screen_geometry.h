@@ -74,7 +74,9 @@ inline bool inside_triangle(Vec2 p, Vec2 A, Vec2 B, Vec2 C, double l[3]) {
 }
 
 // The depth and the (u, v) at barycentric coordinates l of a mesh triangle.
-inline double interpolated_depth(const double l[3], const double z[3]) { return l[0] * z[0] + l[1] * z[1] + l[2] * z[2]; }
+inline double interpolated_depth(const double l[3], const double z[3]) {
+    return l[0] * z[0] + l[1] * z[1] + l[2] * z[2];
+}
 inline Vec2 interpolated_uv(const double l[3], const FaceMesh& mesh, const uint32_t* idx) {
     const Vec2 &a = mesh.uv[idx[0]], &b = mesh.uv[idx[1]], &c = mesh.uv[idx[2]];
     return {l[0] * a.x + l[1] * b.x + l[2] * c.x, l[0] * a.y + l[1] * b.y + l[2] * c.y};
@@ -113,6 +115,5 @@ inline void for_near_cells(const Grid& g, Vec2 p, Bound&& bound, Fn&& fn) {
         }
     }
 }
-
 
 }  // namespace nurbsrt::screen

@@ -31,9 +31,17 @@ GLuint compile(GLenum type, const char* src, const std::string& who) {
 }  // namespace
 
 GlContext::GlContext() {
-    const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0,
-                           OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                           OSMESA_CONTEXT_MAJOR_VERSION, 4, OSMESA_CONTEXT_MINOR_VERSION, 5, 0};
+    const int attribs[] = {OSMESA_FORMAT,
+                           OSMESA_RGBA,
+                           OSMESA_DEPTH_BITS,
+                           0,
+                           OSMESA_PROFILE,
+                           OSMESA_CORE_PROFILE,
+                           OSMESA_CONTEXT_MAJOR_VERSION,
+                           4,
+                           OSMESA_CONTEXT_MINOR_VERSION,
+                           5,
+                           0};
     ctx_ = OSMesaCreateContextAttribs(attribs, nullptr);
     if (!ctx_) fail("OSMesa", "OSMesaCreateContextAttribs (OpenGL 4.5 core) failed");
 }

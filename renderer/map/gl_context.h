@@ -12,7 +12,7 @@ namespace nurbsrt {
 
 class GlContext {
 public:
-    GlContext();   // throws Error(internal) when OSMesa cannot make a 4.5 core context
+    GlContext();  // throws Error(internal) when OSMesa cannot make a 4.5 core context
     ~GlContext();
     GlContext(const GlContext&) = delete;
     GlContext& operator=(const GlContext&) = delete;
@@ -27,7 +27,7 @@ public:
     unsigned int link_program(const char* vertex_src, const char* fragment_src, const std::string& who);
 
 private:
-    void* ctx_ = nullptr;                // OSMesaContext
+    void* ctx_ = nullptr;                  // OSMesaContext
     unsigned char dummy_[4 * 4 * 4] = {};  // default framebuffer (unused: callers draw into FBOs)
 };
 

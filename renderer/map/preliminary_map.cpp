@@ -15,7 +15,6 @@
 
 namespace nurbsrt {
 
-
 float quantize_rgb8(float u, double lo, double hi) {
     const double range = hi - lo;
     if (!(range > 0)) return static_cast<float>(lo);
@@ -51,9 +50,7 @@ void main() {
 }
 )";
 
-[[noreturn]] void fail(const std::string& what) {
-    throw Error(ErrorCode::internal, "preliminary map: " + what);
-}
+[[noreturn]] void fail(const std::string& what) { throw Error(ErrorCode::internal, "preliminary map: " + what); }
 
 }  // namespace
 

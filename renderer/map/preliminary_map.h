@@ -76,7 +76,7 @@ struct MapBands {
 
 class MapRenderer {
 public:
-    MapRenderer();   // creates the OSMesa context, compiles the shaders; throws Error(internal) on failure
+    MapRenderer();  // creates the OSMesa context, compiles the shaders; throws Error(internal) on failure
     ~MapRenderer();
     MapRenderer(const MapRenderer&) = delete;
     MapRenderer& operator=(const MapRenderer&) = delete;

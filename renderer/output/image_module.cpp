@@ -52,9 +52,12 @@ const ImageModule& load_writer() {
 // An entry point's status as write_image and encode_image answer it.
 void check_status(int status, const char* message) {
     switch (status) {
-        case kImageWritten: return;
-        case kImageFormatUnsupported: throw Error(ErrorCode::unsupported_format, message);
-        default: throw Error(ErrorCode::io, message);
+        case kImageWritten:
+            return;
+        case kImageFormatUnsupported:
+            throw Error(ErrorCode::unsupported_format, message);
+        default:
+            throw Error(ErrorCode::io, message);
     }
 }
 

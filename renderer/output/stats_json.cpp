@@ -27,22 +27,26 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
     json histogram = json::object();
     for (size_t k = 0; k < s.iteration_histogram.size(); ++k)
         if (s.iteration_histogram[k]) histogram[std::to_string(k)] = s.iteration_histogram[k];
-    // Most keys are the RenderStats members' own names: one macro says so, and
-    // a member renamed breaks the build instead of the API's documented key.
+            // Most keys are the RenderStats members' own names: one macro says so, and
+            // a member renamed breaks the build instead of the API's documented key.
 #define NURBSRT_STAT(member) {#member, s.member}
-    json j = {NURBSRT_STAT(method), NURBSRT_STAT(width), NURBSRT_STAT(height), NURBSRT_STAT(threads),
-              NURBSRT_STAT(faces), NURBSRT_STAT(patches), NURBSRT_STAT(map_triangles), NURBSRT_STAT(pixels_hit)};
-    j["newton"] = {NURBSRT_STAT(tolerance), NURBSRT_STAT(solves), NURBSRT_STAT(mean_iterations),
-                   {"iteration_histogram", histogram}, NURBSRT_STAT(converged), NURBSRT_STAT(diverged),
-                   NURBSRT_STAT(singular), NURBSRT_STAT(max_iterations), NURBSRT_STAT(iteration_limit),
-                   NURBSRT_STAT(left_domain), NURBSRT_STAT(behind_eye), NURBSRT_STAT(trimmed), NURBSRT_STAT(fallback),
-                   {"primary_pass_ms", s.newton_primary_ms}};
+    json j = {NURBSRT_STAT(method), NURBSRT_STAT(width),   NURBSRT_STAT(height),        NURBSRT_STAT(threads),
+              NURBSRT_STAT(faces),  NURBSRT_STAT(patches), NURBSRT_STAT(map_triangles), NURBSRT_STAT(pixels_hit)};
+    j["newton"] = {NURBSRT_STAT(tolerance),       NURBSRT_STAT(solves),
+                   NURBSRT_STAT(mean_iterations), {"iteration_histogram", histogram},
+                   NURBSRT_STAT(converged),       NURBSRT_STAT(diverged),
+                   NURBSRT_STAT(singular),        NURBSRT_STAT(max_iterations),
+                   NURBSRT_STAT(iteration_limit), NURBSRT_STAT(left_domain),
+                   NURBSRT_STAT(behind_eye),      NURBSRT_STAT(trimmed),
+                   NURBSRT_STAT(fallback),        {"primary_pass_ms", s.newton_primary_ms}};
 #undef NURBSRT_STAT
-    j["rescue"] = {{"neighbour", s.rescue_neighbour},     {"silhouette", s.rescue_silhouette},
-                   {"general", s.rescue_general},         {"trim_tolerance", s.rescue_trim_tolerance},
-                   {"nearer_sheet", s.rescue_nearer},     {"holes", s.holes}};
+    j["rescue"] = {{"neighbour", s.rescue_neighbour}, {"silhouette", s.rescue_silhouette},
+                   {"general", s.rescue_general},     {"trim_tolerance", s.rescue_trim_tolerance},
+                   {"nearer_sheet", s.rescue_nearer}, {"holes", s.holes}};
     j["antialias"] = {{"rays_per_edge_pixel", s.antialias}, {"pixels", s.antialias_pixels}, {"rays", s.antialias_rays}};
-    j["shadows"] = {{"enabled", s.shadows}, {"map_size", s.shadow_map_size}, {"rays", s.shadow_rays},
+    j["shadows"] = {{"enabled", s.shadows},
+                    {"map_size", s.shadow_map_size},
+                    {"rays", s.shadow_rays},
                     {"shadowed_pixels", s.shadowed_pixels}};
     j["timings_ms"] = timings;
     return j;

@@ -65,7 +65,8 @@ double straight_edge_coverage(const SidePoints& a, const SidePoints& b) {
     // (Square roots, not std::hypot: a libm call each, on every two-sided edge
     // pixel; the differences are sums of sample offsets, far from overflow.)
     const double nl = std::sqrt(lo_x * lo_x + lo_y * lo_y), nh = std::sqrt(hi_x * hi_x + hi_y * hi_y);
-    const double spread_c = (lo_x * hi_x + lo_y * hi_y) / (nl * nh), spread_s = cross(lo_x, lo_y, hi_x, hi_y) / (nl * nh);
+    const double spread_c = (lo_x * hi_x + lo_y * hi_y) / (nl * nh),
+                 spread_s = cross(lo_x, lo_y, hi_x, hi_y) / (nl * nh);
     if (spread_s < 0 || (spread_s == 0 && spread_c < 0)) return kNaN;
     double step_c = -spread_c, step_s = spread_s;  // the width
     for (int h = 0; h < kArcHalvings; ++h) halve(step_c, step_s);

@@ -47,7 +47,7 @@ public:
         size_t k;       // the pixel tried
         uint32_t face;  // the thin face, started from its hit's (u, v)
         float u, v;
-        int reach;      // how far that hit lies (pixels, Chebyshev): the nearest start first
+        int reach;  // how far that hit lies (pixels, Chebyshev): the nearest start first
     };
     // Where pixel (i, j)'s hit is a thin face's, a line of pixels in front of
     // other faces (both of a horizontal or vertical pair on other faces, one of

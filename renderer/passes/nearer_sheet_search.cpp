@@ -63,9 +63,7 @@ bool NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
     // that one, beside it or in front of the other (a strip between a face in
     // front and a face behind, as a ring between a capsule's wall and its base).
     auto other = [&](size_t n) { return depth_[n] < HUGE_VAL && hits_[n].face != p.face; };
-    auto thin = [&](size_t a, size_t b) {
-        return other(a) && other(b) && (depth_[a] > behind || depth_[b] > behind);
-    };
+    auto thin = [&](size_t a, size_t b) { return other(a) && other(b) && (depth_[a] > behind || depth_[b] > behind); };
     if (!thin(k - 1, k + 1) && !thin(k - c_.width, k + c_.width)) return false;
     for_each_neighbour(c_, i, j, kThinReach, [&](int ni, int nj) {
         const int reach = std::max(std::abs(ni - i), std::abs(nj - j));
@@ -80,8 +78,7 @@ bool NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
 void NearerSheet::thin_face_tries(uint32_t face, std::vector<ThinTry>& out) const {
     std::vector<MeshScreenPoints::MeshPixel> pixels;
     // Pixels on the background are the rescue's; those on the face itself need nothing.
-    if (!screen_points_.pixels_near(face, kThinFacePixels, kMaxThinFaceTested, hits_, depth_, kSheetFootprints,
-                                    pixels))
+    if (!screen_points_.pixels_near(face, kThinFacePixels, kMaxThinFaceTested, hits_, depth_, kSheetFootprints, pixels))
         return;
     for (const MeshScreenPoints::MeshPixel& m : pixels) {
         const PixelHit& h = hits_[m.k];
@@ -236,9 +233,7 @@ void NearerSheet::mesh_in_front(uint32_t id, int i, int j, PixelHit& best) const
         consider(id, i, j, static_cast<float>(uv.x), static_cast<float>(uv.y), solver_.robust, false, best);
         return best.face != p.face || best.t != p.t;
     };
-    if (screen_points_.frontmost_point(id, sp, reach * reach, start, depth) && depth < max_depth &&
-        from(start))
-        return;
+    if (screen_points_.frontmost_point(id, sp, reach * reach, start, depth) && depth < max_depth && from(start)) return;
     Vec2 starts[kMaxSheetsInFront];
     const int n = screen_points_.starts_in_front(id, sp, reach * reach, max_depth, starts, kMaxSheetsInFront);
     for (int k = 0; k < n; ++k)
@@ -258,7 +253,8 @@ void NearerSheet::adjacent_faces(int i, int j, PixelHit& best) const {
         if (from_mesh_starts(faces[q], i, j, best)) crossed[nc++] = faces[q].id;
         near[nn++] = faces[q].id;
     }
-    if (nc && best.face == p.face && best.t == p.t) beyond_edges(i, j, {crossed, crossed + nc}, {near, near + nn}, best);
+    if (nc && best.face == p.face && best.t == p.t)
+        beyond_edges(i, j, {crossed, crossed + nc}, {near, near + nn}, best);
 }
 
 void NearerSheet::faces_joining_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const {

@@ -98,9 +98,15 @@ public:
     // unchanged while it runs.
     EdgeSampler(const FrameContext& c, const Solver& solver, const Shader& shader, const FrameBuffers& b,
                 const std::vector<uint8_t>& diff, const std::vector<float>& centres, StartCache& starts)
-        : c_(c), solver_(solver), hits_(b.hits), shader_(shader), diff_(diff), centres_(centres),
-          start_cache_(starts), params_(solver.params), robust_(solver.robust) {}
-
+        : c_(c),
+          solver_(solver),
+          hits_(b.hits),
+          shader_(shader),
+          diff_(diff),
+          centres_(centres),
+          start_cache_(starts),
+          params_(solver.params),
+          robust_(solver.robust) {}
 
     // Pixel (i, j)'s colour from its centre sample (`rgba`, straight alpha) and
     // its n stratified sub-pixel samples: where they show two things (two faces,
@@ -113,7 +119,9 @@ public:
         collected_ = false;  // the starts are collected for the first traced sample
         ci_ = i, cj_ = j;
         samples_.resize(static_cast<size_t>(n) + 1);
-        samples_[0] = {0.5, 0.5, hits_[c_.map.index(i, j)].face,
+        samples_[0] = {0.5,
+                       0.5,
+                       hits_[c_.map.index(i, j)].face,
                        {rgba[0] * rgba[3], rgba[1] * rgba[3], rgba[2] * rgba[3], rgba[3]}};
         const uint32_t seed = hash32(static_cast<uint32_t>(c_.map.index(i, j)));
         int traced = 0;
@@ -173,8 +181,8 @@ private:
     struct Start {
         uint32_t face;
         float u, v;
-        double t;    // the depth of that pixel's hit
-        int di, dj;  // the pixel it comes from, relative to the edge pixel
+        double t;       // the depth of that pixel's hit
+        int di, dj;     // the pixel it comes from, relative to the edge pixel
         double cx, cy;  // that pixel's centre in pixel coordinates (exact: integers + 0.5)
     };
     // The hits of the 3x3 around (i, j): every sample's candidate starts.
@@ -333,7 +341,7 @@ private:
     StartCache& start_cache_;
     // Scratch of the pixel being resolved; one EdgeSampler per thread.
     mutable std::vector<Sample> samples_;  // the pixel's: [0] the centre
-    mutable SidePoints side_a_, side_b_;  // the samples by the side they show
+    mutable SidePoints side_a_, side_b_;   // the samples by the side they show
     mutable Start starts_[kNeighbours];
     mutable uint8_t face_of_start_[kNeighbours];  // index of the start's face among the distinct faces
     mutable int nfaces_ = 0;
@@ -352,8 +360,9 @@ void edge_row(const FrameContext& c, const std::vector<uint8_t>& diff, int j, ui
     const uint8_t* up = j > 0 ? &diff[c.map.index(0, j - 1)] : nullptr;
     auto at = [&](int i) {  // any column, borders included
         bool e = d[i] || (i > 0 && (d[i - 1] & kDiffRight));
-        if (up) e = e || (up[i] & kDiffDown) || (i > 0 && (up[i - 1] & kDiffDownRight)) ||
-                    (i + 1 < W && (up[i + 1] & kDiffDownLeft));
+        if (up)
+            e = e || (up[i] & kDiffDown) || (i > 0 && (up[i - 1] & kDiffDownRight)) ||
+                (i + 1 < W && (up[i + 1] & kDiffDownLeft));
         return static_cast<uint8_t>(e);
     };
     out[0] = at(0);

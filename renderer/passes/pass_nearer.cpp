@@ -140,8 +140,8 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
         const bool deep = p.t - std::max(a.t, b.t) > sheet_gap(p.t);
         const float mid_u = 0.5f * (a.u + b.u), mid_v = 0.5f * (a.v + b.v);
         const double off_u = double(p.u) - mid_u, off_v = double(p.v) - mid_v;
-        const bool off_pair = a.face == p.face && b.face == p.face &&
-                              off_u * off_u + off_v * off_v > kUvOffPair2 * half_pair2;
+        const bool off_pair =
+            a.face == p.face && b.face == p.face && off_u * off_u + off_v * off_v > kUvOffPair2 * half_pair2;
         bool from[2] = {false, false}, cont[2] = {false, false};
         for (int q = 0; q < 2; ++q) {
             const PixelHit& n = q == 0 ? a : b;
@@ -309,19 +309,25 @@ void NearerSheet::from_neighbour_hits(int i, int j, std::span<const std::pair<in
 }
 
 void NearerSheet::rim_faces_in_front(int i, int j, PixelHit& best) const {
-    from_neighbour_hits(i, j, kSideOffsets, [&](int di, int dj, const PixelHit& p, const PixelHit& h) {
-        if (h.face == p.face || !(h.t < p.t - spike_)) return false;
-        // A sheet gap in front opposite the background: find's silhouette test tried it.
-        const bool opposite_open = !c_.in_frame(i - di, j - dj) || !hits_[c_.map.index(i - di, j - dj)].face;
-        return !(opposite_open && h.t < p.t - sheet_gap(p.t));
-    }, best);
+    from_neighbour_hits(
+        i, j, kSideOffsets,
+        [&](int di, int dj, const PixelHit& p, const PixelHit& h) {
+            if (h.face == p.face || !(h.t < p.t - spike_)) return false;
+            // A sheet gap in front opposite the background: find's silhouette test tried it.
+            const bool opposite_open = !c_.in_frame(i - di, j - dj) || !hits_[c_.map.index(i - di, j - dj)].face;
+            return !(opposite_open && h.t < p.t - sheet_gap(p.t));
+        },
+        best);
 }
 
 void NearerSheet::diagonal_starts(int i, int j, bool own_face, PixelHit& best) const {
-    from_neighbour_hits(i, j, kDiagonalOffsets, [&](int di, int dj, const PixelHit& p, const PixelHit& h) {
-        if ((own_face && h.face != p.face) || !(h.t < p.t - sheet_gap(p.t))) return false;
-        return !continues(p, h, i + 2 * di, j + 2 * dj);  // not one sheet turning away (see find)
-    }, best);
+    from_neighbour_hits(
+        i, j, kDiagonalOffsets,
+        [&](int di, int dj, const PixelHit& p, const PixelHit& h) {
+            if ((own_face && h.face != p.face) || !(h.t < p.t - sheet_gap(p.t))) return false;
+            return !continues(p, h, i + 2 * di, j + 2 * dj);  // not one sheet turning away (see find)
+        },
+        best);
 }
 
 bool NearerSheet::continues(const PixelHit& p, const PixelHit& n, int fi, int fj) const {
@@ -331,16 +337,13 @@ bool NearerSheet::continues(const PixelHit& p, const PixelHit& n, int fi, int fj
     const double du = double(p.u) - n.u, dv = double(p.v) - n.v;
     const double fu = double(n.u) - f.u, fv = double(n.v) - f.v;
     const double su = du - fu, sv = dv - fv;  // the second difference
-    return su * su + sv * sv <= kUvSmooth2 * (fu * fu + fv * fv) &&
-           std::fabs(p.t - 2 * n.t + f.t) <= sheet_gap(p.t);
+    return su * su + sv * sv <= kUvSmooth2 * (fu * fu + fv * fv) && std::fabs(p.t - 2 * n.t + f.t) <= sheet_gap(p.t);
 }
 
-double NearerSheet::depth_in_front(double t, ScreenPoint sp) const {
-    return c_.depth_behind(t, -kSheetFootprints, sp);
-}
+double NearerSheet::depth_in_front(double t, ScreenPoint sp) const { return c_.depth_behind(t, -kSheetFootprints, sp); }
 
-Outcome NearerSheet::consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params,
-                              bool near, PixelHit& best, double* crossing) const {
+Outcome NearerSheet::consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
+                              PixelHit& best, double* crossing) const {
     PixelHit h;
     const Outcome o = solver_.solve(id, i, j, u0, v0, params, near, h, crossing);
     if ((o == kConverged || o == kNearTrim) && h.t < best.t - nearer_) best = h;
@@ -407,8 +410,9 @@ void add_thin_face_tries(const FrameContext& c, const NearerSheet& nearer, const
 void nearest_per_pixel(std::vector<Update>& updates) {
     std::sort(updates.begin(), updates.end(),
               [](const Update& x, const Update& y) { return std::tie(x.k, x.hit.t) < std::tie(y.k, y.hit.t); });
-    updates.erase(std::unique(updates.begin(), updates.end(), [](const Update& x, const Update& y) { return x.k == y.k; }),
-                  updates.end());
+    updates.erase(
+        std::unique(updates.begin(), updates.end(), [](const Update& x, const Update& y) { return x.k == y.k; }),
+        updates.end());
 }
 
 }  // namespace

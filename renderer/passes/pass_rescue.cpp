@@ -117,8 +117,10 @@ public:
                 const uint32_t id = pass == 0 ? src_[n].face : map.face[n];
                 if (id == 0 || std::find(faces, faces + nf, id) != faces + nf) return;
                 faces[nf++] = id;
-                if (pass == 0) attempt(id, src_[n].u, src_[n].v);
-                else attempt(id, map.u[n], map.v[n]);
+                if (pass == 0)
+                    attempt(id, src_[n].u, src_[n].v);
+                else
+                    attempt(id, map.u[n], map.v[n]);
             });
         if (!own) return;
         // The own map start was solved by the primary pass (not robust): retry it robustly.
@@ -194,7 +196,8 @@ public:
         uint32_t solved_ids[kMaxStarts];
         int ns = 0;
         for (int q = 0; q < ntried_; ++q)
-            if (std::find(solved_ids, solved_ids + ns, tried_[q].id) == solved_ids + ns) solved_ids[ns++] = tried_[q].id;
+            if (std::find(solved_ids, solved_ids + ns, tried_[q].id) == solved_ids + ns)
+                solved_ids[ns++] = tried_[q].id;
         const ScreenPoint sp = c_.camera.pixel_screen(i_, j_);
         MeshScreenPoints::FarFace faces[kScreenFaces.max_faces];
         const int nf = screen_points.faces_near(sp, solved_ids, ns, faces, kScreenFaces);
@@ -283,8 +286,10 @@ bool may_share_crack(const FrameContext& c, const PixelHit& a, const PixelHit& b
     // Both lists ascending: a common element by one merge.
     for (auto x = na.begin(), y = nb.begin(); x != na.end() && y != nb.end();) {
         if (*x == *y) return true;
-        if (*x < *y) ++x;
-        else ++y;
+        if (*x < *y)
+            ++x;
+        else
+            ++y;
     }
     return false;
 }
@@ -306,8 +311,8 @@ bool enclosed_in_crack(const FrameContext& c, const PixelArray<PixelHit>& src, i
 }
 
 // One pixel's rescue from the hits `src` (and the map); returns its kind, or kNoRescue.
-uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, int i,
-                     int j, const PixelArray<PixelHit>& src, PixelHit& out) {
+uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, int i, int j,
+                     const PixelArray<PixelHit>& src, PixelHit& out) {
     const size_t k = c.map.index(i, j);
     auto hit_at = [&](int a, int b) { return c.in_frame(a, b) && src[c.map.index(a, b)].face != 0; };
     const uint32_t own = c.map.face[k] <= c.nfaces ? c.map.face[k] : 0;
@@ -386,13 +391,14 @@ void grow_silhouettes(const FrameContext& c, const Solver& solver, const MeshScr
         throw_if_canceled(c.options);
         cand.clear();
         for (const size_t k : fresh)
-            for_each_neighbour(c, static_cast<int>(k % W), static_cast<int>(k / W), kNeighbourRadius, [&](int ni, int nj) {
-                const size_t n = c.map.index(ni, nj);
-                if (!b.hits[n].face && !queued[n]) {
-                    queued[n] = 1;
-                    cand.push_back(n);
-                }
-            });
+            for_each_neighbour(c, static_cast<int>(k % W), static_cast<int>(k / W), kNeighbourRadius,
+                               [&](int ni, int nj) {
+                                   const size_t n = c.map.index(ni, nj);
+                                   if (!b.hits[n].face && !queued[n]) {
+                                       queued[n] = 1;
+                                       cand.push_back(n);
+                                   }
+                               });
         std::sort(cand.begin(), cand.end());
         std::vector<PixelHit> got(cand.size());
         std::vector<uint8_t> kinds(cand.size(), kNoRescue);
@@ -460,8 +466,7 @@ std::vector<uint8_t> rescue_candidates(const FrameContext& c, const std::vector<
 
 }  // namespace
 
-void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
-                 FrameBuffers& b) {
+void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, FrameBuffers& b) {
     const std::vector<uint8_t> todo = rescue_candidates(c, b.outcome);
     // Every pixel reads the primary hits: the rescued ones are collected per row
     // and written after the pass, so the result does not depend on the order

@@ -33,8 +33,7 @@ class MeshScreenPoints;
 // Fills b.hits and b.rescued where the primary solve found no hit. screen_points:
 // the frame's projected map meshes (mesh_screen_points.h), shared with the
 // nearer-sheet pass, which asks for many of the same faces.
-void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
-                 FrameBuffers& b);
+void rescue_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points, FrameBuffers& b);
 
 // Replaces hits on a farther sheet by nearer ones in b.hits; returns how many.
 uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,

@@ -38,7 +38,8 @@ constexpr double kOwnReachPixels = 1.5;
 constexpr double kMaxStepSpread = 4;
 // The 3x3 around a pixel, the centre first, then the 4-neighbours, then the corners.
 constexpr int kFirstRing = 9;
-constexpr int kRingOrder[kFirstRing][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+constexpr int kRingOrder[kFirstRing][2] = {{0, 0},   {-1, 0}, {1, 0},  {0, -1}, {0, 1},
+                                           {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
 // Where the 3x3 shows a face in front of the point that the light ray does not
 // cross (its map mesh covers where the exact face does not: a thin face, the
 // band along a trim), the occluder may be a face hidden behind it in the map,
@@ -171,7 +172,7 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
     uint32_t near_face[kFirstRing];  // near crossings beyond contact, not blocking alone
     double near_t[kFirstRing];
     int nnear = 0;
-    Outcome last = kNone;  // how occludes_from's solve ended
+    Outcome last = kNone;      // how occludes_from's solve ended
     double last_t = HUGE_VAL;  // and where
     auto occludes_from = [&](uint32_t id, double u0, double v0) {
         PixelHit h;
@@ -280,8 +281,7 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // occluder joining it there (iges/bug22869_Spring.igs iso: a spring's
         // end face, whose rim's band in the light map hid the coil behind it;
         // 14 leaks -> 2).
-        if (id != face || ((last == kTrimmed || last == kNearTrim) && last_t < t_p - contact_))
-            passed[npassed++] = id;
+        if (id != face || ((last == kTrimmed || last == kNearTrim) && last_t < t_p - contact_)) passed[npassed++] = id;
     }
     // Only where the map shows at the point's own pixel a face passed (another
     // face, or another part of the point's own): the light map's nearest

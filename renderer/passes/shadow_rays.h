@@ -65,7 +65,7 @@ private:
     ProjectedFaces projected_;
     Solver solver_;
     MeshScreenPoints screen_points_;  // the map mesh in the light's view: starts on faces no map pixel shows
-    double contact_;  // one light-map pixel, model units
+    double contact_;                  // one light-map pixel, model units
     mutable std::atomic<uint64_t> rays_{0};
 };
 

@@ -8,15 +8,20 @@
 
 namespace nurbsrt {
 
-
 const char* newton_status_name(NewtonStatus s) {
     switch (s) {
-        case NewtonStatus::converged: return "converged";
-        case NewtonStatus::diverged: return "diverged";
-        case NewtonStatus::singular: return "singular";
-        case NewtonStatus::max_iterations: return "max_iterations";
-        case NewtonStatus::left_domain: return "left_domain";
-        case NewtonStatus::behind_eye: return "behind_eye";
+        case NewtonStatus::converged:
+            return "converged";
+        case NewtonStatus::diverged:
+            return "diverged";
+        case NewtonStatus::singular:
+            return "singular";
+        case NewtonStatus::max_iterations:
+            return "max_iterations";
+        case NewtonStatus::left_domain:
+            return "left_domain";
+        case NewtonStatus::behind_eye:
+            return "behind_eye";
     }
     return "unknown";
 }
@@ -66,8 +71,7 @@ inline bool clamp_to_box(double& u, double& v, const UvBox& b) {
 // second clamp fails (left_domain). Robust: clamping is always allowed; only a
 // clamped iterate that did not move (stuck on the border, the solution beyond
 // it) fails. Returns false on failure.
-inline bool accept_box(double u, double v, double& un, double& vn, const UvBox& box, bool robust,
-                       bool& clamped_once) {
+inline bool accept_box(double u, double v, double& un, double& vn, const UvBox& box, bool robust, bool& clamped_once) {
     if (!clamp_to_box(un, vn, box)) return true;
     if (robust) return un != u || vn != v;
     if (clamped_once) return false;
@@ -105,11 +109,11 @@ inline double proposed_residual2(const Vec4& S, const Camera& cam, ScreenPoint s
 bool proposed_step(const SurfaceDerivs& d, ScreenPoint s, double eps_det, Step& out) {
     // Columns P = (X, Y, D), P_u, P_v, R = (xR, yR, 1); det[a, b, c] = a . (b x c).
     const Vec3 P = xyz(d.S), Pu = xyz(d.Su), Pv = xyz(d.Sv), R{s.sx, s.sy, 1.0};
-    const double M = dot(P, cross(Pu, Pv));           // (10) M   = det[P, P_u, P_v]
+    const double M = dot(P, cross(Pu, Pv));                                         // (10) M   = det[P, P_u, P_v]
     if (!regular(M, eps_det, dot(P, P) * dot(Pu, Pu) * dot(Pv, Pv))) return false;  // (14)
-    const double MU = dot(R, cross(Pv, P));           // (10) M_U = det[P, R, P_v]
-    const double MV = dot(R, cross(P, Pu));           // (11) M_V = det[P, P_u, R]
-    const double k = P.z / M;                         // (9)  (du, dv) = (w / M) (M_U, M_V)
+    const double MU = dot(R, cross(Pv, P));                                         // (10) M_U = det[P, R, P_v]
+    const double MV = dot(R, cross(P, Pu));                                         // (11) M_V = det[P, P_u, R]
+    const double k = P.z / M;  // (9)  (du, dv) = (w / M) (M_U, M_V)
     out = {k * MU, k * MV};
     return true;
 }
@@ -129,9 +133,8 @@ bool textbook_step(const SurfaceDerivs& d, ScreenPoint s, double eps_det, Step& 
 RayPlanes ray_planes(const Ray& ray) {
     const Vec3 dir = ray.dir;
     // Martin et al.: N1 from the two largest components of dir, so it is well defined.
-    Vec3 n1 = (std::abs(dir.x) > std::abs(dir.y) && std::abs(dir.x) > std::abs(dir.z))
-                  ? Vec3{dir.y, -dir.x, 0}
-                  : Vec3{0, dir.z, -dir.y};
+    Vec3 n1 = (std::abs(dir.x) > std::abs(dir.y) && std::abs(dir.x) > std::abs(dir.z)) ? Vec3{dir.y, -dir.x, 0}
+                                                                                       : Vec3{0, dir.z, -dir.y};
     n1 = normalize(n1);
     const Vec3 n2 = normalize(cross(n1, dir));
     return {n1, n2, -dot(n1, ray.origin), -dot(n2, ray.origin)};
@@ -179,7 +182,7 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
         res.u = u;
         res.v = v;
         res.iterations = it;
-        if (s.r2 < eps2) {                                                     // (12)
+        if (s.r2 < eps2) {  // (12)
             end(NewtonStatus::converged);
             return res;
         }
@@ -188,11 +191,11 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
             return res;
         }
         Step st;
-        if (!sys.step(s, params.eps_det, st)) {                                // (14)
+        if (!sys.step(s, params.eps_det, st)) {  // (14)
             end(NewtonStatus::singular);
             return res;
         }
-        double un = u + st.du, vn = v + st.dv;                                 // (5)
+        double un = u + st.du, vn = v + st.dv;  // (5)
         if (!accept_box(u, v, un, vn, box, params.robust, clamped_once)) {
             end(NewtonStatus::left_domain);
             return res;
@@ -205,7 +208,7 @@ NewtonResult newton_iterate(const System& sys, double u0, double v0, const UvBox
             vn = 0.5 * (v + vn);
             sn = sys.eval(un, vn);
         }
-        if (!(sn.r2 <= s.r2)) {                                                // (13)
+        if (!(sn.r2 <= s.r2)) {  // (13)
             res.iterations = it + 1;
             end(NewtonStatus::diverged);
             return res;
@@ -276,7 +279,7 @@ struct MartinSystem {
         const double cc = dot(pl.n2, c.Pu), e = dot(pl.n2, c.Pv);
         const double det = a * e - b * cc;
         if (!regular(det, eps_det, dot(c.Pu, c.Pu) * dot(c.Pv, c.Pv))) return false;  // (14)
-        out = {-(e * st.f1 - b * st.f2) / det, -(-cc * st.f1 + a * st.f2) / det};   // -J^{-1} F
+        out = {-(e * st.f1 - b * st.f2) / det, -(-cc * st.f1 + a * st.f2) / det};     // -J^{-1} F
         return true;
     }
     void finish(const State& st, NewtonResult& res) const {
@@ -293,15 +296,15 @@ struct MartinSystem {
 
 }  // namespace
 
-NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
-                             double u0, double v0, const UvBox& box, const NewtonParams& params,
-                             const SurfaceSpans* spans, const SurfaceDerivs* start, const SurfacePatches* patches) {
+NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s, double u0, double v0,
+                             const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans,
+                             const SurfaceDerivs* start, const SurfacePatches* patches) {
     return newton_iterate(ProposedSystem{{projected, spans, patches}, camera, s}, u0, v0, box, params, start);
 }
 
-NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans,
-                           const SurfaceDerivs* start, const SurfacePatches* patches) {
+NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0, const UvBox& box,
+                           const NewtonParams& params, const SurfaceSpans* spans, const SurfaceDerivs* start,
+                           const SurfacePatches* patches) {
     return newton_iterate(MartinSystem{{surface, spans, patches}, ray, ray_planes(ray)}, u0, v0, box, params, start);
 }
 

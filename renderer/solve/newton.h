@@ -84,9 +84,9 @@ UvBox face_uv_box(const NurbsSurface& s, double u0, double u1, double v0, double
 struct NewtonResult {
     NewtonStatus status = NewtonStatus::max_iterations;
     int iterations = 0;
-    double u = 0, v = 0;      // last iterate
-    double t = 0;             // hit distance along the pixel ray (valid when converged)
-    double residual = 0;      // ||F|| at (u, v), model units
+    double u = 0, v = 0;  // last iterate
+    double t = 0;         // hit distance along the pixel ray (valid when converged)
+    double residual = 0;  // ||F|| at (u, v), model units
     // Model-space rational partials of the face's surface at (u, v) when
     // converged (or behind_eye), from the last iterate's derivatives: the
     // shading normal needs no second evaluation of the surface.
@@ -112,15 +112,14 @@ struct NewtonResult {
 // `patches`: the power-form patches of `projected` over `spans`
 // (surface_patches.h; project_patches of the model surface's), evaluated
 // instead of the basis tables: the same iterates to rounding, fewer operations.
-NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s,
-                             double u0, double v0, const UvBox& box, const NewtonParams& params,
-                             const SurfaceSpans* spans = nullptr, const SurfaceDerivs* start = nullptr,
-                             const SurfacePatches* patches = nullptr);
+NewtonResult newton_proposed(const NurbsSurface& projected, const Camera& camera, ScreenPoint s, double u0, double v0,
+                             const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans = nullptr,
+                             const SurfaceDerivs* start = nullptr, const SurfacePatches* patches = nullptr);
 
 // martin: on the model-space surface and the pixel ray; `start` and `patches`
 // as above, of `surface`.
-NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0,
-                           const UvBox& box, const NewtonParams& params, const SurfaceSpans* spans = nullptr,
+NewtonResult newton_martin(const NurbsSurface& surface, const Ray& ray, double u0, double v0, const UvBox& box,
+                           const NewtonParams& params, const SurfaceSpans* spans = nullptr,
                            const SurfaceDerivs* start = nullptr, const SurfacePatches* patches = nullptr);
 
 // The two planes of Martin et al.: N1 perpendicular to dir (built from dir's two

@@ -17,11 +17,11 @@ namespace nurbsrt {
 // Camera-independent per-face data of the pixel solves.
 struct PreparedFace {
     TrimTester trim;
-    SurfaceSpans spans;    // per-span basis tables of the face's surface (span_basis.h)
+    SurfaceSpans spans;      // per-span basis tables of the face's surface (span_basis.h)
     SurfacePatches patches;  // its power-form patches over them (surface_patches.h)
-    UvBox box;             // parameter box with seams (face_uv_box)
-    double near_uv = 0;    // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
-    double trim_uv = 0;    // the trim test's uncertainty: the exact boundary lies within it of the loops
+    UvBox box;               // parameter box with seams (face_uv_box)
+    double near_uv = 0;      // trim-tolerance band for crack filling (pixel_solver.h, Solver::solve)
+    double trim_uv = 0;      // the trim test's uncertainty: the exact boundary lies within it of the loops
     // Faces that touch this one (their map meshes share a vertex, see prepare()),
     // ascending ids. The rescue and the nearer-sheet pass try them where a face
     // too thin for the map to rasterize lies between the pixel's neighbours' faces.

@@ -150,15 +150,24 @@ void KnotSpans::basis_fixed(double t, int& s, double* N, double* dN) const {
 void KnotSpans::basis(double t, int& s, double* N, double* dN) const {
     // The degrees NURBS conversion and CAD systems produce, unrolled.
     switch (p_) {
-        case 1: return basis_fixed<1>(t, s, N, dN);
-        case 2: return basis_fixed<2>(t, s, N, dN);
-        case 3: return basis_fixed<3>(t, s, N, dN);
-        case 4: return basis_fixed<4>(t, s, N, dN);
-        case 5: return basis_fixed<5>(t, s, N, dN);
-        case 6: return basis_fixed<6>(t, s, N, dN);
-        case 7: return basis_fixed<7>(t, s, N, dN);
-        case 8: return basis_fixed<8>(t, s, N, dN);
-        default: return basis_fixed<-1>(t, s, N, dN);
+        case 1:
+            return basis_fixed<1>(t, s, N, dN);
+        case 2:
+            return basis_fixed<2>(t, s, N, dN);
+        case 3:
+            return basis_fixed<3>(t, s, N, dN);
+        case 4:
+            return basis_fixed<4>(t, s, N, dN);
+        case 5:
+            return basis_fixed<5>(t, s, N, dN);
+        case 6:
+            return basis_fixed<6>(t, s, N, dN);
+        case 7:
+            return basis_fixed<7>(t, s, N, dN);
+        case 8:
+            return basis_fixed<8>(t, s, N, dN);
+        default:
+            return basis_fixed<-1>(t, s, N, dN);
     }
 }
 
@@ -176,10 +185,14 @@ SurfaceDerivs evaluate_fixed(const NurbsSurface& s, const SurfaceSpans& spans, d
     constexpr int kMu = kP >= 0 ? kP + 1 : kM, kMv = kQ >= 0 ? kQ + 1 : kM;
     double Nu[kMu], dNu[kMu], Nv[kMv], dNv[kMv];
     int su = 0, sv = 0;
-    if constexpr (kP >= 0) spans.u.basis_fixed<kP>(u, su, Nu, dNu);
-    else spans.u.basis(u, su, Nu, dNu);
-    if constexpr (kQ >= 0) spans.v.basis_fixed<kQ>(v, sv, Nv, dNv);
-    else spans.v.basis(v, sv, Nv, dNv);
+    if constexpr (kP >= 0)
+        spans.u.basis_fixed<kP>(u, su, Nu, dNu);
+    else
+        spans.u.basis(u, su, Nu, dNu);
+    if constexpr (kQ >= 0)
+        spans.v.basis_fixed<kQ>(v, sv, Nv, dNv);
+    else
+        spans.v.basis(v, sv, Nv, dNv);
     const HomogDerivs h = tensor_product<1, kP, kQ>(s, su, sv, Nu, dNu, Nv, dNv);
     return {h.S, h.Su, h.Sv};
 }

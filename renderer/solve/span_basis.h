@@ -70,12 +70,12 @@ public:
 
 private:
     int p_ = 0;
-    std::vector<double> start_;  // left end of each non-empty span, then the last span's right end
-    double inv_span_ = 0;        // spans per parameter unit where they are uniform, else 0
-    std::vector<int> span_;      // knot index s of each non-empty span
-    std::vector<double> mid_;    // midpoint of each non-empty span, the Taylor expansion's centre
+    std::vector<double> start_;     // left end of each non-empty span, then the last span's right end
+    double inv_span_ = 0;           // spans per parameter unit where they are uniform, else 0
+    std::vector<int> span_;         // knot index s of each non-empty span
+    std::vector<double> mid_;       // midpoint of each non-empty span, the Taylor expansion's centre
     std::vector<double> inv_half_;  // 2 / span length: dx/du
-    std::vector<double> coef_;   // per span (p+1) x (p+1): c[r][k]
+    std::vector<double> coef_;      // per span (p+1) x (p+1): c[r][k]
 };
 
 // Both directions of a surface's tables.

@@ -25,7 +25,7 @@ namespace nurbsrt {
 
 struct SurfacePatches {
     int degree_u = 0, degree_v = 0;
-    size_t spans_v = 0;     // non-empty v spans (the patches' row length)
+    size_t spans_v = 0;      // non-empty v spans (the patches' row length)
     std::vector<Vec4> coef;  // per patch (k, l), at (k spans_v + l) (p+1)(q+1): C_ab at a (q+1) + b
     bool usable() const { return !coef.empty(); }
     size_t memory_bytes() const { return coef.capacity() * sizeof(Vec4); }

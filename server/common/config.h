@@ -12,30 +12,30 @@ namespace nurbsrt::server {
 
 struct ServerConfig {
     std::string host = "127.0.0.1";
-    int port = 8080;                 // 0: any free port (see port_file)
-    std::string port_file;           // when set, the bound port is written there once listening
-    std::string data_dir = "data";   // private temp dir for uploads lives in DATA_DIR/tmp
+    int port = 8080;                // 0: any free port (see port_file)
+    std::string port_file;          // when set, the bound port is written there once listening
+    std::string data_dir = "data";  // private temp dir for uploads lives in DATA_DIR/tmp
 
     // Work. Imports and conversions (child processes) are admitted by count;
     // renders by their memory estimate (renderer/frame_cost.h) against the
     // process's budget, and share the cores: cheap frames go first.
-    int workers = 2;                 // concurrent imports/conversions
-    int max_queue = 8;               // requests waiting in each gate; beyond -> 503
-    double queue_timeout_s = 30;     // longest wait for admission; then 503
-    int retry_after_s = 2;           // Retry-After on 503
-    int render_threads = 0;          // threads per render (0: all cores)
-    int max_renders = 8;             // renders at once (each also within the memory budget)
-    size_t memory_budget_bytes = 0;  // the whole process (0: 3/4 of RAM or of the cgroup limit)
+    int workers = 2;                            // concurrent imports/conversions
+    int max_queue = 8;                          // requests waiting in each gate; beyond -> 503
+    double queue_timeout_s = 30;                // longest wait for admission; then 503
+    int retry_after_s = 2;                      // Retry-After on 503
+    int render_threads = 0;                     // threads per render (0: all cores)
+    int max_renders = 8;                        // renders at once (each also within the memory budget)
+    size_t memory_budget_bytes = 0;             // the whole process (0: 3/4 of RAM or of the cgroup limit)
     size_t max_render_bytes = size_t(4) << 30;  // one render's estimated memory; beyond -> 422
-    double max_render_cost_s = 900;  // one render's estimated work, core-seconds; beyond -> 422
+    double max_render_cost_s = 900;             // one render's estimated work, core-seconds; beyond -> 422
 
     // Limits, all checked before work starts.
     size_t max_upload_bytes = size_t(64) << 20;
-    int max_dimension = 8192;        // width and height each
+    int max_dimension = 8192;  // width and height each
     long long max_pixels = 16LL << 20;
     size_t max_faces = 100000;
-    double render_timeout_s = 120;   // the render itself (Newton, map, shading)
-    double import_timeout_s = 120;   // import / conversion child process, wall clock
+    double render_timeout_s = 120;  // the render itself (Newton, map, shading)
+    double import_timeout_s = 120;  // import / conversion child process, wall clock
     size_t import_memory_bytes = size_t(4) << 30;
     // Pre-scan of an upload's text before any import (importer/prescan.h: why these defaults).
     size_t import_max_entities = 20'000'000;
@@ -45,10 +45,10 @@ struct ServerConfig {
     size_t cache_bytes = size_t(512) << 20;  // scene cache capacity (0: no cache)
 
     // Connections (server/http/http_server.h): slow or numerous clients cost only themselves.
-    double header_timeout_s = 10;              // request line + headers; also the body's grace
-    double min_body_rate_bytes = 64 * 1024;    // average upload rate a body must keep
-    int max_connections = 512;                 // open at once; beyond: 503
-    int max_connections_per_client = 128;      // per client address; beyond: 503
+    double header_timeout_s = 10;            // request line + headers; also the body's grace
+    double min_body_rate_bytes = 64 * 1024;  // average upload rate a body must keep
+    int max_connections = 512;               // open at once; beyond: 503
+    int max_connections_per_client = 128;    // per client address; beyond: 503
 
     // API keys (server/http/api_keys.h): a file of keys, and/or a comma-separated list
     // (from the environment only). Neither configured: no authentication. Either
@@ -60,10 +60,10 @@ struct ServerConfig {
     // empty: no CORS headers at all.
     std::vector<std::string> cors_origins;
     // Batch jobs (POST /v1/jobs): kept in DATA_DIR/jobs.db and DATA_DIR/jobs/.
-    int job_runners = 2;             // jobs run at once (their outputs still pass the admission gate)
-    int max_queued_jobs = 100;       // jobs waiting; beyond -> 503
-    int max_job_files = 16;          // files per job
-    int max_job_outputs = 64;        // outputs per job
+    int job_runners = 2;        // jobs run at once (their outputs still pass the admission gate)
+    int max_queued_jobs = 100;  // jobs waiting; beyond -> 503
+    int max_job_files = 16;     // files per job
+    int max_job_outputs = 64;   // outputs per job
     // Job artifacts of all kept jobs together (server/jobs/artifact_quota.h): checked
     // at submission against an estimate and when each artifact is written.
     // 0: half the size of the data directory's file system, taken at start.

@@ -17,8 +17,8 @@ std::string lower(std::string s) {
 
 std::string normalized_origin(const std::string& origin) {
     // A host name, an IPv4 address or a bracketed IPv6 address; a port of up to 5 digits.
-    static const std::regex form(R"(^https?://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.-]*[A-Za-z0-9])?)(:[0-9]{1,5})?$)",
-                                 std::regex::icase);
+    static const std::regex form(
+        R"(^https?://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.-]*[A-Za-z0-9])?)(:[0-9]{1,5})?$)", std::regex::icase);
     if (!std::regex_match(origin, form))
         throw Error(ErrorCode::invalid_argument,
                     "CORS origin '" + origin.substr(0, 100) +

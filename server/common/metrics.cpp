@@ -60,8 +60,8 @@ void Metrics::count_webhook_attempt(const std::string& outcome) {
     ++webhook_attempts_[outcome];
 }
 
-void Metrics::write_histogram(std::string& out, const std::string& name, const std::string& labels,
-                              const Histogram& h, const std::vector<double>& bounds) {
+void Metrics::write_histogram(std::string& out, const std::string& name, const std::string& labels, const Histogram& h,
+                              const std::vector<double>& bounds) {
     uint64_t cumulative = 0;
     const std::string sep = labels.empty() ? "" : ",";
     for (size_t i = 0; i < bounds.size(); ++i) {
@@ -79,8 +79,8 @@ std::string Metrics::exposition(const Gauges& g) const {
     out += "# HELP nurbsrt_http_requests_total HTTP requests by route and status.\n";
     out += "# TYPE nurbsrt_http_requests_total counter\n";
     for (const auto& [k, v] : requests_)
-        out += "nurbsrt_http_requests_total{route=\"" + k.first + "\",status=\"" + std::to_string(k.second) +
-               "\"} " + std::to_string(v) + "\n";
+        out += "nurbsrt_http_requests_total{route=\"" + k.first + "\",status=\"" + std::to_string(k.second) + "\"} " +
+               std::to_string(v) + "\n";
     out += "# HELP nurbsrt_http_request_duration_seconds HTTP request latency by route.\n";
     out += "# TYPE nurbsrt_http_request_duration_seconds histogram\n";
     for (const auto& [route, h] : latency_)
@@ -97,16 +97,18 @@ std::string Metrics::exposition(const Gauges& g) const {
     out += "# TYPE nurbsrt_scene_cache_requests_total counter\n";
     out += "nurbsrt_scene_cache_requests_total{result=\"hit\"} " + std::to_string(cache_hits_) + "\n";
     out += "nurbsrt_scene_cache_requests_total{result=\"miss\"} " + std::to_string(cache_misses_) + "\n";
-    out += "# HELP nurbsrt_jobs_finished_total Batch jobs finished since start, by result "
-           "(canceled: deleted while running).\n";
+    out +=
+        "# HELP nurbsrt_jobs_finished_total Batch jobs finished since start, by result "
+        "(canceled: deleted while running).\n";
     out += "# TYPE nurbsrt_jobs_finished_total counter\n";
     for (const char* result : {"succeeded", "failed", "canceled"}) {
         const auto it = jobs_finished_.find(result);
         out += std::string("nurbsrt_jobs_finished_total{result=\"") + result + "\"} " +
                std::to_string(it == jobs_finished_.end() ? 0 : it->second) + "\n";
     }
-    out += "# HELP nurbsrt_webhook_attempts_total Job callback attempts made by this instance, by outcome "
-           "(retry: not delivered, tried again later; failed: given up).\n";
+    out +=
+        "# HELP nurbsrt_webhook_attempts_total Job callback attempts made by this instance, by outcome "
+        "(retry: not delivered, tried again later; failed: given up).\n";
     out += "# TYPE nurbsrt_webhook_attempts_total counter\n";
     for (const char* outcome : {"delivered", "retry", "failed"}) {
         const auto it = webhook_attempts_.find(outcome);
@@ -124,7 +126,8 @@ std::string Metrics::exposition(const Gauges& g) const {
     out += "# TYPE nurbsrt_instance_info gauge\n";
     out += "nurbsrt_instance_info{instance=\"" + g.instance + "\",job_store=\"" + g.job_store + "\"} 1\n";
     auto gauge = [&](const char* name, const char* help, double v) {
-        out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " gauge\n" + name + " " + num(v) + "\n";
+        out +=
+            std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " gauge\n" + name + " " + num(v) + "\n";
     };
     gauge("nurbsrt_work_active", "Imports and conversions running.", g.active);
     gauge("nurbsrt_work_queued", "Imports and conversions waiting for a worker.", g.queued);

@@ -19,7 +19,7 @@ public:
     void observe_stage(const std::string& stage, double seconds);
     void count_import_failure(const std::string& code);
     void count_cache(bool hit);
-    void count_job_finished(const std::string& result);  // succeeded | failed | canceled
+    void count_job_finished(const std::string& result);      // succeeded | failed | canceled
     void count_webhook_attempt(const std::string& outcome);  // delivered | retry | failed
 
     // Gauges are sampled by the caller when the text is produced.

@@ -18,8 +18,8 @@ std::string utc_timestamp() {
     std::tm tm{};
     gmtime_r(&t, &tm);
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1,
-                  tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
+    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                  tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
     return buf;
 }
 
@@ -52,16 +52,10 @@ std::string request_id_from_header(const std::string& v) {
 }
 
 void log_request(const RequestLogEntry& e) {
-    nlohmann::json j = {{"ts", utc_timestamp()},
-                        {"event", "request"},
-                        {"request_id", e.request_id},
-                        {"method", e.method},
-                        {"route", e.route},
-                        {"status", e.status},
-                        {"duration_ms", e.duration_ms},
-                        {"bytes_in", e.bytes_in},
-                        {"bytes_out", e.bytes_out},
-                        {"remote", e.remote}};
+    nlohmann::json j = {
+        {"ts", utc_timestamp()},    {"event", "request"}, {"request_id", e.request_id},   {"method", e.method},
+        {"route", e.route},         {"status", e.status}, {"duration_ms", e.duration_ms}, {"bytes_in", e.bytes_in},
+        {"bytes_out", e.bytes_out}, {"remote", e.remote}};
     if (!e.code.empty()) j["code"] = e.code;
     write_line(j);
 }

@@ -43,8 +43,8 @@ void ScratchDir::own_instance_dir(const std::string& instance) {
     const std::string lock = dir_ + "/" + instance + ".lock";
     lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
     if (lock_fd_ < 0 || flock(lock_fd_, LOCK_EX | LOCK_NB) != 0)
-        throw Error(ErrorCode::io, "cannot lock '" + lock + "': is another instance running with the id " + instance +
-                                       "?");
+        throw Error(ErrorCode::io,
+                    "cannot lock '" + lock + "': is another instance running with the id " + instance + "?");
     dir_ += "/" + instance;
     fs::create_directories(dir_, ec);
     if (ec || chmod(dir_.c_str(), 0700) != 0) throw Error(ErrorCode::io, "cannot create '" + dir_ + "'");

@@ -4,15 +4,24 @@ namespace nurbsrt::server {
 
 const char* service_code_name(ServiceCode code) {
     switch (code) {
-        case ServiceCode::not_found: return "not_found";
-        case ServiceCode::method_not_allowed: return "method_not_allowed";
-        case ServiceCode::overloaded: return "overloaded";
-        case ServiceCode::render_timeout: return "render_timeout";
-        case ServiceCode::unauthorized: return "unauthorized";
-        case ServiceCode::request_timeout: return "request_timeout";
-        case ServiceCode::interrupted: return "interrupted";
-        case ServiceCode::malformed_request: return "malformed_request";
-        case ServiceCode::not_implemented: return "not_implemented";
+        case ServiceCode::not_found:
+            return "not_found";
+        case ServiceCode::method_not_allowed:
+            return "method_not_allowed";
+        case ServiceCode::overloaded:
+            return "overloaded";
+        case ServiceCode::render_timeout:
+            return "render_timeout";
+        case ServiceCode::unauthorized:
+            return "unauthorized";
+        case ServiceCode::request_timeout:
+            return "request_timeout";
+        case ServiceCode::interrupted:
+            return "interrupted";
+        case ServiceCode::malformed_request:
+            return "malformed_request";
+        case ServiceCode::not_implemented:
+            return "not_implemented";
     }
     return "internal";  // out-of-range value cast to ServiceCode
 }

@@ -25,8 +25,8 @@ enum class ServiceCode {
     unauthorized,        // an API key is configured and the request has none or a wrong one
     request_timeout,     // the request's headers or body did not arrive in time (server/http/http_server.h)
     interrupted,         // a job's run was cut short by service restarts too often (server/jobs/job_runner.h)
-    malformed_request,   // the request's HTTP framing or header syntax is invalid (RFC 9112; server/http/http_framing.h)
-    not_implemented,     // a transfer coding other than chunked (RFC 9112 §6.1: 501); the last code (tests iterate up to it)
+    malformed_request,  // the request's HTTP framing or header syntax is invalid (RFC 9112; server/http/http_framing.h)
+    not_implemented,  // a transfer coding other than chunked (RFC 9112 §6.1: 501); the last code (tests iterate up to it)
 };
 
 // Stable machine-readable name ("not_found", ...), used in JSON errors and the job store.
@@ -41,7 +41,9 @@ public:
     const char* name() const;
     bool operator==(const ProblemCode&) const = default;
     template <class F>
-    auto visit(F&& f) const { return std::visit(static_cast<F&&>(f), code_); }
+    auto visit(F&& f) const {
+        return std::visit(static_cast<F&&>(f), code_);
+    }
 
 private:
     std::variant<ErrorCode, ServiceCode> code_;

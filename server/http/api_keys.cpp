@@ -36,7 +36,8 @@ void ApiKeys::add(std::string_view key, const std::string& where) {
         throw Error(ErrorCode::invalid_argument, "API key in " + where + " is shorter than 16 characters");
     for (const char c : key)
         if (std::isspace(static_cast<unsigned char>(c)) || std::iscntrl(static_cast<unsigned char>(c)))
-            throw Error(ErrorCode::invalid_argument, "API key in " + where + " contains whitespace or control characters");
+            throw Error(ErrorCode::invalid_argument,
+                        "API key in " + where + " contains whitespace or control characters");
     keys_.emplace_back(key);
 }
 
@@ -56,8 +57,8 @@ void ApiKeys::add_file(const std::string& path) {
     // Fail closed: a keys file that is empty, or only comments (a deployment
     // whose secret did not get mounted), must not start an open service.
     if (keys_.size() == before)
-        throw Error(ErrorCode::invalid_argument, "the API keys file " + path +
-                                                     " holds no key: refusing to start without authentication");
+        throw Error(ErrorCode::invalid_argument,
+                    "the API keys file " + path + " holds no key: refusing to start without authentication");
 }
 
 void ApiKeys::add_list(std::string_view list) {

@@ -107,7 +107,8 @@ FramingVerdict check_request_head(std::string_view head) {
 
     // RFC 9112 §3.2: exactly one Host in HTTP/1.1, at most one in HTTP/1.0.
     if (f.hosts > 1) return refuse("more than one Host header (RFC 9112 §3.2)");
-    if (f.hosts == 0 && !http10) return refuse("a request without a Host header (HTTP/1.1 requires one, RFC 9112 §3.2)");
+    if (f.hosts == 0 && !http10)
+        return refuse("a request without a Host header (HTTP/1.1 requires one, RFC 9112 §3.2)");
 
     FramingVerdict v;
     if (!f.transfer_encoding.empty()) {

@@ -195,8 +195,7 @@ void send_canned_problem(socket_t sock, int status, const char* reason, ProblemC
 // caps (see the header), and records why it stopped in Connection::failure.
 class RequestStream final : public httplib::Stream {
 public:
-    RequestStream(Connection& c, const ConnectionLimits& limits)
-        : c_(c), limits_(limits), start_(Clock::now()) {
+    RequestStream(Connection& c, const ConnectionLimits& limits) : c_(c), limits_(limits), start_(Clock::now()) {
         c_.framing = FramingVerdict{};
     }
 
@@ -481,16 +480,16 @@ bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip
         ok = process_request(stream, last, closed, nullptr);
         // A request that failed before routing got no answer from cpp-httplib.
         if (stream.written() == 0 && stream.header_bytes() > 0 && c.failure != ReadFailure::none) {
-            log_event("request_refused", "{\"remote\":\"" + c.remote_ip + "\",\"reason\":\"" +
-                                             (c.failure == ReadFailure::header_timeout ? "header timeout"
-                                                                                        : "headers too large") +
-                                             "\"}");
+            log_event("request_refused",
+                      "{\"remote\":\"" + c.remote_ip + "\",\"reason\":\"" +
+                          (c.failure == ReadFailure::header_timeout ? "header timeout" : "headers too large") + "\"}");
             if (c.failure == ReadFailure::header_timeout)
                 send_canned_problem(sock, 408, "Request Timeout", ServiceCode::request_timeout,
                                     "the request headers did not arrive within the time limit", 0);
             else if (c.failure == ReadFailure::header_too_large)
                 send_canned_problem(sock, 431, "Request Header Fields Too Large", ErrorCode::limit_exceeded,
-                                    "the request headers exceed " + std::to_string(kMaxRequestHeaderBytes) + " bytes", 0);
+                                    "the request headers exceed " + std::to_string(kMaxRequestHeaderBytes) + " bytes",
+                                    0);
         }
         if (!ok || closed || c.close_requested || c.failure != ReadFailure::none) break;
     }

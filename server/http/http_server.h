@@ -43,14 +43,14 @@ namespace nurbsrt::server {
 inline constexpr size_t kMaxRequestHeaderBytes = 64 * 1024;
 
 struct ConnectionLimits {
-    double header_timeout_s = 10;        // request line + headers, from the first byte
-    double min_body_rate = 64 * 1024;    // bytes/s, averaged, after a grace of header_timeout_s
-    size_t max_body_bytes = 64u << 20;   // the upload limit (payload_max_length)
-    int max_connections = 512;           // open connections in total; beyond: 503
-    int max_connections_per_client = 128;// per client address; beyond: 503
-    double keep_alive_timeout_s = 5;     // idle wait for the next request on a connection
+    double header_timeout_s = 10;          // request line + headers, from the first byte
+    double min_body_rate = 64 * 1024;      // bytes/s, averaged, after a grace of header_timeout_s
+    size_t max_body_bytes = 64u << 20;     // the upload limit (payload_max_length)
+    int max_connections = 512;             // open connections in total; beyond: 503
+    int max_connections_per_client = 128;  // per client address; beyond: 503
+    double keep_alive_timeout_s = 5;       // idle wait for the next request on a connection
     int max_requests_per_connection = 100;
-    int retry_after_s = 2;               // Retry-After of the connection-cap 503
+    int retry_after_s = 2;  // Retry-After of the connection-cap 503
 };
 
 // Why reading the current request stopped early (for the error handler's answer).

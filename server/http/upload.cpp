@@ -50,9 +50,9 @@ void read_multipart(const httplib::Request& req, std::initializer_list<const cha
         throw Error(ErrorCode::invalid_argument, "send either a 'file' part or a 'file_id' field, not both");
     for (const char* name : {"file", "file_id", "options"})
         if (req.files.count(name) > 1)
-            throw Error(ErrorCode::invalid_argument,
-                        std::string("more than one '") + name + "' part: send one file and one options part "
-                                                              "(several files: POST /v1/jobs)");
+            throw Error(ErrorCode::invalid_argument, std::string("more than one '") + name +
+                                                         "' part: send one file and one options part "
+                                                         "(several files: POST /v1/jobs)");
     if (file != req.files.end()) {
         up.bytes = &file->second.content;
         up.filename = file->second.filename;
@@ -62,8 +62,7 @@ void read_multipart(const httplib::Request& req, std::initializer_list<const cha
     up.multipart = true;
     if (const auto part = req.files.find("options"); part != req.files.end()) {
         const json o = parse_json_or_throw(part->second.content, kRequestJsonLimits, "the 'options' part");
-        if (!o.is_object())
-            throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
+        if (!o.is_object()) throw Error(ErrorCode::invalid_argument, "the 'options' part must be a JSON object");
         options.merge_patch(o);
     }
     for (const auto& [name, part] : req.files) {
@@ -112,7 +111,8 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
     for (const auto& [k, v] : req.params) {
         // A repeated parameter or part is refused, never resolved silently one way.
         if (options.contains(k))
-            throw Error(ErrorCode::invalid_argument, "query parameter '" + k.substr(0, 64) + "' is given more than once");
+            throw Error(ErrorCode::invalid_argument,
+                        "query parameter '" + k.substr(0, 64) + "' is given more than once");
         // Query strings are bytes, options are JSON text: a name or value that is
         // not UTF-8 names no option and could not be written as JSON.
         if (!is_utf8(k) || !is_utf8(v))
@@ -129,8 +129,13 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
         if (base == "application/json") {
             read_json_body(req.body, options, up);
         } else {
-            static const char* accepted[] = {"",           "application/octet-stream", "model/step", "model/iges",
-                                             "application/step", "application/iges", "application/p21"};
+            static const char* accepted[] = {"",
+                                             "application/octet-stream",
+                                             "model/step",
+                                             "model/iges",
+                                             "application/step",
+                                             "application/iges",
+                                             "application/p21"};
             bool ok = false;
             for (const char* a : accepted) ok = ok || base == a;
             if (!ok)
@@ -185,7 +190,8 @@ JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {
     for (const auto& [name, part] : req.files) {
         if (name == "file") {
             if (static_cast<int>(up.inputs.size()) >= max_job_files)
-                throw Error(ErrorCode::limit_exceeded, "more than " + std::to_string(max_job_files) + " files in one job");
+                throw Error(ErrorCode::limit_exceeded,
+                            "more than " + std::to_string(max_job_files) + " files in one job");
             const std::string& b = part.content;
             const int index = static_cast<int>(up.inputs.size());
             if (b.empty()) throw Error(ErrorCode::invalid_argument, "file " + std::to_string(index) + " is empty");

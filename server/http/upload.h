@@ -20,10 +20,10 @@ struct Upload {
     // The file's content (points into the request); nullptr when the request
     // names a stored file instead (file_id), whose bytes the route loads.
     const std::string* bytes = nullptr;
-    std::string file_id;                 // a stored file (server/store/file_store.h), as sent; "" for an upload
-    std::string options_json;            // JSON object text: query parameters overlaid by the options part
-    std::string filename;                // the `file` part's file name as sent ("" for a raw body)
-    bool multipart = false;              // the file came as the `file` part of multipart/form-data
+    std::string file_id;       // a stored file (server/store/file_store.h), as sent; "" for an upload
+    std::string options_json;  // JSON object text: query parameters overlaid by the options part
+    std::string filename;      // the `file` part's file name as sent ("" for a raw body)
+    bool multipart = false;    // the file came as the `file` part of multipart/form-data
 };
 // A stored file is named by a `file_id` part instead of `file`, or by a JSON
 // body {"file_id": "...", <options>} (Content-Type application/json), whose
@@ -52,9 +52,9 @@ struct JobUpload {
     // The `file` parts in order (index, filename, format, size), then the
     // `file_id` parts in order (index only: the route fills in the stored file's).
     std::vector<JobInput> inputs;
-    std::vector<const std::string*> bytes;     // their contents (point into the request); nullptr for a file_id
-    std::vector<std::string> file_ids;         // the stored file of each input; "" for an uploaded one
-    const std::string* job_json = nullptr;     // the `job` part
+    std::vector<const std::string*> bytes;  // their contents (point into the request); nullptr for a file_id
+    std::vector<std::string> file_ids;      // the stored file of each input; "" for an uploaded one
+    const std::string* job_json = nullptr;  // the `job` part
 };
 // Throws Error(unsupported_format) for a body that is not multipart or a file
 // that is neither STEP nor IGES, Error(limit_exceeded) beyond `max_job_files`

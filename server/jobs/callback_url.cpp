@@ -18,10 +18,9 @@ constexpr size_t kMaxCallbackUrlLength = 2048;
 
 bool public_v4(uint32_t a) {  // host byte order
     auto in = [a](uint32_t net, int bits) { return (a >> (32 - bits)) == (net >> (32 - bits)); };
-    return !(in(0x00000000, 8) || in(0x0A000000, 8) || in(0x64400000, 10) || in(0x7F000000, 8) ||
-             in(0xA9FE0000, 16) || in(0xAC100000, 12) || in(0xC0000000, 24) || in(0xC0000200, 24) ||
-             in(0xC0A80000, 16) || in(0xC6120000, 15) || in(0xC6336400, 24) || in(0xCB007100, 24) ||
-             in(0xE0000000, 4) || in(0xF0000000, 4));
+    return !(in(0x00000000, 8) || in(0x0A000000, 8) || in(0x64400000, 10) || in(0x7F000000, 8) || in(0xA9FE0000, 16) ||
+             in(0xAC100000, 12) || in(0xC0000000, 24) || in(0xC0000200, 24) || in(0xC0A80000, 16) ||
+             in(0xC6120000, 15) || in(0xC6336400, 24) || in(0xCB007100, 24) || in(0xE0000000, 4) || in(0xF0000000, 4));
 }
 
 bool public_v6(const unsigned char* b) {
@@ -30,9 +29,9 @@ bool public_v6(const unsigned char* b) {
     if (std::equal(mapped, mapped + 12, b) || std::equal(nat64, nat64 + 12, b))
         return public_v4(uint32_t(b[12]) << 24 | uint32_t(b[13]) << 16 | uint32_t(b[14]) << 8 | b[15]);
     if (std::all_of(b, b + 15, [](unsigned char c) { return c == 0; })) return false;  // :: and ::1
-    if ((b[0] & 0xfe) == 0xfc) return false;                                            // fc00::/7 unique local
-    if (b[0] == 0xfe && (b[1] & 0xc0) == 0x80) return false;                            // fe80::/10 link-local
-    if (b[0] == 0xff) return false;                                                     // multicast
+    if ((b[0] & 0xfe) == 0xfc) return false;                                           // fc00::/7 unique local
+    if (b[0] == 0xfe && (b[1] & 0xc0) == 0x80) return false;                           // fe80::/10 link-local
+    if (b[0] == 0xff) return false;                                                    // multicast
     if (b[0] == 0x20 && b[1] == 0x01 && b[2] == 0x0d && b[3] == 0xb8) return false;    // 2001:db8::/32 documentation
     return true;
 }
@@ -75,8 +74,8 @@ CallbackUrl check_callback_url(const std::string& url, bool allow_private) {
     std::transform(scheme.begin(), scheme.end(), scheme.begin(), [](unsigned char c) { return std::tolower(c); });
     if (scheme != "http" && scheme != "https") bad("must be an http:// or https:// URL");
     const size_t authority_end = url.find_first_of("/?#", colon + 3);
-    const std::string authority = url.substr(colon + 3, authority_end == std::string::npos ? std::string::npos
-                                                                                          : authority_end - colon - 3);
+    const std::string authority =
+        url.substr(colon + 3, authority_end == std::string::npos ? std::string::npos : authority_end - colon - 3);
     if (authority.find('@') != std::string::npos)
         bad("must not carry user information (user:password@): receivers check the signature instead");
     if (url.find('#') != std::string::npos) bad("must not have a fragment (#...)");

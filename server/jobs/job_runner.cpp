@@ -70,8 +70,10 @@ JobService::JobService(ServerContext& ctx)
         store_ = open_sqlite_job_store(ctx.config.job_store.empty() ? ctx.config.data_dir + "/jobs.db"
                                                                     : ctx.config.job_store);
     webhooks_ = std::make_unique<WebhookSender>(*store_, ctx.config, ctx.metrics);
-    log_event("job_store", nlohmann::json{{"store", store_->describe()}, {"instance", instance_},
-                                          {"shared", store_->shared()}, {"lease_ms", store_->lease_ms()}}
+    log_event("job_store", nlohmann::json{{"store", store_->describe()},
+                                          {"instance", instance_},
+                                          {"shared", store_->shared()},
+                                          {"lease_ms", store_->lease_ms()}}
                                .dump());
     if (store_->shared()) {
         sweep();
@@ -143,7 +145,7 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
     std::lock_guard<std::mutex> submit_lock(submit_m_);
     if (store_->count_by_state()[JobState::queued] >= ctx_.config.max_queued_jobs)
         throw ServiceError(ServiceCode::overloaded,
-                    std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
+                           std::to_string(ctx_.config.max_queued_jobs) + " jobs are already waiting; retry later");
     job.id = new_request_id();
     job.created_ms = unix_now_ms();
     const std::string dir = job_dir(job.id);
@@ -359,8 +361,7 @@ void JobService::end_claim(const JobClaim& claim) {
         const auto now = store_->get(claim.id);
         bool left = false;
         for (const JobOutput& o : now ? now->outputs : std::vector<JobOutput>{})
-            for (const int index : claim.run)
-                left = left || (o.index == index && !is_finished(o.state));
+            for (const int index : claim.run) left = left || (o.index == index && !is_finished(o.state));
         if (left) {
             store_->requeue(claim);
             log_event("job_requeued", nlohmann::json{{"job_id", claim.id}}.dump());

@@ -87,10 +87,12 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             if (options.is_null()) options = json::object();  // null: every option's default
             if (!options.is_object()) bad(where + ": 'options' must be an object");
             // A null option is its default: kept out of the stored options (and the job document).
-            for (auto it = options.begin(); it != options.end();) it = it->is_null() ? options.erase(it) : std::next(it);
+            for (auto it = options.begin(); it != options.end();)
+                it = it->is_null() ? options.erase(it) : std::next(it);
             if (options.contains("camera") && options["camera"].is_object()) {
                 json& camera = options["camera"];
-                for (auto it = camera.begin(); it != camera.end();) it = it->is_null() ? camera.erase(it) : std::next(it);
+                for (auto it = camera.begin(); it != camera.end();)
+                    it = it->is_null() ? camera.erase(it) : std::next(it);
             }
             out.options_json = options.dump();
             RenderRequest r;

@@ -106,8 +106,8 @@ std::string read_webhook_secret_file(const std::string& path) {
 
 void check_webhook_secret(const std::string& secret) {
     if (secret.size() < kMinSecretLength)
-        throw Error(ErrorCode::invalid_argument, "the webhook secret must have at least " +
-                                                     std::to_string(kMinSecretLength) + " characters");
+        throw Error(ErrorCode::invalid_argument,
+                    "the webhook secret must have at least " + std::to_string(kMinSecretLength) + " characters");
     for (unsigned char c : secret)
         if (c < 0x20 || c == 0x7f)
             throw Error(ErrorCode::invalid_argument, "the webhook secret must not contain control characters");
@@ -202,12 +202,11 @@ void WebhookSender::attempt(const JobRecord& job) {
     }
     const char* outcome = out.delivered ? "delivered" : a.state == CallbackState::failed ? "failed" : "retry";
     metrics_.count_webhook_attempt(outcome);
-    log_event("webhook_attempt", nlohmann::json{{"job_id", job.id},
-                                                {"attempt", number},
-                                                {"outcome", outcome},
-                                                {"status", out.status},
-                                                {"error", out.error}}
-                                     .dump());
+    log_event(
+        "webhook_attempt",
+        nlohmann::json{
+            {"job_id", job.id}, {"attempt", number}, {"outcome", outcome}, {"status", out.status}, {"error", out.error}}
+            .dump());
     try {
         store_.callback_attempted(job.id, a);
     } catch (const std::exception& e) {

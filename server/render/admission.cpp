@@ -46,7 +46,8 @@ std::shared_ptr<AdmissionGate::Ticket> AdmissionGate::enter(std::chrono::millise
     fifo_waiting_.emplace_back(my_number, bytes);
     const auto deadline = std::chrono::steady_clock::now() + max_wait;
     bool gave_up = false;
-    const bool admitted = wait_for(lock, deadline, [&] { return serving_ == my_number && fits(); }, give_up, gave_up);
+    const bool admitted = wait_for(
+        lock, deadline, [&] { return serving_ == my_number && fits(); }, give_up, gave_up);
     --queued_;
     fifo_waiting_.erase(std::find(fifo_waiting_.begin(), fifo_waiting_.end(), std::make_pair(my_number, bytes)));
     if (!admitted) {
@@ -88,8 +89,7 @@ std::shared_ptr<AdmissionGate::Ticket> AdmissionGate::overtake(std::unique_lock<
         }
         ++queued_;
         bool gave_up = false;
-        const bool admitted =
-            wait_for(lock, std::chrono::steady_clock::now() + max_wait, ready, give_up, gave_up);
+        const bool admitted = wait_for(lock, std::chrono::steady_clock::now() + max_wait, ready, give_up, gave_up);
         --queued_;
         if (!admitted) {
             why = gave_up ? Refusal::gave_up : Refusal::queue_timeout;

@@ -78,8 +78,8 @@ private:
     std::condition_variable cv_;
     int active_ = 0, queued_ = 0;
     size_t used_bytes_ = 0;
-    uint64_t next_number_ = 0, serving_ = 0;  // FIFO among waiters
-    std::vector<uint64_t> abandoned_;           // numbers whose waiters timed out
+    uint64_t next_number_ = 0, serving_ = 0;                 // FIFO among waiters
+    std::vector<uint64_t> abandoned_;                        // numbers whose waiters timed out
     std::vector<std::pair<uint64_t, size_t>> fifo_waiting_;  // number and bytes of each FIFO waiter
 };
 

@@ -50,7 +50,8 @@ bool boolean(const json& v, const std::string& key) {
 std::string background_text(const json& v, const std::string& key, size_t max_size) {
     const std::string what = "option '" + key + "'";
     const std::string sizes = max_size == 3 ? "3" : "3 or 4";
-    if (!v.is_array() || v.size() < 3 || v.size() > max_size) bad(what + " must be an array of " + sizes + " numbers, or a string");
+    if (!v.is_array() || v.size() < 3 || v.size() > max_size)
+        bad(what + " must be an array of " + sizes + " numbers, or a string");
     std::string text;
     for (const json& x : v) {
         if (!x.is_number()) bad(what + " must be an array of " + sizes + " numbers, or a string");
@@ -120,8 +121,9 @@ unsigned aov_bits(const json& v, const std::string& key) {
         bool known = false;
         for (Aov a : kAllAovs)
             if (name == aov_name(a)) bits |= aov_bit(a), known = true;
-        if (!known) bad("option '" + key + "' names an unknown AOV '" + name.substr(0, 64) +
-                        "' (z, face, normal, uv, iterations)");
+        if (!known)
+            bad("option '" + key + "' names an unknown AOV '" + name.substr(0, 64) +
+                "' (z, face, normal, uv, iterations)");
     }
     return bits;
 }
@@ -134,9 +136,12 @@ constexpr const char* kRenderOptions =
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
-    if (key == "eye") r.eye = vec3(v, key);
-    else if (key == "target") r.target = vec3(v, key);
-    else if (key == "up") r.up = vec3(v, key);
+    if (key == "eye")
+        r.eye = vec3(v, key);
+    else if (key == "target")
+        r.target = vec3(v, key);
+    else if (key == "up")
+        r.up = vec3(v, key);
     else if (key == "projection")
         r.projection = one_of(v, key, {"perspective", "orthographic"}) == "orthographic" ? Projection::orthographic
                                                                                          : Projection::perspective;
@@ -226,7 +231,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
         } else if (key == "map_precision") {
             r.map_precision = *parse_map_precision(one_of(v, key, {"float", "rgb8"}));
         } else if (key == "format") {
-            r.format = output_format(image_format_of_extension(one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"})));
+            r.format =
+                output_format(image_format_of_extension(one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"})));
         } else if (key == "background") {
             r.background = background(v, key);
         } else if (key == "aovs") {
@@ -259,11 +265,16 @@ RenderRequest parse_render_options(const std::string& options_json) {
 
 const char* aov_name(Aov a) {
     switch (a) {
-        case Aov::z: return "z";
-        case Aov::face: return "face";
-        case Aov::normal: return "normal";
-        case Aov::uv: return "uv";
-        case Aov::iterations: break;
+        case Aov::z:
+            return "z";
+        case Aov::face:
+            return "face";
+        case Aov::normal:
+            return "normal";
+        case Aov::uv:
+            return "uv";
+        case Aov::iterations:
+            break;
     }
     return "iterations";
 }
@@ -295,10 +306,14 @@ ImageFormat image_format_of_extension(std::string ext) {
 
 OutputFormat output_format(ImageFormat kind) {
     switch (kind) {
-        case ImageFormat::jpeg: return {kind, "jpeg", ".jpg", "image/jpeg"};
-        case ImageFormat::tiff: return {kind, "tiff", ".tif", "image/tiff"};
-        case ImageFormat::exr: return {kind, "exr", ".exr", "image/x-exr"};
-        default: return {ImageFormat::png, "png", ".png", "image/png"};
+        case ImageFormat::jpeg:
+            return {kind, "jpeg", ".jpg", "image/jpeg"};
+        case ImageFormat::tiff:
+            return {kind, "tiff", ".tif", "image/tiff"};
+        case ImageFormat::exr:
+            return {kind, "exr", ".exr", "image/x-exr"};
+        default:
+            return {ImageFormat::png, "png", ".png", "image/png"};
     }
 }
 

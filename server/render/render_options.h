@@ -92,7 +92,7 @@ struct RenderRequest {
     MapPrecision map_precision = MapPrecision::float32;
     OutputFormat format = output_format(ImageFormat::png);
     std::optional<Background> background;  // unset: default_background(format)
-    unsigned aovs = 0;                      // aov_bit() of each AOV asked for
+    unsigned aovs = 0;                     // aov_bit() of each AOV asked for
     ImageLook look;
 };
 

@@ -48,9 +48,12 @@ RenderPriority priority_for(const FrameCost& cost) {
 
 const char* priority_name(RenderPriority p) {
     switch (p) {
-        case RenderPriority::low: return "low";
-        case RenderPriority::high: return "high";
-        case RenderPriority::normal: break;
+        case RenderPriority::low:
+            return "low";
+        case RenderPriority::high:
+            return "high";
+        case RenderPriority::normal:
+            break;
     }
     return "normal";
 }
@@ -121,16 +124,24 @@ std::vector<AovBuffer> aov_buffers(const RenderImage& image, unsigned bits) {
     for (Aov a : kAllAovs) {
         if (!(bits & aov_bit(a))) continue;
         switch (a) {
-            case Aov::z: out.push_back({a, "float32", 1, raw_bytes(image.z)}); break;
-            case Aov::face: out.push_back({a, "uint32", 1, raw_bytes(image.face)}); break;
-            case Aov::normal: out.push_back({a, "float32", 3, raw_bytes(image.normal)}); break;
+            case Aov::z:
+                out.push_back({a, "float32", 1, raw_bytes(image.z)});
+                break;
+            case Aov::face:
+                out.push_back({a, "uint32", 1, raw_bytes(image.face)});
+                break;
+            case Aov::normal:
+                out.push_back({a, "float32", 3, raw_bytes(image.normal)});
+                break;
             case Aov::uv: {
                 std::vector<float> uv(image.u.size() * 2);
                 for (size_t i = 0; i < image.u.size(); ++i) uv[2 * i] = image.u[i], uv[2 * i + 1] = image.v[i];
                 out.push_back({a, "float32", 2, raw_bytes(uv)});
                 break;
             }
-            case Aov::iterations: out.push_back({a, "uint8", 1, raw_bytes(image.iterations)}); break;
+            case Aov::iterations:
+                out.push_back({a, "uint8", 1, raw_bytes(image.iterations)});
+                break;
         }
     }
     return out;
@@ -139,8 +150,7 @@ std::vector<AovBuffer> aov_buffers(const RenderImage& image, unsigned bits) {
 }  // namespace
 
 std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& bytes,
-                                                    const RenderControl& control, bool& cache_hit,
-                                                    StageClock& stages) {
+                                                    const RenderControl& control, bool& cache_hit, StageClock& stages) {
     const ImportOptions options;
     SceneCache::Source source = SceneCache::Source::loaded;
     // A hash of every byte, unless the caller knows it: a stage of its own.

@@ -27,9 +27,9 @@ struct AovBuffer {
 };
 
 struct RenderedImage {
-    std::string bytes;       // the encoded image (r.format)
+    std::string bytes;            // the encoded image (r.format)
     std::vector<AovBuffer> aovs;  // those of r.aovs, in kAllAovs order
-    std::string stats_json;  // the Statistics object's JSON text (with camera, cache, warnings)
+    std::string stats_json;       // the Statistics object's JSON text (with camera, cache, warnings)
     bool cache_hit = false;
     // The stages from RenderControl::start to the statistics, as in stats_json's
     // timings_ms; a caller that builds an answer from this marks its own stage
@@ -68,8 +68,7 @@ struct RenderControl {
 // the slot), prescan, isolation, read, nurbs_convert, mesh, transfer, prepare.
 // Also what POST /v1/files imports, so a stored file's first render is a hit.
 std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& cad_bytes,
-                                                    const RenderControl& control, bool& cache_hit,
-                                                    StageClock& stages);
+                                                    const RenderControl& control, bool& cache_hit, StageClock& stages);
 
 // Renders `cad_bytes` (STEP/IGES, already checked by content) with `r`.
 // Admission happens here, in two steps: an import slot (ctx.gate) when the

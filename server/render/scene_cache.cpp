@@ -62,9 +62,8 @@ void SceneCache::put(const std::string& key, std::shared_ptr<const PreparedScene
     }
 }
 
-std::shared_ptr<const PreparedScene> SceneCache::get_or_load(const std::string& key,
-                                                     const std::function<std::shared_ptr<const PreparedScene>()>& load,
-                                                     Source& source) {
+std::shared_ptr<const PreparedScene> SceneCache::get_or_load(
+    const std::string& key, const std::function<std::shared_ptr<const PreparedScene>()>& load, Source& source) {
     std::promise<std::shared_ptr<const PreparedScene>> promise;
     {
         std::unique_lock<std::mutex> lock(m_);

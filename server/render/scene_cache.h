@@ -49,8 +49,8 @@ public:
     // import it once); the result is put in the cache. When `load` throws, every
     // caller waiting for it gets the same exception and nothing is cached.
     std::shared_ptr<const PreparedScene> get_or_load(const std::string& key,
-                                             const std::function<std::shared_ptr<const PreparedScene>()>& load,
-                                             Source& source);
+                                                     const std::function<std::shared_ptr<const PreparedScene>()>& load,
+                                                     Source& source);
 
     size_t bytes() const;
     size_t entries() const;

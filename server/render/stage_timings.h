@@ -22,9 +22,9 @@ namespace nurbsrt::server {
 // A render's stages in the order they run (a cached scene skips prescan
 // through prepare; frame stages that are off take 0).
 inline constexpr const char* kRenderStages[] = {
-    "upload",     "cache",    "queue",        "prescan",  "isolation",       "read",   "nurbs_convert",
-    "mesh",       "transfer", "prepare",      "frame_setup", "preliminary_map", "newton", "shadow_map",
-    "shade",      "antialias", "edges",       "statistics", "encode",         "response"};
+    "upload", "cache",     "queue",   "prescan",     "isolation",       "read",    "nurbs_convert",
+    "mesh",   "transfer",  "prepare", "frame_setup", "preliminary_map", "newton",  "shadow_map",
+    "shade",  "antialias", "edges",   "statistics",  "encode",          "response"};
 
 // A conversion's stages in the order they run (mesh: STL, glb and NURBS JSON;
 // verify: STEP and IGES).

@@ -12,21 +12,24 @@ std::shared_ptr<AdmissionGate::Ticket> admit(ServerContext& ctx, AdmissionGate& 
                                              const AdmissionWait& wait) {
     // A full queue turns a request away; patient work tries again shortly.
     constexpr auto kRetryWhenFull = std::chrono::milliseconds(200);
-    const auto max_wait = wait.patient ? std::chrono::milliseconds(std::chrono::hours(24))
-                                       : std::chrono::milliseconds(static_cast<long long>(ctx.config.queue_timeout_s * 1000));
+    const auto max_wait = wait.patient
+                              ? std::chrono::milliseconds(std::chrono::hours(24))
+                              : std::chrono::milliseconds(static_cast<long long>(ctx.config.queue_timeout_s * 1000));
     for (;;) {
         AdmissionGate::Refusal why;
         auto ticket = gate.enter(max_wait, why, wait.give_up, bytes, wait.order);
         if (ticket) return ticket;
         switch (why) {
             case AdmissionGate::Refusal::too_large:
-                throw Error(ErrorCode::limit_exceeded,
-                            "the work needs an estimated " + std::to_string(bytes >> 20) + " MiB; the service's memory for it is " +
-                                std::to_string(gate.capacity_bytes() >> 20) + " MiB in all");
-            case AdmissionGate::Refusal::gave_up: throw Error(ErrorCode::canceled, "the work was canceled while waiting");
+                throw Error(ErrorCode::limit_exceeded, "the work needs an estimated " + std::to_string(bytes >> 20) +
+                                                           " MiB; the service's memory for it is " +
+                                                           std::to_string(gate.capacity_bytes() >> 20) + " MiB in all");
+            case AdmissionGate::Refusal::gave_up:
+                throw Error(ErrorCode::canceled, "the work was canceled while waiting");
             case AdmissionGate::Refusal::queue_full:
                 if (wait.patient) {
-                    if (wait.give_up && wait.give_up()) throw Error(ErrorCode::canceled, "the work was canceled while waiting");
+                    if (wait.give_up && wait.give_up())
+                        throw Error(ErrorCode::canceled, "the work was canceled while waiting");
                     std::this_thread::sleep_for(kRetryWhenFull);
                     continue;
                 }
@@ -34,7 +37,8 @@ std::shared_ptr<AdmissionGate::Ticket> admit(ServerContext& ctx, AdmissionGate& 
             case AdmissionGate::Refusal::queue_timeout:
                 if (wait.patient) continue;
                 throw ServiceError(ServiceCode::overloaded, "no worker became free in time; retry later");
-            case AdmissionGate::Refusal::none: break;
+            case AdmissionGate::Refusal::none:
+                break;
         }
         throw Error(ErrorCode::internal, "admission refused without a reason");
     }

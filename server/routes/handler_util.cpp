@@ -29,9 +29,7 @@ std::string lower(std::string s) {
 
 std::string request_id(const httplib::Response& res) { return res.get_header_value("X-Request-Id"); }
 
-void note_request_start(const std::string& id) {
-    t_note = ThreadNote{true, std::chrono::steady_clock::now(), id, ""};
-}
+void note_request_start(const std::string& id) { t_note = ThreadNote{true, std::chrono::steady_clock::now(), id, ""}; }
 
 void note_problem_code(const std::string& code) { t_note.code = code; }
 
@@ -49,7 +47,8 @@ RequestNote take_request_note() {
 void send_problem(httplib::Response& res, ProblemCode code, const std::string& detail, int retry_after_s) {
     const Problem p = make_problem(code, detail, request_id(res));
     res.status = p.status;
-    if (code == ServiceCode::overloaded && retry_after_s > 0) res.set_header("Retry-After", std::to_string(retry_after_s));
+    if (code == ServiceCode::overloaded && retry_after_s > 0)
+        res.set_header("Retry-After", std::to_string(retry_after_s));
     res.set_content(p.body, kProblemContentType);
     note_problem_code(code.name());
 }

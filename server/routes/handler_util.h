@@ -86,11 +86,9 @@ inline constexpr const char* kBulkJsonContentType = "application/json; charset=u
 // True when the client asked for JSON (Accept contains application/json).
 bool wants_json(const httplib::Request& req);
 
-
 // For a request naming a stored file (upload.file_id, server/store/file_store.h):
 // loads its record and bytes into `stored` and points upload.bytes and
 // upload.filename at them. Throws Error(not_found) naming the id.
 void load_stored_file(ServerContext& ctx, Upload& upload, StoredContent& stored);
-
 
 }  // namespace nurbsrt::server

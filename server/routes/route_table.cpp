@@ -7,8 +7,8 @@
 namespace nurbsrt::server {
 
 std::string route_of(const std::string& path) {
-    static const char* known[] = {"/v1/renders", "/v1/conversions", "/v1/jobs", "/v1/files", "/healthz", "/readyz",
-                                  "/metrics",     "/v1/openapi.json", "/"};
+    static const char* known[] = {"/v1/renders", "/v1/conversions", "/v1/jobs",         "/v1/files", "/healthz",
+                                  "/readyz",     "/metrics",        "/v1/openapi.json", "/"};
     for (const char* k : known)
         if (path == k) return k;
     // Job and stored-file resources by template (the id and name are the client's, unbounded).

@@ -102,9 +102,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         res.set_header("Server-Timing", server_timing(stages, kConversionStages));
         res.set_content(body.dump(), kBulkJsonContentType);
     } else {
-        res.set_header("Content-Disposition", "attachment; filename=\"" +
-                                                  download_name(upload.filename, download_extension(format)) +
-                                                  "\"");
+        res.set_header("Content-Disposition",
+                       "attachment; filename=\"" + download_name(upload.filename, download_extension(format)) + "\"");
         if (!report.warnings.empty()) res.set_header("X-Nurbsrt-Warnings", warnings_header(report.warnings));
         res.set_content(data, content_type.c_str());
         stages.mark("response");

@@ -55,8 +55,8 @@ json import_summary(const Scene& scene) {
     if (!scene.bbox.empty())
         bbox = {{"min", {scene.bbox.lo.x, scene.bbox.lo.y, scene.bbox.lo.z}},
                 {"max", {scene.bbox.hi.x, scene.bbox.hi.y, scene.bbox.hi.z}}};
-    return {{"faces", scene.faces.size()}, {"bodies", scene.bodies.size()}, {"units", scene.units},
-            {"bbox", bbox},         {"colors", color_list},             {"warnings", scene.warnings}};
+    return {{"faces", scene.faces.size()}, {"bodies", scene.bodies.size()}, {"units", scene.units}, {"bbox", bbox},
+            {"colors", color_list},        {"warnings", scene.warnings}};
 }
 
 json file_json(const ServerContext& ctx, const StoredFile& f) {
@@ -121,8 +121,8 @@ UploadRequest upload_parameters(const httplib::Request& req, const Upload& uploa
         } else if (k == "filename" && v.is_string()) {
             out.filename = v.get<std::string>();
         } else {
-            throw Error(ErrorCode::invalid_argument, "unknown parameter '" + k.substr(0, 64) +
-                                                         "' (a stored file takes 'filename' and 'pinned')");
+            throw Error(ErrorCode::invalid_argument,
+                        "unknown parameter '" + k.substr(0, 64) + "' (a stored file takes 'filename' and 'pinned')");
         }
     }
     if (upload.multipart && !upload.filename.empty()) out.filename = upload.filename;
@@ -180,7 +180,8 @@ void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Res
     file.summary_json = import_summary(prepared->scene()).dump(-1, ' ', false, json::error_handler_t::replace);
     file.created_ms = unix_now_ms();
     switch (ctx.files.put(file, bytes)) {
-        case FileStore::PutOutcome::over_quota: return send_over_quota(ctx, res, bytes.size());
+        case FileStore::PutOutcome::over_quota:
+            return send_over_quota(ctx, res, bytes.size());
         case FileStore::PutOutcome::created:
             res.set_header("Location", file_url(file.id));
             return send_json(res, file_json(ctx, file), 201);
@@ -243,7 +244,8 @@ void handle_patch(ServerContext& ctx, const httplib::Request& req, httplib::Resp
         throw Error(ErrorCode::invalid_argument, "the body must be {\"pinned\": true} or {\"pinned\": false}");
     for (const auto& [k, v] : body.items())
         if (k != "pinned")
-            throw Error(ErrorCode::invalid_argument, "field '" + k.substr(0, 64) + "' cannot be changed (only 'pinned')");
+            throw Error(ErrorCode::invalid_argument,
+                        "field '" + k.substr(0, 64) + "' cannot be changed (only 'pinned')");
     const std::optional<StoredFile> f = ctx.files.set_pinned(id, body["pinned"].get<bool>());
     if (!f) throw no_such_file(id);
     send_json(res, file_json(ctx, *f));
@@ -254,7 +256,6 @@ void handle_delete(ServerContext& ctx, const httplib::Request& req, httplib::Res
     if (!ctx.files.remove(id)) throw no_such_file(id);
     res.status = 204;
 }
-
 
 }  // namespace
 

@@ -50,8 +50,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
             const std::string etag = render_etag(stored.file.id, upload.options_json);
             res.set_header("ETag", etag);
             res.set_header("Vary", "Accept");
-            if (req.has_header("If-None-Match") &&
-                if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
+            if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
                 res.status = 304;
                 return;
             }

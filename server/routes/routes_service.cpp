@@ -45,7 +45,8 @@ void add_service_routes(httplib::Server& svr, ServerContext& ctx) {
         g.cache_entries = ctx.cache.entries();
         g.cache_capacity = ctx.cache.capacity();
         if (ctx.jobs)
-            for (const auto& [state, n] : ctx.jobs->store().count_by_state()) g.jobs_by_state[job_state_name(state)] = n;
+            for (const auto& [state, n] : ctx.jobs->store().count_by_state())
+                g.jobs_by_state[job_state_name(state)] = n;
         g.instance = ctx.config.instance_id;
         g.job_store = ctx.config.job_store.empty() ? "sqlite" : "postgresql";
         res.set_content(ctx.metrics.exposition(g), "text/plain; version=0.0.4; charset=utf-8");

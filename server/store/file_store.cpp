@@ -53,8 +53,9 @@ void write_atomically(const std::string& dir, const std::string& path, const std
 json record_json(const StoredFile& f) {
     json summary = json::parse(f.summary_json, nullptr, false);
     if (summary.is_discarded()) summary = json::object();
-    return {{"id", f.id},         {"format", f.format},         {"filename", f.filename}, {"bytes", f.bytes},
-            {"created_ms", f.created_ms}, {"pinned", f.pinned}, {"summary", summary}};
+    return {{"id", f.id},        {"format", f.format},         {"filename", f.filename},
+            {"bytes", f.bytes},  {"created_ms", f.created_ms}, {"pinned", f.pinned},
+            {"summary", summary}};
 }
 
 std::optional<StoredFile> read_record(const std::string& path) {
@@ -86,7 +87,9 @@ std::string make_cursor(bool newest_first, const StoredFile& f) {
 }
 
 std::pair<int64_t, std::string> parse_cursor(const std::string& c, bool newest_first) {
-    const auto bad = [] { return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page"); };
+    const auto bad = [] {
+        return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
+    };
     const size_t dot = c.find('.');
     if (c.size() < 3 || c[0] != (newest_first ? 'n' : 'o') || dot == std::string::npos || dot < 2 || dot > 17)
         throw bad();
@@ -113,8 +116,8 @@ bool FileStore::valid_id(const std::string& id) {
 std::string FileStore::content_path(const std::string& id) const { return dir_ + "/" + id + kContentSuffix; }
 
 void FileStore::write_record(const StoredFile& file) const {
-    write_atomically(dir_, dir_ + "/" + file.id + kRecordSuffix, record_json(file).dump(-1, ' ', false,
-                                                                                        json::error_handler_t::replace));
+    write_atomically(dir_, dir_ + "/" + file.id + kRecordSuffix,
+                     record_json(file).dump(-1, ' ', false, json::error_handler_t::replace));
 }
 
 FileStore::PutOutcome FileStore::put(StoredFile& file, const std::string& bytes) {
@@ -143,7 +146,8 @@ std::optional<StoredFile> FileStore::get(const std::string& id) const {
 
 StoredContent FileStore::open(const std::string& id) const {
     const auto missing = [&] {
-        return ServiceError(ServiceCode::not_found, "no stored file '" + id.substr(0, 80) + "' (POST /v1/files stores one)");
+        return ServiceError(ServiceCode::not_found,
+                            "no stored file '" + id.substr(0, 80) + "' (POST /v1/files stores one)");
     };
     std::optional<StoredFile> f = get(id);
     if (!f) throw missing();
@@ -236,7 +240,8 @@ int FileStore::expire(int64_t before_ms) {
                             !fs::exists(dir_ + "/" + entry.path().stem().string() + kRecordSuffix);
         if (!temp && !orphan) continue;
         const auto t = fs::last_write_time(entry.path(), ec);
-        if (!ec && now - t > std::chrono::duration_cast<clock::duration>(kLeftoverAge)) leftovers.push_back(entry.path());
+        if (!ec && now - t > std::chrono::duration_cast<clock::duration>(kLeftoverAge))
+            leftovers.push_back(entry.path());
     }
     for (const fs::path& p : leftovers) fs::remove(p, ec);
     return removed;

@@ -30,9 +30,9 @@
 namespace nurbsrt::server {
 
 struct StoredFile {
-    std::string id;            // the SHA-256 of the bytes, 64 lowercase hex digits
-    std::string format;        // STEP | IGES (by content)
-    std::string filename;      // the client's label only (never a path)
+    std::string id;        // the SHA-256 of the bytes, 64 lowercase hex digits
+    std::string format;    // STEP | IGES (by content)
+    std::string filename;  // the client's label only (never a path)
     int64_t bytes = 0;
     int64_t created_ms = 0;    // Unix ms
     bool pinned = false;       // pinned files never expire
@@ -49,7 +49,6 @@ struct FilePage {
     std::vector<StoredFile> files;
     std::optional<std::string> next_cursor;  // opaque; set when more may follow
 };
-
 
 class FileStore {
 public:

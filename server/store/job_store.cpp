@@ -13,11 +13,16 @@ int64_t unix_now_ms() {
 
 const char* job_state_name(JobState s) {
     switch (s) {
-        case JobState::queued: return "queued";
-        case JobState::running: return "running";
-        case JobState::succeeded: return "succeeded";
-        case JobState::failed: return "failed";
-        case JobState::canceled: return "canceled";
+        case JobState::queued:
+            return "queued";
+        case JobState::running:
+            return "running";
+        case JobState::succeeded:
+            return "succeeded";
+        case JobState::failed:
+            return "failed";
+        case JobState::canceled:
+            return "canceled";
     }
     return "";
 }
@@ -28,9 +33,7 @@ std::optional<JobState> parse_job_state(std::string_view name) {
     return std::nullopt;
 }
 
-bool is_finished(JobState s) {
-    return s == JobState::succeeded || s == JobState::failed || s == JobState::canceled;
-}
+bool is_finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::canceled; }
 
 JobState stored_job_state(std::string_view name) {
     if (auto s = parse_job_state(name)) return *s;
@@ -52,18 +55,23 @@ OutputKind stored_output_kind(std::string_view name) {
 
 const char* callback_state_name(CallbackState s) {
     switch (s) {
-        case CallbackState::none: return "";
-        case CallbackState::waiting: return "waiting";
-        case CallbackState::pending: return "pending";
-        case CallbackState::delivered: return "delivered";
-        case CallbackState::failed: return "failed";
+        case CallbackState::none:
+            return "";
+        case CallbackState::waiting:
+            return "waiting";
+        case CallbackState::pending:
+            return "pending";
+        case CallbackState::delivered:
+            return "delivered";
+        case CallbackState::failed:
+            return "failed";
     }
     return "";
 }
 
 CallbackState parse_callback_state(const std::string& s) {
-    for (CallbackState c : {CallbackState::waiting, CallbackState::pending, CallbackState::delivered,
-                            CallbackState::failed})
+    for (CallbackState c :
+         {CallbackState::waiting, CallbackState::pending, CallbackState::delivered, CallbackState::failed})
         if (s == callback_state_name(c)) return c;
     return CallbackState::none;
 }

@@ -107,8 +107,7 @@ bool is_postgres_url(const std::string& spec) {
     return spec.rfind("postgresql://", 0) == 0 || spec.rfind("postgres://", 0) == 0;
 }
 
-std::unique_ptr<JobStore> open_postgres_job_store(const std::string& url, const std::string& instance,
-                                                  double lease_s) {
+std::unique_ptr<JobStore> open_postgres_job_store(const std::string& url, const std::string& instance, double lease_s) {
     return std::make_unique<PgJobStore>(url, instance, lease_s);
 }
 
@@ -158,8 +157,8 @@ void PgJobStore::create(JobRecord& job) {
         conn_->exec(
             "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
             "VALUES ($1, $2, $3, $4, $5, $6, $7, 'queued')",
-            {job.id, std::to_string(o.index), std::to_string(o.file), output_kind_name(o.kind), o.options_json, o.artifact,
-             o.content_type});
+            {job.id, std::to_string(o.index), std::to_string(o.file), output_kind_name(o.kind), o.options_json,
+             o.artifact, o.content_type});
     t.commit();
 }
 
@@ -218,10 +217,9 @@ bool PgJobStore::exists(const std::string& id) {
 JobPage PgJobStore::list(const std::optional<JobState>& state, bool newest_first, int limit,
                          std::optional<int64_t> after_seq) {
     std::lock_guard<std::mutex> lock(m_);
-    const std::string sql =
-        std::string(kJobColumns) +
-        (newest_first ? "WHERE ($1 = '' OR state = $1) AND seq < $2 ORDER BY seq DESC LIMIT $3"
-                      : "WHERE ($1 = '' OR state = $1) AND seq > $2 ORDER BY seq ASC LIMIT $3");
+    const std::string sql = std::string(kJobColumns) +
+                            (newest_first ? "WHERE ($1 = '' OR state = $1) AND seq < $2 ORDER BY seq DESC LIMIT $3"
+                                          : "WHERE ($1 = '' OR state = $1) AND seq > $2 ORDER BY seq ASC LIMIT $3");
     PgConn::Transaction t(*conn_);
     conn_->exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
     // One more than asked tells whether a next page exists.
@@ -343,11 +341,12 @@ bool PgJobStore::callback_attempted(const std::string& id, const CallbackAttempt
     std::lock_guard<std::mutex> lock(m_);
     const bool done = a.state != CallbackState::pending;
     return conn_
-               ->exec("UPDATE jobs SET callback_attempts = callback_attempts + 1, callback_state = $1, "
-                      "callback_due_ms = $2, callback_status = $3, callback_error = $4, callback_done_ms = $5 "
-                      "WHERE id = $6 AND callback_state = 'pending'",
-                      {callback_state_name(a.state), std::to_string(done ? 0 : a.next_ms), std::to_string(a.status),
-                       a.error, std::to_string(done ? a.now_ms : 0), id})
+               ->exec(
+                   "UPDATE jobs SET callback_attempts = callback_attempts + 1, callback_state = $1, "
+                   "callback_due_ms = $2, callback_status = $3, callback_error = $4, callback_done_ms = $5 "
+                   "WHERE id = $6 AND callback_state = 'pending'",
+                   {callback_state_name(a.state), std::to_string(done ? 0 : a.next_ms), std::to_string(a.status),
+                    a.error, std::to_string(done ? a.now_ms : 0), id})
                .affected() > 0;
 }
 

@@ -40,10 +40,11 @@ std::optional<JobState> PgJobStore::finish_locked(const std::string& id, int64_t
     const std::string message =
         failed ? str(failed) + " of " + str(total) + " outputs failed; first: " + first_message : std::string();
     // The callback becomes due in the same transaction (server/jobs/webhooks.h).
-    conn_->exec("UPDATE jobs SET state = $1, finished_ms = $2, error_code = $3, error_message = $4, "
-                "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = $2 "
-                "WHERE id = $5",
-                {job_state_name(state), str(now_ms), failed ? first_code : std::string(), message, id});
+    conn_->exec(
+        "UPDATE jobs SET state = $1, finished_ms = $2, error_code = $3, error_message = $4, "
+        "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = $2 "
+        "WHERE id = $5",
+        {job_state_name(state), str(now_ms), failed ? first_code : std::string(), message, id});
     return state;
 }
 
@@ -68,13 +69,16 @@ void PgJobStore::fail_interrupted(const std::string& id, int output, int max_att
 std::optional<JobClaim> PgJobStore::claim_output(const std::string& id, int output, int attempts, int64_t now_ms) {
     JobClaim claim;
     claim.lease = new_request_id();  // 128 random bits
-    conn_->exec("UPDATE job_outputs SET attempts = $3, lease_token = $4, lease_owner = $5, "
-                "lease_expires_ms = " NURBSRT_PG_NOW " + $6, state = 'queued', progress = 0, started_ms = 0 "
-                "WHERE job_id = $1 AND idx = $2",
-                {id, str(output), str(attempts), claim.lease, instance_, str(lease_ms_)});
-    conn_->exec("UPDATE jobs SET state = 'running', attempts = GREATEST(attempts, $2), "
-                "started_ms = CASE WHEN started_ms = 0 THEN $3 ELSE started_ms END WHERE id = $1",
-                {id, str(attempts), str(now_ms)});
+    conn_->exec(
+        "UPDATE job_outputs SET attempts = $3, lease_token = $4, lease_owner = $5, "
+        "lease_expires_ms = " NURBSRT_PG_NOW
+        " + $6, state = 'queued', progress = 0, started_ms = 0 "
+        "WHERE job_id = $1 AND idx = $2",
+        {id, str(output), str(attempts), claim.lease, instance_, str(lease_ms_)});
+    conn_->exec(
+        "UPDATE jobs SET state = 'running', attempts = GREATEST(attempts, $2), "
+        "started_ms = CASE WHEN started_ms = 0 THEN $3 ELSE started_ms END WHERE id = $1",
+        {id, str(attempts), str(now_ms)});
     auto job = read(id);
     if (!job) return std::nullopt;
     static_cast<JobRecord&>(claim) = std::move(*job);
@@ -126,7 +130,8 @@ bool PgJobStore::renew(const JobClaim& claim) {
     if (claim.run.empty()) return false;
     std::lock_guard<std::mutex> lock(m_);
     return conn_
-               ->exec("UPDATE job_outputs o SET lease_expires_ms = " NURBSRT_PG_NOW " + $4 FROM jobs j "
+               ->exec("UPDATE job_outputs o SET lease_expires_ms = " NURBSRT_PG_NOW
+                      " + $4 FROM jobs j "
                       "WHERE o.job_id = $1 AND o.idx = $2 AND o.lease_token = $3 AND j.id = o.job_id "
                       "AND j.state = 'running' AND o.state IN ('queued', 'running')",
                       {claim.id, str(claim.run.front()), claim.lease, str(lease_ms_)})
@@ -136,18 +141,20 @@ bool PgJobStore::renew(const JobClaim& claim) {
 bool PgJobStore::output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease) {
     std::lock_guard<std::mutex> lock(m_);
     return conn_
-               ->exec("UPDATE job_outputs SET state = 'running', progress = 0, started_ms = $1 "
-                      "WHERE job_id = $2 AND idx = $3 AND lease_token = $4 AND state = 'queued'",
-                      {str(now_ms), id, str(output), lease})
+               ->exec(
+                   "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = $1 "
+                   "WHERE job_id = $2 AND idx = $3 AND lease_token = $4 AND state = 'queued'",
+                   {str(now_ms), id, str(output), lease})
                .affected() > 0;
 }
 
 bool PgJobStore::output_progress(const std::string& id, int output, double progress, const std::string& lease) {
     std::lock_guard<std::mutex> lock(m_);
     return conn_
-               ->exec("UPDATE job_outputs SET progress = $1 WHERE job_id = $2 AND idx = $3 AND lease_token = $4 "
-                      "AND state = 'running'",
-                      {std::to_string(progress), id, str(output), lease})
+               ->exec(
+                   "UPDATE job_outputs SET progress = $1 WHERE job_id = $2 AND idx = $3 AND lease_token = $4 "
+                   "AND state = 'running'",
+                   {std::to_string(progress), id, str(output), lease})
                .affected() > 0;
 }
 
@@ -156,10 +163,11 @@ bool PgJobStore::output_succeeded(const std::string& id, int output, int64_t art
     std::lock_guard<std::mutex> lock(m_);
     // Fenced: only the run holding the lease finishes the output, once.
     return conn_
-               ->exec("UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = $1, result = $2, "
-                      "finished_ms = $3, completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
-                      "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state = 'running'",
-                      {str(artifact_bytes), result_json, str(now_ms), id, str(output), lease})
+               ->exec(
+                   "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = $1, result = $2, "
+                   "finished_ms = $3, completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
+                   "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state = 'running'",
+                   {str(artifact_bytes), result_json, str(now_ms), id, str(output), lease})
                .affected() > 0;
 }
 
@@ -167,10 +175,11 @@ bool PgJobStore::output_failed(const std::string& id, int output, const std::str
                                int64_t now_ms, const std::string& lease) {
     std::lock_guard<std::mutex> lock(m_);
     return conn_
-               ->exec("UPDATE job_outputs SET state = 'failed', error_code = $1, error_message = $2, finished_ms = $3, "
-                      "completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
-                      "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state IN ('queued', 'running')",
-                      {code, message, str(now_ms), id, str(output), lease})
+               ->exec(
+                   "UPDATE job_outputs SET state = 'failed', error_code = $1, error_message = $2, finished_ms = $3, "
+                   "completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
+                   "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state IN ('queued', 'running')",
+                   {code, message, str(now_ms), id, str(output), lease})
                .affected() > 0;
 }
 
@@ -178,15 +187,17 @@ void PgJobStore::requeue(const JobClaim& claim) {
     std::lock_guard<std::mutex> lock(m_);
     PgConn::Transaction t(*conn_);
     lock_outputs(claim.id);
-    conn_->exec("UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0, "
-                "attempts = GREATEST(attempts - 1, 0), lease_token = '', lease_expires_ms = 0 "
-                "WHERE job_id = $1 AND lease_token = $2 AND state IN ('queued', 'running')",
-                {claim.id, claim.lease});
+    conn_->exec(
+        "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0, "
+        "attempts = GREATEST(attempts - 1, 0), lease_token = '', lease_expires_ms = 0 "
+        "WHERE job_id = $1 AND lease_token = $2 AND state IN ('queued', 'running')",
+        {claim.id, claim.lease});
     // Back to the queue unless another instance runs one of its outputs.
-    conn_->exec("UPDATE jobs SET state = 'queued', attempts = (SELECT COALESCE(MAX(attempts), 0) FROM job_outputs "
-                "WHERE job_id = $1) WHERE id = $1 AND state = 'running' AND NOT EXISTS (SELECT 1 FROM job_outputs "
-                "WHERE job_id = $1 AND lease_token <> '' AND lease_expires_ms >= " NURBSRT_PG_NOW ")",
-                {claim.id});
+    conn_->exec(
+        "UPDATE jobs SET state = 'queued', attempts = (SELECT COALESCE(MAX(attempts), 0) FROM job_outputs "
+        "WHERE job_id = $1) WHERE id = $1 AND state = 'running' AND NOT EXISTS (SELECT 1 FROM job_outputs "
+        "WHERE job_id = $1 AND lease_token <> '' AND lease_expires_ms >= " NURBSRT_PG_NOW ")",
+        {claim.id});
     t.commit();
 }
 

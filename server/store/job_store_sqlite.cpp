@@ -61,8 +61,9 @@ void SqliteJobStore::create(JobRecord& job) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     {
-        Impl::Stmt s(*impl_,
-                     "INSERT INTO jobs(id, state, created_ms, callback_url, callback_state) VALUES (?, 'queued', ?, ?, ?)");
+        Impl::Stmt s(
+            *impl_,
+            "INSERT INTO jobs(id, state, created_ms, callback_url, callback_state) VALUES (?, 'queued', ?, ?, ?)");
         job.callback = {};
         if (!job.callback_url.empty()) job.callback.state = CallbackState::waiting;
         s.bind(1, job.id).bind(2, job.created_ms).bind(3, job.callback_url);
@@ -78,7 +79,11 @@ void SqliteJobStore::create(JobRecord& job) {
         Impl::Stmt s(*impl_,
                      "INSERT INTO job_outputs(job_id, idx, file, kind, options, artifact, content_type, state) "
                      "VALUES (?, ?, ?, ?, ?, ?, ?, 'queued')");
-        s.bind(1, job.id).bind(2, o.index).bind(3, o.file).bind(4, std::string(output_kind_name(o.kind))).bind(5, o.options_json);
+        s.bind(1, job.id)
+            .bind(2, o.index)
+            .bind(3, o.file)
+            .bind(4, std::string(output_kind_name(o.kind)))
+            .bind(5, o.options_json);
         s.bind(6, o.artifact).bind(7, o.content_type).run();
     }
     t.commit();
@@ -97,14 +102,13 @@ bool SqliteJobStore::exists(const std::string& id) {
 }
 
 JobPage SqliteJobStore::list(const std::optional<JobState>& state, bool newest_first, int limit,
-                       std::optional<int64_t> after_seq) {
+                             std::optional<int64_t> after_seq) {
     std::lock_guard<std::mutex> lock(m_);
     // One more than asked tells whether a next page exists.
-    const char* sql = newest_first
-                          ? "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
-                            " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq < ?2 ORDER BY seq DESC LIMIT ?3"
-                          : "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
-                            " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq > ?2 ORDER BY seq ASC LIMIT ?3";
+    const char* sql = newest_first ? "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
+                                     " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq < ?2 ORDER BY seq DESC LIMIT ?3"
+                                   : "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
+                                     " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq > ?2 ORDER BY seq ASC LIMIT ?3";
     JobPage page;
     {
         Impl::Stmt s(*impl_, sql);
@@ -182,7 +186,7 @@ bool SqliteJobStore::output_progress(const std::string& id, int output, double p
 }
 
 bool SqliteJobStore::output_succeeded(const std::string& id, int output, int64_t artifact_bytes,
-                                const std::string& result_json, int64_t now_ms, const std::string&) {
+                                      const std::string& result_json, int64_t now_ms, const std::string&) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
     Impl::Stmt s(*impl_,
@@ -237,9 +241,13 @@ JobState SqliteJobStore::Impl::finish_job(const std::string& id, int64_t now_ms)
     if (failed)
         message = std::to_string(failed) + " of " + std::to_string(total) + " outputs failed; first: " + first_message;
     Stmt s(*this,
-           "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ?, "
-           NURBSRT_SQLITE_CALLBACK_DUE " WHERE id = ?");
-    s.bind(1, std::string(job_state_name(state))).bind(2, now_ms).bind(3, failed ? first_code : std::string()).bind(4, message).bind(5, now_ms);
+           "UPDATE jobs SET state = ?, finished_ms = ?, error_code = ?, error_message = ?, " NURBSRT_SQLITE_CALLBACK_DUE
+           " WHERE id = ?");
+    s.bind(1, std::string(job_state_name(state)))
+        .bind(2, now_ms)
+        .bind(3, failed ? first_code : std::string())
+        .bind(4, message)
+        .bind(5, now_ms);
     s.bind(6, id).run();
     return state;
 }

@@ -77,8 +77,8 @@ ALTER TABLE job_outputs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0;
 )sql";
 
 // The columns read_job() reads, in its order.
-#define NURBSRT_SQLITE_JOB_COLUMNS                                                                      \
-    "seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, "       \
+#define NURBSRT_SQLITE_JOB_COLUMNS                                                                        \
+    "seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, "          \
     "callback_url, callback_state, callback_attempts, callback_due_ms, callback_status, callback_error, " \
     "callback_done_ms"
 
@@ -88,7 +88,6 @@ ALTER TABLE job_outputs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0;
     "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = ?"
 
 }  // namespace sqlite_store
-
 
 struct SqliteJobStore::Impl {
     sqlite3* db = nullptr;
@@ -151,8 +150,7 @@ struct SqliteJobStore::Impl {
             impl_.fail("statement failed");
         }
         void run() {
-            while (step()) {
-            }
+            while (step()) {}
         }
         int64_t i64(int c) const { return sqlite3_column_int64(st_, c); }
         double real(int c) const { return sqlite3_column_double(st_, c); }

@@ -49,7 +49,8 @@ PgConn::PgConn(const std::string& url) : url_(url), where_(redact_pg_url(url)) {
         throw Error(ErrorCode::io, "job store " + where_ + ": cannot connect: " +
                                        (conn_ ? trimmed(PQerrorMessage(conn_)) : std::string("out of memory")));
     // Notices (CREATE ... IF NOT EXISTS "already exists, skipping") are not ours to print.
-    PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);
+    PQsetNoticeProcessor(
+        conn_, [](void*, const char*) {}, nullptr);
 }
 
 PgConn::~PgConn() {

@@ -265,13 +265,21 @@ Handle(Geom_BSplineSurface) make_freeform_surface(bool rational) {
     // u: degree 3, knots 0, 8 (double), 20 -> 4 + 2 + 4 = 10 = 6 + 3 + 1.
     TColStd_Array1OfReal uk(1, 3);
     TColStd_Array1OfInteger um(1, 3);
-    uk(1) = 0.0; uk(2) = 8.0; uk(3) = 20.0;
-    um(1) = 4; um(2) = 2; um(3) = 4;
+    uk(1) = 0.0;
+    uk(2) = 8.0;
+    uk(3) = 20.0;
+    um(1) = 4;
+    um(2) = 2;
+    um(3) = 4;
     // v: degree 3, knots -1, 0.5, 3 -> 4 + 1 + 4 = 9 = 5 + 3 + 1.
     TColStd_Array1OfReal vk(1, 3);
     TColStd_Array1OfInteger vm(1, 3);
-    vk(1) = -1.0; vk(2) = 0.5; vk(3) = 3.0;
-    vm(1) = 4; vm(2) = 1; vm(3) = 4;
+    vk(1) = -1.0;
+    vk(2) = 0.5;
+    vk(3) = 3.0;
+    vm(1) = 4;
+    vm(2) = 1;
+    vm(3) = 4;
     if (rational) return new Geom_BSplineSurface(poles, weights, uk, vk, um, vm, 3, 3);
     return new Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3);
 }
@@ -279,7 +287,7 @@ Handle(Geom_BSplineSurface) make_freeform_surface(bool rational) {
 // A face on `surf` (natural boundary) with `hole` (a closed 2D curve in its
 // parameter space) as an inner trim loop. Self-checked with BRepClass: the
 // hole's centre must classify OUT and a point near the box corner IN.
-TopoDS_Face make_face_with_hole(const Handle(Geom_BSplineSurface)& surf, const Handle(Geom2d_Curve)& hole,
+TopoDS_Face make_face_with_hole(const Handle(Geom_BSplineSurface) & surf, const Handle(Geom2d_Curve) & hole,
                                 const gp_Pnt2d& hole_centre) {
     const TopoDS_Face outer = BRepBuilderAPI_MakeFace(surf, Precision::Confusion()).Face();
     TopoDS_Edge e = BRepBuilderAPI_MakeEdge(hole, surf).Edge();
@@ -342,16 +350,22 @@ struct Named {
     std::string (*make)();
 };
 const Named kFixtures[] = {
-    {"box_with_holes", box_with_holes}, {"filleted_box", filleted_box}, {"cylinder", cylinder},
-    {"sphere", sphere},                 {"cone", cone},                 {"torus", torus},
-    {"freeform_bspline", freeform_bspline}, {"freeform_rational", freeform_rational},
+    {"box_with_holes", box_with_holes},
+    {"filleted_box", filleted_box},
+    {"cylinder", cylinder},
+    {"sphere", sphere},
+    {"cone", cone},
+    {"torus", torus},
+    {"freeform_bspline", freeform_bspline},
+    {"freeform_rational", freeform_rational},
     {"assembly", assembly},
-    {"filleted_box_blend", filleted_box_blend}, {"blade_fan", blade_fan},
+    {"filleted_box_blend", filleted_box_blend},
+    {"blade_fan", blade_fan},
     {"thin_ring", thin_ring},
 };
 // Fixtures that also get an IGES copy ("<name>_iges").
-const char* const kIgesFixtures[] = {"box_with_holes", "filleted_box", "cylinder", "sphere",
-                                     "torus", "freeform_bspline", "freeform_rational"};
+const char* const kIgesFixtures[] = {"box_with_holes", "filleted_box",     "cylinder",         "sphere",
+                                     "torus",          "freeform_bspline", "freeform_rational"};
 
 }  // namespace
 
@@ -428,7 +442,7 @@ std::string to_iges(const std::string& step_path) {
             throw std::runtime_error("to_iges: cannot read " + step_path);
         IGESControl_Controller::Init();
         IGESControl_Writer w("MM", 1);  // 1 = BRep mode (MSBO/shell/face entities)
-        if (!w.AddShape(r.OneShape()) ) throw std::runtime_error("to_iges: AddShape failed");
+        if (!w.AddShape(r.OneShape())) throw std::runtime_error("to_iges: AddShape failed");
         w.ComputeModel();
         if (!w.Write(path.c_str())) throw std::runtime_error("to_iges: write failed: " + path);
     });

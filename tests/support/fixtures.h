@@ -116,9 +116,9 @@ std::string sanitize_test_name(const std::string& s);
 }  // namespace nurbsrt::test
 
 // Skips the current test, with a visible reason, when ../shared/models is absent.
-#define NURBSRT_REQUIRE_SHARED_MODELS()                                                    \
-    do {                                                                                   \
-        if (::nurbsrt::test::shared_models_dir().empty())                                  \
-            GTEST_SKIP() << "../shared/models is absent: skipping this test on real CAD "  \
+#define NURBSRT_REQUIRE_SHARED_MODELS()                                                   \
+    do {                                                                                  \
+        if (::nurbsrt::test::shared_models_dir().empty())                                 \
+            GTEST_SKIP() << "../shared/models is absent: skipping this test on real CAD " \
                             "models (set NURBSRT_MODELS to point elsewhere)";             \
     } while (0)

@@ -56,10 +56,13 @@ Handle(Geom_BSplineSurface) occt_surface(const NurbsSurface& s) {
         std::vector<double> v;
         std::vector<int> m;
         for (const double x : k) {
-            if (!v.empty() && x == v.back()) ++m.back();
-            else v.push_back(x), m.push_back(1);
+            if (!v.empty() && x == v.back())
+                ++m.back();
+            else
+                v.push_back(x), m.push_back(1);
         }
-        Knots out{TColStd_Array1OfReal(1, static_cast<int>(v.size())), TColStd_Array1OfInteger(1, static_cast<int>(v.size()))};
+        Knots out{TColStd_Array1OfReal(1, static_cast<int>(v.size())),
+                  TColStd_Array1OfInteger(1, static_cast<int>(v.size()))};
         for (size_t q = 0; q < v.size(); ++q) {
             out.values.SetValue(static_cast<int>(q + 1), v[q]);
             out.mults.SetValue(static_cast<int>(q + 1), m[q]);
@@ -195,8 +198,8 @@ struct Diagnoser {
         const size_t k = map.index(i, j);
         o << "map face " << map.face[k];
         if (map.face[k] && map.face[k] <= c.scene.faces.size())
-            o << " from uv=(" << map.u[k] << "," << map.v[k]
-              << ") -> " << describe(map.face[k], solve(map.face[k], i, j, map.u[k], map.v[k], primary));
+            o << " from uv=(" << map.u[k] << "," << map.v[k] << ") -> "
+              << describe(map.face[k], solve(map.face[k], i, j, map.u[k], map.v[k], primary));
         const uint32_t F = static_cast<uint32_t>(f.ref_face);
         if (!F || F > c.scene.faces.size()) {
             f.cause = "reference face outside the scene";
@@ -239,7 +242,10 @@ struct Diagnoser {
                     if (std::binary_search(adj.begin(), adj.end(), F)) touching = std::to_string(g);
                 }
             }
-        o << " | face " << F << (in8 ? " in 3x3" : in25 ? " in 5x5 only" : " NOT within 5x5")
+        o << " | face " << F
+          << (in8    ? " in 3x3"
+              : in25 ? " in 5x5 only"
+                     : " NOT within 5x5")
           << (touching.empty() ? ", touches no face of the 5x5" : ", touches face " + touching);
         o << " | robust Newton from " << tried << " neighbour hits on it: " << ok << " reach the reference root";
         if (!first.empty()) o << " (first: " << first << ")";
@@ -257,23 +263,30 @@ struct Diagnoser {
                     best = r, found = true;
             }
         o << " | root near the reference t on face " << F << ": " << (found ? describe(F, best) : "none");
-        if (!found) f.cause = "no Newton root on our NURBS of the reference face";
+        if (!found)
+            f.cause = "no Newton root on our NURBS of the reference face";
         else if (!inside(F, best)) {
             const double box = std::hypot(pf.box.u1 - pf.box.u0, pf.box.v1 - pf.box.v0);
             const double d = pf.trim.boundary_distance({best.u, best.v}, box);
             f.cause = d <= pf.near_uv ? "root within the near-trim band, not accepted" : "root outside our trim loops";
-        } else if (!in25) f.cause = "face not in the rescue's candidate set";
-        else if (ok > 0) f.cause = "root reachable from a neighbour's start, not taken";
-        else f.cause = "root inside the trim, Newton from the rescue's starts misses it";
+        } else if (!in25)
+            f.cause = "face not in the rescue's candidate set";
+        else if (ok > 0)
+            f.cause = "root reachable from a neighbour's start, not taken";
+        else
+            f.cause = "root inside the trim, Newton from the rescue's starts misses it";
         f.detail = o.str();
     }
 };
 
 std::string label_of(FullFrameFinding::Kind k) {
     switch (k) {
-        case FullFrameFinding::Kind::hole: return "hole";
-        case FullFrameFinding::Kind::speckle: return "speckle";
-        case FullFrameFinding::Kind::off_ray: return "off-ray hit";
+        case FullFrameFinding::Kind::hole:
+            return "hole";
+        case FullFrameFinding::Kind::speckle:
+            return "speckle";
+        case FullFrameFinding::Kind::off_ray:
+            return "off-ray hit";
     }
     return "";
 }
@@ -390,9 +403,10 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
         (ours ? rep.speckles : rep.holes) += 1;
         rep.findings.push_back(f);
     }
-    std::stable_sort(rep.findings.begin(), rep.findings.end(), [](const FullFrameFinding& a, const FullFrameFinding& b) {
-        return a.kind == FullFrameFinding::Kind::hole && b.kind != FullFrameFinding::Kind::hole;
-    });
+    std::stable_sort(rep.findings.begin(), rep.findings.end(),
+                     [](const FullFrameFinding& a, const FullFrameFinding& b) {
+                         return a.kind == FullFrameFinding::Kind::hole && b.kind != FullFrameFinding::Kind::hole;
+                     });
     if (!rep.findings.empty() && max_diagnosed > 0) {
         const PreparedScene prepared = prepare(scene);
         const PreliminaryMap map = render_preliminary_map(prepared, camera);
@@ -407,24 +421,25 @@ FullFrameReport full_frame_check(const std::string& label, const Scene& scene, c
 std::string FullFrameReport::text(size_t max_listed) const {
     std::ostringstream o;
     o << "[ full-frame ] " << label << " " << width << "x" << height << ": hit " << pixels_hit << " px; candidates "
-      << enclosed << " enclosed background + " << spikes << " depth spikes + " << steps << " depth steps; HOLES " << holes
-      << ", SPECKLES "
-      << speckles << ", OFF-RAY HITS " << off_ray << "; reference threw " << ref_errors << ", reference off its face " << ref_spurious
-      << ", reference nearer within a grazing contact's spread " << grazing
-      << (unchecked ? "; UNCHECKED (time budget) " + std::to_string(unchecked) : std::string()) << "; check "
+      << enclosed << " enclosed background + " << spikes << " depth spikes + " << steps << " depth steps; HOLES "
+      << holes << ", SPECKLES " << speckles << ", OFF-RAY HITS " << off_ray << "; reference threw " << ref_errors
+      << ", reference off its face " << ref_spurious << ", reference nearer within a grazing contact's spread "
+      << grazing << (unchecked ? "; UNCHECKED (time budget) " + std::to_string(unchecked) : std::string()) << "; check "
       << std::fixed << std::setprecision(2) << check_s << " s" << std::defaultfloat << "\n";
     for (size_t q = 0; q < findings.size() && q < max_listed; ++q) {
         const FullFrameFinding& f = findings[q];
         o << "   " << label_of(f.kind) << " px(" << f.i << "," << f.j << ") ours: ";
-        if (f.face) o << "face " << f.face << " t=" << std::setprecision(10) << f.t;
-        else o << "background";
+        if (f.face)
+            o << "face " << f.face << " t=" << std::setprecision(10) << f.t;
+        else
+            o << "background";
         if (f.kind == FullFrameFinding::Kind::off_ray) {
             o << " | the point at its (u, v) lies " << std::setprecision(3) << f.off_distance << " from the ray ("
               << f.off_footprints << " pixel footprints)\n";
             continue;
         }
-        o << " | reference: face " << f.ref_face << " t=" << std::setprecision(10) << f.ref_t
-          << " (on its face within " << std::setprecision(3) << f.ref_on_face << ")";
+        o << " | reference: face " << f.ref_face << " t=" << std::setprecision(10) << f.ref_t << " (on its face within "
+          << std::setprecision(3) << f.ref_on_face << ")";
         if (!f.cause.empty()) o << "\n      cause: " << f.cause << "\n      why: " << f.detail;
         o << "\n";
     }

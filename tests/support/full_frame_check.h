@@ -117,25 +117,25 @@ struct FullFrameFinding {
     // off_ray: the shown point's distance from the ray, in model units and in
     // pixel footprints (the reference fields above stay unset).
     double off_distance = 0, off_footprints = 0;
-    std::string cause;       // short classification (see diagnose in the .cpp)
-    std::string detail;      // the evidence
+    std::string cause;   // short classification (see diagnose in the .cpp)
+    std::string detail;  // the evidence
 };
 
 struct FullFrameReport {
     std::string label;
     int width = 0, height = 0;
     long pixels_hit = 0;
-    long enclosed = 0;           // hole candidates (enclosed background pixels)
-    long spikes = 0;             // speckle candidates (depth spikes)
-    long steps = 0;              // speckle candidates (far sides of depth steps, not spikes)
+    long enclosed = 0;  // hole candidates (enclosed background pixels)
+    long spikes = 0;    // speckle candidates (depth spikes)
+    long steps = 0;     // speckle candidates (far sides of depth steps, not spikes)
     long holes = 0, speckles = 0;
-    long off_ray = 0;            // hit pixels showing a point off their ray (every hit pixel checked)
-    long grazing = 0;            // reference nearer, on our face, within the contact's spread (not speckles)
-    long ref_errors = 0;         // candidates the intersector threw on (no reference)
-    long ref_spurious = 0;       // reference hits settled as not on their face
-    long unchecked = 0;          // candidates left when kCheckBudgetSeconds ran out
+    long off_ray = 0;       // hit pixels showing a point off their ray (every hit pixel checked)
+    long grazing = 0;       // reference nearer, on our face, within the contact's spread (not speckles)
+    long ref_errors = 0;    // candidates the intersector threw on (no reference)
+    long ref_spurious = 0;  // reference hits settled as not on their face
+    long unchecked = 0;     // candidates left when kCheckBudgetSeconds ran out
     std::vector<FullFrameFinding> findings;  // every hole, speckle and off-ray hit, in that order
-    double check_s = 0;          // time of the reference rays and settlements
+    double check_s = 0;                      // time of the reference rays and settlements
 
     // Counts, then up to max_listed findings with their diagnosis.
     std::string text(size_t max_listed = 12) const;

@@ -70,9 +70,8 @@ std::string ShadowCheckReport::text(const std::string& label) const {
     o << "[ shadows ] " << label << ": " << facing << " px facing the key light, " << shadowed << " shadowed; "
       << checked << " re-cast: FALSE SHADOWS " << false_shadows << ", LEAKS " << leaks
       << " (within a pixel of the boundary: " << boundary_false_shadows << " false, " << boundary_leaks
-      << " leaks); reference threw " << ref_errors << ", missed " << ref_misses
-      << "; check "
-      << std::fixed << std::setprecision(2) << check_s << " s\n"
+      << " leaks); reference threw " << ref_errors << ", missed " << ref_misses << "; check " << std::fixed
+      << std::setprecision(2) << check_s << " s\n"
       << detail;
     return o.str();
 }

@@ -49,16 +49,16 @@ namespace nurbsrt::test {
 constexpr size_t kMaxSingles = 400, kMaxShadowedSamples = 800, kMaxLitSamples = 400;
 
 struct ShadowCheckReport {
-    long facing = 0;          // hit pixels facing the key light
-    long shadowed = 0;        // of them, flagged shadowed
-    long checked = 0;         // re-cast against the reference
-    long false_shadows = 0;   // away from the shadow's boundary
-    long leaks = 0;           // away from the shadow's boundary
+    long facing = 0;                                      // hit pixels facing the key light
+    long shadowed = 0;                                    // of them, flagged shadowed
+    long checked = 0;                                     // re-cast against the reference
+    long false_shadows = 0;                               // away from the shadow's boundary
+    long leaks = 0;                                       // away from the shadow's boundary
     long boundary_false_shadows = 0, boundary_leaks = 0;  // within a pixel of it
-    long ref_errors = 0;      // the intersector threw
-    long ref_misses = 0;      // we shadow, the intersector saw no hit, BRepExtrema finds the ray meets a face
+    long ref_errors = 0;                                  // the intersector threw
+    long ref_misses = 0;  // we shadow, the intersector saw no hit, BRepExtrema finds the ray meets a face
     double check_s = 0;
-    std::string detail;       // the first few disagreements away from the boundary
+    std::string detail;  // the first few disagreements away from the boundary
     std::string text(const std::string& label) const;
 };
 

@@ -102,9 +102,9 @@ Encodable exr_pixels(const RenderImage& img) {
     Encodable e;
     e.spec = ImageSpec(img.width, img.height, 12, TypeDesc::FLOAT);
     e.spec.channelnames = {"R", "G", "B", "A", "Z", "face", "N.X", "N.Y", "N.Z", "u", "v", "iterations"};
-    e.spec.channelformats = {TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT,
+    e.spec.channelformats = {TypeDesc::FLOAT, TypeDesc::FLOAT,  TypeDesc::FLOAT, TypeDesc::FLOAT,
                              TypeDesc::FLOAT, TypeDesc::UINT32, TypeDesc::FLOAT, TypeDesc::FLOAT,
-                             TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::FLOAT, TypeDesc::UINT32};
+                             TypeDesc::FLOAT, TypeDesc::FLOAT,  TypeDesc::FLOAT, TypeDesc::UINT32};
     e.spec.alpha_channel = 3;
     e.spec.z_channel = 4;
     struct Px {
@@ -119,9 +119,17 @@ Encodable exr_pixels(const RenderImage& img) {
     e.pixels.resize(npx * sizeof(Px));
     Px* buf = reinterpret_cast<Px*>(e.pixels.data());
     for (size_t k = 0; k < npx; ++k)
-        buf[k] = {img.rgba[4 * k], img.rgba[4 * k + 1], img.rgba[4 * k + 2], img.rgba[4 * k + 3], img.z[k], img.face[k],
-                  has_n ? img.normal[3 * k] : 0.0f, has_n ? img.normal[3 * k + 1] : 0.0f,
-                  has_n ? img.normal[3 * k + 2] : 0.0f, has_uv ? img.u[k] : 0.0f, has_uv ? img.v[k] : 0.0f,
+        buf[k] = {img.rgba[4 * k],
+                  img.rgba[4 * k + 1],
+                  img.rgba[4 * k + 2],
+                  img.rgba[4 * k + 3],
+                  img.z[k],
+                  img.face[k],
+                  has_n ? img.normal[3 * k] : 0.0f,
+                  has_n ? img.normal[3 * k + 1] : 0.0f,
+                  has_n ? img.normal[3 * k + 2] : 0.0f,
+                  has_uv ? img.u[k] : 0.0f,
+                  has_uv ? img.v[k] : 0.0f,
                   has_it ? img.iterations[k] : 0u};
     return e;
 }
