@@ -33,7 +33,6 @@
 #include "server/http/problem.h"
 #include "server/common/request_log.h"
 #include "server/routes/route_table.h"
-#include "server/routes/routes.h"
 #include "server/http/upload.h"
 
 namespace nurbsrt::server {
@@ -349,12 +348,7 @@ int run_server(const ServerConfig& given) {
     install_error_answers(svr, config);
     install_request_log(svr, ctx);
 
-    add_render_routes(svr, ctx);
-    add_conversion_routes(svr, ctx);
-    add_job_routes(svr, ctx);
-    add_file_routes(svr, ctx);
-    add_service_routes(svr, ctx);
-    add_page_routes(svr, ctx);
+    register_routes(svr, ctx);
 
     int port = config.port;
     if (port == 0) {

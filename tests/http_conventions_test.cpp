@@ -48,6 +48,35 @@ TEST(RouteTable, TemplatesAndAllowedMethods) {
     EXPECT_FALSE(allows_method("other", "GET"));
 }
 
+// The route table and the API document describe the same routes and methods:
+// a handler added to one and not the other fails here.
+TEST(RouteTable, IsTheApiDocumentsPaths) {
+    const nlohmann::json doc = nlohmann::json::parse(openapi_document());
+    std::set<std::string> documented, served;
+    for (const auto& [path, item] : doc.at("paths").items())
+        for (const auto& [method, op] : item.items())
+            if (method != "options" && method != "parameters" && method != "summary" && method != "description")
+                documented.insert(method + " " + path);
+    for (const Route& route : route_table()) {
+        const std::string name = route.name;
+        if (name.find('{') == std::string::npos) {
+            EXPECT_EQ(route_of(name), name);  // a fixed path is its own template
+        }
+        for (const RouteMethod& m : route.methods) {
+            static const char* const names[] = {"get", "post", "patch", "delete"};
+            served.insert(std::string(names[static_cast<int>(m.method)]) + " " + route.name);
+            ASSERT_NE(m.handler, nullptr) << route.name;
+        }
+    }
+    EXPECT_EQ(served, documented);
+    // The Allow headers the table makes, method by method in RFC 9110's order.
+    EXPECT_STREQ(allowed_methods("/v1/jobs"), "GET, HEAD, POST, OPTIONS");
+    EXPECT_STREQ(allowed_methods("/v1/files/{id}"), "GET, HEAD, PATCH, DELETE, OPTIONS");
+    EXPECT_STREQ(allowed_methods("/v1/jobs/{id}"), "GET, HEAD, DELETE, OPTIONS");
+    EXPECT_STREQ(allowed_methods("/v1/openapi.json"), "GET, HEAD, OPTIONS");
+    EXPECT_EQ(route_of("/v1/openapiXjson"), "other");  // the dot is not a wildcard
+}
+
 TEST(Cors, OriginsAreCheckedAndNormalized) {
     EXPECT_EQ(normalized_origin("HTTPS://App.Example.com:8443"), "https://app.example.com:8443");
     EXPECT_EQ(normalized_origin("http://[::1]:3000"), "http://[::1]:3000");

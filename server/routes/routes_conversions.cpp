@@ -48,6 +48,8 @@ std::string warnings_header(const std::vector<std::string>& warnings) {
     return head + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
 }
 
+}  // namespace
+
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
@@ -109,12 +111,6 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         stages.mark("response");
         res.set_header("Server-Timing", server_timing(stages, kConversionStages));
     }
-}
-
-}  // namespace
-
-void add_conversion_routes(httplib::Server& svr, ServerContext& ctx) {
-    svr.Post("/v1/conversions", guarded(ctx, handle_conversion));
 }
 
 }  // namespace nurbsrt::server

@@ -144,7 +144,9 @@ void send_over_quota(const ServerContext& ctx, httplib::Response& res, size_t si
                                  " in use): delete stored files (DELETE /v1/files/{id}) first");
 }
 
-void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+}  // namespace
+
+void handle_file_upload(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const Upload upload = read_upload(req, {"pinned", "filename"});
     const UploadRequest params = upload_parameters(req, upload);
     const std::string& bytes = *upload.bytes;
@@ -191,7 +193,7 @@ void handle_upload(ServerContext& ctx, const httplib::Request& req, httplib::Res
     }
 }
 
-void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_file_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const PageQuery q = parse_page_query(req, {});
     std::optional<std::string> cursor;
     if (req.has_param("cursor")) cursor = req.get_param_value("cursor");
@@ -204,14 +206,14 @@ void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Respo
                     {"max_stored_bytes", ctx.files.max_bytes()}});
 }
 
-void handle_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_file_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];
     const std::optional<StoredFile> f = ctx.files.get(id);
     if (!f) throw no_such_file(id);
     send_json(res, file_json(ctx, *f));
 }
 
-void handle_content(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_file_content(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];
     if (!ctx.files.get(id)) throw no_such_file(id);
     // The id is the SHA-256 of the bytes, which never change: a strong
@@ -232,7 +234,7 @@ void handle_content(ServerContext& ctx, const httplib::Request& req, httplib::Re
     res.set_content(*c.bytes, step ? "model/step" : "model/iges");
 }
 
-void handle_patch(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_file_patch(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];
     const std::string type = req.get_header_value("Content-Type");
     const std::string base = type.substr(0, type.find(';'));
@@ -251,21 +253,10 @@ void handle_patch(ServerContext& ctx, const httplib::Request& req, httplib::Resp
     send_json(res, file_json(ctx, *f));
 }
 
-void handle_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_file_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];
     if (!ctx.files.remove(id)) throw no_such_file(id);
     res.status = 204;
-}
-
-}  // namespace
-
-void add_file_routes(httplib::Server& svr, ServerContext& ctx) {
-    svr.Post("/v1/files", guarded(ctx, handle_upload));
-    svr.Get("/v1/files", guarded(ctx, handle_list));
-    svr.Get(R"(/v1/files/([^/]+))", guarded(ctx, handle_get));
-    svr.Patch(R"(/v1/files/([^/]+))", guarded(ctx, handle_patch));
-    svr.Delete(R"(/v1/files/([^/]+))", guarded(ctx, handle_delete));
-    svr.Get(R"(/v1/files/([^/]+)/content)", guarded(ctx, handle_content));
 }
 
 }  // namespace nurbsrt::server

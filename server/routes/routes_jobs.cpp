@@ -42,7 +42,9 @@ JobService& jobs_of(ServerContext& ctx) {
     return *ctx.jobs;
 }
 
-void handle_submit(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+}  // namespace
+
+void handle_job_submit(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     JobUpload up = read_job_upload(req, ctx.config.max_job_files);
     // Stored files are copied into the job's inputs when it is accepted (as
     // uploads are): deleting or expiring a stored file later never breaks a job.
@@ -102,7 +104,7 @@ int64_t parse_cursor(const std::string& c, bool newest_first) {
     return v;
 }
 
-void handle_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_job_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const PageQuery q = parse_page_query(req, {"state"});
     const int limit = q.limit;
     const bool newest = q.newest;
@@ -126,7 +128,7 @@ std::string checked_id(const std::string& id) {
     return id;
 }
 
-void handle_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_job_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = checked_id(req.matches[1]);
     const auto job = jobs_of(ctx).store().get(id);
     if (!job) throw ServiceError(ServiceCode::not_found, "no such job");
@@ -134,7 +136,7 @@ void handle_get(ServerContext& ctx, const httplib::Request& req, httplib::Respon
     send_json(res, job_json(*job));
 }
 
-void handle_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_job_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = checked_id(req.matches[1]);
     switch (jobs_of(ctx).remove(id)) {
         case JobStore::DeleteOutcome::not_found:
@@ -155,7 +157,7 @@ void handle_delete(ServerContext& ctx, const httplib::Request& req, httplib::Res
     }
 }
 
-void handle_artifact(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
+void handle_job_artifact(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const std::string id = checked_id(req.matches[1]);
     const std::string name = req.matches[2];
     if (!valid_artifact_name(name)) throw ServiceError(ServiceCode::not_found, "no such artifact");
@@ -203,16 +205,6 @@ void handle_artifact(ServerContext& ctx, const httplib::Request& req, httplib::R
         return;
     }
     throw ServiceError(ServiceCode::not_found, "no such artifact");
-}
-
-}  // namespace
-
-void add_job_routes(httplib::Server& svr, ServerContext& ctx) {
-    svr.Post("/v1/jobs", guarded(ctx, handle_submit));
-    svr.Get("/v1/jobs", guarded(ctx, handle_list));
-    svr.Get(R"(/v1/jobs/([^/]+))", guarded(ctx, handle_get));
-    svr.Delete(R"(/v1/jobs/([^/]+))", guarded(ctx, handle_delete));
-    svr.Get(R"(/v1/jobs/([^/]+)/artifacts/([^/]+))", guarded(ctx, handle_artifact));
 }
 
 }  // namespace nurbsrt::server

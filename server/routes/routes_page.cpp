@@ -45,23 +45,22 @@ void send_asset(const WebAsset& a, httplib::Response& res) {
 
 }  // namespace
 
-void add_page_routes(httplib::Server& svr, ServerContext&) {
-    svr.Get("/", [](const httplib::Request&, httplib::Response& res) {
-        const WebAsset* page = find_asset("index.html");
-        if (!page) {
-            send_problem(res, ServiceCode::not_found, "this build has no web page");
-            return;
-        }
-        send_asset(*page, res);
-    });
-    svr.Get(R"(/web/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
-        const WebAsset* a = find_asset(req.matches[1].str());
-        if (!a) {
-            send_problem(res, ServiceCode::not_found, "no such file of the web page");
-            return;
-        }
-        send_asset(*a, res);
-    });
+void handle_page(ServerContext&, const httplib::Request&, httplib::Response& res) {
+    const WebAsset* page = find_asset("index.html");
+    if (!page) {
+        send_problem(res, ServiceCode::not_found, "this build has no web page");
+        return;
+    }
+    send_asset(*page, res);
+}
+
+void handle_web_file(ServerContext&, const httplib::Request& req, httplib::Response& res) {
+    const WebAsset* a = find_asset(req.matches[1].str());
+    if (!a) {
+        send_problem(res, ServiceCode::not_found, "no such file of the web page");
+        return;
+    }
+    send_asset(*a, res);
 }
 
 }  // namespace nurbsrt::server

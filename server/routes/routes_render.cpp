@@ -31,6 +31,8 @@ nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
     return out;
 }
 
+}  // namespace
+
 void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     // The stages (timings_ms, Server-Timing) run from the request's arrival.
     const auto t0 = GuardedServer::request_received_at();
@@ -92,12 +94,6 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     body["statistics"] = std::move(stats);
     set_timing_header();
     res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), kBulkJsonContentType);
-}
-
-}  // namespace
-
-void add_render_routes(httplib::Server& svr, ServerContext& ctx) {
-    svr.Post("/v1/renders", guarded(ctx, handle_render));
 }
 
 }  // namespace nurbsrt::server
