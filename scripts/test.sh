@@ -5,7 +5,8 @@
 #   scripts/test.sh          the whole suite (what CI runs)
 #   scripts/test.sh --fast   the edit loop: the `unit` ctest label and the API smoke
 #                            files (tests/api.sh with NURBSRT_API_TESTS), no model,
-#                            accuracy or full-frame checks, no fuzzing, no browser
+#                            accuracy or full-frame checks, no fuzzing, no browser;
+#                            the include layering (tests/layers.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fast=0
@@ -25,6 +26,8 @@ status=0
 if [ $fast -eq 1 ]; then
   echo "== unit tests (ctest -L unit)"
   ( cd "$BUILD_DIR" && ctest --output-on-failure --timeout 900 -j "$(nproc)" -L unit ) || status=1
+  echo "== tests/layers.sh"
+  bash tests/layers.sh || status=1
   echo "== tests/api.sh (smoke: $API_SMOKE)"
   NURBSRT_API_TESTS="$API_SMOKE" bash tests/api.sh "$BUILD_DIR/nurbsrt" || status=1
   exit $status
