@@ -21,7 +21,7 @@ namespace {
 // up to a second frame plus its shading.
 constexpr double kTargetAaEdges = 1.6;
 constexpr double kTargetShadows = 2.2;
-// The service's default for PNG and JPEG (server/render/render_options.cpp).
+// The service's default for PNG and JPEG (options/render_request.cpp).
 constexpr int kAntialiasRays = 4;
 // A cap on runs, as Table 1's: min_ms would otherwise keep a very fast frame going.
 constexpr int kMaxRuns = 100;

@@ -20,7 +20,7 @@
 #include "renderer/image_module.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
 #include "server/render/stage_timings.h"
 
 namespace nurbsrt::cli {
@@ -38,15 +38,6 @@ constexpr const char* kCliRenderStages[] = {"read",      "nurbs_convert",   "mes
                                             "prepare",   "preliminary_map", "newton",     "shadow_map", "shade",
                                             "antialias", "edges",           "statistics", "encode"};
 
-// "x,y,z" -> Vec3 (CLI11 validator + converter).
-Vec3 parse_vec3(const std::string& s, const char* what) {
-    Vec3 v;
-    char tail = 0;
-    if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &v.x, &v.y, &v.z, &tail) != 3)
-        throw Error(ErrorCode::invalid_argument, std::string(what) + " must be x,y,z (got '" + s + "')");
-    return v;
-}
-
 struct Args {
     std::vector<std::string> models;
     std::string output, aov, stats;
@@ -61,7 +52,7 @@ struct Args {
     int threads = 0;
     double tolerance = kDefaultRelativeTolerance;
     std::string background;
-    std::optional<int> antialias;  // unset: server::default_antialias(output format)
+    std::optional<int> antialias;  // unset: default_antialias(output format)
     bool edges = false;
     std::string edge_color;
     double edge_width = 1.0;
@@ -70,44 +61,40 @@ struct Args {
     bool quiet = false;
 };
 
-// The output's format by its extension (checked by the -o validator).
-server::ImageFormat output_format(const std::string& path) {
-    return server::image_format_of_extension(std::filesystem::path(path).extension().string());
-}
-
-CameraSpec base_camera(const Args& a) {
-    CameraSpec base;
-    server::complete_size(a.width ? std::optional<int>(a.width) : std::nullopt,
-                          a.height ? std::optional<int>(a.height) : std::nullopt, base.width, base.height);
-    base.projection =
+// The request model of the flags (options/render_request.h): the texts CLI11
+// has checked are parsed here, once; the camera and the renderer's options are
+// then built from it exactly as the service builds them.
+RenderRequest request_of(const Args& a) {
+    RenderRequest r;
+    complete_size(a.width ? std::optional<int>(a.width) : std::nullopt,
+                  a.height ? std::optional<int>(a.height) : std::nullopt, r.width, r.height);
+    r.view = a.view;
+    if (!a.eye.empty()) r.eye = parse_point(a.eye, "--eye");
+    if (!a.target.empty()) r.target = parse_point(a.target, "--target");
+    if (!a.up.empty()) r.up = parse_point(a.up, "--up");
+    r.projection =
         (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic : Projection::perspective;
-    if (a.fov > 0) base.fov_deg = a.fov;
-    return base;
+    if (a.fov > 0) r.fov_deg = a.fov;
+    if (a.ortho_height > 0) r.ortho_height = a.ortho_height;
+    r.fit_margin = a.fit_margin;
+    r.method = *parse_newton_method(a.method);
+    r.map_precision = *parse_map_precision(a.map_precision);
+    r.tolerance = a.tolerance;
+    r.format = output_format(image_format_of_extension(std::filesystem::path(a.output).extension().string()));
+    if (!a.background.empty()) r.background = parse_background(a.background, "--background");
+    r.look.antialias = a.antialias;
+    r.look.edges = a.edges;
+    if (!a.edge_color.empty()) r.look.edge_color = parse_rgb(a.edge_color, "--edge-color");
+    r.look.edge_width = a.edge_width;
+    r.look.shadows = a.shadows;
+    return r;
 }
 
-// The named view, then the explicit vectors one by one (checked by CLI11's
-// vec3_validator, parsed here).
-ViewRequest view_request(const Args& a) {
-    ViewRequest v;
-    v.view = a.view;
-    if (!a.eye.empty()) v.eye = parse_vec3(a.eye, "--eye");
-    if (!a.target.empty()) v.target = parse_vec3(a.target, "--target");
-    if (!a.up.empty()) v.up = parse_vec3(a.up, "--up");
-    if (a.ortho_height > 0) v.ortho_height = a.ortho_height;
-    v.fit_margin = a.fit_margin;
-    return v;
-}
-
-// The camera checks that need no model (eye at the target, up along the view),
-// made by the renderer's own Camera on the request fitted to a unit box, so that
-// they are usage errors found before the import, as the API finds them.
-void check_camera_before_import(const Args& a) {
-    BBox unit;
-    unit.extend(Vec3{-1, -1, -1});
-    unit.extend(Vec3{1, 1, 1});
+// The camera checks that need no model (eye at the target, up along the view)
+// are usage errors found before the import, as the API finds them.
+void check_camera_before_import(const Args& a, const RenderRequest& r) {
     try {
-        const Camera checked(fitted_camera(view_request(a), unit, base_camera(a)));
-        (void)checked;
+        check_camera_without_scene(r);
     } catch (const Error& e) {
         const char* flag = !a.up.empty() ? "--up" : !a.target.empty() ? "--target" : "--eye";
         throw CLI::ValidationError(flag, e.what());
@@ -129,33 +116,8 @@ void add_output_options(CLI::App* cmd, Args& a) {
         ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
 }
 
-void add_camera_options(CLI::App* cmd, Args& a) {
-    cmd->add_option("--width", a.width, "image width in pixels (default 800; given alone, the height keeps 4:3)")
-        ->check(CLI::Range(1, 16384));
-    cmd->add_option("--height", a.height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
-        ->check(CLI::Range(1, 16384));
-    cmd->add_option("--view", a.view,
-                    "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
-                    "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
-        ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))
-        ->capture_default_str();
-    cmd->add_option("--eye", a.eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
-        ->check(vec3_validator());
-    cmd->add_option("--target", a.target, "point looked at, x,y,z")->check(vec3_validator());
-    cmd->add_option("--up", a.up, "up vector x,y,z")->check(vec3_validator());
-    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")->check(CLI::Range(0.01, 179.0));
-    cmd->add_option("--ortho-height", a.ortho_height, "orthographic view height in model units (implies orthographic)")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--fit-margin", a.fit_margin,
-                    "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
-        ->check(CLI::Range(0.0, kMaxFitMargin))
-        ->capture_default_str();
-    cmd->add_option("--projection", a.projection, "perspective or orthographic")
-        ->check(CLI::IsMember({"perspective", "orthographic"}))
-        ->capture_default_str();
-}
-
-// The API's parsers as CLI11 checks, so that both accept and refuse the same values.
+// The request model's parsers as CLI11 checks, so that the CLI and the API
+// accept and refuse the same values.
 template <class Parse>
 CLI::Validator shared_check(Parse parse, const char* description) {
     return CLI::Validator(
@@ -170,6 +132,37 @@ CLI::Validator shared_check(Parse parse, const char* description) {
             }
         },
         description);
+}
+
+// "x,y,z" of --eye, --target and --up, as the API reads its text points.
+CLI::Validator point_check() {
+    return shared_check([](const std::string& s) { parse_point(s, "the value"); }, "X,Y,Z");
+}
+
+void add_camera_options(CLI::App* cmd, Args& a) {
+    cmd->add_option("--width", a.width, "image width in pixels (default 800; given alone, the height keeps 4:3)")
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--height", a.height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--view", a.view,
+                    "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
+                    "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
+        ->check(CLI::IsMember({"iso", "front", "back", "left", "right", "top", "bottom"}))
+        ->capture_default_str();
+    cmd->add_option("--eye", a.eye, "camera position x,y,z (model units; write --eye=-1,2,3 for a leading minus)")
+        ->check(point_check());
+    cmd->add_option("--target", a.target, "point looked at, x,y,z")->check(point_check());
+    cmd->add_option("--up", a.up, "up vector x,y,z")->check(point_check());
+    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")->check(CLI::Range(0.01, 179.0));
+    cmd->add_option("--ortho-height", a.ortho_height, "orthographic view height in model units (implies orthographic)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--fit-margin", a.fit_margin,
+                    "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
+        ->check(CLI::Range(0.0, kMaxFitMargin))
+        ->capture_default_str();
+    cmd->add_option("--projection", a.projection, "perspective or orthographic")
+        ->check(CLI::IsMember({"perspective", "orthographic"}))
+        ->capture_default_str();
 }
 
 void add_solver_options(CLI::App* cmd, Args& a) {
@@ -203,44 +196,22 @@ void add_look_options(CLI::App* cmd, Args& a) {
     cmd->add_option("--background", a.background,
                     "background: r,g,b (opaque) or r,g,b,a in [0,1], or transparent (default: transparent; "
                     "opaque white for JPEG)")
-        ->check(shared_check([](const std::string& s) { server::parse_background(s, "the value"); },
-                             "R,G,B[,A]|transparent"));
+        ->check(shared_check([](const std::string& s) { parse_background(s, "the value"); }, "R,G,B[,A]|transparent"));
     cmd->add_option(
            "--antialias", a.antialias,
            "extra sub-pixel samples per edge pixel (silhouettes, face borders, creases), exact rays where an edge "
            "can cross them; 0: off "
            "(default: " +
-               std::to_string(server::kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
-        ->check(shared_check([](const std::string& s) { server::parse_antialias(std::stod(s), "the value"); }, "N"));
+               std::to_string(kDefaultAntialias) + " for PNG/JPEG, 0 for TIFF/EXR)")
+        ->check(shared_check([](const std::string& s) { parse_antialias(std::stod(s), "the value"); }, "N"));
     cmd->add_flag("--edges", a.edges, "draw feature lines: silhouettes, face borders and creases");
     cmd->add_option("--edge-color", a.edge_color, "feature line colour r,g,b in [0,1] (default 0.02,0.02,0.02)")
-        ->check(shared_check([](const std::string& s) { server::parse_rgb(s, "the value"); }, "R,G,B"));
+        ->check(shared_check([](const std::string& s) { parse_rgb(s, "the value"); }, "R,G,B"));
     cmd->add_option("--edge-width", a.edge_width, "feature line width in pixels, at any resolution")
-        ->check(shared_check([](const std::string& s) { server::parse_edge_width(std::stod(s), "the value"); }, "PX"))
+        ->check(shared_check([](const std::string& s) { parse_edge_width(std::stod(s), "the value"); }, "PX"))
         ->capture_default_str();
     cmd->add_flag("--shadows", a.shadows,
                   "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
-}
-
-// The renderer's options from the command line; the option strings were
-// checked by CLI11 (IsMember) and are parsed here, once.
-RenderOptions render_options(const Args& a, const Scene& scene) {
-    RenderOptions options;
-    options.method = *parse_newton_method(a.method);
-    options.map_precision = *parse_map_precision(a.map_precision);
-    options.threads = a.threads;
-    options.newton.eps = a.tolerance * std::max(scene.bbox.diagonal(), 1e-300);
-    server::apply_background(a.background.empty() ? server::default_background(output_format(a.output))
-                                                  : server::parse_background(a.background, "--background"),
-                             options);
-    server::ImageLook look;
-    look.antialias = a.antialias;
-    look.edges = a.edges;
-    if (!a.edge_color.empty()) look.edge_color = server::parse_rgb(a.edge_color, "--edge-color");
-    look.edge_width = a.edge_width;
-    look.shadows = a.shadows;
-    server::apply_look(look, output_format(a.output), options);
-    return options;
 }
 
 // Progress on stderr: live on a terminal; otherwise a line per 10% once the
@@ -273,11 +244,11 @@ private:
     int next_decile_ = 1;
 };
 
-void write_stats(const Args& a, const Scene& scene, const Camera& camera, const RenderResult& result,
-                 StageClock& stages) {
+void write_stats(const Args& a, const RenderRequest& r, const Scene& scene, const Camera& camera,
+                 const RenderResult& result, StageClock& stages) {
     nlohmann::json j = render_stats_json(result.stats, nlohmann::json::object());
     j["camera"] = camera_json(camera);
-    j["map_precision"] = a.map_precision;
+    j["map_precision"] = map_precision_option(r.map_precision);
     j["warnings"] = scene.warnings;
     stages.mark("statistics");
     j["timings_ms"] = server::stage_timings_json(stages, kCliRenderStages);
@@ -293,7 +264,8 @@ void write_stats(const Args& a, const Scene& scene, const Camera& camera, const 
 void run_render(const Args& a) {
     for (const std::string& m : a.models)
         if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
-    check_camera_before_import(a);
+    const RenderRequest request = request_of(a);
+    check_camera_before_import(a, request);
     const auto t0 = clock_type::now();
     auto say = [&](const char* fmt, auto... xs) {
         if (a.quiet) return;
@@ -317,8 +289,9 @@ void run_render(const Args& a) {
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-    const Camera camera(fitted_camera(view_request(a), scene, base_camera(a)));
-    RenderOptions options = render_options(a, scene);
+    const Camera camera(camera_spec_for(request, scene));
+    RenderOptions options = render_options_for(request, scene);
+    options.threads = a.threads;
     say("rendering %dx%d with %s", camera.width(), camera.height(), a.method.c_str());
     auto progress = std::make_shared<ProgressPrinter>(t0);
     if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
@@ -334,7 +307,7 @@ void run_render(const Args& a) {
     if (!a.aov.empty()) write_image(result.image, a.aov);
     stages.mark("encode");
     say("wrote %s%s%s", a.output.c_str(), a.aov.empty() ? "" : " and ", a.aov.c_str());
-    if (!a.stats.empty()) write_stats(a, scene, camera, result, stages);
+    if (!a.stats.empty()) write_stats(a, request, scene, camera, result, stages);
 }
 
 }  // namespace

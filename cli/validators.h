@@ -13,19 +13,6 @@
 
 namespace nurbsrt::cli {
 
-// "x,y,z": three numbers.
-inline CLI::Validator vec3_validator() {
-    return CLI::Validator(
-        [](std::string& s) -> std::string {
-            double x, y, z;
-            char tail = 0;
-            if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3)
-                return "must be three numbers x,y,z (got '" + s + "')";
-            return {};
-        },
-        "X,Y,Z");
-}
-
 // A file we are going to write: one of `extensions` (lower case, with the dot),
 // in a directory that exists and that we may write.
 inline CLI::Validator output_file_validator(std::initializer_list<const char*> extensions) {

@@ -33,7 +33,8 @@
 #include "server/jobs/job_spec.h"
 #include "server/http/problem.h"
 #include "server/common/redact.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
+#include "server/render/render_limits.h"
 #include "server/http/upload.h"
 
 using namespace nurbsrt;
@@ -69,7 +70,7 @@ public:
         Post("/v1/renders", [this](const httplib::Request& req, httplib::Response& res) {
             handle(res, [&] {
                 const server::Upload up = server::read_upload(req);
-                const server::RenderRequest r = server::parse_render_options(up.options_json);
+                const nurbsrt::RenderRequest r = nurbsrt::parse_render_options(up.options_json);
                 server::check_render_limits(config_, r);
                 if (up.bytes) (void)detect_format_bytes(up.bytes->data(), up.bytes->size());  // else a file_id
             });
@@ -77,7 +78,7 @@ public:
         Post("/v1/conversions", [](const httplib::Request& req, httplib::Response& res) {
             handle(res, [&] {
                 const server::Upload up = server::read_upload(req);
-                (void)server::parse_conversion_format(up.options_json);
+                (void)nurbsrt::parse_conversion_format(up.options_json);
                 if (up.bytes) (void)detect_format_bytes(up.bytes->data(), up.bytes->size());  // else a file_id
             });
         });

@@ -366,8 +366,10 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o /nonexistent-dir/a.png", "--output: the directory '/nonexistent-dir' does not exist"},
         {"-o " + (dir / "a.bmp").string(), "--output: '" + (dir / "a.bmp").string() + "' must end in one of .png"},
         {"-o " + out + " --aov " + out, "--aov: '" + out + "' must end in one of .exr"},
-        {"-o " + out + " --eye 1,2", "--eye: must be three numbers x,y,z (got '1,2')"},
-        {"-o " + out + " --up 0,0,z", "--up: must be three numbers"},
+        {"-o " + out + " --eye 1,2", "--eye: the value must be x,y,z: three decimal numbers (got '1,2')"},
+        {"-o " + out + " --up 0,0,z", "--up: the value must be x,y,z"},
+        {"-o " + out + " --eye 0x1,0,0", "--eye: the value must be x,y,z"},  // decimal only, as in the API
+        {"-o " + out + " --eye=1e13,0,0", "--eye: the value has a coordinate beyond +-1e12"},
         {"-o " + out + " --background 2,0,0", "--background: the value has a component outside [0, 1] (got '2,0,0')"},
         {"-o " + out + " --stats " + (dir / "s.txt").string(), "--stats"},
         {"-o " + out + " --antialias 65", "--antialias: the value must be an integer from 0 (off) to 64"},

@@ -7,7 +7,7 @@
 #include "importer/importer.h"
 #include "core/error.h"
 #include "core/json_limits.h"
-#include "server/http/query_values.h"
+#include "options/query_values.h"
 
 namespace nurbsrt::server {
 namespace {

@@ -3,7 +3,7 @@
 #include <sys/statvfs.h>
 
 #include "core/error.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
 
 namespace nurbsrt::server {
 namespace {

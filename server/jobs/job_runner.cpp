@@ -22,7 +22,7 @@
 #include "server/store/durable_file.h"
 #include "server/jobs/job_spec.h"
 #include "server/common/redact.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
 #include "server/render/render_service.h"
 #include "server/common/request_log.h"
 #include "server/common/scratch.h"

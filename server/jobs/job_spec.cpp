@@ -7,7 +7,8 @@
 #include "importer/importer.h"
 #include "core/error.h"
 #include "core/json_limits.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
+#include "server/render/render_limits.h"
 #include "server/jobs/callback_url.h"
 
 namespace nurbsrt::server {

@@ -206,13 +206,9 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
     const Camera camera(camera_spec_for(r, scene));
-    RenderOptions options;
-    options.method = r.method;
-    options.map_precision = r.map_precision;
+    RenderOptions options = render_options_for(r, scene);
     options.threads = ctx.config.render_threads;
     options.progress = control.progress;
-    apply_background(r.background.value_or(default_background(r.format.kind)), options);
-    apply_look(r.look, r.format.kind, options);
     const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows});
     check_frame_cost(ctx.config, cost);
     const RenderPriority priority = priority_for(cost);

@@ -13,7 +13,7 @@
 
 #include "core/stage_clock.h"
 #include "server/render/context.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
 
 namespace nurbsrt::server {
 

@@ -12,7 +12,7 @@
 #include "server/render/context.h"
 #include "server/http/http_server.h"
 #include "server/routes/handler_util.h"
-#include "server/render/render_options.h"
+#include "options/render_request.h"
 #include "server/routes/routes.h"
 #include "server/render/stage_timings.h"
 #include "server/render/work.h"

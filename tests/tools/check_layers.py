@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The repository's layering, checked from the #include lines (docs/DESIGN.md, "Layers").
 
-- core/ includes only core/; importer/ no renderer internals, server/ or cli/.
+- core/ includes only core/; importer/ no renderer internals, options/, server/ or cli/.
+- options/ (the request model of the CLI and the server) includes core/, the
+  public headers of renderer/ and importer/importer.h, and itself.
 - renderer/: the public headers (renderer/*.h) include only core/ and each other;
   a room includes the public headers and lower rooms only (solve < map < frame <
   passes < output); render.cpp and frame_cost.cpp, on top, may include any room.
@@ -20,7 +22,7 @@ import sys
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 RENDERER_ROOMS = ["solve", "map", "frame", "passes", "output"]
 SERVER_ROOMS = ["common", "store", "http", "render", "jobs", "routes"]
-PRODUCT = ["core", "importer", "renderer", "server", "cli", "bench", "fuzz"]
+PRODUCT = ["core", "importer", "renderer", "options", "server", "cli", "bench", "fuzz"]
 kMaxFiles = 20
 # Folders still over kMaxFiles, to be split into rooms as renderer/ and server/ were.
 kFolderDebts = {"core": 24, "importer": 26, "bench": 25}
@@ -49,7 +51,9 @@ def check(path, kind, inc):
     itop = inc.split("/")[0]
     if top == "core" and itop != "core":
         return "core/ includes only core/"
-    if top == "importer" and (itop in ("server", "cli", "bench") or (itop == "renderer" and room(inc, "renderer"))):
+    if top == "options" and (itop in ("server", "cli", "bench") or (itop == "importer" and inc != "importer/importer.h")):
+        return "options/ includes core/, public renderer headers, importer/importer.h and itself"
+    if top == "importer" and (itop in ("options", "server", "cli", "bench") or (itop == "renderer" and room(inc, "renderer"))):
         return "importer/ includes no renderer internals, server/ or cli/"
     if itop == "renderer" and room(inc, "renderer"):
         if top == "renderer":
@@ -68,7 +72,7 @@ def check(path, kind, inc):
             there = room(inc, "server")
             if not there or SERVER_ROOMS.index(there) > SERVER_ROOMS.index(here):
                 return "a server room includes a higher room or server.h"
-    if top in ("core", "importer", "renderer") and itop in ("server", "cli", "bench"):
+    if top in ("core", "importer", "renderer") and itop in ("options", "server", "cli", "bench"):
         return "a lower layer includes a higher one"
     return None
 

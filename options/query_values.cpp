@@ -1,4 +1,4 @@
-#include "server/http/query_values.h"
+#include "options/query_values.h"
 
 #include <charconv>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 
-namespace nurbsrt::server {
+namespace nurbsrt {
 namespace {
 
 // The options whose values are not text, by kind (render options; `pinned` of
@@ -94,4 +94,4 @@ nlohmann::json query_value(const std::string& key, const std::string& text) {
     return text;
 }
 
-}  // namespace nurbsrt::server
+}  // namespace nurbsrt

@@ -1,20 +1,21 @@
-#include "server/render/render_options.h"
-
+// The JSON (and query-parameter) form of the request model: POST /v1/renders'
+// `options`, a job output's options and the conversions' format, parsed once
+// into RenderRequest and ConversionFormat (render_request.h).
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <set>
-#include <utility>
+#include <string>
 #include <vector>
 
 #include "core/error.h"
 #include "core/json_limits.h"
-#include "server/http/query_values.h"
+#include "options/query_values.h"
+#include "options/render_request.h"
 
-namespace nurbsrt::server {
+namespace nurbsrt {
 namespace {
 
 using nlohmann::json;
@@ -22,7 +23,7 @@ using nlohmann::json;
 [[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
 
 // Options take JSON types only: query parameters and form fields were typed
-// at the edge by the option they set (server/http/query_values.h).
+// at the edge by the option they set (options/query_values.h).
 double number(const json& v, const std::string& key) {
     if (v.is_number()) return v.get<double>();
     bad("option '" + key + "' must be a number");
@@ -71,24 +72,11 @@ Background background(const json& v, const std::string& key) {
 }
 
 Vec3 vec3(const json& v, const std::string& key) {
-    Vec3 r;
-    if (v.is_array() && v.size() == 3 && v[0].is_number() && v[1].is_number() && v[2].is_number()) {
-        r = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-    } else if (v.is_string()) {
-        // "x,y,z" (query parameters): three decimal numbers, nothing else.
-        const auto xyz = decimal_list(v.get<std::string>(), 3, 3);
-        if (!xyz) bad("option '" + key + "' must be x,y,z (three decimal numbers)");
-        r = {(*xyz)[0], (*xyz)[1], (*xyz)[2]};
-    } else {
-        bad("option '" + key + "' must be an array of 3 numbers");
-    }
-    if (!std::isfinite(r.x) || !std::isfinite(r.y) || !std::isfinite(r.z)) bad("option '" + key + "' must be finite");
-    // 1e12 mm is a million km: beyond any part, and far enough from DBL_MAX that
-    // differences of two points stay finite (1e308 overflowed into "must differ").
-    constexpr double kMaxCoordinate = 1e12;
-    if (std::abs(r.x) > kMaxCoordinate || std::abs(r.y) > kMaxCoordinate || std::abs(r.z) > kMaxCoordinate)
-        bad("option '" + key + "' has a coordinate beyond +-1e12 (model units, mm)");
-    return r;
+    const std::string what = "option '" + key + "'";
+    if (v.is_string()) return parse_point(v.get<std::string>(), what);  // "x,y,z" (query parameters)
+    if (!(v.is_array() && v.size() == 3 && v[0].is_number() && v[1].is_number() && v[2].is_number()))
+        bad(what + " must be an array of 3 numbers");
+    return checked_point({v[0].get<double>(), v[1].get<double>(), v[2].get<double>()}, what);
 }
 
 std::string one_of(const json& v, const std::string& key, const std::set<std::string>& allowed) {
@@ -182,38 +170,6 @@ json parse_object(const std::string& options_json) {
     return o;
 }
 
-CameraSpec base_spec(const RenderRequest& r) {
-    CameraSpec base;
-    base.width = r.width;
-    base.height = r.height;
-    base.projection = r.projection;
-    if (r.fov_deg) base.fov_deg = *r.fov_deg;
-    return base;
-}
-
-ViewRequest view_request(const RenderRequest& r) {
-    ViewRequest v;
-    v.view = r.view;
-    v.eye = r.eye;
-    v.target = r.target;
-    v.up = r.up;
-    v.ortho_height = r.ortho_height;
-    v.fit_margin = r.fit_margin;
-    return v;
-}
-
-// Every camera check that needs no scene (up along the view direction, eye at
-// the target, field of view, orthographic height), made by the renderer's own
-// Camera on the view fitted to a unit box: a job's options are refused before
-// 202 exactly as /v1/renders would refuse them later.
-void check_camera_without_scene(const RenderRequest& r) {
-    BBox unit;
-    unit.extend(Vec3{-1, -1, -1});
-    unit.extend(Vec3{1, 1, 1});
-    const Camera checked(fitted_camera(view_request(r), unit, base_spec(r)));
-    (void)checked;
-}
-
 }  // namespace
 
 RenderRequest parse_render_options(const std::string& options_json) {
@@ -263,133 +219,6 @@ RenderRequest parse_render_options(const std::string& options_json) {
     return r;
 }
 
-const char* aov_name(Aov a) {
-    switch (a) {
-        case Aov::z:
-            return "z";
-        case Aov::face:
-            return "face";
-        case Aov::normal:
-            return "normal";
-        case Aov::uv:
-            return "uv";
-        case Aov::iterations:
-            break;
-    }
-    return "iterations";
-}
-
-Background parse_background(const std::string& s, const std::string& what) {
-    if (s == "transparent") return {};
-    auto given = decimal_list(s, 3, 4);
-    if (!given)
-        throw Error(ErrorCode::invalid_argument,
-                    what + " must be r,g,b or r,g,b,a in [0,1], or transparent (got '" + s.substr(0, 64) + "')");
-    std::vector<double>& c = *given;
-    if (c.size() == 3) c.push_back(1);  // opaque
-    for (double x : c)
-        if (!(x >= 0 && x <= 1))
-            throw Error(ErrorCode::invalid_argument,
-                        what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
-    return {{c[0], c[1], c[2]}, c[3]};
-}
-
-ImageFormat image_format_of_extension(std::string ext) {
-    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
-    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    if (ext == "png") return ImageFormat::png;
-    if (ext == "jpg" || ext == "jpeg") return ImageFormat::jpeg;
-    if (ext == "tif" || ext == "tiff") return ImageFormat::tiff;
-    if (ext == "exr") return ImageFormat::exr;
-    return ImageFormat::other;
-}
-
-OutputFormat output_format(ImageFormat kind) {
-    switch (kind) {
-        case ImageFormat::jpeg:
-            return {kind, "jpeg", ".jpg", "image/jpeg"};
-        case ImageFormat::tiff:
-            return {kind, "tiff", ".tif", "image/tiff"};
-        case ImageFormat::exr:
-            return {kind, "exr", ".exr", "image/x-exr"};
-        default:
-            return {ImageFormat::png, "png", ".png", "image/png"};
-    }
-}
-
-int default_antialias(ImageFormat format) {
-    return format == ImageFormat::png || format == ImageFormat::jpeg ? kDefaultAntialias : 0;
-}
-
-int parse_antialias(double n, const std::string& what) {
-    if (!(n >= 0 && n <= kMaxAntialias) || n != std::floor(n))
-        throw Error(ErrorCode::invalid_argument, what + " must be an integer from 0 (off) to " +
-                                                     std::to_string(kMaxAntialias) + " extra rays per edge pixel");
-    return static_cast<int>(n);
-}
-
-double parse_edge_width(double w, const std::string& what) {
-    if (!(w >= kMinEdgeWidth && w <= kMaxEdgeWidth)) {
-        char msg[64];
-        std::snprintf(msg, sizeof msg, " must be from %g to %g pixels", kMinEdgeWidth, kMaxEdgeWidth);
-        throw Error(ErrorCode::invalid_argument, what + msg);
-    }
-    return w;
-}
-
-Color parse_rgb(const std::string& s, const std::string& what) {
-    const auto c = decimal_list(s, 3, 3);
-    if (!c) throw Error(ErrorCode::invalid_argument, what + " must be r,g,b in [0,1] (got '" + s.substr(0, 64) + "')");
-    for (double x : *c)
-        if (!(x >= 0 && x <= 1))
-            throw Error(ErrorCode::invalid_argument,
-                        what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
-    return {static_cast<float>((*c)[0]), static_cast<float>((*c)[1]), static_cast<float>((*c)[2])};
-}
-
-void apply_background(const Background& bg, RenderOptions& options) {
-    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
-    options.background_alpha = static_cast<float>(bg.alpha);
-}
-
-void apply_look(const ImageLook& look, ImageFormat format, RenderOptions& options) {
-    options.antialias = look.antialias.value_or(default_antialias(format));
-    options.edges = look.edges;
-    options.edge_color = look.edge_color;
-    options.edge_width = static_cast<float>(look.edge_width);
-    options.shadows = look.shadows;
-}
-
-Background default_background(ImageFormat format) {
-    if (format == ImageFormat::jpeg) return {{1, 1, 1}, 1};
-    return {};
-}
-
-void complete_size(std::optional<int> width, std::optional<int> height, int& out_width, int& out_height) {
-    const auto keep_aspect = [](int given, int from, int to) {
-        return std::max(1, static_cast<int>(std::lround(double(given) * to / from)));
-    };
-    out_width = width ? *width : height ? keep_aspect(*height, kDefaultHeight, kDefaultWidth) : kDefaultWidth;
-    out_height = height ? *height : width ? keep_aspect(*width, kDefaultWidth, kDefaultHeight) : kDefaultHeight;
-}
-
-void check_render_limits(const ServerConfig& c, const RenderRequest& r) {
-    for (const auto& [name, value] : {std::pair{"width", r.width}, std::pair{"height", r.height}})
-        if (value > c.max_dimension)
-            throw Error(ErrorCode::limit_exceeded, std::string("option '") + name + "' is " + std::to_string(value) +
-                                                       ", over the limit of " + std::to_string(c.max_dimension) +
-                                                       " pixels per side");
-    const long long pixels = static_cast<long long>(r.width) * r.height;
-    if (pixels > c.max_pixels)
-        throw Error(ErrorCode::limit_exceeded, "options 'width' x 'height' give " + std::to_string(r.width) + "x" +
-                                                   std::to_string(r.height) + " = " + std::to_string(pixels) +
-                                                   " pixels, over the limit of " + std::to_string(c.max_pixels));
-}
-
-CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
-    return fitted_camera(view_request(r), scene, base_spec(r));
-}
-
 ConversionFormat parse_conversion_format(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format;
@@ -403,4 +232,4 @@ ConversionFormat parse_conversion_format(const std::string& options_json) {
     return f;
 }
 
-}  // namespace nurbsrt::server
+}  // namespace nurbsrt

@@ -1,6 +1,9 @@
-// The options of POST /v1/renders, from the JSON `options` part or query
-// parameters (values as strings), validated: width, height, view or camera,
-// method, map precision, output format, background, anti-aliasing, feature lines.
+// The request model of a render, one for the CLI and the service: size, view or
+// camera, method, map precision, output format, background, anti-aliasing,
+// feature lines, shadows, AOVs. The CLI fills it from its flags, the service from
+// JSON or query parameters (parse_render_options); both validate values with the
+// same parsers below and build the camera and the renderer's options from it
+// with the same functions (camera_spec_for, render_options_for).
 #pragma once
 
 #include <cstdint>
@@ -10,24 +13,9 @@
 #include "importer/importer.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "server/common/config.h"
+#include "options/image_format.h"
 
-namespace nurbsrt::server {
-
-// The image formats, decided once from the API's `format` or the CLI's file
-// extension; `other`: a file extension the CLI hands to OpenImageIO as it is.
-enum class ImageFormat : uint8_t { png, jpeg, tiff, exr, other };
-// By extension, with or without its dot, any case: png, jpg/jpeg, tif/tiff, exr.
-ImageFormat image_format_of_extension(std::string extension);
-
-struct OutputFormat {
-    ImageFormat kind = ImageFormat::png;
-    std::string name;          // png, jpeg, tiff, exr
-    std::string extension;     // .png, .jpg, .tif, .exr
-    std::string content_type;  // image/png, ...
-};
-// The API's output format of each kind (not `other`).
-OutputFormat output_format(ImageFormat kind);
+namespace nurbsrt {
 
 // The background of the image: colour and alpha (0 transparent, 1 opaque).
 struct Background {
@@ -90,6 +78,9 @@ struct RenderRequest {
     double fit_margin = kDefaultFitMargin;  // of the frame, each side (named views, and an eye alone)
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
+    // Newton's stop tolerance (Sisojevs & Glazs 2010, eq. (12)) as a fraction of the
+    // scene's bounding-box diagonal: the CLI's --tolerance; the API keeps the default.
+    double tolerance = kDefaultRelativeTolerance;
     OutputFormat format = output_format(ImageFormat::png);
     std::optional<Background> background;  // unset: default_background(format)
     unsigned aovs = 0;                     // aov_bit() of each AOV asked for
@@ -99,14 +90,27 @@ struct RenderRequest {
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).
 RenderRequest parse_render_options(const std::string& options_json);
 
-// Throws Error(limit_exceeded) when the image is over the configured size limits.
-void check_render_limits(const ServerConfig& config, const RenderRequest& r);
+// A point or vector option: finite, within +-kMaxCoordinate. Throws
+// Error(invalid_argument) naming `what`. parse_point reads "x,y,z" (decimal numbers).
+// 1e12 mm is a million km: beyond any part, and far enough from DBL_MAX that
+// differences of two points stay finite.
+constexpr double kMaxCoordinate = 1e12;
+Vec3 checked_point(Vec3 p, const std::string& what);
+Vec3 parse_point(const std::string& text, const std::string& what);
 
 // The camera for a scene: the named view fitted to it, then explicit values.
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene);
+// Every camera check that needs no scene (up along the view direction, eye at
+// the target, field of view, orthographic height), made by the renderer's own
+// Camera on the view fitted to a unit box: usage errors found before any import,
+// alike for the CLI, a render and a job's outputs. Throws Error(invalid_argument).
+void check_camera_without_scene(const RenderRequest& r);
+// The renderer's options of the request for `scene` (its tolerance in model
+// units); threads, priority, progress and cancellation are the caller's.
+RenderOptions render_options_for(const RenderRequest& r, const Scene& scene);
 
 // Options for the conversions endpoint: {"format": "step" | "stp" | "iges" | "igs" |
 // "stl" | "glb" | "json"}; anything else is Error(invalid_argument).
 ConversionFormat parse_conversion_format(const std::string& options_json);
 
-}  // namespace nurbsrt::server
+}  // namespace nurbsrt

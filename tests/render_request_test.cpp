@@ -4,14 +4,14 @@
 // a name compared as text.
 #include <gtest/gtest.h>
 
-#include "server/render/render_options.h"
+#include "options/render_request.h"
 
 namespace {
 
-using nurbsrt::server::ImageFormat;
+using nurbsrt::ImageFormat;
 
 TEST(RenderOptions, ImageFormatByExtension) {
-    using nurbsrt::server::image_format_of_extension;
+    using nurbsrt::image_format_of_extension;
     EXPECT_EQ(image_format_of_extension(".png"), ImageFormat::png);
     EXPECT_EQ(image_format_of_extension("PNG"), ImageFormat::png);
     EXPECT_EQ(image_format_of_extension(".jpg"), ImageFormat::jpeg);
@@ -24,9 +24,9 @@ TEST(RenderOptions, ImageFormatByExtension) {
 }
 
 TEST(RenderOptions, DefaultsFollowTheFormat) {
-    using nurbsrt::server::default_antialias;
-    using nurbsrt::server::default_background;
-    using nurbsrt::server::kDefaultAntialias;
+    using nurbsrt::default_antialias;
+    using nurbsrt::default_background;
+    using nurbsrt::kDefaultAntialias;
     EXPECT_EQ(default_antialias(ImageFormat::png), kDefaultAntialias);
     EXPECT_EQ(default_antialias(ImageFormat::jpeg), kDefaultAntialias);
     EXPECT_EQ(default_antialias(ImageFormat::tiff), 0);
@@ -38,7 +38,7 @@ TEST(RenderOptions, DefaultsFollowTheFormat) {
 }
 
 TEST(RenderOptions, ApiFormatParsedOnce) {
-    using nurbsrt::server::parse_render_options;
+    using nurbsrt::parse_render_options;
     const auto jpg = parse_render_options(R"({"format":"jpg"})");
     EXPECT_EQ(jpg.format.kind, ImageFormat::jpeg);
     EXPECT_EQ(jpg.format.name, "jpeg");

@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-namespace nurbsrt::server {
+namespace nurbsrt {
 
 // The JSON value of option `key` given as `text`; throws Error(invalid_argument)
 // naming the option when the text is not of its type.
@@ -28,4 +28,4 @@ std::optional<long long> decimal_integer(std::string_view text);
 // nothing else (no spaces, no empty item); nullopt otherwise.
 std::optional<std::vector<double>> decimal_list(std::string_view text, size_t min_count, size_t max_count);
 
-}  // namespace nurbsrt::server
+}  // namespace nurbsrt

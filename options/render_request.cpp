@@ -1,0 +1,163 @@
+#include "options/render_request.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "options/query_values.h"
+
+namespace nurbsrt {
+
+const char* aov_name(Aov a) {
+    switch (a) {
+        case Aov::z:
+            return "z";
+        case Aov::face:
+            return "face";
+        case Aov::normal:
+            return "normal";
+        case Aov::uv:
+            return "uv";
+        case Aov::iterations:
+            break;
+    }
+    return "iterations";
+}
+
+Background parse_background(const std::string& s, const std::string& what) {
+    if (s == "transparent") return {};
+    auto given = decimal_list(s, 3, 4);
+    if (!given)
+        throw Error(ErrorCode::invalid_argument,
+                    what + " must be r,g,b or r,g,b,a in [0,1], or transparent (got '" + s.substr(0, 64) + "')");
+    std::vector<double>& c = *given;
+    if (c.size() == 3) c.push_back(1);  // opaque
+    for (double x : c)
+        if (!(x >= 0 && x <= 1))
+            throw Error(ErrorCode::invalid_argument,
+                        what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
+    return {{c[0], c[1], c[2]}, c[3]};
+}
+
+Vec3 checked_point(Vec3 p, const std::string& what) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw Error(ErrorCode::invalid_argument, what + " must be finite");
+    if (std::abs(p.x) > kMaxCoordinate || std::abs(p.y) > kMaxCoordinate || std::abs(p.z) > kMaxCoordinate)
+        throw Error(ErrorCode::invalid_argument, what + " has a coordinate beyond +-1e12 (model units, mm)");
+    return p;
+}
+
+Vec3 parse_point(const std::string& text, const std::string& what) {
+    const auto xyz = decimal_list(text, 3, 3);
+    if (!xyz)
+        throw Error(ErrorCode::invalid_argument,
+                    what + " must be x,y,z: three decimal numbers (got '" + text.substr(0, 64) + "')");
+    return checked_point({(*xyz)[0], (*xyz)[1], (*xyz)[2]}, what);
+}
+
+int default_antialias(ImageFormat format) {
+    return format == ImageFormat::png || format == ImageFormat::jpeg ? kDefaultAntialias : 0;
+}
+
+int parse_antialias(double n, const std::string& what) {
+    if (!(n >= 0 && n <= kMaxAntialias) || n != std::floor(n))
+        throw Error(ErrorCode::invalid_argument, what + " must be an integer from 0 (off) to " +
+                                                     std::to_string(kMaxAntialias) + " extra rays per edge pixel");
+    return static_cast<int>(n);
+}
+
+double parse_edge_width(double w, const std::string& what) {
+    if (!(w >= kMinEdgeWidth && w <= kMaxEdgeWidth)) {
+        char msg[64];
+        std::snprintf(msg, sizeof msg, " must be from %g to %g pixels", kMinEdgeWidth, kMaxEdgeWidth);
+        throw Error(ErrorCode::invalid_argument, what + msg);
+    }
+    return w;
+}
+
+Color parse_rgb(const std::string& s, const std::string& what) {
+    const auto c = decimal_list(s, 3, 3);
+    if (!c) throw Error(ErrorCode::invalid_argument, what + " must be r,g,b in [0,1] (got '" + s.substr(0, 64) + "')");
+    for (double x : *c)
+        if (!(x >= 0 && x <= 1))
+            throw Error(ErrorCode::invalid_argument,
+                        what + " has a component outside [0, 1] (got '" + s.substr(0, 64) + "')");
+    return {static_cast<float>((*c)[0]), static_cast<float>((*c)[1]), static_cast<float>((*c)[2])};
+}
+
+void apply_background(const Background& bg, RenderOptions& options) {
+    options.background = {static_cast<float>(bg.rgb.x), static_cast<float>(bg.rgb.y), static_cast<float>(bg.rgb.z)};
+    options.background_alpha = static_cast<float>(bg.alpha);
+}
+
+void apply_look(const ImageLook& look, ImageFormat format, RenderOptions& options) {
+    options.antialias = look.antialias.value_or(default_antialias(format));
+    options.edges = look.edges;
+    options.edge_color = look.edge_color;
+    options.edge_width = static_cast<float>(look.edge_width);
+    options.shadows = look.shadows;
+}
+
+Background default_background(ImageFormat format) {
+    if (format == ImageFormat::jpeg) return {{1, 1, 1}, 1};
+    return {};
+}
+
+void complete_size(std::optional<int> width, std::optional<int> height, int& out_width, int& out_height) {
+    const auto keep_aspect = [](int given, int from, int to) {
+        return std::max(1, static_cast<int>(std::lround(double(given) * to / from)));
+    };
+    out_width = width ? *width : height ? keep_aspect(*height, kDefaultHeight, kDefaultWidth) : kDefaultWidth;
+    out_height = height ? *height : width ? keep_aspect(*width, kDefaultWidth, kDefaultHeight) : kDefaultHeight;
+}
+
+namespace {
+
+CameraSpec base_spec(const RenderRequest& r) {
+    CameraSpec base;
+    base.width = r.width;
+    base.height = r.height;
+    base.projection = r.projection;
+    if (r.fov_deg) base.fov_deg = *r.fov_deg;
+    return base;
+}
+
+ViewRequest view_request(const RenderRequest& r) {
+    ViewRequest v;
+    v.view = r.view;
+    v.eye = r.eye;
+    v.target = r.target;
+    v.up = r.up;
+    v.ortho_height = r.ortho_height;
+    v.fit_margin = r.fit_margin;
+    return v;
+}
+
+}  // namespace
+
+void check_camera_without_scene(const RenderRequest& r) {
+    BBox unit;
+    unit.extend(Vec3{-1, -1, -1});
+    unit.extend(Vec3{1, 1, 1});
+    const Camera checked(fitted_camera(view_request(r), unit, base_spec(r)));
+    (void)checked;
+}
+
+CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
+    return fitted_camera(view_request(r), scene, base_spec(r));
+}
+
+RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
+    RenderOptions options;
+    options.method = r.method;
+    options.map_precision = r.map_precision;
+    options.newton.eps = default_newton_eps(scene.bbox, r.tolerance);
+    apply_background(r.background.value_or(default_background(r.format.kind)), options);
+    apply_look(r.look, r.format.kind, options);
+    return options;
+}
+
+}  // namespace nurbsrt
