@@ -180,7 +180,7 @@ CartesianDerivs cartesian_from(const SurfaceDerivs& h) {
 }
 
 // Degenerate pole edges. If an edge v = v0 of the parameter box collapses to one point
-// (a whole row of control points equal, e.g. a sphere's pole or the duck body's tip),
+// (a whole row of control points equal, e.g. a sphere's pole or a body's pointed tip),
 // P_u vanishes along it, and near it P_u(u, v0 + h) = h P_uv(u, v0) + O(h^2), so
 //   P_u x P_v = h (P_uv x P_v) + O(h^2):
 // the normal's limit from inside the box is sign(h) (P_uv x P_v), evaluated exactly at

@@ -1,5 +1,5 @@
 // Operations on whole Scenes: placing a copy under an affine transform and
-// concatenating scenes (multi-model renders such as the paper's "27 Ducks").
+// concatenating scenes (multi-model renders such as the 3x3x3 grid scene of Sisojevs & Glazs 2010).
 #pragma once
 
 #include <array>

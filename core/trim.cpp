@@ -97,7 +97,7 @@ void TrimTester::size_grid(const Bounds& b, int max_cells_per_side) {
 void TrimTester::bin_edges() {
     // The grid in locals: the stores into the uint32_t / uint8_t arrays below
     // may alias the members as far as the compiler knows, which made it reload
-    // them in the inner loops (+6 % instructions in prepare()).
+    // them in the inner loops.
     const double u0 = u0_, v0 = v0_, du = du_, dv = dv_;
     const int nu = nu_, nv = nv_;
     const size_t ncell = static_cast<size_t>(nu) * nv;
@@ -135,10 +135,10 @@ void TrimTester::classify_cell_centres() {
         for (int i = 0; i < nu; ++i) ref_[static_cast<size_t>(j) * nu + i] = {u0 + (i + 0.5) * du, v0 + (j + 0.5) * dv};
     // The crossings of each row's centre line, bucketed by row (two passes:
     // count, then fill): an edge crosses only the rows between its end points,
-    // and testing every edge on every row was 40 % of prepare() (the cylinder
-    // block's 822 faces, loops sampled finely). rows_of gives a range at least
-    // one row wider each way (by truncation: the edges lie above v0, and
-    // std::floor is a library call on the baseline target); the test itself
+    // and testing every edge on every row dominated prepare() on finely sampled
+    // loops. rows_of gives a range at least one row wider each way (by
+    // truncation: the edges lie above v0, and std::floor is a library call on
+    // the baseline target); the test itself decides, as it did per row.
     // decides, as it did per row.
     auto row_y = [&](int j) { return v0 + (j + 0.5) * dv; };
     auto crosses = [](const Edge& e, double y) { return (e.ay > y) != (e.by > y); };
@@ -180,8 +180,7 @@ void TrimTester::classify_cell_centres() {
 // A reference point (nearly) on an edge of its cell would make the query's
 // crossing count ambiguous: move it to another point of the cell, away from
 // every edge, and classify it by brute force (rare: exact CAD coordinates).
-// (Squared distances: std::hypot, a libm call per edge of every cell, was a
-// sixth of prepare() on the cylinder block.)
+// (Squared distances: std::hypot is a libm call per edge of every cell.)
 void TrimTester::settle_reference_points(const std::vector<TrimLoop>& loops) {
     const double u0 = u0_, v0 = v0_, du = du_, dv = dv_;  // locals, as in bin_edges
     const int nu = nu_, nv = nv_;

@@ -192,10 +192,9 @@ ConvertedFace convert_face(const TopoDS_Face& face) {
             out.face = TopoDS::Face(nc.Shape());
         } else {
             // Already a B-spline surface: NurbsConvert would return the same
-            // surface (checked pole for pole on trj8, trj3, linkrods, bearing,
-            // ship_kcs) but re-approximates every edge curve, which costs
-            // seconds on some faces (trj8_b1-ec-214 face 151: 8.6 s). A plain
-            // copy keeps the exact pcurves and the same (u,v).
+            // surface but re-approximates every edge curve, which can cost
+            // seconds on one face. A plain copy keeps the exact pcurves and the
+            // same (u,v).
             out.face = copied_face(face);
         }
 

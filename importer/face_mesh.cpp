@@ -109,8 +109,7 @@ FaceMesh trimmed_grid_mesh(const ConvertedFace& cf, const UVBox& box, const std:
 namespace {
 
 // BRepMesh can leave part of a face without triangles while the nodes of its
-// boundary are there (step/ec_turbine-A.stp face 2, a strip along an edge of a
-// plane; four faces of step/bug32596_abc_0_13.step), at any deflection and with
+// boundary are there (e.g. a strip along an edge of a plane), at any deflection and with
 // the Watson and the Delabella algorithm alike. The preliminary map then shows
 // no pixel of that part, and the rescue and nearer-sheet passes, which look
 // for faces through the map's meshes, miss a thin face in front there. Such a
@@ -188,8 +187,8 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
     const auto budget =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, p.time_limit_s)));
     const Clock::time_point deadline = start + budget;
-    // One face may not eat the whole budget (iges/bug22869_Spring.igs: BRepMesh
-    // never finishes one face), so the others still get their real meshes.
+    // One face may not eat the whole budget (BRepMesh may never finish one
+    // face), so the others still get their real meshes.
     const auto face_budget =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, p.face_time_limit_s)));
     enum Outcome : char { ok, failed, timed_out, skipped };
@@ -208,10 +207,10 @@ void mesh_faces(const std::vector<ConvertedFace>& faces, const std::vector<UVBox
             return;
         }
         Handle(DeadlineIndicator) indicator = new DeadlineIndicator(std::min(deadline, now + face_budget));
-        // A deflection larger than the face itself (a bolt hole in a model
-        // 3e5 mm across, step/as1_motor.step) polygonizes its edges into
-        // self-intersecting wires and BRepMesh gives up; so the deflection is
-        // capped by the face's size, and a failed face gets one finer retry.
+        // A deflection larger than the face itself (a small hole in a very
+        // large model) polygonizes its edges into self-intersecting wires and
+        // BRepMesh gives up; so the deflection is capped by the face's size,
+        // and a failed face gets one finer retry.
         double deflection = p.deflection;
         if (i < face_sizes.size() && face_sizes[i] > 0) deflection = std::min(deflection, 0.1 * face_sizes[i]);
         try {

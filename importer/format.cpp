@@ -35,7 +35,7 @@ bool looks_like_iges_record(std::string_view rec) {
 }
 
 // First record: up to the first line break when there is one within 80
-// columns (plus CR), otherwise the first 80 bytes: some writers (broken/Disc.igs)
+// columns (plus CR), otherwise the first 80 bytes: some writers
 // emit all records back to back without line breaks.
 std::string_view first_record(std::string_view s) {
     const size_t nl = s.find('\n');

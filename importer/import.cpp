@@ -56,10 +56,10 @@ struct FaceWork {
 
 // For each face, the first face that is the same face placed elsewhere (the same
 // TShape and orientation under another location: a part an assembly uses more
-// than once; CAx-IF as1: 160 faces, 53 distinct), or itself. Such a face's
-// surface, (u,v) box, trim loops and mesh are its first one's moved by the
-// relative placement (instance_work, instance_mesh), not converted, sampled
-// and meshed again: a placement moves the surface and keeps its parameters.
+// than once), or itself. Such a face's surface, (u,v) box, trim loops and mesh
+// are its first one's moved by the relative placement (instance_work,
+// instance_mesh), not converted, sampled and meshed again: a placement moves
+// the surface and keeps its parameters.
 std::vector<size_t> first_instances(const std::vector<TopoDS_Face>& faces) {
     std::map<std::pair<const TopoDS_TShape*, int>, size_t> first;
     std::vector<size_t> out(faces.size());

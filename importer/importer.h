@@ -32,18 +32,11 @@ struct ImportOptions {
     // Trim loops: maximum deviation of the (u,v) polyline from its pcurve, as a
     // fraction of the face's parameter-box diagonal. It sets the trim band (twice
     // the trim test's uncertainty), in which a hit near an edge counts for cracks
-    // and light rays count as grazing an edge: at 1e-4 that band was up to 200x
-    // a model's edge tolerance (t4mec: 0.245 mm against 0.0012 mm) and light rays
-    // passing 0.05-0.3 mm beside an edge were taken as blocked by it. 1e-5 cost
-    // 2-3x the loop points and no measurable import time (the trim test's grid
-    // keeps a query to the edges near its point). At 1e-5 a chord of a convex
-    // loop still cut off a silhouette pixel that the exact face covers (4e-5
-    // outside the polyline: a hole in a bolt's view) and a hole's inscribed
-    // loop left a sliver of the hole in the plate that shadowed a grazing-lit
-    // wall; 3e-6 takes both to the exact answer, for 1.8x the loop points,
-    // +5-50 ms of single-thread conversion (phone 14 -> 20 ms, cylinder block
-    // 220 -> 274) and no measurable frame time. 1e-6 fixed the same two and
-    // moved one light ray of t4mec into a false shadow, for twice that cost.
+    // and light rays count as grazing an edge. A coarser tolerance makes the band
+    // exceed a model's own edge tolerance many times over (light rays beside an
+    // edge taken as blocked) and lets a chord of a loop cut off pixels the exact
+    // face covers; 3e-6 gives the exact answer where coarser ones did not, for
+    // a few ms of conversion and no measurable frame time (docs/BENCHMARKS.md).
     double trim_relative_tolerance = 3e-6;
     // Read colours and names through the XDE readers (slower, richer).
     bool read_attributes = true;

@@ -33,12 +33,10 @@ constexpr int kStopPollMs = 100;
 
 // The worker program: nurbsrt-worker beside this executable when it is there
 // (the build and the Docker image put it there), else this executable itself,
-// which has the same entry points as hidden subcommands. Why a separate program:
-// on Debian 12 `nurbsrt` links 107 shared libraries (OSMesa's LLVM, libpq, Embree
-// besides OCCT) and starts in 0.08-0.12 s; nurbsrt-worker links OCCT alone (72)
-// and starts in 0.06-0.07 s (`time nurbsrt --help` against `time nurbsrt-worker
-// --help`, 2-core EPYC), on every upload the service imports. (Before OpenImageIO
-// became a module loaded on demand, nurbsrt linked 305 and took 0.37-0.5 s.)
+// which has the same entry points as hidden subcommands. A separate program
+// because the service starts one on every upload it imports: `nurbsrt` links
+// OSMesa's LLVM, libpq and Embree besides OCCT and starts markedly slower than
+// a program that links OCCT alone (docs/BENCHMARKS.md).
 std::string default_worker_executable() {
     const std::string sibling = beside_executable("nurbsrt-worker");
     return access(sibling.c_str(), X_OK) == 0 ? sibling : executable_path();

@@ -94,7 +94,7 @@ ReferenceHit ReferenceIntersector::cast(const Ray& r, double t_max) {
         impl_->inter.Perform(gp_Lin(gp_Pnt(r.origin.x, r.origin.y, r.origin.z), gp_Dir(r.dir.x, r.dir.y, r.dir.z)), 0.0,
                              t_max);
     } catch (const Standard_Failure&) {
-        // Seen: Standard_NullObject on a few rays of trj8. No reference for this
+        // OCCT can throw (e.g. Standard_NullObject) on a few rays. No reference for this
         // ray; reload so that a possibly inconsistent state is not reused.
         h.error = true;
         impl_->inter.Load(impl_->shape, impl_->tolerance);

@@ -33,12 +33,12 @@ constexpr size_t kBytesPerMapVertex = 2 * 4 * sizeof(float);
 constexpr size_t kFixedBytes = size_t(32) << 20;
 
 // Work, in core-seconds of the reference machine (2-core Xeon), fitted to the
-// CPU time (not wall time: the machine is shared) of cached frames of OCCT's
-// screw (rational, low degree: 0.52 us per pixel at 320x240, encoding
-// included) and of a degree-9 face on 200 x 200 poles (1.75 us per pixel at
-// 1600x1200): a pixel's fixed cost (map readback, a solve's set-up, shading,
-// encoding) and the cost per basis-function product of its solve (Newton's few
-// iterations each evaluate (p+1)(q+1) products with derivatives).
+// CPU time (not wall time: the machine is shared) of cached frames of a
+// rational low-degree part (0.52 us per pixel at 320x240, encoding included)
+// and of a degree-9 face on 200 x 200 poles (1.75 us per pixel at 1600x1200):
+// a pixel's fixed cost (map readback, a solve's set-up, shading, encoding) and
+// the cost per basis-function product of its solve (Newton's few iterations
+// each evaluate (p+1)(q+1) products with derivatives).
 constexpr double kSecondsPerPixel = 0.4e-6;
 constexpr double kSecondsPerBasisProduct = 0.0134e-6;
 constexpr double kSecondsPerTriangle = 0.2e-6;

@@ -1,12 +1,11 @@
 // Image files are written by a module loaded on first use, libnurbsrt_image.so
 // (renderer/output/image_writer/), not by code linked into the programs: Debian 12
 // builds OpenImageIO against ~260 shared libraries (OpenCV with its video I/O,
-// FFmpeg, DCMTK, OpenVDB, ...), and relocating them took 0.35-0.4 s of every
-// nurbsrt process's start, before main (an empty program linked with the same
-// libraries: 0.46-0.53 s, without OpenImageIO's: 0.08-0.14 s). Commands that
-// write no image (info, convert, a service before its first render) no longer
-// pay it. The module lives beside the executable, as nurbsrt-worker does, or on
-// the library search path.
+// FFmpeg, DCMTK, OpenVDB, ...), whose relocation would add a large share of a
+// second to every nurbsrt process's start, before main. Commands that write no
+// image (info, convert, a service before its first render) do not pay it. The
+// module lives beside the executable, as nurbsrt-worker does, or on the library
+// search path.
 #pragma once
 
 #include <cstddef>

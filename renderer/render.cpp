@@ -31,11 +31,8 @@ constexpr int kRescueMinIterations = 16;
 // ... and halve a step that raises the residual at most twice (1/4), not four
 // times: a pixel's rescue tries many starts, and one whose step must shrink
 // further is on its way off the surface (a silhouette the ray misses) while
-// another start reaches the root. Measured on 7 models x 2 views: 17-35 % fewer
-// robust evaluations (4-16 % of the frame's), the same frames but 4 pixels (2 of
-// them a nearer root than before, 1 a farther one; 1 differs by 0.007 in colour),
-// the same full-frame results. Shadow rays keep four (shadow_rays.cpp): light
-// rays grazing an occluder leak with two.
+// another start reaches the root. Shadow rays keep four (shadow_rays.cpp):
+// light rays grazing an occluder leak with two.
 constexpr int kRescueBacktracks = 2;
 
 tbb::task_arena::priority arena_priority(RenderPriority p) {

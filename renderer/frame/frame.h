@@ -90,9 +90,8 @@ struct FrameContext {
     int width, height;
     uint32_t nfaces;
     // 2 / height, once: pixel_footprint runs per pixel pair in several passes,
-    // where a division per call (the compiler may not turn x / h into a
-    // product) costs far more cycles than its one instruction. The same
-    // frames (a power-of-two height keeps every product exact).
+    // where a division per call (the compiler may not turn x / h into a product)
+    // costs far more. A power-of-two height keeps every product exact.
     double two_over_height = 2.0 / height;
 
     bool in_frame(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
@@ -111,11 +110,9 @@ struct FrameContext {
 };
 
 // Frame-sized buffers are filled in blocks of this many bytes with a cancel check
-// between blocks. Filling fresh pages (frame buffers above glibc's mmap
-// threshold get new pages every frame) costs ~0.8 s per GiB on the shared
-// 2-core machines when one thread does it, most of it the kernel zeroing the
-// pages; a 25-Mpixel frame has over 3 GiB of them, which a canceled render must
-// not go on filling.
+// between blocks: filling fresh pages (above glibc's mmap threshold) is mostly the
+// kernel zeroing them, ~0.8 s per GiB on one thread of a 2-core machine, and a
+// 25-Mpixel frame has over 3 GiB that a canceled render must not go on filling.
 inline constexpr size_t kCancelBlockBytes = size_t(64) << 20;
 // From this size on a buffer's storage is fresh pages (glibc's mmap threshold as
 // tune_heap_for_frames sets it), and the frame's threads fault them in together
@@ -160,11 +157,11 @@ void assign_cancelable(std::vector<T>& v, size_t n, const T& value, const FrameC
 }
 
 // Per-pixel storage that the frame's first pass writes in full before anything
-// reads it, allocated without an initial fill: a 512x512 frame's hits are 10.5
-// MB, whose serial fill (std::vector's) took 4.0-4.7 ms of every frame; the
-// primary pass writes each element once, in parallel, next to its solve. The
-// elements are aggregates of scalars (implicit-lifetime types: C++20 [intro.object]),
-// so the raw storage holds them once written.
+// reads it, allocated without an initial fill: std::vector's serial fill of a
+// 512x512 frame's 10.5 MB of hits took milliseconds, while the primary pass
+// writes each element once, in parallel, next to its solve. The elements are
+// aggregates of scalars (implicit-lifetime types: C++20 [intro.object]), so the
+// raw storage holds them once written.
 template <class T>
 class PixelArray {
     static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_destructible_v<T>);
@@ -201,9 +198,8 @@ struct FrameBuffers {
     PixelArray<PixelHit> hits;
     // hits[k].t where hits[k] is a hit, +inf elsewhere: the depths alone (8
     // bytes a pixel instead of the hits' 40), for the tests that read every
-    // pixel's neighbourhood (the nearer-sheet pass's spikes): reading the hits
-    // for them was a millisecond per 512² frame. Written with the hits (set,
-    // update_depth).
+    // pixel's neighbourhood (the nearer-sheet pass's spikes). Written with the
+    // hits (set, update_depth).
     PixelArray<double> depth;
     void set(size_t k, const PixelHit& h) {
         hits[k] = h;

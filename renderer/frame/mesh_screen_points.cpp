@@ -13,12 +13,9 @@ namespace {
 
 // Triangles per grid cell aimed at: a query then tests a few cells' worth of
 // triangles instead of the face's thousands, and the grid stays small. A
-// triangle is listed in every cell its screen box overlaps, ~5 at 4 per cell:
-// building the grids was a tenth of the 27 ducks' frame. At 16 the rescue and
-// nearer-sheet passes took 15 % less time there (68 -> 58 ms, 1 thread), the
-// same within noise on the cylinder block, trj8, bug29715_slow and
-// bug31670_russian (64 per cell: 5-10 % more on bug29715_slow's dense face),
-// and every frame stayed the same.
+// triangle is listed in every cell its screen box overlaps (~5 at 4 per cell),
+// so small cells make the grids costly to build; 16 balances building against
+// querying (docs/BENCHMARKS.md).
 constexpr double kTrianglesPerCell = 16.0;
 // Cells per axis at the most: bounds a grid's memory where a face has very many
 // triangles or a very long screen box (a face crossing the eye plane).
@@ -37,7 +34,7 @@ bool MeshScreenPoints::usable_triangle(const FaceMesh& mesh, const std::vector<P
 namespace {
 // floor(f) clamped to [0, n - 1] (0 for NaN): truncation where f is positive.
 // std::floor is a libm call on the baseline x86-64 target, and a grid's making
-// takes four per triangle: 37 % of it on the 27 ducks.
+// takes four per triangle.
 int clamped_cell(double f, int n) { return !(f > 0) ? 0 : f < n ? static_cast<int>(f) : n - 1; }
 
 // A grid's compressed rows in two passes (count, then fill): begin[cell] ..
@@ -82,11 +79,8 @@ const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
 }
 
 // A face's grid is built at its first query, although one scan of its
-// triangles is cheaper than a grid's making: the scans of the faces asked about
-// a few times (the first 3 queries scanned, until this) cost more than their
-// grids, rescue and nearer-sheet passes together 288.6 -> 258.8 M instructions
-// on the 27 ducks (iso, 1 thread), 186.1 -> 182.8 M on the cylinder block,
-// 0.4-8 % less on 7 more models, none more, the frames identical.
+// triangles is cheaper than a grid's making: the scans of faces asked about a
+// few times cost more in total than their grids.
 const MeshScreenPoints::Grid& MeshScreenPoints::grid(uint32_t id) const {
     Entry& e = faces_[id - 1];  // projected(id) has run: its callers ask for it first
     e.grid_once.call(e.m, [&] { build_grid(id, e); });
@@ -364,8 +358,7 @@ int MeshScreenPoints::adjacent_far_faces(const uint32_t* near, int nn, ScreenPoi
                 continue;
             // The mesh box's corners on screen bound its points' (all in front
             // of the eye when the corners are): most adjacent faces lie farther
-            // and are left without projecting their mesh (its projection, one
-            // per face and frame, was a fifth of the rescue's time on trj8).
+            // and are left without projecting their mesh.
             const ScreenBox& sb = boxes[id - 1];
             if (sb.empty || (!sb.around && !(box_distance2(p, sb.lo.x, sb.hi.x, sb.lo.y, sb.hi.y) <= max_d2))) continue;
             const Entry& e = projected(id);

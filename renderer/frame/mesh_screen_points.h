@@ -29,12 +29,11 @@ struct NearFaceBound {
 // of the root). A face narrower than a pixel (a fillet or a blend seen edge-on)
 // has mesh vertices many pixels apart along its length; the nearest vertex would
 // start Newton that far away, across a thin trimmed strip, and miss.
-// Each face's vertices are projected once per face and frame on first use, not
-// once per pixel, and bucketed in a screen grid when first searched, so that a query visits the
-// triangles near the pixel instead of all of them (a face of the ducks has ~3000
-// triangles, and the rescue asks for hundreds of pixels per frame). Same
-// arithmetic as projecting in place (X/D, Y/D of Camera::project_h); NaN marks a
-// vertex behind the eye. Thread-safe.
+// Each face's vertices are projected once per frame on first use, and bucketed
+// in a screen grid when first searched, so that a query visits the triangles
+// near the pixel instead of all of a face's thousands. Same arithmetic as
+// projecting in place (X/D, Y/D of Camera::project_h); NaN marks a vertex
+// behind the eye. Thread-safe.
 class MeshScreenPoints {
 public:
     explicit MeshScreenPoints(const FrameContext& c) : c_(c), faces_(new Entry[c.nfaces]) {}
@@ -124,9 +123,7 @@ private:
     // frame's cells), as index ranges into one array (compressed rows); apart,
     // the faces whose box may cover any point (`around`). A box within reach
     // of a point overlaps a cell of the square around the point, so only those
-    // cells' faces need the exact box test, where faces_near tested every
-    // face's box per call (a cylinder block's 822 faces: faces_near 11.3 ->
-    // 8.8 M instructions of its iso frame's 446 M).
+    // cells' faces need the exact box test, not every face's.
     struct BoxGrid {
         int n = 0;  // cells per side
         double x0 = 0, y0 = 0, inv_cw = 1, inv_ch = 1;
@@ -152,12 +149,10 @@ private:
         int cell_y(double y) const;
     };
     // std::call_once's work without its cost here: glibc's pthread_once ends
-    // every first call with a futex wake system call, waiters or not, and the
-    // frame's first use of each face's projection and grid made some 400 of
-    // them a frame on trj8 (a tenth of the rescue's and the nearer-sheet
-    // pass's time on this virtual machine). The flag is read with acquire
-    // order; only a first use takes the entry's mutex (uncontended: no system
-    // call). As with call_once, an init that throws leaves it undone.
+    // every first call with a futex wake system call, waiters or not, and a
+    // frame makes hundreds of first uses. The flag is read with acquire order;
+    // only a first use takes the entry's mutex (uncontended: no system call).
+    // As with call_once, an init that throws leaves it undone.
     class Once {
     public:
         template <class F>

@@ -16,10 +16,8 @@ namespace {
 
 // A border stop farther from its ray than this many pixel footprints is not
 // taken for a hit in a crack, whatever the trim band allows: the point shown
-// would lie visibly beside the pixel's ray. Half a pixel keeps the fills of the
-// faces whose NURBS stops short of the shape's face by a fraction of a pixel
-// (the cylinder block's face 770: 0.3-0.4 footprints; without them, 11 pixels
-// there show the farther sheet).
+// would lie visibly beside the pixel's ray. Half a pixel still fills faces
+// whose NURBS stops short of the shape's face by a fraction of a pixel.
 constexpr double kMaxBorderGapPixels = 0.5;
 // Relative margin of that early decision for the rounding of the bounds (a few
 // units in the last place) against the exact test's own.
@@ -120,8 +118,7 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
 // band off that border goes), and within kMaxBorderGapPixels of the ray.
 // With the larger speed of the two instead, faces much longer in one parameter
 // than in the other accepted iterates stuck on a border for rays that miss the
-// face by several pixels: phantom strips beside the face (5,941 pixels over the
-// full-frame test's models, 5,129 of them on one assembly).
+// face by several pixels: phantom strips beside the face.
 bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const {
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const UvBox& b = ff.box;
@@ -130,8 +127,7 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
     // The test below, decided early and exactly where the stop's bounds already
     // fail it (NewtonResult::gap_bound, t_bound; the band never exceeds
     // kMaxBorderGapPixels footprints, which grow with t), without the trim test
-    // and the surface evaluation: a third of the anti-aliasing samples' border
-    // stops on trj8's iso frame (8.7k of them went on to the evaluation, 5.7k now).
+    // and the surface evaluation.
     if (!(r.t_bound > 0) || r.gap_bound > (1 + kBoundRounding) * kMaxBorderGapPixels * ctx.pixel_footprint(r.t_bound))
         return false;
     if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return false;

@@ -23,8 +23,8 @@ namespace nurbsrt {
 // footprint squared over the curvature radius, far below one footprint except
 // where the sheet is seen almost edge-on (a wasted re-solve there, never a wrong hit).
 constexpr double kSheetFootprints = 1.0;
-// unlinked_end's largest step, in sheet gaps: the speckles it was made for lie
-// 2.4 gaps behind the face in front; 4 keeps the search to such near steps.
+// unlinked_end's largest step, in sheet gaps: an unsewn continuation of a face
+// lies about as deep as the face at its edge; a larger step is a silhouette.
 constexpr double kUnlinkedStepGaps = 4.0;
 
 class NearerSheet {
@@ -32,12 +32,9 @@ public:
     NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                 const FrameBuffers& b);
     // Whether find(i, j) can find anything: the pixel is a spike against one of
-    // its pairs (on the hits' depths alone, t, +inf where no hit), a fold's
-    // edge, or on a silhouette a sheet gap behind the pair's other pixel, the
-    // first tests of find, which the first pass reads for every pixel. The
-    // hits are read only where the depths allow a fold's edge (both of the pair
-    // hit, one a sheet gap behind). `thin`: whether the pixel may have
-    // thin_tries, a 4-neighbour a sheet gap behind it (in one scan of the depths).
+    // its pairs (on depths alone), a fold's edge, or a silhouette a sheet gap
+    // behind the pair's other pixel. Read by the first pass for every pixel.
+    // `thin`: whether thin_tries may apply (a 4-neighbour a sheet gap behind).
     bool maybe_spike(int i, int j, bool& thin) const;
     // A nearer hit for pixel (i, j) than its current one, if any.
     bool find(int i, int j, PixelHit& out) const;
@@ -50,27 +47,18 @@ public:
         int reach;  // how far that hit lies (pixels, Chebyshev): the nearest start first
     };
     // Where pixel (i, j)'s hit is a thin face's, a line of pixels in front of
-    // other faces (both of a horizontal or vertical pair on other faces, one of
-    // them a hit a sheet gap behind it; maybe_spike's `thin` flag is the same
-    // test): the pixels within kThinReach a sheet gap behind it on other faces,
-    // but its 4-neighbours (find's steps), to be solved on its face from its
-    // (u, v). A face narrower than a pixel running diagonally (a thin ring of
-    // unsewn IGES panels seen edge-on, iges/marsCapsule.igs front) covers only
-    // every second or third pixel centre in the map; between those the pixels
-    // show the face behind, level all around, where no spike, step or pit
-    // starts a search, though the exact ray crosses the thin face.
+    // other faces (the same test as maybe_spike's `thin`): the pixels within
+    // kThinReach a sheet gap behind it on other faces, to be solved on its face
+    // from its (u, v). A face narrower than a pixel running diagonally covers only
+    // every second or third pixel centre in the map, and the pixels between show
+    // the face behind with no spike, step or pit to start a search.
     // Returns whether the pixel is a thin face's.
     bool thin_tries(int i, int j, std::vector<ThinTry>& out) const;
-    // A thin face's tries over its whole mesh: the pixels within
-    // kThinFacePixels of its mesh on screen, where its frontmost mesh point
-    // there lies a sheet gap in front of the pixel's hit. Where the thin face
-    // runs along a row or a column, its map pixels can be many pixels apart or
-    // missing for a stretch: the mesh's chords sag by up to its deflection (a
-    // ring a third of a pixel wide whose mesh strip passes between two rows of
-    // pixel centres, where the exact ring covers one row's). Triangles hidden
-    // behind the hit at their centroid's pixel are skipped (a face mostly
-    // behind others, whose few visible pixels are thin: the mesh scan of
-    // trj8's iso frame 7.6 -> 5.3 M instructions).
+    // A thin face's tries over its whole mesh: the pixels within kThinFacePixels
+    // of its mesh on screen where its frontmost mesh point lies a sheet gap in
+    // front of the pixel's hit. Along a row or column a thin face's map pixels can
+    // be far apart or missing, since mesh chords sag by up to the deflection.
+    // Triangles hidden behind the hit at their centroid's pixel are skipped.
     void thin_face_tries(uint32_t face, std::vector<ThinTry>& out) const;
     // Solves a ThinTry; true, with out, where it is nearer than the pixel's hit.
     bool solve(const ThinTry& t, PixelHit& out) const;
@@ -92,53 +80,33 @@ private:
         bool unlinked = false;  // the face in front ends unlinked (unlinked_end)
     };
     // At a step that its 4-neighbours' faces did not fill: the faces that only
-    // diagonal neighbours show in front of the hit (a sheet gap nearer), from
-    // their hits, then the 3x3's map faces not tried yet, from the map's
-    // starts, robustly. A strip narrower than a pixel between the face in front
-    // and the pixel's touches the pixel's ray while its map pixels run
-    // diagonally past it (a thin ring of unsewn IGES panels,
-    // iges/marsCapsule.igs front), or while its own solves there failed and the
-    // hits show the faces around it (a fillet strip, step/r0901_ec.stp iso).
+    // diagonal neighbours show a sheet gap in front of the hit, from their hits,
+    // then the 3x3's map faces not tried yet, from the map's starts, robustly. A
+    // strip narrower than a pixel can touch the ray while its map pixels run
+    // diagonally past it, or while its own solves there failed.
     void diagonal_faces(int i, int j, PixelHit& best) const;
-    // At a step where Newton diverged or stalled on the face in front (no
-    // crossing outside its trim beyond which beyond_edges would search), the
-    // faces hit in front of the pixel's hit two pixels away on the side of
-    // each such step (kRingSide pixels centred on the step's line) that the
-    // 3x3 does not show: a face between the face in front and the pixel's, a
-    // pixel or two wide, whose map pixels lie just beyond the 3x3
-    // (iges/bearing.iges iso: a blend 0.0021 in front of the hit, its pixels
-    // two to the right). Not where Newton left the face's parameter box (the
-    // face ends there): those steps found no other pixel (the full-frame
-    // test, 8 models x 2 views) and were a third of this search's cost. Three
-    // pixels, not the ring's side of five nor the whole ring of 16, which
-    // found the same pixel (one iso frame, instructions, the box-leaving steps
-    // included: trj8 +0.7 % with 3, +0.8 % with 5, +0.7 % for the ring after
-    // diagonal_faces; the cylinder block's orthographic front +0.9, 1.2, 1.3 %).
+    // At a step where Newton diverged or stalled on the face in front (no crossing
+    // outside its trim for beyond_edges to follow): the faces hit in front of the
+    // pixel's hit two pixels away on that side (kRingSide pixels centred on the
+    // step's line) that the 3x3 does not show, i.e. a blend a pixel or two wide
+    // between the two faces. Not where Newton left the parameter box (the face
+    // ends there; those steps cost much and found nothing). See docs/BENCHMARKS.md.
     static constexpr int kRingSide = 3;
     void faces_beyond_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const;
-    // At a step where Newton failed on the face in front (any way, leaving its
-    // parameter box too), the faces joining that face (PreparedFace::adjacent)
-    // hit between it and the pixel's hit in the block beyond the 3x3 on the
-    // step's side, 2 to kJoiningReach pixels out and kJoiningReach either way
-    // across: a blend strip between the face in front and the pixel's face,
-    // hidden behind the former's edge but for a few pixels off along it
-    // (iges/bearing.iges front: face 20, 0.0106 in front of the hit, its
-    // nearest pixels 3 rows down, 2 across). Solved from its mesh's starts at
-    // the pixel, not from those pixels' hits: a blend seen edge-on is crossed
-    // twice, and a start 3 pixels along it led to the farther crossing. At
-    // most kMaxJoiningFaces faces (two robust solves each). Cost, callgrind,
-    // one frame: +0.5 % (trj8 iso, cylinder block iso), +1.2 % (cylinder
-    // block orthographic front); the whole 7x7 ring around the pixel
-    // without the depth bound: +3.2 %, +3.1 %, +6.4 %.
+    // At a step where Newton failed on the face in front (any way), the faces
+    // joining it (PreparedFace::adjacent) hit between it and the pixel's hit in
+    // the block beyond the 3x3 on the step's side (2 to kJoiningReach pixels out,
+    // kJoiningReach either way): a blend strip hidden behind the front face's edge
+    // but for a few pixels along it. Solved from its mesh's starts at the pixel,
+    // not from those pixels' hits: a blend seen edge-on is crossed twice, and a
+    // start along it can lead to the farther crossing. At most kMaxJoiningFaces.
     static constexpr int kJoiningReach = 3;
     static constexpr int kMaxJoiningFaces = 8;
     void faces_joining_failed(int i, int j, const StepFronts& fronts, PixelHit& best) const;
     // At a silhouette pixel, the 4-neighbours on other faces in front of its hit
-    // (by more than the spike threshold) that find's silhouette test did not
-    // try, each from its own (u, v), robustly, until one is nearer: a face just
-    // in front of the pixel's where its rim meets the silhouette, whose pixels
-    // lie beside the silhouette rather than across it (iges/marsCapsule.igs iso:
-    // 0.0075 in front).
+    // (by more than the spike threshold) that find's silhouette test did not try,
+    // each from its own (u, v), robustly, until one is nearer: a face whose rim
+    // meets the silhouette, its pixels beside the silhouette rather than across it.
     void rim_faces_in_front(int i, int j, PixelHit& best) const;
     // The diagonal neighbours' hits in front of the pixel's by a sheet gap (with
     // own_face, only those on the pixel's face), each from its own (u, v),
@@ -150,79 +118,55 @@ private:
     template <class Accept>
     void from_neighbour_hits(int i, int j, std::span<const std::pair<int, int>> offsets, Accept accept,
                              PixelHit& best) const;
-    // Whether hit p, with neighbour n on its face, has the pair's other
-    // neighbour a sheet gap behind on the same face, (u, v) jumping (kUvJump2:
-    // a steep smooth sheet steps more in depth, but evenly): the silhouette of
-    // a face folded over itself (step/bug29715_slow.stp seen edge-on). There
-    // the ray can cross the near sheet twice and the map's start lead to the
-    // farther root; the nearer lies past p's (u, v), on along n's step to it.
-    // (With any face behind, i.e. at every silhouette, it cost 5-70 % of the
-    // frame on 10 models and changed pixels only of that file.)
+    // Whether hit p, with neighbour n on its face, has the pair's other neighbour
+    // a sheet gap behind on the same face with (u, v) jumping (kUvJump2: a steep
+    // smooth sheet steps more in depth, but evenly): the silhouette of a face
+    // folded over itself. There the ray can cross the near sheet twice and the
+    // map's start lead to the farther root; the nearer lies past p's (u, v), on
+    // along n's step. Only on the same face: with any face behind it was costly.
     bool fold_edge(const PixelHit& p, const PixelHit& n, const PixelHit& behind) const;
     bool fold_edge(size_t k, size_t a, size_t b) const;
-    // At a silhouette pixel behind another face's neighbour that did not fill
-    // it: beside that face in front, a rescued pixel's own face may have a
-    // nearer sheet that no neighbour shows (a rim face whose pixels the rescue
-    // all filled from its farther root, started from each other's (u, v)): its
-    // mesh in front (mesh_in_front). So too a primary hit whose face no
-    // 8-neighbour shows: the map's start there lies on the edge of its face's
-    // mesh, a chord that barely reaches the pixel, from where Newton can run
-    // over the rim to the far root (step/eight_cyl.stp iso: 20 units behind;
-    // iges/BUC50025.igs iso: 0.38). Not at every primary hit (the map's start
-    // lies on the mesh's front sheet; on every face: +25 % of the pass's
-    // instructions on trj8 for one more pixel); never a plane's (a ray crosses
-    // it once).
+    // At a silhouette pixel behind another face's neighbour that did not fill it:
+    // a rescued pixel's own face may have a nearer sheet that no neighbour shows
+    // (a rim face the rescue filled from its farther root), searched in its mesh
+    // in front (mesh_in_front). Likewise a primary hit whose face no 8-neighbour
+    // shows: the map's start lies on its mesh's edge, a chord that barely reaches
+    // the pixel, from where Newton can run over the rim to the far root. Not at
+    // every primary hit (too costly for what it finds); never on a plane.
     void rim_own_mesh(int i, int j, PixelHit& best) const;
     // Whether no 8-neighbour of pixel (i, j) shows the face its hit is on but
     // at a distance under nearer_than (-HUGE_VAL: none at all; a sheet gap in
     // front of the hit: none on the hit's own sheet).
     bool alone_on_face(int i, int j, double nearer_than) const;
     // At a silhouette pixel beside its own face's other sheet in front, that
-    // sheet's start failing, where no 8-neighbour shows the pixel's sheet
-    // (alone_on_face): the ray may clip the face by its rim, entering and
-    // leaving it close together, and the map's start led Newton to the exit.
-    // The map's (u, v) lies on the mesh chord between the two roots, so the
-    // entry lies beyond it from the exit: robust starts along that line
-    // (kAcrossRimSteps), until one is nearer (duck_from_glscene front: t 5.6863
-    // -> 5.6712, the reference's). Rescue + nearer-sheet instructions +3.5 %
-    // on the 27 ducks, +0.7 % trj8, +0.5 % cylinder block (on every such
-    // pixel, not only those alone on their sheet: +12.6 %, +2.5 %, +1.9 %).
+    // sheet's start failing, with no 8-neighbour on the pixel's sheet
+    // (alone_on_face): the ray may clip the face by its rim, and the map's start
+    // led Newton to the exit. The map's (u, v) lies on the mesh chord between the
+    // two roots, so the entry lies beyond it from the exit: robust starts along
+    // that line (kAcrossRimSteps) until one is nearer.
     void across_own_rim(int i, int j, PixelHit& best) const;
-    // Whether the pixel's hit p continues the sheet of its neighbour n's hit
-    // and of the hit beyond n, pixel (fi, fj): all three on one face, with p
-    // where n and the next pixel extrapolate it, in (u, v) and in depth. Such
-    // a pixel is a pit because of its other side: most often the edge of an
-    // occluder in front of a face that slopes towards the eye (three quarters
-    // of a cylinder block's pits). Two sheets of one face closer than a pixel
-    // footprint still pass (a fold of the duck), so a solve from n is kept.
+    // Whether the pixel's hit p continues the sheet of its neighbour n's hit and
+    // of the hit beyond n, pixel (fi, fj): all three on one face, p where n and
+    // the next extrapolate it in (u, v) and depth. Such a pit is one because of its
+    // other side, most often an occluder's edge in front of a face sloping towards
+    // the eye. Two sheets of one face closer than a footprint still pass, so a
+    // solve from n is kept.
     bool continues(const PixelHit& p, const PixelHit& n, int fi, int fj) const;
     // One side of the pair through pixel (i, j) is background, its neighbour
-    // (ni, nj) a hit: the pixel lies on a silhouette, next to a neighbour
-    // nearer by more than a footprint (another sheet), where a fold's near
-    // sheet reaches the silhouette over a run of far-sheet pixels that the
-    // pairs peel down to here (a dense folded face seen edge-on,
-    // step/bug29715_slow.stp), or where the ray crosses a curved face twice by
-    // its silhouette and the map's start led to the farther root (a fillet's
-    // or a sphere's rim): solved from that neighbour, unless the pixel
-    // continues its sheet (continues(): a surface turning away steps more in
-    // depth towards its silhouette, evenly, on one sheet).
+    // (ni, nj) a hit nearer by more than a footprint: at a fold's silhouette, or
+    // where the ray crosses a curved face twice near its rim (a fillet, a sphere)
+    // and the map's start led to the farther root. Solved from that neighbour
+    // unless the pixel continues its sheet (continues(): a surface turning away
+    // steps more in depth towards its silhouette, evenly, on one sheet).
     void silhouette_pair(int i, int j, int ni, int nj, PixelHit& best) const;
-    // At a step, whether the neighbour n's face in front (another than the
-    // pixel's, p's) ends at the pixel
-    // without a face linked to it there: solved from n, its surface is met
-    // outside its trim or Newton leaves its parameter box (o), and the face
-    // has no adjacent faces at all (PreparedFace::adjacent: an unsewn IGES
-    // face shares no mesh node with another). Beyond the edges of linked
-    // faces, beyond_edges tries the faces joining them; here none are known,
-    // and a piece continuing the face in front may lie between it and the
-    // hit (iges/marsCapsule.igs front: a panel's band split into two unsewn
-    // faces, the second 0.03 units, 1.5 footprints, in front of the face the
-    // pixel showed; 4 pixels). Only for steps of more than one footprint
-    // (smaller ones are a slope across an unsewn seam) and fewer than
-    // kUnlinkedStepGaps: the continuation of a face lies about as deep as the
-    // face at its edge, so a step of many footprints is a silhouette over a
-    // face far behind. (Without those bounds the screen search ran at 4,712
-    // pixels of marsCapsule's front frame, +8 % of its instructions.)
+    // At a step, whether the neighbour n's face in front (not p's) ends at the
+    // pixel with no face linked there: solved from n, its surface is met outside
+    // its trim or Newton leaves its parameter box (o), and the face has no
+    // adjacent faces (PreparedFace::adjacent; an unsewn IGES face shares no mesh
+    // node). beyond_edges needs adjacency; here a piece continuing the face in
+    // front may lie between it and the hit. Only for steps of more than one
+    // footprint (smaller ones are a slope across an unsewn seam) and below
+    // kUnlinkedStepGaps, which keep the screen search rare.
     bool unlinked_end(const PixelHit& p, const PixelHit& n, Outcome o) const;
     // How far in front of a hit at distance t another sheet must lie to count as one.
     double sheet_gap(double t) const { return kSheetFootprints * c_.pixel_footprint(t); }
@@ -235,35 +179,21 @@ private:
     Outcome consider(uint32_t id, int i, int j, float u0, float v0, const NewtonParams& params, bool near,
                      PixelHit& best, double* crossing = nullptr) const;
     // A pit that the pair's own starts did not fill, tried further with the
-    // robust Newton (clamp-and-continue at borders, backtracking), in order of
-    // cost until a nearer hit turns up, inside a trim only: a hit in the trim
-    // band here makes the pixel a pit for its neighbours in turn, and the
-    // peeling passes would spread the band over the face behind, a pixel at a
-    // time (it did, on a machine component, over 1.6 mm beyond a face's edge): from every 3x3 neighbour's converged
-    // (u, v), from the pixel's own face's mesh in front of its hit (mesh_in_front),
-    // from the 3x3's map starts (the map may show the nearer face next to
-    // the pixel while the neighbours' hits lie on others), then the faces adjacent
-    // to these that none of them shows: a face too thin for the map to show any
-    // pixel of it here (a fillet or blend strip seen edge-on) lies in front,
-    // between the faces it touches; last, any face near on screen in front of
-    // the hit (screen_faces).
-    // One start per face (the first in for_each_neighbour's order): the 3x3's
-    // starts of one face lie on one sheet within a pixel or two and end at one
-    // root; except on the pixel's own face (other_sheet_starts).
-    // `edge_of_other_face`: the pixel is a pit only because its hit continues
-    // one neighbour's sheet (continues()) while the other neighbour shows
-    // another face, and no neighbour shows another sheet of the pixel's face:
-    // the pixel lies by the edge of a face in front, and its own face's mesh
-    // in front of the hit (mesh_in_front) is not searched. Where a neighbour
-    // does show another sheet of it (a closed face seen through its near side:
-    // the duck), it is. 3.5 of the 17 ms of the cylinder block's nearer-sheet
-    // pass, with the same frames on 10 models x 2 views and the same full-frame
-    // test results. Nor are the faces adjacent to the 3x3's (adjacent_faces)
-    // and those near on screen (screen_faces): three quarters of the cylinder
-    // block's pits are such edges, and their adjacent faces' mesh searches were
-    // 7 % of its frame's instructions (callgrind, iso: 510 -> 475 M; trj8 270 ->
-    // 261 M) and found nothing there: the same frames on 8 models x 2 views,
-    // the same full-frame results on every model and fixture.
+    // robust Newton (clamp-and-continue, backtracking), cheapest first until a
+    // nearer hit turns up, inside a trim only (a hit in the trim band would make
+    // the pixel a pit for its neighbours, and the peeling would spread the band
+    // over the face behind a pixel at a time): from every 3x3 neighbour's (u, v),
+    // from the pixel's own face's mesh in front of its hit (mesh_in_front), from
+    // the 3x3's map starts, then the faces adjacent to these that none shows (a
+    // strip too thin for the map, between the faces it touches), last any face
+    // near on screen in front of the hit (screen_faces). One start per face: the
+    // 3x3's starts of one face lie on one sheet and end at one root, except on the
+    // pixel's own face (other_sheet_starts).
+    // `edge_of_other_face`: the pixel is a pit only because its hit continues one
+    // neighbour's sheet (continues()) while the other shows another face, and no
+    // neighbour shows another sheet of the pixel's face: it lies by the edge of a
+    // face in front, and mesh_in_front, adjacent_faces and screen_faces are
+    // skipped (they found nothing there at a large share of the pass's cost).
     void fill_pit(int i, int j, bool edge_of_other_face, PixelHit& best) const;
     // The distinct faces of the 3x3 around pixel (i, j), hit or in the map, into
     // out (room for kFaces3x3); returns how many.
@@ -281,24 +211,18 @@ private:
     };
     // Whether face id is new to `tried` at pixel (i, j), recording it if so.
     bool first_try(TriedFaces& tried, int i, int j, uint32_t id) const;
-    // Any faces whose mesh comes within reach of pixel (i, j) on screen and
-    // nearer to the eye than its hit, but those of the 3x3 (hit or in the map):
-    // a face seen through a gap between faces that do not touch it, which the
-    // map hides behind them and adjacency does not offer (a capsule's panel in
-    // front of a pit whose 3x3 shows only the faces behind it, iges/marsCapsule.igs).
-    // The last resort of a pit, as the rescue's D is of a hole: by the time the
-    // pits of occluders' edges (edge_of_other_face) and concave corners are left
-    // out, some 150 pixels of a cylinder block's frame get here, for ~1 ms.
+    // Any faces whose mesh comes within reach of pixel (i, j) on screen nearer
+    // than its hit, but those of the 3x3: a face seen through a gap between faces
+    // that do not touch it, which the map hides and adjacency does not offer. The
+    // last resort of a pit, as the rescue's D is of a hole; rarely reached.
     void screen_faces(int i, int j, PixelHit& best) const;
-    // Where the pixel's hit is a farther root of the very face its neighbours
-    // show in front (a closed or folded face: the duck's body seen through its
-    // near side; a dense face folded over itself), the pixel lies near that
-    // sheet's silhouette, where Newton from one start runs over the fold to the
-    // far root and from the next one stays on the near sheet: every neighbour
-    // hit on the pixel's face that lies on another sheet (nearer by a pixel
-    // footprint, as in find) is a robust start, until one gives a nearer root;
-    // but the first hit on the face, which fill_pit's round of one start per
-    // face has solved from already.
+    // Where the pixel's hit is a farther root of the face its neighbours show in
+    // front (a closed or folded face seen through its near side), the pixel lies
+    // near that sheet's silhouette, where Newton from one start runs over the fold
+    // and from the next stays on the near sheet: every neighbour hit on the
+    // pixel's face on another sheet (a footprint nearer, as in find) is a robust
+    // start until one gives a nearer root, but the first, which fill_pit's round
+    // of one start per face has solved from already.
     void other_sheet_starts(int i, int j, PixelHit& best) const;
     // Starts from the mesh of face id in front of the pixel's hit by a footprint.
     // Where no neighbour's hit starts Newton on the pixel's own face's nearer
@@ -313,16 +237,14 @@ private:
     // The faces adjacent to those of the 3x3 around pixel (i, j), hit or in the
     // map (PreparedFace::adjacent), that none of them shows, from their mesh
     // starts; failing those, the faces adjacent to those whose surface the ray
-    // crosses outside their trim (the ray passes beyond that face's edge, where a
-    // face joining it there may lie in front: a Russian part's flange behind a
-    // thin face, step/bug31670_russian.stp). Both rings only within reach on screen.
+    // crosses outside their trim (a face joining it beyond that edge may lie in
+    // front). Both only within reach on screen.
     void adjacent_faces(int i, int j, PixelHit& best) const;
-    // The faces adjacent to `crossed`, faces whose surface the pixel's ray
-    // crosses outside their trim (it passes beyond their edge, where a face
-    // joining them may lie in front: a fillet strip too thin for the map along
-    // the edge of a face in front, step/bug27693_cornetta-step.stp iso; find
-    // adds the pixel's own face at a step, see there), within reach on screen,
-    // but those in `tried`; from their mesh starts, robustly.
+    // The faces adjacent to `crossed` (faces whose surface the ray crosses outside
+    // their trim, so a face joining them beyond the edge, e.g. a fillet strip too
+    // thin for the map, may lie in front; find adds the pixel's own face at a
+    // step), within reach on screen, but those in `tried`; from their mesh
+    // starts, robustly.
     void beyond_edges(int i, int j, std::span<const uint32_t> crossed, std::span<const uint32_t> tried,
                       PixelHit& best) const;
     // Solves face f.id from each of its mesh starts (robustly, keeping the

@@ -26,8 +26,8 @@ constexpr NearFaceBound kPitAdjacentFaces{12, kPitFacePixels};
 // nearest first: as many as the rescue's last resort tries at a hole.
 constexpr NearFaceBound kPitScreenFaces{4, kPitFacePixels};
 // Sheets of the pixel's own face in front of its hit that are tried, nearest
-// to the eye first: a face folded over itself many times (a dense spring or
-// coil seen edge-on) puts several there, and the map's front one may be a mesh
+// to the eye first: a face folded over itself many times (a dense coil
+// seen edge-on) puts several there, and the map's front one may be a mesh
 // sheet the exact ray passes by.
 constexpr int kMaxSheetsInFront = 4;
 // The faces a step tries at the most: its 4 neighbours' (tried by the pair
@@ -36,13 +36,11 @@ constexpr int kMaxSheetsInFront = 4;
 constexpr int kStepFaces = 12;
 // How far from a thin face's pixel its face is tried (thin_tries): a strip
 // narrower than a pixel that runs diagonally covers a pixel centre every one to
-// three pixels, so the pixels between lie within 2 of one of its map pixels
-// (iges/marsCapsule.igs front: 68 wrong-sheet pixels, all within 2).
+// three pixels, so the pixels between lie within 2 of one of its map pixels.
 constexpr int kThinReach = 2;
 // thin_face_tries: the pixels within this of a thin face's mesh on screen. The
 // map mesh's chords lie within its deflection of the surface, under a pixel at
-// the views rendered (the thin ring fixture: 0.14 against 0.2 per pixel); half
-// a pixel more for the pixel centre's offset.
+// the views rendered; half a pixel more for the pixel centre's offset.
 constexpr double kThinFacePixels = 1.5;
 // ... and not for a face whose mesh's triangles' screen boxes hold more pixel
 // centres than this (a face covering much of the frame, which a few thin
@@ -61,7 +59,7 @@ bool NearerSheet::thin_tries(int i, int j, std::vector<ThinTry>& out) const {
     // A pair on other faces (hits: a thin face against the background is the
     // rescue's), one of them behind the hit: the thin face lies in front of
     // that one, beside it or in front of the other (a strip between a face in
-    // front and a face behind, as a ring between a capsule's wall and its base).
+    // front and a face behind, as a ring between a wall and its base).
     auto other = [&](size_t n) { return depth_[n] < HUGE_VAL && hits_[n].face != p.face; };
     auto thin = [&](size_t a, size_t b) { return other(a) && other(b) && (depth_[a] > behind || depth_[b] > behind); };
     if (!thin(k - 1, k + 1) && !thin(k - c_.width, k + c_.width)) return false;
@@ -92,8 +90,7 @@ bool NearerSheet::solve(const ThinTry& t, PixelHit& out) const {
     const PixelHit& p = hits_[t.k];
     PixelHit best = p;
     // Plain Newton, as for find's pairs: the start lies a pixel or two away on
-    // the thin face. The robust one found 1 more pixel over all models (bearing
-    // iso) for 4 M more instructions on a machine component's frame (trj8).
+    // the thin face. The robust one costs more and found next to nothing more.
     consider(t.face, static_cast<int>(t.k % c_.width), static_cast<int>(t.k / c_.width), t.u, t.v, solver_.params,
              false, best);
     if (best.face == p.face && best.t == p.t) return false;

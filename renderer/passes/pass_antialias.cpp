@@ -35,24 +35,18 @@ constexpr int kNeighbours = 9;
 // in a gamma-2 encoding of the premultiplied colour (close to how 8-bit sRGB
 // spaces its steps), gets no extra rays (Mitchell 1987 refines where the
 // samples' contrast exceeds a threshold): two tangent faces of one colour
-// meeting (a fillet's borders), or a crease both sides of which the light hits
-// alike. A step of contrast J through the pixel moves its box average from the
-// centre sample's by at most J / 2 (the edge through the centre), so under two
-// steps of the encoding the pixel is off by at most one output step. Measured
-// on trj8's iso frame (4 rays, feature lines), 1/255 -> 2/255: 12 % fewer
-// anti-aliased pixels (15,724 -> 13,802) and rays (41,423 -> 36,348); the 8-bit
-// sRGB image differs at 149 pixels, 148 of them by one step, one by two.
+// meeting, or a crease both sides of which the light hits alike. A step of
+// contrast J through the pixel moves its box average from the centre sample's
+// by at most J / 2, so under two steps of the encoding the pixel is off by at
+// most one output step.
 constexpr double kSmoothContrast = 2.0 / 255;
 
 // A sample's hit is found to within this fraction of a pixel in the image plane
 // (Newton's residual (12), in model units at the hit's depth), not to the
-// frame's tolerance (1e-8 of the scene, ~1e-5 of a pixel): a sample only decides
-// which side of an edge it falls on and the colour there, and an error of 1/256
-// pixel moves an edge within the pixel by that much, changing its coverage by
-// at most ~1/180 of the pixel's area per sample, below one 8-bit step of the
-// average. From a start at most 1.5 pixels away one Newton step mostly gets
-// there: the samples' steps fell from 2.1-2.3 to 1.2-1.3 per converged solve
-// (quadratic convergence: the second step only took 1e-5 pixel to 1e-10).
+// frame's tolerance (~1e-5 of a pixel): a sample only decides which side of an
+// edge it falls on, and an error of 1/256 pixel changes the coverage by at most
+// ~1/180 of the pixel's area per sample, below one 8-bit step. From a start at
+// most 1.5 pixels away, one Newton step mostly gets there.
 constexpr double kSamplePixels = 1.0 / 256;
 
 // Whether the robust Newton (newton.h) can end otherwise than a plain solve that
@@ -65,11 +59,10 @@ bool retried(Outcome o) { return !(o == kTrimmed || o == kBehind || o == kSingul
 
 // The surface's derivatives at pixels' hits, the starts of the samples,
 // evaluated on first use: a pixel's samples start from the same few neighbour
-// hits, and the edge pixels around a hit (up to 3 rows, 3 columns) share it
-// (evaluating starts was a third of the pass's surface evaluations). One per
-// thread; rows j and j +- 1 have distinct slots (row mod 4), and an entry
-// remembers its row, so rows in any order stay correct. The samples' iterates
-// are the same numbers as without it.
+// hits, and the edge pixels around a hit (up to 3 rows, 3 columns) share it.
+// One per thread; rows j and j +- 1 have distinct slots (row mod 4), and an
+// entry remembers its row, so rows in any order stay correct. The samples'
+// iterates are the same numbers as without it.
 class StartCache {
 public:
     explicit StartCache(int width) : width_(width), entries_(4 * static_cast<size_t>(width)) {}

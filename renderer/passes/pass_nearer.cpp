@@ -48,8 +48,8 @@ constexpr double kUvJump2 = 9.0;
 // On one smooth sheet the pixel's (u, v) lies near the midpoint of its pair's;
 // off it by more than the pair's whole distance (twice half of it; squared: 4),
 // it lies on another sheet between two on one: a fold of the face, where the
-// steps to both neighbours are alike and kUvJump2 does not tell (a bearing's
-// fillet, seen where it turns away).
+// steps to both neighbours are alike and kUvJump2 does not tell (a fillet seen
+// where it turns away).
 constexpr double kUvOffPair2 = 4.0;
 // A neighbour nearer than the pixel by this many times the depth step to the
 // pair's other neighbour is on another sheet, whatever the (u, v) say: on one
@@ -67,7 +67,7 @@ constexpr double kSheetStepRatio = 8;
 constexpr double kUvSmooth2 = 1.0;
 // across_own_rim's starts, in steps from the pixel's root through the map's
 // start: the ray's entry root lies on the far side of the rim from its exit,
-// at an unknown multiple of that step (8 on duck_from_glscene front).
+// at an unknown multiple of that step.
 constexpr double kAcrossRimSteps[] = {2, 4, 8, 16};
 // Passes after the first: a run of far-sheet pixels is peeled one pixel per pass
 // from each end, so runs of up to about 64 pixels are cleared; longer runs are not spikes
@@ -124,19 +124,16 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
         }
         if (!a.face || !b.face || !(p.t > 0.5 * (a.t + b.t) + spike_)) continue;
         // Only from a neighbour on another face, or on another sheet of the same
-        // face: its (u, v) jumps. A smoothly curved concave sheet, where depth
-        // also rises above the pair's mean, changes (u, v) evenly (the pixel's
-        // (u, v) lies about midway between its neighbours') and is not solved
-        // again. Two ways to be on another sheet: one neighbour is far in (u, v)
-        // while the other is near (the pixel sits at the edge of a run of
-        // far-sheet pixels), or both are far compared with their own distance
-        // (an isolated far-sheet pixel between two near-sheet ones).
+        // face, where its (u, v) jumps: a smoothly curved concave sheet, whose
+        // depth also rises above the pair's mean, changes (u, v) evenly and is not
+        // solved again. On another sheet either one neighbour is far in (u, v)
+        // while the other is near (the edge of a run of far-sheet pixels), or both
+        // are far compared with their own distance (an isolated far-sheet pixel).
         const double half_pair2 = 0.25 * uv_dist2(a, b);
         // (u, v) distances mislead where a face's parametrization is very
-        // anisotropic (two sheets a tenth of a pixel's v-step apart in u); in
-        // model units, a pixel deeper than both of its pair by more than its own
-        // footprint is not on their smooth sheet either (on a slope it lies
-        // between them, so grazing views cost no extra solves).
+        // anisotropic; in model units, a pixel deeper than both of its pair by
+        // more than its own footprint is not on their smooth sheet either (on a
+        // slope it lies between them, so grazing views cost no extra solves).
         const bool deep = p.t - std::max(a.t, b.t) > sheet_gap(p.t);
         const float mid_u = 0.5f * (a.u + b.u), mid_v = 0.5f * (a.v + b.v);
         const double off_u = double(p.u) - mid_u, off_v = double(p.v) - mid_v;
@@ -154,11 +151,10 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
         }
         const int jumps = from[0] + from[1];
         step |= jumps == 1;
-        // Where both neighbours are in front (a pit), the pixel is a crack in the
-        // front surface: a hit just outside a neighbour's trim, within its
-        // tolerance band, counts (as for the rescue's cracks), so that the crack
-        // does not show the face behind. Never at a mere step in depth: there the
-        // band would spread a face past its edge pixel by pixel.
+        // At a pit (both neighbours in front) the pixel is a crack in the front
+        // surface: a hit just outside a neighbour's trim, within its tolerance
+        // band, counts (as for the rescue's cracks). Never at a mere step in
+        // depth, where the band would spread a face past its edge pixel by pixel.
         // Where each neighbour's surface meets the pixel's ray (NaN: no
         // convergence), for telling a concave corner from a crack below.
         double crossing[2] = {NAN, NAN};
@@ -178,21 +174,17 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
         }
         // A pit between two nearer neighbours on one face: the middle of their
         // (u, v) starts next to the root between them, where Newton from either
-        // end can still run to another sheet (near a silhouette, a sheet's two
+        // end can still run to another sheet (near a silhouette a sheet's two
         // roots lie close together). So too a step whose pair lies on the
-        // pixel's face: the pixel on a far turn of a face folded many times
-        // (step/bug29715_slow.stp front: the map's start diverged, all 8
-        // neighbours' starts led 15 units behind; the pair's middle lay 2.5 in v
-        // from the nearest root, the starts 12 to 56). No trim band there (a step).
+        // pixel's face: the pixel on a far turn of a face folded many times,
+        // where every neighbour's start may lead behind. No trim band at a step.
         if ((jumps == 2 || (jumps == 1 && a.face == p.face)) && a.face == b.face)
             consider(a.face, i, j, 0.5f * (a.u + b.u), 0.5f * (a.v + b.v), solver_.params, jumps == 2, best);
         // A pit whose two neighbours' surfaces both meet the ray at or behind
         // the pixel's hit is a concave corner (a groove, a fillet's foot seen
-        // from outside: every concave edge's pixels), not a crack: a crack's
-        // front surface continues over the gap, so at least one of them meets
-        // the ray in front, outside its trim. Searching further there found
-        // nothing (1 nearer hit in 1,757 such pits per frame of the cylinder
-        // block, 12,890 solves) and cost a quarter of its frame.
+        // from outside), not a crack: a crack's front surface continues over the
+        // gap, so at least one of them meets the ray in front, outside its trim.
+        // Corners are not searched further: costly, and almost never nearer.
         const bool corner = crossing[0] >= p.t - nearer_ && crossing[1] >= p.t - nearer_;
         if (jumps == 2 && !corner) {
             pit = true;
@@ -205,16 +197,12 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     // A step (one neighbour in front) that the pair's faces did not fill: the
     // faces the 4-neighbours do not show (a strip thinner than a pixel between
     // the face in front and the pixel's). So too at a silhouette pixel the
-    // rescue filled (its map start failed): the face in front of it may show
-    // only diagonally, where a face's corner overhangs the silhouette
-    // (step/ec_turbine-A.stp iso: a blade's pixel 1.5 units behind the hub face
-    // its lower-right neighbour shows); first the diagonal neighbours' own
-    // starts, on any face: the rescue may have reached the farther root of its
-    // face from a 4-neighbour's start that only a diagonal one avoids. At any
-    // silhouette pixel, those on its own face: the map's start too may lead to
-    // the farther root of a thin rim (iges/heartValve.igs iso: 31 units behind
-    // the root a diagonal neighbour's start reaches). (On every face there:
-    // 5 % more of the pass's instructions on trj8, for no more pixels.)
+    // rescue filled: the face in front may show only diagonally, where a face's
+    // corner overhangs the silhouette; first the diagonal neighbours' own
+    // starts, on any face (the rescue may have reached the farther root from a
+    // 4-neighbour's start that only a diagonal one avoids). At any silhouette
+    // pixel, those on its own face only: the map's start too may lead to the
+    // farther root of a thin rim (on every face it cost more for nothing).
     const bool rescued_rim = silhouette && rescued_[c_.map.index(i, j)];
     if (silhouette && unchanged()) rim_faces_in_front(i, j, best);
     if (silhouette && unchanged()) diagonal_starts(i, j, !rescued_rim, best);
@@ -225,9 +213,8 @@ bool NearerSheet::find(int i, int j, PixelHit& out) const {
     }
     // Beyond the edge of a face in front, the faces joining it there, and those
     // joining the pixel's own face, the face behind: a wall rising from it
-    // towards the edge, seen edge-on, lies between the two (step/cylinder_block.stp
-    // front: a drafted wall between a floor and the face in front, 14 units in
-    // front of the floor's hit, too thin to show in any map pixel).
+    // towards the edge, seen edge-on, lies between the two, too thin to show in
+    // any map pixel.
     if (fronts.ncrossed && !pit && unchanged()) {
         fronts.crossed[fronts.ncrossed++] = p.face;
         beyond_edges(i, j, {fronts.crossed, fronts.crossed + fronts.ncrossed}, {}, best);
@@ -376,8 +363,8 @@ void solve_thin(const FrameContext& c, const NearerSheet& nearer, std::vector<Ne
 
 // A face is thin where at least this share of its pixels are thin pixels
 // (NearerSheet::thin_tries): a ring or a strip narrower than a pixel is all thin
-// pixels, while the faces of a machine part show a few at their corners and
-// narrow ends (whose meshes, searched too, cost trj8's nearer-sheet pass 4x).
+// pixels, while ordinary faces show a few at their corners and narrow ends,
+// whose whole-mesh searches would cost far more than they find.
 constexpr double kThinFaceShare = 0.5;
 
 // The thin faces among those of the rows' thin pixels, ascending.
@@ -424,9 +411,9 @@ uint64_t nearer_sheet_pass(const FrameContext& c, const Solver& solver, const Me
     // The first pass examines every pixel; replacements are collected per row
     // (almost always none) and applied between passes: no frame-sized buffer for
     // a handful of pixels. Later passes examine only the 4-neighbours of those the
-    // last pass changed (all 8: 7-19 % more solves here, most of them repeats),
-    // and where a changed pixel is a thin face's, that face around it (a strip
-    // narrower than a pixel is followed along, its pixels 2-3 apart).
+    // last pass changed (all 8 adds solves, mostly repeats), and where a changed
+    // pixel is a thin face's, that face around it (a strip narrower than a pixel
+    // is followed along, its pixels 2-3 apart).
     std::vector<std::vector<Update>> row_updates(c.height);
     std::vector<std::vector<NearerSheet::ThinTry>> row_tries(c.height);
     std::vector<std::vector<uint32_t>> row_thin(c.height);  // the faces of the row's thin pixels

@@ -135,18 +135,11 @@ public:
     }
     // B: every face of the 5x5 neighbourhood. `thorough` (an enclosed pixel):
     // from each start it offers, then its far starts (mesh point and vertex
-    // nearest to the pixel, box middle). Otherwise (a pixel on an open
-    // silhouette, where B runs most and every start of one face fails alike): from
-    // the face's converged and map starts nearest to the pixel only, and only for
-    // the faces A has not solved already; Newton from the others, on the same
-    // sheet a pixel or two farther, ends where these do.
-    // There the far starts never found a hit the near ones had missed (eight
-    // models of ../shared/models at two views: none in ~11000 faces so tried) and
-    // cost three solves per face and pixel: a third of the rescue's solves. And
-    // A's faces again, from their nearest starts instead of A's, found nothing
-    // either on the 27 ducks (11,213 solves over the 2,152 silhouette pixels of
-    // a frame where B ran, 0 hits): along a diagonal silhouette almost every
-    // background pixel has two hit 4-neighbours, and B ran on all of them.
+    // nearest to the pixel, box middle). Otherwise (an open silhouette, where B
+    // runs most and every start of one face fails alike): only the face's
+    // converged and map starts nearest to the pixel, and only for faces A has
+    // not solved; the other starts, on the same sheet, end where these do, and
+    // the far starts there cost a third of the rescue's solves for no hit.
     void general_starts(const MeshScreenPoints& screen_points, bool thorough) {
         const PreliminaryMap& map = c_.map;
         uint32_t faces[kMaxGeneralFaces];
@@ -274,9 +267,8 @@ bool behind_pair(const FrameContext& c, const PixelArray<PixelHit>& src, int i, 
 // pixels, can border one crack: their depths differ by at most
 // kCrackDepthFootprints pixel footprints (one surface, or two that meet, across
 // the gap), or their faces are the same, touch, or both touch a third (a strip
-// too thin for the map between them). Otherwise the gap is the background
-// between two separate things, one seen behind the other (27 ducks: 23 % of the
-// rescue's surface evaluations went to searching such gaps thoroughly, in vain).
+// too thin for the map between them). Otherwise the gap is background between
+// two separate things, where a thorough search is wasted.
 bool may_share_crack(const FrameContext& c, const PixelHit& a, const PixelHit& b) {
     const double footprint = c.pixel_footprint(std::min(a.t, b.t));
     if (std::abs(a.t - b.t) <= kCrackDepthFootprints * footprint || a.face == b.face) return true;
@@ -334,15 +326,11 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     PixelRescue pr(c, solver, src, i, j, crack);
     pr.neighbour_starts(own);
     // The map shows its own face here, in front of every other mesh, but its
-    // solves failed while another face was hit: the own face's far starts too,
-    // as B gives them where nothing was hit. A strip seen edge-on whose mesh
-    // chord lies off the exact surface: a turbine's fillet (step/ec_turbine-A.stp
-    // front) diverged from its map start, showing the face 33 units behind;
-    // from its nearest mesh vertex Newton reaches it (4 such pixels, none left).
-    // Where the own face ends short of the pixel (most of trj8 iso's ~240) they
-    // fail, at 1.2 % of that frame's instructions (cylinder block 1.8 %). Inside
-    // the trim only: a band hit here lies over the face across the edge, which
-    // the ray hits (trj8 iso: 5 pixels nearer than the reference's hit).
+    // solves failed while another face was hit: try the own face's far starts
+    // too, as B does where nothing was hit. A strip seen edge-on whose mesh
+    // chord lies off the exact surface can diverge from its map start yet
+    // converge from its nearest mesh vertex. Inside the trim only: a band hit
+    // here lies over the face across the edge, which the ray does hit.
     if (own && pr.best.face && pr.best.face != own) {
         pr.keep_band_hits = false;
         pr.far_starts(screen_points, own, c.camera.pixel_screen(i, j));
@@ -354,8 +342,8 @@ uint8_t rescue_pixel(const FrameContext& c, const Solver& solver, const MeshScre
     // front surface: the face that closes the crack is not among A's; look further.
     const bool pit = pr.best.face && behind_pair(c, src, i, j, pr.best.t);
     if ((!pr.best.face && !pr.best_near.face && (own || n4 >= 2 || enclosed)) || pit) {
-        // Thorough where a face should cover the pixel: not in a gap between separate things
-        // (enclosed_in_crack), where the far starts and D find nothing (27 ducks: D 241x, 0 filled).
+        // Thorough where a face should cover the pixel, not in a gap between separate things
+        // (enclosed_in_crack), where the far starts and D find nothing.
         const bool thorough = own || crack || pit || enclosed_in_crack(c, src, i, j);
         pr.general_starts(screen_points, thorough);
         kind = kRescueGeneral;
@@ -428,15 +416,10 @@ namespace {
 
 // Per pixel: 1 where the pixel has no primary hit but a face in the map or a hit
 // among its 8 neighbours, i.e. where rescue_pixel has something to try; the rest
-// of the background (most of a frame) is skipped on one byte instead of nine
-// hits' worth of memory. A 3x3 dilation of the hit mask, separable: along rows,
-// then along columns. The mask comes from the primary outcomes, a byte per
-// pixel (a primary solve hits exactly when it converged inside the trim),
-// not from the 40-byte hits: reading those was a millisecond of trj8's frame.
-// Each loop is branch-free over a row's interior (the frame's borders are
-// handled apart), so that the compiler vectorizes it: with a test of the
-// borders in every pixel, this mask was 10 M instructions of trj8's frame
-// (3 % of it), now under 1 M.
+// of the background is skipped on one byte. A separable 3x3 dilation of the hit
+// mask, from the primary outcomes (a byte per pixel) rather than the 40-byte
+// hits. Each loop is branch-free over a row's interior (the borders apart) so
+// that the compiler vectorizes it.
 std::vector<uint8_t> rescue_candidates(const FrameContext& c, const std::vector<uint8_t>& outcome) {
     const size_t W = static_cast<size_t>(c.width), H = static_cast<size_t>(c.height), n = c.pixels();
     std::vector<uint8_t> hit(n), row(n);

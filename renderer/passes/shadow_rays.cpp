@@ -43,29 +43,26 @@ constexpr int kRingOrder[kFirstRing][2] = {{0, 0},   {-1, 0}, {1, 0},  {0, -1}, 
 // Where the 3x3 shows a face in front of the point that the light ray does not
 // cross (its map mesh covers where the exact face does not: a thin face, the
 // band along a trim), the occluder may be a face hidden behind it in the map,
-// adjacent to it (it was the case for the leaks traced on step/box_sides.STEP).
-// Those adjacent faces whose mesh comes within 2 light-map pixels of the point
-// are tried, at most 4 of them, nearest first (a base plate with many holes has
-// dozens of neighbours).
+// adjacent to it. Those adjacent faces whose mesh comes within 2 light-map
+// pixels of the point are tried, at most 4, nearest first (a plate with many
+// holes has dozens of neighbours).
 constexpr NearFaceBound kAdjacentFaces{4, 2.0};
 // A screen distance bound of 0 for nearest_starts: only mesh triangles that
 // contain the light ray's screen point, i.e. the ray pierces the face's mesh.
 constexpr double kPiercedOnly = 0.0;
 // Where the point's own face was solved to the point itself, its mesh sheets
 // in front of the point are tried (nearest to the light first, at most 2,
-// within 2 light-map pixels: as the view's nearer-sheet pass does at a pit),
-// only where the light grazes the point: the leaks this fixed were all lit at
-// cosines 0.05-0.12 (the ray stays near the surface, and Newton from a start
-// on the part in front can run on to the point's root); at any angle it cost
-// 28-41 % more light rays on the look benchmark's scenes, at < 0.2 6-10 %,
-// and leaving out planar faces (which cannot shadow themselves) 0.5-10 %.
+// within 2 light-map pixels, as the view's nearer-sheet pass does at a pit),
+// only where the light grazes the point: there the ray stays near the surface,
+// and Newton from a start on the part in front can run on to the point's root.
+// At every angle this would cost far more light rays for no gain.
 constexpr int kMaxOwnSheets = 2;
 constexpr double kOwnSheetReachPixels = 2.0;
 constexpr double kGrazingCosine = 0.2;
 
 // The view's robust Newton with the default backtracking (NewtonParams::backtracks):
 // a light ray has one start per face, and one grazing an occluder converges only
-// through its deeper halvings (with the view rescue's two, 3 models leaked).
+// through the deeper halvings (the view rescue's two let light leak).
 NewtonParams light_ray_params(const NewtonParams& view_robust) {
     NewtonParams p = view_robust;
     p.backtracks = NewtonParams{}.backtracks;
@@ -163,10 +160,8 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
     const double self = kSelfCrossingTolerances * solver_.params.eps / std::max(cosine, kMinCosine);
     // The faces of the 3x3 around that pixel, each once from its pixel nearest
     // the centre: the map's mesh covers a face's exact silhouette to within a
-    // pixel, so a face the light ray crosses shows there. (Retrying a face whose
-    // solve failed from its other pixels of the 5x5 cost 2.5x the solves on
-    // trj8 and changed no pixel there; on a sphere's shadow it moved 1 of 326
-    // boundary pixels.)
+    // pixel, so a face the light ray crosses shows there. Retrying failed faces
+    // from their other pixels of the 5x5 cost much and changed almost nothing.
     uint32_t tried[kFirstRing];
     int ntried = 0;
     uint32_t near_face[kFirstRing];  // near crossings beyond contact, not blocking alone
@@ -179,23 +174,18 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         rays_.fetch_add(1, std::memory_order_relaxed);
         // Crossings within a light-map pixel of the point (`contact`) are told
         // apart by their direction: the point's ray starts in the air, so its
-        // first real crossing enters a solid, against the crossed face's
-        // outward normal; one that leaves a solid there is the edge the point
-        // lies on (the adjacent face of a convex edge, reached inside its trim
-        // polyline or just beyond it). At a concave edge the adjacent face in
+        // first real crossing enters a solid; one that leaves a solid there is
+        // the edge the point lies on. At a concave edge the adjacent face in
         // front of the point is crossed right beside it, within its trim band
-        // (Solver's near hit: both trim loops are only within tolerance of the
-        // shared edge), and only that close: the ray leaves the point's surface
-        // at cos to its normal, so at distance d it stands d * cos above it, and
-        // a crossing of the adjacent face that high lies that far inside the
-        // face from the shared edge (below). A band crossing higher up passes
-        // outside the adjacent face, beyond its free edge or a face between (it
-        // cast false shadows in rows along a cone of step/t4mec.stp). Beyond
-        // contact a crossing in the trim band blocks only beside another face's
-        // at the same depth (a crack between two faces of an occluder): alone,
-        // the band would widen every occluder into a phantom shadow line along
-        // its free edges. A stop on the parameter-box border near the ray
-        // (Solver's border-gap hit) is no crossing at all.
+        // (both trim loops are only within tolerance of the shared edge), and
+        // only that close: at distance d the ray stands d * cos above the
+        // point's surface, so a crossing of the adjacent face that high lies that
+        // far inside it from the shared edge (below). A band crossing higher up
+        // passes outside the face and would cast false shadows. Beyond contact a
+        // band crossing blocks only beside another face's at the same depth (a
+        // crack between two faces of an occluder): alone, the band would widen
+        // every occluder into a phantom shadow line along its free edges. A stop
+        // on the parameter-box border (Solver's border-gap hit) is no crossing.
         const Outcome o = last = solver_.solve(id, sp, u0, v0, solver_.robust, true, h);
         last_t = h.t;
         if (o != kConverged && o != kNearTrim) return false;
@@ -205,16 +195,12 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         const PreparedFace& f = ctx_.prepared.faces()[id - 1];
         if (on_box_border(f.box, h)) return false;
         // The concave edge's crossing lies on the exact face, at least its
-        // height above the point's surface inside it from the shared edge (more
-        // where the faces meet at other than a right angle), and the exact face
-        // ends within its trim uncertainty of the loops (trim_uv, half the band:
-        // the band allows for two faces' loops around a crack). So the crossing
-        // lies at most trim_uv less that height (in (u, v): over the surface's
-        // faster speed, the least (u, v) a model distance can be) outside the
-        // loops; farther out, the ray passes beside the face (it shadowed
-        // grazing-lit walls under a ledge of step/trj5_k1-ct-214.stp: 1.6x
-        // trim_uv outside the ledge's loop, and one 0.9x trim_uv outside at a
-        // height of 0.55x trim_uv, where the reference's ray misses the ledge).
+        // height above the point's surface inside it from the shared edge, and
+        // the exact face ends within its trim uncertainty of the loops (trim_uv,
+        // half the band, which allows for two faces' loops around a crack). So
+        // the crossing lies at most trim_uv less that height (in (u, v): over the
+        // surface's faster speed) outside the loops; farther out, the ray passes
+        // beside the face (a grazing-lit wall under a ledge would be shadowed).
         if (contact) {
             const double reach = f.trim_uv - (t_p - h.t) * std::max(cosine, kMinCosine) / speed(id, h);
             return entering && reach >= 0 && std::isfinite(f.trim.boundary_distance({h.u, h.v}, reach));
@@ -235,12 +221,11 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         const size_t k = map_.index(i, j);
         if (occludes_from(id, map_.u[k], map_.v[k])) return true;
         // The point's own face, solved to the point itself (or beyond) from a
-        // start the light map shows elsewhere on it: a ray leaving the face at
-        // a grazing angle can cross it again nearer the light (a hull lit
-        // almost along it, iges/ship_kcs.igs; never a plane), a root Newton
-        // ran past. Retried from the face's mesh sheets more than a light-map
-        // pixel in front of the point (nearer, the mesh's chords around the
-        // point itself; the light is orthographic: depth along it is the ray's t).
+        // start the light map shows elsewhere on it: a ray leaving the face at a
+        // grazing angle can cross it again nearer the light (a long hull lit
+        // almost along it; never a plane), a root Newton ran past. Retried from
+        // the face's mesh sheets more than a light-map pixel in front of the
+        // point (the light is orthographic: depth along it is the ray's t).
         const bool found_itself = (last == kConverged || last == kNearTrim) && !(last_t < t_p - self);
         if (id == face && found_itself && cosine < kGrazingCosine && !ctx_.prepared.faces()[face - 1].planar) {
             Vec2 sheets[kMaxOwnSheets];
@@ -250,15 +235,11 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
             return occludes_from_any(face, sheets, ns);
         }
         // A solve that found no point at all (it diverged or ran off the
-        // parameter box, unlike one that ended outside the trim or behind) set
-        // out from a start of the light map's pixel, which may lie on another
-        // part of a strongly curved face than the one the ray crosses (a
-        // bearing race seen from the light leaked through that way): retried
-        // from the face's mesh where the ray pierces it. Only there: over the
-        // full-frame test's models, retrying every failed solve from the
-        // nearest mesh point found 510 crossings in 371k retries (light rays
-        // +56 % on the phone, +66 % on trj8); 418 of them lay where the ray
-        // pierces the mesh, which 31k retries cover.
+        // parameter box) set out from a start of the light map's pixel, which may
+        // lie on another part of a strongly curved face than the one the ray
+        // crosses: retried from the face's mesh where the ray pierces it. Only
+        // there: retrying every failed solve from the nearest mesh point costs
+        // many more rays, and most of what it finds lies where the ray pierces.
         if (!newton_failed(last)) return false;
         Vec2 starts[2];
         return occludes_from_any(id, starts, screen_points_.nearest_starts(id, sp, starts, nullptr, kPiercedOnly));
@@ -278,16 +259,14 @@ bool KeyLightShadows::blocked(Vec3 p, Vec3 n, uint32_t face, double u, double v)
         // The point's own face counts as passed where the map shows another
         // part of it, in front of the point, that the ray passes beside: its
         // mesh covers the ray where the exact face ends, and can hide an
-        // occluder joining it there (iges/bug22869_Spring.igs iso: a spring's
-        // end face, whose rim's band in the light map hid the coil behind it;
-        // 14 leaks -> 2).
+        // occluder joining it there.
         if (id != face || ((last == kTrimmed || last == kNearTrim) && last_t < t_p - contact_)) passed[npassed++] = id;
     }
     // Only where the map shows at the point's own pixel a face passed (another
     // face, or another part of the point's own): the light map's nearest
-    // surface there is not the point's. Elsewhere (a face beside
-    // the point in the 3x3, at every face border of the lit surfaces) the search
-    // cost 40 % of the frame on trj8 and found nothing more.
+    // surface there is not the point's. Elsewhere (a face beside the point in
+    // the 3x3, at every face border of the lit surfaces) the search is costly
+    // and finds nothing.
     const uint32_t centre = ctx_.in_frame(ci, cj) ? map_.face[map_.index(ci, cj)] : 0;
     if (!centre || std::find(passed, passed + npassed, centre) == passed + npassed) return false;
     MeshScreenPoints::FarFace far[kAdjacentFaces.max_faces];

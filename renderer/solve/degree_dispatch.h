@@ -8,12 +8,10 @@ namespace nurbsrt::degree_dispatch {
 // Degrees up to this in both directions get a fully unrolled evaluation (CAD
 // surfaces are mostly of degree 1-3: planes, cylinders, cones, bicubic
 // free-form). So do, up to kMaxUnrolled: degree 1 in one direction (NURBS
-// conversion of extrusions and ruled faces gives 1 x 5-11 and 5-11 x 1; on a
-// machine component 1 x 8, 1 x 11 and 8 x 1 are 40 % of the hit pixels), and
-// equal degrees (free-form faces approximated to 5 x 5 or 7 x 7). Otherwise the
-// v degree alone (the contiguous inner loop of a tensor product) up to
-// kMaxUnrolled. On the machine component's frame each unrolled pair took 7-28 %
-// fewer instructions than the loops (callgrind).
+// conversion of extrusions and ruled faces gives 1 x 5-11 and 5-11 x 1, often
+// a large share of a part's pixels), and equal degrees (free-form faces
+// approximated to 5 x 5 or 7 x 7). Otherwise the v degree alone (the contiguous
+// inner loop of a tensor product) up to kMaxUnrolled.
 constexpr int kMaxUnrolledBoth = 3;
 constexpr int kMaxUnrolled = 11;
 

@@ -93,7 +93,7 @@ MapMesh merge_map_meshes(const Scene& scene) {
 // coincident nodes always share it, and an edge has a node at each end, so a
 // pair split by a cell border at one end is still found at the other. The
 // (cell, face) pairs are sorted rather than hashed into per-cell lists: no
-// allocation per cell, which made this most of prepare() on the 27 ducks.
+// allocation per cell, which dominated prepare() on scenes of many faces.
 void link_adjacent_faces(const Scene& scene, std::vector<PreparedFace>& faces) {
     struct Node {
         int64_t x, y, z;
@@ -135,7 +135,7 @@ void link_adjacent_faces(const Scene& scene, std::vector<PreparedFace>& faces) {
 // Power-form patches of a whole scene: at most this many coefficients (64 MB).
 // They hold up to (p+1)(q+1) coefficients per knot-span pair where the control
 // points hold about one, so a large upload of dense bicubic faces could
-// multiply its memory by ~16 (the models of ../shared/models: at most 70k, 10x
+// multiply its memory by ~16 (typical CAD models stay far below: about 10x
 // their control points). Beyond the budget the largest faces keep only the
 // basis tables, which give the same hits to rounding, more slowly.
 constexpr size_t kMaxScenePatchCoefficients = size_t(1) << 21;

@@ -29,11 +29,9 @@
 namespace nurbsrt {
 
 // Degrees tabulated: all that the stack-only A2.2 path takes (kMaxFastDegree).
-// CAD surfaces are almost all of degree <= 5 (STEP/IGES from the CAD systems of
-// ../shared/models: 1-3, some 5), but NURBS conversion gives degree 8 and 11 too:
-// 144 and 14 of the 415 faces of the machine component (trj8). Its degree-8
-// faces took half of its primary solves' time on the A2.2 path; with the table
-// up to degree 8 only, the 14 of degree 11 still took 15 % of it (profile).
+// CAD surfaces are almost all of degree <= 5 (mostly 1-3), but NURBS conversion
+// gives degree 8 and 11 too, and a part with many such faces spent most of its
+// primary solves' time on the A2.2 path.
 constexpr int kMaxTableDegree = kMaxFastDegree;
 
 // The table of one knot vector.

@@ -8,9 +8,9 @@ namespace nurbsrt {
 namespace {
 
 // Coefficients per face above which no patches are made: 8 MB (a face of
-// 100 x 160 bicubic spans). The largest face of ../shared/models has 8,832
-// (a dense helical spring); the cap keeps a hostile file's single face from
-// multiplying its control points' memory by (p+1)(q+1).
+// 100 x 160 bicubic spans, well above the densest real faces, such as a helical
+// coil's); the cap keeps a hostile file's single face from multiplying its
+// control points' memory by (p+1)(q+1).
 constexpr size_t kMaxPatchCoefficients = size_t(1) << 18;
 
 struct PatchEvaluation {
@@ -95,14 +95,9 @@ SurfacePatches make_surface_patches(const NurbsSurface& s, const SurfaceSpans& s
 // function multiversioning, "default" elsewhere), with the degree dispatch and
 // its unrolled loops inlined (flatten): a Vec4 takes one 256-bit register, and
 // each Horner step y * r + c is one fused multiply-add, which shortens the
-// chains of dependent operations that bound this loop (AVX2 without FMA halved
-// the instructions but saved 0-3 % of the Newton stage). Interleaved minima,
-// 1 thread: trj8 iso frame 35.9 -> 32.0 ms (Newton 27.0 -> 23.8), cylinder block
-// 66.3 -> 64.4 (47.8 -> 44.9). A fused multiply-add rounds once, so results may
-// differ from the default build's in the last bit: over 8 models x 2 views only
-// 2 pixels changed (duck front, a silhouette the default build showed as
-// background, where the reference intersector hits at the same depth), and the
-// full-frame and thread tests give the same results.
+// chains of dependent operations that bound this loop (AVX2 without FMA did
+// not). A fused multiply-add rounds once, so results may differ from the
+// default build's in the last bit (docs/BENCHMARKS.md).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define NURBSRT_EVALUATION_CLONES __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
 #else

@@ -8,11 +8,9 @@
 // step then evaluates the point and both partials by Horner's rule (A1.1) on C
 // alone, nested in y and x: about 2 (p+1) q + 3 p Vec4 multiply-adds, where the
 // basis tables take 2 (p+1)^2 + 2 (q+1)^2 scalar ones for the basis and then
-// 3 (p+1)(q+1) Vec4 ones for the tensor product. Callgrind, one frame of a
-// machine component (degrees 1 x 8, 1 x 11, 5 x 5): evaluation 204 -> 83 M
-// instructions. The projection of a frame (Camera::project_h) is linear in
-// homogeneous coordinates, so the projected surface's patches are the
-// projected coefficients (project_patches below).
+// 3 (p+1)(q+1) Vec4 ones for the tensor product. The projection of a frame
+// (Camera::project_h) is linear in homogeneous coordinates, so the projected
+// surface's patches are the projected coefficients (project_patches below).
 #pragma once
 
 #include <cstddef>

@@ -58,22 +58,19 @@ private:
 
 // PNG rows unfiltered: the renders are flat background and smooth shading, where
 // zlib alone compresses better than after libpng's adaptive filters, and in half
-// the time (800x600 renders of three models: 21-69 KB instead of 25-69 KB,
-// 49-130 ms instead of 103-225 ms, at zlib's default level 6).
+// the time.
 constexpr int kPngFilterNone = 8;  // libpng's PNG_FILTER_NONE
 
 // zlib level 3 for PNG and TIFF, not the default 6: the encoding is a service
 // answer's largest cost after the frame, and level 3 halves it for files ~40 %
-// larger (512x512 render of a 305-face part, measured with OpenImageIO 2.4:
-// PNG 5.3 ms / 19.8 KB at level 6, 2.7 ms / 27.3 KB at 3, 2.4 ms / 31.0 KB at 1;
-// TIFF alike). Level 1 saves little more and loses more size.
+// larger. Level 1 saves little more and loses more size.
 constexpr int kZlibLevel = 3;
 
 // OpenImageIO compresses a TIFF's strips in parallel only when its thread pool
 // has two workers or more (TIFFOutput::write_scanlines), and it sizes the pool
 // one below its "threads" (the calling thread takes part): on 2 cores, never.
-// One more thread than cores gives the pool a worker per core: a 512x512 TIFF
-// 2.6 -> 1.5 ms on 2 cores (PNG, one zlib stream, stays serial).
+// One more thread than cores gives the pool a worker per core (PNG, one zlib
+// stream, stays serial).
 void size_thread_pool() {
     static const bool sized = [] {
         OIIO::attribute("threads", static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) + 1);
