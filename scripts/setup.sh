@@ -17,6 +17,8 @@ cd "$(dirname "$0")/.."
 # are in libclang-rt-14-dev, which clang's packages only recommend (not installed
 # with --no-install-recommends). libfuzzer-14-dev is not needed: it holds a libFuzzer
 # for linking by hand, not the runtime that clang's -fsanitize=fuzzer links.
+# clang-format: the house style (.clang-format), checked by tests/layers.sh
+# (scripts/format.sh --check).
 # chromium, python3-websocket: the web page's end-to-end test (tests/webpage.sh) drives
 # Debian's headless Chromium over the DevTools protocol from Python; nothing downloads
 # a browser of its own.
@@ -33,7 +35,7 @@ PACKAGES=(
   libsqlite3-dev sqlite3 libembree-dev
   libpq-dev postgresql
   iproute2
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-format
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
   chromium python3-websocket
 )
