@@ -69,7 +69,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
 
     RenderResult res;
     RenderStats& st = res.stats;
-    st.method = newton_method_name(options.method);
+    st.method = options.method;
     st.width = W;
     st.height = H;
     st.threads = threads;

@@ -74,7 +74,7 @@ struct RenderImage {
 };
 
 struct RenderStats {
-    std::string method;
+    NewtonMethod method = NewtonMethod::proposed;
     int width = 0, height = 0, threads = 0;
     size_t faces = 0, patches = 0, map_triangles = 0;
     size_t pixels_hit = 0;

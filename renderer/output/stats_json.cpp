@@ -27,11 +27,17 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
     json histogram = json::object();
     for (size_t k = 0; k < s.iteration_histogram.size(); ++k)
         if (s.iteration_histogram[k]) histogram[std::to_string(k)] = s.iteration_histogram[k];
-            // Most keys are the RenderStats members' own names: one macro says so, and
-            // a member renamed breaks the build instead of the API's documented key.
 #define NURBSRT_STAT(member) {#member, s.member}
-    json j = {NURBSRT_STAT(method), NURBSRT_STAT(width),   NURBSRT_STAT(height),        NURBSRT_STAT(threads),
-              NURBSRT_STAT(faces),  NURBSRT_STAT(patches), NURBSRT_STAT(map_triangles), NURBSRT_STAT(pixels_hit)};
+    // Most keys are the RenderStats members' own names: one macro says so, and
+    // a member renamed breaks the build instead of the API's documented key.
+    json j = {{"method", newton_method_name(s.method)},
+              NURBSRT_STAT(width),
+              NURBSRT_STAT(height),
+              NURBSRT_STAT(threads),
+              NURBSRT_STAT(faces),
+              NURBSRT_STAT(patches),
+              NURBSRT_STAT(map_triangles),
+              NURBSRT_STAT(pixels_hit)};
     j["newton"] = {NURBSRT_STAT(tolerance),       NURBSRT_STAT(solves),
                    NURBSRT_STAT(mean_iterations), {"iteration_histogram", histogram},
                    NURBSRT_STAT(converged),       NURBSRT_STAT(diverged),

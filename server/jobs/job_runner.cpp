@@ -426,7 +426,7 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
         };
         const RenderedImage image = render_upload(ctx_, read_file_bytes(input), r, control);
         write_durably(partial, image.bytes);
-        result = nlohmann::json::parse(image.stats_json);
+        result = statistics_json(image);
     } else {
         ConvertReport report;
         StageClock stages(t0);

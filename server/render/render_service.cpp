@@ -229,20 +229,29 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     ticket.reset();
     stages.mark("encode");
 
-    nlohmann::json stats = render_stats_json(result.stats, nlohmann::json::object());
-    stats["estimate"] = {{"memory_mb", double(cost.memory_bytes) / (1 << 20)},
-                         {"core_seconds", cost.core_seconds},
-                         {"priority", priority_name(options.priority)}};
-    stats["camera"] = camera_json(camera);
-    stats["map_precision"] = map_precision_option(r.map_precision);
-    stats["warnings"] = scene.warnings;
-    stats["cache"] = out.cache_hit ? "hit" : "miss";
+    out.stats = result.stats;
+    out.camera = camera;
+    out.map_precision = r.map_precision;
+    out.cost = cost;
+    out.priority = priority;
+    out.warnings = scene.warnings;
     stages.mark("statistics");
-    stats["timings_ms"] = stage_timings_json(stages, kRenderStages);
     for (const StageClock::Stage& s : stages.stages()) ctx.metrics.observe_stage(s.name, s.ms / 1000.0);
     ctx.metrics.observe_stage("total", stages.total_ms() / 1000.0);
-    out.stats_json = stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     return out;
+}
+
+nlohmann::json statistics_json(const RenderedImage& image) {
+    nlohmann::json stats = render_stats_json(image.stats, nlohmann::json::object());
+    stats["estimate"] = {{"memory_mb", double(image.cost.memory_bytes) / (1 << 20)},
+                         {"core_seconds", image.cost.core_seconds},
+                         {"priority", priority_name(image.priority)}};
+    if (image.camera) stats["camera"] = camera_json(*image.camera);
+    stats["map_precision"] = map_precision_option(image.map_precision);
+    stats["warnings"] = image.warnings;
+    stats["cache"] = image.cache_hit ? "hit" : "miss";
+    stats["timings_ms"] = stage_timings_json(image.timings, kRenderStages);
+    return stats;
 }
 
 }  // namespace nurbsrt::server

@@ -11,7 +11,12 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "core/stage_clock.h"
+#include "renderer/camera.h"
+#include "renderer/frame_cost.h"
+#include "renderer/render.h"
 #include "server/render/context.h"
 #include "options/render_request.h"
 
@@ -29,13 +34,25 @@ struct AovBuffer {
 struct RenderedImage {
     std::string bytes;            // the encoded image (r.format)
     std::vector<AovBuffer> aovs;  // those of r.aovs, in kAllAovs order
-    std::string stats_json;       // the Statistics object's JSON text (with camera, cache, warnings)
+    // What the Statistics object of the answer and of a job's result says,
+    // serialised once, at the edge (statistics_json).
+    RenderStats stats;
+    std::optional<Camera> camera;
+    MapPrecision map_precision = MapPrecision::float32;
+    FrameCost cost;
+    RenderPriority priority = RenderPriority::normal;
+    std::vector<std::string> warnings;  // the import's
     bool cache_hit = false;
-    // The stages from RenderControl::start to the statistics, as in stats_json's
-    // timings_ms; a caller that builds an answer from this marks its own stage
-    // ("response") on it and so keeps the stages summing to the total.
+    // The stages from RenderControl::start to the statistics; a caller that
+    // builds an answer from this marks its own stage ("response") on it and so
+    // keeps the stages summing to the total.
     StageClock timings;
 };
+
+// The Statistics object of `image` (the renderer's statistics with the camera,
+// the estimate, the cache, the warnings), with timings_ms as `image.timings`
+// holds them now.
+nlohmann::json statistics_json(const RenderedImage& image);
 
 struct RenderControl {
     // Set by the caller to stop the render (a deleted job); the render then ends

@@ -80,7 +80,6 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
         set_timing_header();
         return;
     }
-    nlohmann::json stats = nlohmann::json::parse(rendered.stats_json);
     nlohmann::json body = {{"request_id", request_id(res)},
                            {"format", r.format.name},
                            {"content_type", r.format.content_type},
@@ -91,8 +90,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
     // The last stage, this answer, ends before its serialization: the text
     // cannot hold the time it takes to write itself.
     stages.mark("response");
-    stats["timings_ms"] = stage_timings_json(stages, kRenderStages);
-    body["statistics"] = std::move(stats);
+    body["statistics"] = statistics_json(rendered);
     set_timing_header();
     res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), kBulkJsonContentType);
 }
