@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/check.h"
 #include "core/error.h"
 #include "renderer/frame/frame.h"
 #include "renderer/frame/mesh_screen_points.h"
@@ -19,8 +20,16 @@
 #include "renderer/passes/shadow_rays.h"
 
 namespace nurbsrt {
-
 namespace {
+
+// RenderImage's contract (render.h): every buffer holds its values for every
+// pixel, row-major; the shadow flags exactly when shadows were asked for.
+void check_image_contract(const RenderImage& im, bool shadows) {
+    const size_t n = static_cast<size_t>(im.width) * static_cast<size_t>(im.height);
+    NURBSRT_CHECK(im.rgba.size() == 4 * n && im.z.size() == n && im.normal.size() == 3 * n);
+    NURBSRT_CHECK(im.face.size() == n && im.u.size() == n && im.v.size() == n && im.iterations.size() == n);
+    NURBSRT_CHECK(im.shadow.size() == (shadows ? n : 0));
+}
 
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
@@ -160,6 +169,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     progress.finish();
     st.statistics_ms = lap();
     st.total_ms = std::chrono::duration<double, std::milli>(last - t_total).count();
+    check_image_contract(res.image, options.shadows);
     return res;
 }
 

@@ -1,4 +1,5 @@
 // Solver: a pixel's Newton solve of one face and its trim test (see pixel_solver.h).
+#include "core/check.h"
 #include "renderer/frame/pixel_solver.h"
 
 #include <algorithm>
@@ -74,6 +75,7 @@ SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
 
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
                       PixelHit& hit, const SurfaceDerivs* start, double* crossing) const {
+    NURBSRT_DCHECK(id >= 1 && id <= ctx.faces);  // face ids are 1-based, 0 is the background
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const Camera& camera = ctx.camera;
     const NurbsSurface& surface = iterated_surface(id);

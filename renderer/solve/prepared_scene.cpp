@@ -12,6 +12,7 @@
 #include <cmath>
 #include <thread>
 
+#include "core/check.h"
 #include "core/error.h"
 
 namespace nurbsrt {
@@ -163,6 +164,16 @@ std::vector<uint8_t> faces_with_patches(const Scene& scene, const std::vector<Pr
     return with;
 }
 
+// What the preliminary map draws from without bounds checks (a GL draw call
+// reads indices and attributes as given): every array per vertex, every index
+// a vertex, every face id a face.
+void check_map_mesh(const MapMesh& map, size_t faces) {
+    NURBSRT_CHECK(map.uv.size() == 2 * map.xyz.size() && map.face.size() == map.xyz.size());
+    NURBSRT_CHECK(map.indices.size() % 3 == 0);
+    for (uint32_t i : map.indices) NURBSRT_CHECK(i < map.xyz.size());
+    for (uint32_t f : map.face) NURBSRT_CHECK(f >= 1 && f <= faces);
+}
+
 }  // namespace
 
 PreparedScene::PreparedScene() : data_(std::make_unique<PreparedData>()) {}
@@ -197,6 +208,7 @@ struct PreparedSceneBuilder {
         });
         arena.execute([&] { link_adjacent_faces(scene, ps.data_->faces); });
         ps.data_->map = merge_map_meshes(scene);
+        check_map_mesh(ps.data_->map, scene.faces.size());
         ps.prepare_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         return ps;
     }

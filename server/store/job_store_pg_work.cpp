@@ -1,6 +1,7 @@
 // The PostgreSQL job store's work side: claiming outputs under a lease,
 // renewing it, the fenced output transitions, finishing a job once its last
 // output is done (on whichever instance), and putting work back on a stop.
+#include "core/check.h"
 #include "server/store/job_store_pg.h"
 
 #include "core/error.h"
@@ -36,6 +37,7 @@ std::optional<JobState> PgJobStore::finish_locked(const std::string& id, int64_t
             first_message = r.text(i, 2);
         }
     }
+    NURBSRT_CHECK(total > 0);  // a job has outputs: with none it would "succeed" having made nothing
     const JobState state = failed ? JobState::failed : JobState::succeeded;
     const std::string message =
         failed ? str(failed) + " of " + str(total) + " outputs failed; first: " + first_message : std::string();

@@ -1,5 +1,7 @@
 #include "server/store/job_store_sqlite.h"
 
+#include "core/check.h"
+
 #include "server/store/job_store_sqlite_impl.h"
 
 namespace nurbsrt::server {
@@ -173,6 +175,7 @@ bool SqliteJobStore::output_running(const std::string& id, int output, int64_t n
                  "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = ?, attempts = attempts + 1 "
                  "WHERE job_id = ? AND idx = ? AND state = 'queued'");
     s.bind(1, now_ms).bind(2, id).bind(3, output).run();
+    NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
     const bool ok = s.changes() > 0;
     t.commit();
     return ok;
@@ -193,6 +196,7 @@ bool SqliteJobStore::output_succeeded(const std::string& id, int output, int64_t
                  "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = ?, result = ?, "
                  "finished_ms = ? WHERE job_id = ? AND idx = ? AND state = 'running'");
     s.bind(1, artifact_bytes).bind(2, result_json).bind(3, now_ms).bind(4, id).bind(5, output).run();
+    NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
     const bool ok = s.changes() > 0;
     t.commit();
     return ok;
@@ -206,6 +210,7 @@ bool SqliteJobStore::output_failed(const std::string& id, int output, const std:
                  "UPDATE job_outputs SET state = 'failed', error_code = ?, error_message = ?, finished_ms = ? "
                  "WHERE job_id = ? AND idx = ? AND state IN ('queued', 'running')");
     s.bind(1, code).bind(2, message).bind(3, now_ms).bind(4, id).bind(5, output).run();
+    NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
     const bool ok = s.changes() > 0;
     t.commit();
     return ok;
@@ -236,6 +241,7 @@ JobState SqliteJobStore::Impl::finish_job(const std::string& id, int64_t now_ms)
             }
         }
     }
+    NURBSRT_CHECK(total > 0);  // a job has outputs: with none it would "succeed" having made nothing
     const JobState state = failed ? JobState::failed : JobState::succeeded;
     std::string message;
     if (failed)
