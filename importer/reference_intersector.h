@@ -1,6 +1,8 @@
 // The exact reference for pixel rays: OCCT's IntCurvesFace_ShapeIntersector on
 // the ORIGINAL shape as the file defines it (planes, cylinders, offset surfaces,
-// ... not our NURBS conversion), trimmed by OCCT's own face classifier. Shares no
+// ... not our NURBS conversion), trimmed by OCCT's own face classifier; a B-spline
+// face of many spans is searched as exact pieces of itself (ShapeUpgrade's
+// division), each hit reported on its face. Shares no
 // code with the renderer or the importer's conversion, so it serves both as the
 // accuracy oracle of tests/render_accuracy_test.cpp and as the "exact peer" of
 // `nurbsrt bench`. OCCT-free header: rays in, hits out.

@@ -174,17 +174,6 @@ const std::vector<Known> kKnownRemaining = {
     // to 3e-6 instead of 1e-5 of their box: ImportOptions::trim_relative_tolerance.)
 };
 
-// Models whose reference is slow: IntCurvesFace_ShapeIntersector needs 65 ms per
-// ray on average (40 rays measured, one thread) on the dense helical face of
-// bug22869_Spring.igs, whose every view has ~5,000 candidates (each coil turn's
-// silhouette over the next is a step): 320 s a view to check them all, more than
-// ctest's 600 s per test case allows with the shadows. It gets kSlowReferenceBudget
-// a view (the ~1,500 deepest candidates: every enclosed background pixel, then the
-// deepest spikes and steps), the rest counted and reported as unchecked, and a
-// test case per view (cases()); every other model is checked whole.
-const char* const kSlowReference[] = {"iges/bug22869_Spring.igs"};
-constexpr double kSlowReferenceBudget = 100.0;
-
 // Shadow disagreements the renderer still has (work to do, not a tolerance),
 // counted over the fixed sample of tests/support/shadow_check.h; everywhere else
 // the test demands 0, and these counts may not rise. They follow the light map's
@@ -286,34 +275,21 @@ struct Case {
     std::string fixture;  // a generated fixture, or
     std::string path;     // a file of ../shared/models
     std::string rel;      // its path relative to ../shared/models
-    std::string view;     // only this view of kViews; empty: every view
 };
-
-bool slow_reference(const std::string& rel) {
-    for (const char* slow : kSlowReference)
-        if (rel == slow) return true;
-    return false;
-}
 
 std::vector<Case> cases() {
     std::vector<Case> v;
     for (const char* f : {"filleted_box", "filleted_box_blend", "blade_fan", "box_with_holes", "thin_ring"})
-        v.push_back({std::string("fixture_") + f, f, "", "", ""});
+        v.push_back({std::string("fixture_") + f, f, "", ""});
     const std::string root = T::shared_models_dir();
     if (root.empty()) {
-        v.push_back({"shared_models_absent", "", "", "", ""});
+        v.push_back({"shared_models_absent", "", "", ""});
         return v;
     }
     for (const char* dir : kModelDirs)
         for (const std::string& p : T::shared_model_files(dir)) {
-            const std::string rel = fs::relative(p, root).string(), name = T::sanitize_test_name(rel);
-            if (!slow_reference(rel)) {
-                v.push_back({name, "", p, rel, ""});
-                continue;
-            }
-            // A slow reference gets a test case per view: ctest runs them side by
-            // side, and each stays well inside the per-test timeout.
-            for (const View& view : kViews) v.push_back({name + "_" + view.name, "", p, rel, view.name});
+            const std::string rel = fs::relative(p, root).string();
+            v.push_back({T::sanitize_test_name(rel), "", p, rel});
         }
     return v;
 }
@@ -325,7 +301,6 @@ class RenderFullFrame : public testing::TestWithParam<Case> {};
 TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
     const Case& c = GetParam();
     if (c.fixture.empty() && c.path.empty()) NURBSRT_REQUIRE_SHARED_MODELS();
-    const double budget = slow_reference(c.rel) ? kSlowReferenceBudget : T::kCheckBudgetSeconds;
     const std::string path = c.fixture.empty() ? c.path : T::fixture_by_name(c.fixture);
     ASSERT_TRUE(fs::exists(path)) << path;
 
@@ -341,7 +316,6 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
               << std::defaultfloat << "\n";
 
     for (const View& view : kViews) {
-        if (!c.view.empty() && c.view != view.name) continue;
         CameraSpec base;
         base.width = base.height = kSize;
         base.projection = view.projection;
@@ -352,7 +326,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
         options.shadows = true;
         const RenderResult r = render(prepared, camera, options);
         const std::string label = c.name + "/" + view.name;
-        const T::FullFrameReport rep = T::full_frame_check(label, scene, model, inter, camera, r.image, budget);
+        const T::FullFrameReport rep = T::full_frame_check(label, scene, model, inter, camera, r.image);
         std::cout << rep.text() << "   render " << std::fixed << std::setprecision(0) << r.stats.total_ms << " ms"
                   << std::defaultfloat << "\n"
                   << std::flush;
@@ -366,7 +340,7 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
             std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles << " speckles ("
                       << known->cause << ")\n";
         if (rep.unchecked)
-            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within " << budget
+            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within " << T::kCheckBudgetSeconds
                       << " s\n";
         EXPECT_LE(rep.holes, known ? known->holes : 0)
             << label << ": background pixels where the exact ray hits a face";

@@ -79,10 +79,11 @@ constexpr double kContactSpreadMargin = 2.0;
 constexpr double kOnFaceTolFactor = 4.0;
 
 // Time budget of one frame's check (reference rays and settlements), seconds.
-// IntCurvesFace_ShapeIntersector costs 0.1 ms to ~65 ms per ray (a dense
-// helical B-spline face); on every model but that one the whole check takes
-// well under this. Spike candidates left when it runs out (the shallowest, see the
-// .cpp) are counted as unchecked and reported, never silently dropped.
+// A reference ray costs 0.1 ms to ~2 ms (ReferenceIntersector cuts dense
+// B-spline faces into pieces), and every model's whole check takes well under
+// this; it guards against a slow machine or a new slow model. Spike candidates
+// left when it runs out (the shallowest, see the .cpp) are counted as unchecked
+// and reported, never silently dropped.
 constexpr double kCheckBudgetSeconds = 40.0;
 
 // A depth step: a hit farther than a 4-neighbour's by more than this many pixel
@@ -143,7 +144,7 @@ struct FullFrameReport {
 
 // Checks `image` (rendered by `camera` from `scene`) against `model` (the same file
 // as OCCT reads it, face-index contract) with `inter` (built on `model`), within
-// budget_seconds (kCheckBudgetSeconds but for a model whose reference is slow).
+// budget_seconds.
 FullFrameReport full_frame_check(const std::string& label, const Scene& scene, const occt::OcctModel& model,
                                  ReferenceIntersector& inter, const Camera& camera, const RenderImage& image,
                                  double budget_seconds = kCheckBudgetSeconds, size_t max_diagnosed = 12);
