@@ -36,8 +36,30 @@ fi
 echo "== unit and integration tests (GoogleTest via ctest)"
 ( cd "$BUILD_DIR" && ctest --output-on-failure --timeout 900 -j "$(nproc)" ) || status=1
 
+# The two API suites run side by side: each drives its own server (free port,
+# data dir, job store) and leaves a core mostly idle while it waits on it. Their
+# output is shown whole, one after the other.
+SIDE_BY_SIDE="tests/api.sh tests/api_postgres.sh"
+logs=$(mktemp -d)
+trap 'rm -rf "$logs"' EXIT
+pids=()
+for suite in $SIDE_BY_SIDE; do
+  bash "$suite" "$BUILD_DIR/nurbsrt" > "$logs/$(basename "$suite").log" 2>&1 &
+  pids+=($!)
+done
+i=0
+for suite in $SIDE_BY_SIDE; do
+  rc=0
+  wait "${pids[$i]}" || rc=$?
+  echo "== $suite (side by side with the other API suite)"
+  cat "$logs/$(basename "$suite").log"
+  [ $rc -eq 0 ] || { echo "== $suite: FAILED (exit $rc)"; status=1; }
+  i=$((i + 1))
+done
+
 for suite in tests/*.sh; do
   [ -e "$suite" ] || continue
+  case " $SIDE_BY_SIDE " in *" $suite "*) continue ;; esac
   echo "== $suite"
   bash "$suite" "$BUILD_DIR/nurbsrt" || status=1
 done
