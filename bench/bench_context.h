@@ -15,8 +15,8 @@
 #include "importer/importer.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "core/scene.h"
-#include "core/scene_ops.h"
+#include "core/scene/scene.h"
+#include "core/scene/scene_ops.h"
 
 namespace nurbsrt::bench {
 

@@ -16,7 +16,7 @@
 // On the Table 1 scenes and, in a full run, the four extra models (extra_scenes).
 #include "bench/bench_context.h"
 #include "bench/embree_peer.h"
-#include "importer/tessellate.h"
+#include "importer/faces/tessellate.h"
 
 #include <tbb/task_arena.h>
 

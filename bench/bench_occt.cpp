@@ -9,7 +9,7 @@
 #include <numeric>
 
 #include "bench/bench_context.h"
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 
 namespace nurbsrt::bench {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "bench/bench_context.h"
 #include "bench/embree_peer.h"
-#include "importer/tessellate.h"
+#include "importer/faces/tessellate.h"
 #include "bench/mesh_raster.h"
 
 namespace nurbsrt::bench {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "core/triangle_mesh.h"
+#include "core/scene/triangle_mesh.h"
 
 namespace nurbsrt::bench {
 

@@ -26,7 +26,7 @@
 #include <string>
 
 #include "bench/bench_context.h"
-#include "core/heap_tuning.h"
+#include "core/process/heap_tuning.h"
 #include "renderer/render.h"
 
 namespace {

@@ -6,7 +6,7 @@
 
 #include "cli/commands.h"
 #include "core/error.h"
-#include "core/heap_tuning.h"
+#include "core/process/heap_tuning.h"
 
 int main(int argc, char** argv) {
     nurbsrt::tune_heap_for_frames();

@@ -8,8 +8,8 @@
 #include "cli/scene_placements.h"
 #include "importer/isolated.h"
 #include "core/error.h"
-#include "core/scene_json.h"
-#include "core/scene_ops.h"
+#include "core/io/scene_json.h"
+#include "core/scene/scene_ops.h"
 
 namespace nurbsrt::cli {
 namespace {

@@ -4,7 +4,7 @@
 // Relative paths are taken from the JSON file's folder. Each distinct file is
 // imported once; copies are transformed duplicates of its scene. A file (given
 // or listed) may also be the NURBS scene JSON that `nurbsrt convert` writes
-// (core/scene_json.h), read without OCCT.
+// (core/io/scene_json.h), read without OCCT.
 #pragma once
 
 #include <string>

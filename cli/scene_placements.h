@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene_ops.h"
+#include "core/scene/scene_ops.h"
 
 namespace nurbsrt::cli {
 

@@ -1,4 +1,4 @@
-// The binary scene format (core/scene_io.h) that import children hand back
+// The binary scene format (core/io/scene_io.h) that import children hand back
 // to the service, and the NURBS scene JSON written from what it reads.
 //
 // An input that starts with the magic is taken as a whole file (header checks);
@@ -13,9 +13,9 @@
 #include <cstring>
 
 #include "fuzz/fuzz_common.h"
-#include "core/nurbs.h"
-#include "core/scene_io.h"
-#include "core/scene_json.h"
+#include "core/scene/nurbs.h"
+#include "core/io/scene_io.h"
+#include "core/io/scene_json.h"
 
 using namespace nurbsrt;
 

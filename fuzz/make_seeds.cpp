@@ -5,8 +5,8 @@
 #include <fstream>
 #include <string>
 
-#include "core/scene.h"
-#include "core/scene_io.h"
+#include "core/scene/scene.h"
+#include "core/io/scene_io.h"
 
 using namespace nurbsrt;
 

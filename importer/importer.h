@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 
@@ -51,7 +51,7 @@ Scene import_file(const std::string& path, const ImportOptions& options = {});
 // What convert_file can write, chosen by the output file's extension. The CAD
 // formats keep the exact geometry; STL and glb are triangle meshes (BRepMesh at
 // ImportOptions' default relative deflection); nurbs_json is the imported Scene's
-// patches as JSON (core/scene_json.h, api_schema/nurbs_scene.schema.json).
+// patches as JSON (core/io/scene_json.h, api_schema/nurbs_scene.schema.json).
 enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json };
 
 // .stp/.step/.p21, .igs/.iges, .stl, .glb, .json (case-insensitive); unknown otherwise.

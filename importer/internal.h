@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "importer/occt_shape.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 class Standard_Failure;
 class TDF_Label;

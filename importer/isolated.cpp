@@ -21,8 +21,8 @@
 #include <thread>
 
 #include "core/error.h"
-#include "core/executable_path.h"
-#include "core/scene_io.h"
+#include "core/process/executable_path.h"
+#include "core/io/scene_io.h"
 
 namespace nurbsrt {
 namespace {

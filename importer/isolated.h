@@ -7,7 +7,7 @@
 // program with those arguments where the worker is not installed
 // (cli/cmd_import_worker.cpp); under an address-space limit. The parent waits
 // with a wall-clock limit, kills the child when it runs over, and reads the
-// serialized scene (core/scene_io.h) or the typed error the child wrote.
+// serialized scene (core/io/scene_io.h) or the typed error the child wrote.
 // The child dies with its parent (PR_SET_PDEATHSIG: a killed service leaves no
 // worker writing files behind it) and has a CPU-time limit of the wall-clock
 // limit, so even an orphan cannot run on.

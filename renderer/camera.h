@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 #include "core/vec.h"
 
 namespace nurbsrt {

@@ -8,7 +8,7 @@
 #include <optional>
 #include <string_view>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

@@ -14,7 +14,7 @@
 #include "core/error.h"
 #include "renderer/frame/frame.h"
 #include "renderer/frame/mesh_screen_points.h"
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 #include "renderer/passes/passes.h"
 #include "renderer/frame/pixel_solver.h"
 #include "renderer/passes/shadow_rays.h"

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 #include "renderer/camera.h"
 #include "renderer/method.h"
 #include "renderer/prepared_scene.h"

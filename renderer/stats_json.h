@@ -7,7 +7,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 #include "core/stage_clock.h"
 
 namespace nurbsrt {

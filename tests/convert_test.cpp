@@ -11,7 +11,7 @@
 //              Y-up metres ((x, y, z) mm -> (x, z, -y) / 1000). The assembly keeps its
 //              instances (named nodes with their converted translations) and its colour.
 //  * Json:     the dump parses, has one patch per face, and a patch rebuilt from its JSON
-//              knots/control points evaluates (core/nurbs.h) bit-identically to the
+//              knots/control points evaluates (core/scene/nurbs.h) bit-identically to the
 //              imported Scene's patch; non-finite numbers become null, never invalid JSON.
 //  * Isolated: convert_isolated carries the new report fields back from the worker.
 #include <gtest/gtest.h>
@@ -47,8 +47,8 @@
 #include "importer/isolated.h"
 #include "importer/occt_shape.h"
 #include "core/error.h"
-#include "core/nurbs.h"
-#include "core/scene_json.h"
+#include "core/scene/nurbs.h"
+#include "core/io/scene_json.h"
 #include "tests/support/fixtures.h"
 
 namespace {

@@ -12,7 +12,7 @@
 
 #include "cli/scene_placements.h"
 #include "core/error.h"
-#include "core/scene_io.h"
+#include "core/io/scene_io.h"
 #include "server/http/upload.h"
 #include "tests/support/error_code_of.h"
 

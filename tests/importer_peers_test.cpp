@@ -1,14 +1,14 @@
 // The OCCT peers of `nurbsrt bench` behind their OCCT-free headers: the exact
-// ray caster (importer/reference_intersector.h, also the accuracy test's oracle)
-// and the BRepMesh tessellation (importer/tessellate.h), on the sphere fixture
+// ray caster (importer/reference/reference_intersector.h, also the accuracy test's oracle)
+// and the BRepMesh tessellation (importer/faces/tessellate.h), on the sphere fixture
 // (radius 15 at the origin), alone and placed twice.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "importer/reference_intersector.h"
-#include "importer/tessellate.h"
+#include "importer/reference/reference_intersector.h"
+#include "importer/faces/tessellate.h"
 #include "core/error.h"
 #include "tests/support/fixtures.h"
 

@@ -54,9 +54,9 @@
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
 #include "core/error.h"
-#include "core/nurbs.h"
-#include "core/scene.h"
-#include "core/trim.h"
+#include "core/scene/nurbs.h"
+#include "core/scene/scene.h"
+#include "core/scene/trim.h"
 #include "tests/support/fixtures.h"
 
 namespace {

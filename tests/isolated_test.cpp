@@ -12,7 +12,7 @@
 
 #include "importer/isolated.h"
 #include "core/error.h"
-#include "core/scene_io.h"
+#include "core/io/scene_io.h"
 #include "tests/support/error_code_of.h"
 
 namespace {

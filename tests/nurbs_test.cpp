@@ -1,5 +1,5 @@
-// Analytic checks of the NURBS evaluation core (core/nurbs.h).
-#include "core/nurbs.h"
+// Analytic checks of the NURBS evaluation core (core/scene/nurbs.h).
+#include "core/scene/nurbs.h"
 
 #include <gtest/gtest.h>
 

@@ -65,13 +65,13 @@
 
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 #include "renderer/camera.h"
 #include "renderer/solve/newton.h"
 #include "renderer/map/preliminary_map.h"
 #include "renderer/render.h"
-#include "core/scene.h"
-#include "core/trim.h"
+#include "core/scene/scene.h"
+#include "core/scene/trim.h"
 #include "tests/support/fixtures.h"
 #include "tests/support/occt_distance.h"
 
@@ -242,7 +242,7 @@ bool near_edge(const RenderImage& im, int i, int j) {
     return !(uniform && count == 8);
 }
 
-// The intersector's answer for one ray (importer/reference_intersector.h).
+// The intersector's answer for one ray (importer/reference/reference_intersector.h).
 using OcctHit = ReferenceHit;
 
 enum class Verdict {

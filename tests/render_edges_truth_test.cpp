@@ -1,6 +1,6 @@
 // Feature lines against the true projected edges: on a box with filleted edges
 // and a through-hole, the edges of the image are where OCCT's exact intersector
-// (IntCurvesFace_ShapeIntersector, importer/reference_intersector.h) shows
+// (IntCurvesFace_ShapeIntersector, importer/reference/reference_intersector.h) shows
 // another face, or none, in the next pixel: the true edge passes between those
 // two pixel centres, within a pixel of each. A line one pixel wide is centred on
 // the midpoint between two such centres and falls off over half a pixel more
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "importer/importer.h"
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 #include "renderer/camera.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render.h"

@@ -39,7 +39,7 @@
 
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 #include "renderer/camera.h"
 #include "renderer/render.h"
 #include "tests/support/fixtures.h"
@@ -340,8 +340,8 @@ TEST_P(RenderFullFrame, NoHolesNoSpeckles) {
             std::cout << "   known remaining: " << known->holes << " holes, " << known->speckles << " speckles ("
                       << known->cause << ")\n";
         if (rep.unchecked)
-            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within " << T::kCheckBudgetSeconds
-                      << " s\n";
+            std::cout << "   NOTE: " << rep.unchecked << " shallow depth spikes and steps not checked within "
+                      << T::kCheckBudgetSeconds << " s\n";
         EXPECT_LE(rep.holes, known ? known->holes : 0)
             << label << ": background pixels where the exact ray hits a face";
         EXPECT_LE(rep.speckles, known ? known->speckles : 0)

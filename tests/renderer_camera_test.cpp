@@ -8,7 +8,7 @@
 
 #include "renderer/camera.h"
 #include "core/error.h"
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 
 using namespace nurbsrt;
 

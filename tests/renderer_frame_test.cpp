@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "renderer/frame/frame.h"
-#include "core/heap_tuning.h"
+#include "core/process/heap_tuning.h"
 
 namespace nurbsrt {
 namespace {

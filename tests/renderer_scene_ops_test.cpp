@@ -1,11 +1,11 @@
-// Placing and concatenating scenes (core/scene_ops.h): a moved copy must be
+// Placing and concatenating scenes (core/scene/scene_ops.h): a moved copy must be
 // exactly the moved surface, and concatenation must keep the face-index contract.
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "core/nurbs.h"
-#include "core/scene_ops.h"
+#include "core/scene/nurbs.h"
+#include "core/scene/scene_ops.h"
 #include "tests/renderer_test_surfaces.h"
 
 namespace {

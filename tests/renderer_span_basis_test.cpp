@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 #include "renderer/solve/span_basis.h"
 #include "renderer/solve/surface_patches.h"
 

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "core/nurbs.h"
-#include "core/scene.h"
+#include "core/scene/nurbs.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt::testing {
 

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <random>
 
-#include "core/trim.h"
+#include "core/scene/trim.h"
 
 using namespace nurbsrt;
 

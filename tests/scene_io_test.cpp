@@ -1,6 +1,6 @@
-// Scene binary serialization (core/scene_io.h): exact round trips and rejection of
+// Scene binary serialization (core/io/scene_io.h): exact round trips and rejection of
 // every kind of damaged input with Error(corrupt_scene).
-#include "core/scene_io.h"
+#include "core/io/scene_io.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -15,7 +15,7 @@
 //     f64 trim_tolerance_uv,
 //     mesh: uv: count, 2 f64...; xyz: count, 3 f64...; triangles: count, u32...; bool fallback_grid
 //     bool has_color, Color, str name, u32 body }...
-#include "core/scene_io.h"
+#include "core/io/scene_io.h"
 
 #include <bit>
 #include <cmath>

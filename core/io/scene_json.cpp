@@ -1,6 +1,6 @@
 // Scene -> JSON (see scene_json.h). Built as an ordered_json so that the keys
 // appear in the documented order, which makes the files readable by people.
-#include "core/scene_json.h"
+#include "core/io/scene_json.h"
 
 #include <cmath>
 #include <fstream>

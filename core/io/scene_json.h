@@ -12,7 +12,7 @@
 #include <ostream>
 #include <string>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

@@ -7,10 +7,10 @@
 
 #include "core/error.h"
 #include "core/json_limits.h"
-#include "core/nurbs.h"
-#include "core/scene_io.h"
-#include "core/scene_json.h"
-#include "core/trim.h"
+#include "core/scene/nurbs.h"
+#include "core/io/scene_io.h"
+#include "core/io/scene_json.h"
+#include "core/scene/trim.h"
 
 namespace nurbsrt {
 namespace {

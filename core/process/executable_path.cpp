@@ -1,5 +1,5 @@
 // The running program's own path (see executable_path.h).
-#include "core/executable_path.h"
+#include "core/process/executable_path.h"
 
 #include <unistd.h>
 

@@ -1,4 +1,4 @@
-#include "core/heap_tuning.h"
+#include "core/process/heap_tuning.h"
 
 #include <cstdlib>  // defines __GLIBC__ (through <features.h>) on glibc
 

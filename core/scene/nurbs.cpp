@@ -6,7 +6,7 @@
 //
 // Hot path: degrees <= kMaxFastDegree use fixed stack arrays; higher degrees use one
 // heap buffer per call. Both share the same code (the scratch pointers differ).
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 
 #include <algorithm>
 #include <vector>

@@ -7,7 +7,7 @@
 // a correct but slower path that allocates.
 #pragma once
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

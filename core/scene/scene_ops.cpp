@@ -1,4 +1,4 @@
-#include "core/scene_ops.h"
+#include "core/scene/scene_ops.h"
 
 #include <cmath>
 

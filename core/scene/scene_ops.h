@@ -4,7 +4,7 @@
 
 #include <array>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

@@ -1,5 +1,5 @@
 // Grid-accelerated even-odd trim test (see trim.h).
-#include "core/trim.h"
+#include "core/scene/trim.h"
 
 #include <algorithm>
 #include <cmath>

@@ -18,7 +18,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

@@ -1,13 +1,13 @@
 // convert_file: checks the output, then dispatches on its extension to the
 // writer of that format (convert_writers.h); the NURBS JSON dump is the
-// imported Scene written by core/scene_json.h.
+// imported Scene written by core/io/scene_json.h.
 #include <chrono>
 #include <filesystem>
 
-#include "importer/convert_writers.h"
+#include "importer/convert/convert_writers.h"
 #include "importer/importer.h"
 #include "core/error.h"
-#include "core/scene_json.h"
+#include "core/io/scene_json.h"
 
 namespace nurbsrt {
 namespace {

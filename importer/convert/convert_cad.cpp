@@ -25,7 +25,7 @@
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XCAFPrs_DocumentExplorer.hxx>
 
-#include "importer/convert_writers.h"
+#include "importer/convert/convert_writers.h"
 #include "importer/internal.h"
 #include "core/error.h"
 

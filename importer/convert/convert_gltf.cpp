@@ -19,7 +19,7 @@
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 
-#include "importer/convert_writers.h"
+#include "importer/convert/convert_writers.h"
 #include "importer/internal.h"
 #include "core/error.h"
 

@@ -3,7 +3,7 @@
 #include <StlAPI_Writer.hxx>
 #include <Standard_Failure.hxx>
 
-#include "importer/convert_writers.h"
+#include "importer/convert/convert_writers.h"
 #include "importer/internal.h"
 #include "core/error.h"
 

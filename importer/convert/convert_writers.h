@@ -1,4 +1,4 @@
-// The per-format halves of convert_file (importer/convert.cpp dispatches on the
+// The per-format halves of convert_file (importer/convert/convert.cpp dispatches on the
 // output extension). importer/*.cpp only: the mesh helper takes OCCT types.
 #pragma once
 

@@ -13,7 +13,7 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 
-#include "importer/convert_writers.h"
+#include "importer/convert/convert_writers.h"
 #include "importer/internal.h"
 #include "core/error.h"
 

@@ -1,5 +1,5 @@
 // BRepMesh tessellation of a whole file (see tessellate.h).
-#include "importer/tessellate.h"
+#include "importer/faces/tessellate.h"
 
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>

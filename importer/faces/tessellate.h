@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "core/scene_ops.h"
-#include "core/triangle_mesh.h"
+#include "core/scene/scene_ops.h"
+#include "core/scene/triangle_mesh.h"
 
 namespace nurbsrt {
 

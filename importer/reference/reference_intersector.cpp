@@ -1,6 +1,6 @@
 // IntCurvesFace_ShapeIntersector as the exact ray-casting reference (see
 // reference_intersector.h).
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepGProp.hxx>
@@ -77,7 +77,8 @@ std::vector<TopoDS_Face> cut(const TopoDS_Face& face, int pieces) {
         ShapeUpgrade_ShapeDivideArea divide(face);
         divide.MaxArea() = props.Mass() / pieces;
         if (!divide.Perform()) return out;
-        for (TopExp_Explorer e(divide.Result(), TopAbs_FACE); e.More(); e.Next()) out.push_back(TopoDS::Face(e.Current()));
+        for (TopExp_Explorer e(divide.Result(), TopAbs_FACE); e.More(); e.Next())
+            out.push_back(TopoDS::Face(e.Current()));
     } catch (const Standard_Failure&) {
         out.clear();
     }
@@ -88,8 +89,8 @@ std::vector<TopoDS_Face> cut(const TopoDS_Face& face, int pieces) {
 
 struct ReferenceIntersector::Impl {
     TopoDS_Shape shape;
-    TopTools_IndexedMapOfShape faces;  // TopExp::MapShapes order: the face-index contract
-    TopoDS_Compound searched;          // the faces, dense B-spline faces cut into pieces
+    TopTools_IndexedMapOfShape faces;              // TopExp::MapShapes order: the face-index contract
+    TopoDS_Compound searched;                      // the faces, dense B-spline faces cut into pieces
     TopTools_DataMapOfShapeInteger face_of_piece;  // a piece of `searched` -> its face's index
     IntCurvesFace_ShapeIntersector inter;
     double tolerance = ReferenceIntersector::kDefaultTolerance;

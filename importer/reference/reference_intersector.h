@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "core/scene_ops.h"
+#include "core/scene/scene_ops.h"
 
 namespace nurbsrt {
 

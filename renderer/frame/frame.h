@@ -23,11 +23,11 @@
 #include <vector>
 
 #include "renderer/camera.h"
-#include "core/heap_tuning.h"
+#include "core/process/heap_tuning.h"
 #include "renderer/map/preliminary_map.h"
 #include "renderer/solve/prepared_data.h"
 #include "renderer/render.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

@@ -8,7 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 #include "renderer/solve/span_basis.h"
 
 namespace nurbsrt {

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "core/scene.h"
+#include "core/scene/scene.h"
 #include "core/vec.h"
 
 namespace nurbsrt::screen {

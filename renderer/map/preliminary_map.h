@@ -46,7 +46,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/method.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 

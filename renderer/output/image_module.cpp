@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "core/error.h"
-#include "core/executable_path.h"
+#include "core/process/executable_path.h"
 #include "renderer/render.h"
 
 namespace nurbsrt {

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 #include "renderer/passes/passes.h"
 
 namespace nurbsrt {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 
 namespace nurbsrt {
 

@@ -54,8 +54,8 @@
 
 #include "renderer/camera.h"
 #include "renderer/method.h"
-#include "core/nurbs.h"
-#include "core/scene.h"
+#include "core/scene/nurbs.h"
+#include "core/scene/scene.h"
 #include "renderer/solve/span_basis.h"
 #include "renderer/solve/surface_patches.h"
 

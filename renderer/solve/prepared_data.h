@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/scene.h"
-#include "core/trim.h"
+#include "core/scene/scene.h"
+#include "core/scene/trim.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/solve/newton.h"
 

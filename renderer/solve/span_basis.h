@@ -24,7 +24,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "core/nurbs.h"
+#include "core/scene/nurbs.h"
 
 namespace nurbsrt {
 

@@ -23,7 +23,7 @@
 #include <sstream>
 
 #include "importer/occt_shape.h"
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 #include "renderer/solve/newton.h"
 #include "renderer/map/preliminary_map.h"
 #include "renderer/solve/prepared_data.h"

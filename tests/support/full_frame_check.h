@@ -1,5 +1,5 @@
 // The full-frame check of a rendered frame against the exact reference
-// (importer/reference_intersector.h): instead of sampling pixels, it looks at
+// (importer/reference/reference_intersector.h): instead of sampling pixels, it looks at
 // EVERY pixel of the frame for the two defects a user sees as dots:
 //
 //  * hole: a pixel we show as background although the exact ray hits a face.
@@ -38,7 +38,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 class ReferenceIntersector;

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "importer/occt_shape.h"
-#include "importer/reference_intersector.h"
+#include "importer/reference/reference_intersector.h"
 #include "renderer/frame/frame.h"
 #include "renderer/passes/lighting.h"
 

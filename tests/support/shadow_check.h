@@ -27,7 +27,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/render.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 
 namespace nurbsrt {
 class ReferenceIntersector;
