@@ -4,102 +4,18 @@
 #include "server/store/job_store_pg.h"
 
 #include "core/error.h"
+#include "server/store/job_schema.h"
 
 namespace nurbsrt::server {
 namespace {
 
-// 1: jobs, inputs, outputs. 2: the webhook columns of jobs.
+// 1: jobs, inputs, outputs (with the leases); 2: the webhook columns of jobs (job_schema.h).
 constexpr int kSchemaVersion = 2;
 // Any constant: instances starting together migrate one after the other.
 constexpr const char* kMigrationLock = "7353021";
 
-// Times are Unix ms (BIGINT) as in the SQLite schema; lease expiries are in the
-// database server's clock, so instances whose clocks disagree still agree on
-// when a lease ran out. `completions` counts the final updates of an output:
-// fencing keeps it at 1, and tests read it to prove that.
-const char* kSchema = R"sql(
-CREATE TABLE IF NOT EXISTS jobs (
-  seq BIGSERIAL PRIMARY KEY,
-  id TEXT NOT NULL UNIQUE,
-  state TEXT NOT NULL,
-  created_ms BIGINT NOT NULL,
-  started_ms BIGINT NOT NULL DEFAULT 0,
-  finished_ms BIGINT NOT NULL DEFAULT 0,
-  attempts INTEGER NOT NULL DEFAULT 0,
-  error_code TEXT NOT NULL DEFAULT '',
-  error_message TEXT NOT NULL DEFAULT ''
-);
-CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);
-CREATE TABLE IF NOT EXISTS job_inputs (
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  idx INTEGER NOT NULL,
-  filename TEXT NOT NULL,
-  format TEXT NOT NULL,
-  bytes BIGINT NOT NULL,
-  PRIMARY KEY (job_id, idx)
-);
-CREATE TABLE IF NOT EXISTS job_outputs (
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  idx INTEGER NOT NULL,
-  file INTEGER NOT NULL,
-  kind TEXT NOT NULL,
-  options TEXT NOT NULL,
-  artifact TEXT NOT NULL,
-  content_type TEXT NOT NULL,
-  state TEXT NOT NULL,
-  progress DOUBLE PRECISION NOT NULL DEFAULT 0,
-  error_code TEXT NOT NULL DEFAULT '',
-  error_message TEXT NOT NULL DEFAULT '',
-  artifact_bytes BIGINT NOT NULL DEFAULT 0,
-  started_ms BIGINT NOT NULL DEFAULT 0,
-  finished_ms BIGINT NOT NULL DEFAULT 0,
-  result TEXT NOT NULL DEFAULT '',
-  attempts INTEGER NOT NULL DEFAULT 0,
-  lease_token TEXT NOT NULL DEFAULT '',
-  lease_owner TEXT NOT NULL DEFAULT '',
-  lease_expires_ms BIGINT NOT NULL DEFAULT 0,
-  completions INTEGER NOT NULL DEFAULT 0,
-  PRIMARY KEY (job_id, idx)
-);
-CREATE INDEX IF NOT EXISTS job_outputs_open ON job_outputs(state, lease_expires_ms);
-)sql";
-
-// Version 2: a job's callback URL and its delivery (server/jobs/webhooks.h).
-const char* kSchemaV2 = R"sql(
-ALTER TABLE jobs ADD COLUMN callback_url TEXT NOT NULL DEFAULT '';
-ALTER TABLE jobs ADD COLUMN callback_state TEXT NOT NULL DEFAULT '';
-ALTER TABLE jobs ADD COLUMN callback_attempts INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE jobs ADD COLUMN callback_due_ms BIGINT NOT NULL DEFAULT 0;
-ALTER TABLE jobs ADD COLUMN callback_status INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE jobs ADD COLUMN callback_error TEXT NOT NULL DEFAULT '';
-ALTER TABLE jobs ADD COLUMN callback_done_ms BIGINT NOT NULL DEFAULT 0;
-CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
-)sql";
-
-constexpr const char* kJobColumns =
-    "SELECT seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, callback_url, "
-    "callback_state, callback_attempts, callback_due_ms, callback_status, callback_error, callback_done_ms FROM jobs ";
-
-JobRecord read_job(const PgResult& r, int row) {
-    JobRecord j;
-    j.seq = r.i64(row, 0);
-    j.id = r.text(row, 1);
-    j.state = stored_job_state(r.text(row, 2));
-    j.created_ms = r.i64(row, 3);
-    j.started_ms = r.i64(row, 4);
-    j.finished_ms = r.i64(row, 5);
-    j.attempts = static_cast<int>(r.i64(row, 6));
-    j.error_code = r.text(row, 7);
-    j.error_message = r.text(row, 8);
-    j.callback_url = r.text(row, 9);
-    j.callback.state = parse_callback_state(r.text(row, 10));
-    j.callback.attempts = static_cast<int>(r.i64(row, 11));
-    j.callback.due_ms = r.i64(row, 12);
-    j.callback.last_status = static_cast<int>(r.i64(row, 13));
-    j.callback.last_error = r.text(row, 14);
-    j.callback.done_ms = r.i64(row, 15);
-    return j;
-}
+// "SELECT <the columns job_of_row reads> FROM jobs <where>".
+std::string jobs_query(const char* where) { return std::string("SELECT ") + kJobColumns + " FROM jobs " + where; }
 
 }  // namespace
 
@@ -131,8 +47,8 @@ void PgJobStore::migrate() {
                                        ", newer than this nurbsrt's " + std::to_string(kSchemaVersion) +
                                        ": run the newer nurbsrt, or point --job-store at another database");
     if (version < kSchemaVersion) {
-        if (version < 1) conn_->exec(kSchema);
-        if (version < 2) conn_->exec(kSchemaV2);
+        if (version < 1) conn_->exec(job_schema_v1(SqlDialect::postgres).c_str());
+        if (version < 2) conn_->exec(job_schema_v2(SqlDialect::postgres).c_str());
         conn_->exec("DELETE FROM schema_version");
         conn_->exec("INSERT INTO schema_version(version) VALUES ($1)", {std::to_string(kSchemaVersion)});
     }
@@ -163,38 +79,20 @@ void PgJobStore::create(JobRecord& job) {
 }
 
 void PgJobStore::load_children(JobRecord& j) {
-    const PgResult in =
-        conn_->exec("SELECT idx, filename, format, bytes FROM job_inputs WHERE job_id = $1 ORDER BY idx", {j.id});
-    for (int i = 0; i < in.rows(); ++i)
-        j.inputs.push_back({static_cast<int>(in.i64(i, 0)), in.text(i, 1), in.text(i, 2), in.i64(i, 3)});
-    const PgResult r = conn_->exec(
-        "SELECT idx, file, kind, options, artifact, content_type, state, progress, error_code, error_message, "
-        "artifact_bytes, started_ms, finished_ms, result FROM job_outputs WHERE job_id = $1 ORDER BY idx",
-        {j.id});
-    for (int i = 0; i < r.rows(); ++i) {
-        JobOutput o;
-        o.index = static_cast<int>(r.i64(i, 0));
-        o.file = static_cast<int>(r.i64(i, 1));
-        o.kind = stored_output_kind(r.text(i, 2));
-        o.options_json = r.text(i, 3);
-        o.artifact = r.text(i, 4);
-        o.content_type = r.text(i, 5);
-        o.state = stored_job_state(r.text(i, 6));
-        o.progress = r.real(i, 7);
-        o.error_code = r.text(i, 8);
-        o.error_message = r.text(i, 9);
-        o.artifact_bytes = r.i64(i, 10);
-        o.started_ms = r.i64(i, 11);
-        o.finished_ms = r.i64(i, 12);
-        o.result_json = r.text(i, 13);
-        j.outputs.push_back(std::move(o));
-    }
+    const std::string inputs =
+        std::string("SELECT ") + kInputColumns + " FROM job_inputs WHERE job_id = $1 ORDER BY idx";
+    const PgResult in = conn_->exec(inputs.c_str(), {j.id});
+    for (int i = 0; i < in.rows(); ++i) j.inputs.push_back(input_of_row(in.row(i)));
+    const std::string outputs =
+        std::string("SELECT ") + kOutputColumns + " FROM job_outputs WHERE job_id = $1 ORDER BY idx";
+    const PgResult r = conn_->exec(outputs.c_str(), {j.id});
+    for (int i = 0; i < r.rows(); ++i) j.outputs.push_back(output_of_row(r.row(i)));
 }
 
 std::optional<JobRecord> PgJobStore::read(const std::string& id) {
-    const PgResult r = conn_->exec((std::string(kJobColumns) + "WHERE id = $1").c_str(), {id});
+    const PgResult r = conn_->exec(jobs_query("WHERE id = $1").c_str(), {id});
     if (r.rows() == 0) return std::nullopt;
-    JobRecord j = read_job(r, 0);
+    JobRecord j = job_of_row(r.row(0));
     load_children(j);
     return j;
 }
@@ -217,9 +115,9 @@ bool PgJobStore::exists(const std::string& id) {
 JobPage PgJobStore::list(const std::optional<JobState>& state, bool newest_first, int limit,
                          std::optional<int64_t> after_seq) {
     std::lock_guard<std::mutex> lock(m_);
-    const std::string sql = std::string(kJobColumns) +
-                            (newest_first ? "WHERE ($1 = '' OR state = $1) AND seq < $2 ORDER BY seq DESC LIMIT $3"
-                                          : "WHERE ($1 = '' OR state = $1) AND seq > $2 ORDER BY seq ASC LIMIT $3");
+    const std::string sql =
+        jobs_query(newest_first ? "WHERE ($1 = '' OR state = $1) AND seq < $2 ORDER BY seq DESC LIMIT $3"
+                                : "WHERE ($1 = '' OR state = $1) AND seq > $2 ORDER BY seq ASC LIMIT $3");
     PgConn::Transaction t(*conn_);
     conn_->exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
     // One more than asked tells whether a next page exists.
@@ -227,7 +125,7 @@ JobPage PgJobStore::list(const std::optional<JobState>& state, bool newest_first
                                                  std::to_string(after_seq.value_or(newest_first ? INT64_MAX : 0)),
                                                  std::to_string(static_cast<int64_t>(limit) + 1)});
     JobPage page;
-    for (int i = 0; i < r.rows(); ++i) page.jobs.push_back(read_job(r, i));
+    for (int i = 0; i < r.rows(); ++i) page.jobs.push_back(job_of_row(r.row(i)));
     if (page.jobs.size() > static_cast<size_t>(limit)) {
         page.jobs.resize(static_cast<size_t>(limit));
         page.next_after = page.jobs.back().seq;

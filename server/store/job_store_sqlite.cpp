@@ -6,8 +6,6 @@
 
 namespace nurbsrt::server {
 
-using sqlite_store::kSchema;
-using sqlite_store::kSchemaV2;
 using sqlite_store::kSchemaV3;
 using sqlite_store::kSchemaVersion;
 
@@ -39,8 +37,8 @@ SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_uni
                                            ", newer than this nurbsrt's " + std::to_string(kSchemaVersion));
         if (version < kSchemaVersion) {
             Impl::Transaction t(*impl_);
-            if (version < 1) impl_->exec(kSchema);
-            if (version < 2) impl_->exec(kSchemaV2);
+            if (version < 1) impl_->exec(job_schema_v1(SqlDialect::sqlite).c_str());
+            if (version < 2) impl_->exec(job_schema_v2(SqlDialect::sqlite).c_str());
             if (version < 3) impl_->exec(kSchemaV3);
             impl_->exec("DELETE FROM schema_version");
             Impl::Stmt(*impl_, "INSERT INTO schema_version(version) VALUES (?)").bind(1, kSchemaVersion).run();
@@ -107,17 +105,16 @@ JobPage SqliteJobStore::list(const std::optional<JobState>& state, bool newest_f
                              std::optional<int64_t> after_seq) {
     std::lock_guard<std::mutex> lock(m_);
     // One more than asked tells whether a next page exists.
-    const char* sql = newest_first ? "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
-                                     " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq < ?2 ORDER BY seq DESC LIMIT ?3"
-                                   : "SELECT " NURBSRT_SQLITE_JOB_COLUMNS
-                                     " FROM jobs WHERE (?1 = '' OR state = ?1) AND seq > ?2 ORDER BY seq ASC LIMIT ?3";
+    const std::string sql = sqlite_store::select_jobs() +
+                            (newest_first ? "WHERE (?1 = '' OR state = ?1) AND seq < ?2 ORDER BY seq DESC LIMIT ?3"
+                                          : "WHERE (?1 = '' OR state = ?1) AND seq > ?2 ORDER BY seq ASC LIMIT ?3");
     JobPage page;
     {
-        Impl::Stmt s(*impl_, sql);
+        Impl::Stmt s(*impl_, sql.c_str());
         s.bind(1, std::string(state ? job_state_name(*state) : ""));
         s.bind(2, after_seq.value_or(newest_first ? INT64_MAX : 0));
         s.bind(3, static_cast<int64_t>(limit) + 1);
-        while (s.step()) page.jobs.push_back(impl_->read_job(s));
+        while (s.step()) page.jobs.push_back(job_of_row(s));
     }
     if (page.jobs.size() > static_cast<size_t>(limit)) {
         page.jobs.resize(static_cast<size_t>(limit));

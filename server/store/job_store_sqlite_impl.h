@@ -9,66 +9,15 @@
 #include <unordered_map>
 
 #include "core/error.h"
+#include "server/store/job_schema.h"
 #include "server/store/job_store_sqlite.h"
 
 namespace nurbsrt::server {
 namespace sqlite_store {
 
-// 1: jobs, inputs, outputs. 2: the webhook columns of jobs.
+// 1: jobs, inputs, outputs; 2: the webhook columns of jobs (both job_schema.h);
+// 3: the runs started of each output (below).
 inline constexpr int kSchemaVersion = 3;
-
-inline constexpr const char* kSchema = R"sql(
-CREATE TABLE IF NOT EXISTS jobs (
-  seq INTEGER PRIMARY KEY AUTOINCREMENT,
-  id TEXT NOT NULL UNIQUE,
-  state TEXT NOT NULL,
-  created_ms INTEGER NOT NULL,
-  started_ms INTEGER NOT NULL DEFAULT 0,
-  finished_ms INTEGER NOT NULL DEFAULT 0,
-  attempts INTEGER NOT NULL DEFAULT 0,
-  error_code TEXT NOT NULL DEFAULT '',
-  error_message TEXT NOT NULL DEFAULT ''
-);
-CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);
-CREATE TABLE IF NOT EXISTS job_inputs (
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  idx INTEGER NOT NULL,
-  filename TEXT NOT NULL,
-  format TEXT NOT NULL,
-  bytes INTEGER NOT NULL,
-  PRIMARY KEY (job_id, idx)
-);
-CREATE TABLE IF NOT EXISTS job_outputs (
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  idx INTEGER NOT NULL,
-  file INTEGER NOT NULL,
-  kind TEXT NOT NULL,
-  options TEXT NOT NULL,
-  artifact TEXT NOT NULL,
-  content_type TEXT NOT NULL,
-  state TEXT NOT NULL,
-  progress REAL NOT NULL DEFAULT 0,
-  error_code TEXT NOT NULL DEFAULT '',
-  error_message TEXT NOT NULL DEFAULT '',
-  artifact_bytes INTEGER NOT NULL DEFAULT 0,
-  started_ms INTEGER NOT NULL DEFAULT 0,
-  finished_ms INTEGER NOT NULL DEFAULT 0,
-  result TEXT NOT NULL DEFAULT '',
-  PRIMARY KEY (job_id, idx)
-);
-)sql";
-
-// Version 2: a job's callback URL and its delivery (server/jobs/webhooks.h).
-inline constexpr const char* kSchemaV2 = R"sql(
-ALTER TABLE jobs ADD COLUMN callback_url TEXT NOT NULL DEFAULT '';
-ALTER TABLE jobs ADD COLUMN callback_state TEXT NOT NULL DEFAULT '';
-ALTER TABLE jobs ADD COLUMN callback_attempts INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE jobs ADD COLUMN callback_due_ms INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE jobs ADD COLUMN callback_status INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE jobs ADD COLUMN callback_error TEXT NOT NULL DEFAULT '';
-ALTER TABLE jobs ADD COLUMN callback_done_ms INTEGER NOT NULL DEFAULT 0;
-CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
-)sql";
 
 // Version 3: runs started of each output, so that a crash counts against the
 // output it cut short only (SqliteJobStore::recover).
@@ -76,11 +25,11 @@ inline constexpr const char* kSchemaV3 = R"sql(
 ALTER TABLE job_outputs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0;
 )sql";
 
-// The columns read_job() reads, in its order.
-#define NURBSRT_SQLITE_JOB_COLUMNS                                                                        \
-    "seq, id, state, created_ms, started_ms, finished_ms, attempts, error_code, error_message, "          \
-    "callback_url, callback_state, callback_attempts, callback_due_ms, callback_status, callback_error, " \
-    "callback_done_ms"
+// "SELECT <the columns job_of_row reads> FROM jobs " (job_schema.h).
+inline const std::string& select_jobs() {
+    static const std::string sql = std::string("SELECT ") + kJobColumns + " FROM jobs ";
+    return sql;
+}
 
 // The SET clause that ends a job (succeeded or failed): its callback becomes
 // due at the same time (the first parameter is the time).
@@ -183,63 +132,25 @@ struct SqliteJobStore::Impl {
         bool done_ = false;
     };
 
-    JobRecord read_job(Stmt& s) {
-        JobRecord j;
-        j.seq = s.i64(0);
-        j.id = s.text(1);
-        j.state = stored_job_state(s.text(2));
-        j.created_ms = s.i64(3);
-        j.started_ms = s.i64(4);
-        j.finished_ms = s.i64(5);
-        j.attempts = static_cast<int>(s.i64(6));
-        j.error_code = s.text(7);
-        j.error_message = s.text(8);
-        j.callback_url = s.text(9);
-        j.callback.state = parse_callback_state(s.text(10));
-        j.callback.attempts = static_cast<int>(s.i64(11));
-        j.callback.due_ms = s.i64(12);
-        j.callback.last_status = static_cast<int>(s.i64(13));
-        j.callback.last_error = s.text(14);
-        j.callback.done_ms = s.i64(15);
-        return j;
-    }
-
     void load_children(JobRecord& j) {
         {
-            Stmt s(*this, "SELECT idx, filename, format, bytes FROM job_inputs WHERE job_id = ? ORDER BY idx");
+            Stmt s(*this,
+                   (std::string("SELECT ") + kInputColumns + " FROM job_inputs WHERE job_id = ? ORDER BY idx").c_str());
             s.bind(1, j.id);
-            while (s.step()) j.inputs.push_back({static_cast<int>(s.i64(0)), s.text(1), s.text(2), s.i64(3)});
+            while (s.step()) j.inputs.push_back(input_of_row(s));
         }
         Stmt s(*this,
-               "SELECT idx, file, kind, options, artifact, content_type, state, progress, error_code, error_message, "
-               "artifact_bytes, started_ms, finished_ms, result FROM job_outputs WHERE job_id = ? ORDER BY idx");
+               (std::string("SELECT ") + kOutputColumns + " FROM job_outputs WHERE job_id = ? ORDER BY idx").c_str());
         s.bind(1, j.id);
-        while (s.step()) {
-            JobOutput o;
-            o.index = static_cast<int>(s.i64(0));
-            o.file = static_cast<int>(s.i64(1));
-            o.kind = stored_output_kind(s.text(2));
-            o.options_json = s.text(3);
-            o.artifact = s.text(4);
-            o.content_type = s.text(5);
-            o.state = stored_job_state(s.text(6));
-            o.progress = s.real(7);
-            o.error_code = s.text(8);
-            o.error_message = s.text(9);
-            o.artifact_bytes = s.i64(10);
-            o.started_ms = s.i64(11);
-            o.finished_ms = s.i64(12);
-            o.result_json = s.text(13);
-            j.outputs.push_back(std::move(o));
-        }
+        while (s.step()) j.outputs.push_back(output_of_row(s));
     }
 
     std::optional<JobRecord> get(const std::string& id) {
         std::optional<JobRecord> j;
         {
-            Stmt s(*this, "SELECT " NURBSRT_SQLITE_JOB_COLUMNS " FROM jobs WHERE id = ?");
+            Stmt s(*this, (sqlite_store::select_jobs() + "WHERE id = ?").c_str());
             s.bind(1, id);
-            if (s.step()) j = read_job(s);
+            if (s.step()) j = job_of_row(s);
         }
         if (j) load_children(*j);
         return j;

@@ -30,6 +30,16 @@ public:
     int64_t i64(int row, int col) const;
     double real(int row, int col) const;
 
+    // One row, read by column alone (the row readers of job_schema.h).
+    struct Row {
+        const PgResult& result;
+        int row;
+        std::string text(int col) const { return result.text(row, col); }
+        int64_t i64(int col) const { return result.i64(row, col); }
+        double real(int col) const { return result.real(row, col); }
+    };
+    Row row(int i) const { return {*this, i}; }
+
 private:
     pg_result* r_;
 };
