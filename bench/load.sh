@@ -44,25 +44,11 @@ if [ -z "${MODELS:-}" ]; then
   fi
 fi
 
-TMP=$(mktemp -d)
-SERVER_PID=""
-cleanup() {
-  if [ -n "$SERVER_PID" ] && kill -0 "$SERVER_PID" 2>/dev/null; then
-    kill -TERM "$SERVER_PID" 2>/dev/null || true
-    for _ in $(seq 1 50); do kill -0 "$SERVER_PID" 2>/dev/null || break; sleep 0.1; done
-    kill -KILL "$SERVER_PID" 2>/dev/null || true
-  fi
-  rm -rf "$TMP"
-}
-trap cleanup EXIT
+source tests/support/server.sh
 
-"$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
+start_server load.sh "$BIN" \
   --workers "$WORKERS" --max-queue "$MAX_QUEUE" --queue-timeout 60 --render-threads "$RENDER_THREADS" \
-  --import-timeout 300 --render-timeout 300 2> "$TMP/server.log" &
-SERVER_PID=$!
-for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done
-[ -s "$TMP/port" ] || { echo "load.sh: the server did not start:"; cat "$TMP/server.log"; exit 1; }
-URL="http://127.0.0.1:$(cat "$TMP/port")"
+  --import-timeout 300 --render-timeout 300
 
 # Scene cache lookups so far, "hits misses" (from /metrics): proves which scenario hit.
 cache_counts() {

@@ -21,19 +21,10 @@ using namespace nurbsrt;
 
 namespace {
 
-uint64_t fnv1a64(const char* p, size_t n) {
-    uint64_t h = 14695981039346656037ull;
-    for (size_t i = 0; i < n; ++i) {
-        h ^= static_cast<unsigned char>(p[i]);
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
 std::string with_header(const std::string& payload) {
     std::string file = "NRBSCENE";
     const uint32_t version = kSceneFormatVersion;
-    const uint64_t size = payload.size(), sum = fnv1a64(payload.data(), payload.size());
+    const uint64_t size = payload.size(), sum = scene_checksum(payload.data(), payload.size());
     file.append(reinterpret_cast<const char*>(&version), 4);
     file.append(reinterpret_cast<const char*>(&size), 8);
     file += payload;

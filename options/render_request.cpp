@@ -126,14 +126,12 @@ CameraSpec base_spec(const RenderRequest& r) {
 }
 
 ViewRequest view_request(const RenderRequest& r) {
-    ViewRequest v;
-    v.view = r.view;
-    v.eye = r.eye;
-    v.target = r.target;
-    v.up = r.up;
-    v.ortho_height = r.ortho_height;
-    v.fit_margin = r.fit_margin;
-    return v;
+    return {.view = r.view,
+            .eye = r.eye,
+            .target = r.target,
+            .up = r.up,
+            .ortho_height = r.ortho_height,
+            .fit_margin = r.fit_margin};
 }
 
 }  // namespace

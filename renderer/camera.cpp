@@ -85,16 +85,9 @@ Vec4 Camera::clip(Vec3 p, double n, double fr) const {
 }
 
 NurbsSurface project_surface(const Camera& camera, const NurbsSurface& s) {
-    NurbsSurface out;
-    out.degree_u = s.degree_u;
-    out.degree_v = s.degree_v;
-    out.num_u = s.num_u;
-    out.num_v = s.num_v;
-    out.knots_u = s.knots_u;
-    out.knots_v = s.knots_v;
-    out.rational = true;  // D varies over the surface even for a polynomial patch
-    out.cp.resize(s.cp.size());
-    for (size_t k = 0; k < s.cp.size(); ++k) out.cp[k] = camera.project_h(s.cp[k]);
+    NurbsSurface out = s;  // the same degrees and knots, projected poles
+    out.rational = true;   // D varies over the surface even for a polynomial patch
+    for (Vec4& c : out.cp) c = camera.project_h(c);
     return out;
 }
 

@@ -63,14 +63,12 @@ ProblemCode code_for_status(int status) {
 }
 
 ConnectionLimits connection_limits(const ServerConfig& config) {
-    ConnectionLimits l;
-    l.header_timeout_s = config.header_timeout_s;
-    l.min_body_rate = config.min_body_rate_bytes;
-    l.max_body_bytes = config.max_upload_bytes;
-    l.max_connections = config.max_connections;
-    l.max_connections_per_client = config.max_connections_per_client;
-    l.retry_after_s = config.retry_after_s;
-    return l;
+    return {.header_timeout_s = config.header_timeout_s,
+            .min_body_rate = config.min_body_rate_bytes,
+            .max_body_bytes = config.max_upload_bytes,
+            .max_connections = config.max_connections,
+            .max_connections_per_client = config.max_connections_per_client,
+            .retry_after_s = config.retry_after_s};
 }
 
 std::string format_seconds(double s) {

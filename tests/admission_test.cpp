@@ -105,22 +105,24 @@ TEST(AdmissionGate, MemoryCapacityBoundsWhatIsHeldTogether) {
     EXPECT_TRUE(gate.enter(0ms, why, {}, 40 * kMiB));
 }
 
+// gate.enter for `bytes`, waiting up to 10 s, on a thread of its own.
+auto enter_waiting(AdmissionGate& gate, size_t bytes) {
+    return std::async(std::launch::async, [&gate, bytes] {
+        AdmissionGate::Refusal w;
+        return gate.enter(10s, w, {}, bytes);
+    });
+}
+
 TEST(AdmissionGate, LargeWaiterIsNotOvertakenBySmallOnes) {
     AdmissionGate gate(8, 4, 100 * kMiB);
     AdmissionGate::Refusal why;
     auto held = gate.enter(0ms, why, {}, 50 * kMiB);
     ASSERT_TRUE(held);
     // 80 MiB does not fit beside 50: it waits at the head of the queue ...
-    auto large = std::async(std::launch::async, [&] {
-        AdmissionGate::Refusal w;
-        return gate.enter(10s, w, {}, 80 * kMiB);
-    });
+    auto large = enter_waiting(gate, 80 * kMiB);
     wait_queued(gate, 1);
     // ... and a small request that would fit waits behind it, in order.
-    auto small = std::async(std::launch::async, [&] {
-        AdmissionGate::Refusal w;
-        return gate.enter(10s, w, {}, 10 * kMiB);
-    });
+    auto small = enter_waiting(gate, 10 * kMiB);
     wait_queued(gate, 2);
     EXPECT_EQ(small.wait_for(100ms), std::future_status::timeout);
     held.reset();
@@ -141,10 +143,7 @@ TEST(AdmissionGate, ShortWorkOvertakesLargeWorkWaitingForMemory) {
     AdmissionGate::Refusal why;
     auto running = gate.enter(0ms, why, {}, 70 * kMiB);
     ASSERT_TRUE(running);
-    auto large = std::async(std::launch::async, [&] {
-        AdmissionGate::Refusal w;
-        return gate.enter(10s, w, {}, 60 * kMiB);  // waits for the running work's memory
-    });
+    auto large = enter_waiting(gate, 60 * kMiB);  // waits for the running work's memory
     wait_queued(gate, 1);
     // The large waiter cannot start before the running work ends anyway: short
     // work that fits beside the running one goes ahead instead of waiting.

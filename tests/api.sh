@@ -9,30 +9,14 @@ BIN=$(realpath "${1:?usage: tests/api.sh path/to/nurbsrt}")
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY=/usr/bin/python3   # python3 on PATH may be another build without Debian's python3-* modules
 
-TMP=$(mktemp -d)
-SERVER_PID=""
-cleanup() {
-  if [ -n "$SERVER_PID" ] && kill -0 "$SERVER_PID" 2>/dev/null; then
-    kill -TERM "$SERVER_PID" 2>/dev/null || true
-    for _ in $(seq 1 50); do kill -0 "$SERVER_PID" 2>/dev/null || break; sleep 0.1; done
-    kill -KILL "$SERVER_PID" 2>/dev/null || true
-  fi
-  rm -rf "$TMP"
-}
-trap cleanup EXIT
+source "$HERE/support/server.sh"
 
 # Small limits so that the limit tests are cheap; 2 workers + 2 queued so that
 # the concurrency test sees the queue fill up.
-"$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
+start_server api.sh "$BIN" \
   --workers 2 --max-queue 2 --queue-timeout 60 --max-upload-mb 4 --max-dimension 4096 \
   --max-pixels 4000000 --import-timeout 60 --render-timeout 60 --render-threads 2 \
-  ${NURBSRT_API_JOB_STORE:+--job-store "$NURBSRT_API_JOB_STORE"} \
-  2> "$TMP/server.log" &
-SERVER_PID=$!
-for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done
-if [ ! -s "$TMP/port" ]; then
-  echo "api.sh: the server did not start; its log:"; cat "$TMP/server.log"; exit 1
-fi
+  ${NURBSRT_API_JOB_STORE:+--job-store "$NURBSRT_API_JOB_STORE"}
 
 # NURBSRT_API_TESTS: the test files to run (names in tests/api/, space-separated;
 # scripts/test.sh --fast); default: all of them.
@@ -43,7 +27,7 @@ if [ -n "${NURBSRT_API_TESTS:-}" ]; then
 fi
 
 status=0
-NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_BIN="$BIN" NURBSRT_DATA_DIR="$TMP/data" \
+NURBSRT_URL="$URL" NURBSRT_BIN="$BIN" NURBSRT_DATA_DIR="$TMP/data" \
   "$PY" -m pytest -q -rs -p no:cacheprovider "${targets[@]}" || status=$?
 
 if ! kill -0 "$SERVER_PID" 2>/dev/null; then

@@ -9,12 +9,6 @@ set -euo pipefail
 BIN=$(realpath "${1:?usage: tests/api_postgres.sh path/to/nurbsrt}")
 HERE=$(cd "$(dirname "$0")" && pwd)
 source "$HERE/support/pg.sh"
-if ! pg_available; then
-  echo "api_postgres.sh: SKIPPED: PostgreSQL binaries (initdb, pg_ctl, psql) not installed (Debian: postgresql)"
-  exit 0
-fi
-trap pg_stop EXIT
-pg_start
-echo "api_postgres.sh: PostgreSQL on 127.0.0.1:$PG_PORT"
+pg_start_or_skip api_postgres.sh
 NURBSRT_API_JOB_STORE="$PG_URL" NURBSRT_TEST_PG_ADMIN="$PG_ADMIN_URL" NURBSRT_LEASE_SECONDS=3 \
   bash "$HERE/api.sh" "$BIN"

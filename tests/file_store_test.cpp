@@ -14,6 +14,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "tests/support/temp_dir.h"
 #include "server/store/file_store.h"
 #include "server/common/service_error.h"
 
@@ -30,12 +31,7 @@ namespace {
 
 class FileStoreTest : public ::testing::Test {
 protected:
-    void SetUp() override {
-        char tmpl[] = "/tmp/nurbsrt-filestore-XXXXXX";
-        ASSERT_NE(mkdtemp(tmpl), nullptr);
-        dir_ = std::string(tmpl) + "/files";  // created by the first put
-    }
-    void TearDown() override { fs::remove_all(fs::path(dir_).parent_path()); }
+    nurbsrt::test::TempDir tmp_{"nurbsrt-filestore"};
 
     static StoredFile record(const std::string& bytes, int64_t created_ms, bool pinned = false) {
         StoredFile f;
@@ -49,7 +45,7 @@ protected:
         return f;
     }
 
-    std::string dir_;
+    const std::string dir_ = tmp_.path() + "/files";  // created by the first put
 };
 
 TEST(Sha256, KnownVector) {

@@ -14,16 +14,7 @@
 #include "server/store/job_store_pg.h"
 #include "server/store/pg_conn.h"
 
-using nurbsrt::server::CallbackAttempt;
-using nurbsrt::server::CallbackState;
-using nurbsrt::server::JobClaim;
-using nurbsrt::server::JobOutput;
-using nurbsrt::server::JobRecord;
-using nurbsrt::server::JobState;
-using nurbsrt::server::JobStore;
-using nurbsrt::server::output_kind_name;
-using nurbsrt::server::OutputKind;
-using nurbsrt::server::PgJobStore;
+using namespace nurbsrt::server;
 
 namespace {
 

@@ -12,35 +12,19 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "tests/support/temp_dir.h"
 #include "server/store/job_store_sqlite.h"
 
 namespace fs = std::filesystem;
 using nurbsrt::Error;
 using nurbsrt::ErrorCode;
-using nurbsrt::server::CallbackAttempt;
-using nurbsrt::server::CallbackState;
-using nurbsrt::server::JobOutput;
-using nurbsrt::server::JobRecord;
-using nurbsrt::server::JobState;
-using nurbsrt::server::JobStore;
-using nurbsrt::server::output_kind_name;
-using nurbsrt::server::OutputKind;
-using nurbsrt::server::SqliteJobStore;
+using namespace nurbsrt::server;
 
 namespace {
 
 class JobStoreTest : public ::testing::Test {
 protected:
-    void SetUp() override {
-        char tmpl[] = "/tmp/nurbsrt-jobstore-XXXXXX";
-        ASSERT_NE(mkdtemp(tmpl), nullptr);
-        dir_ = tmpl;
-        db_ = dir_ + "/jobs.db";
-    }
-    void TearDown() override {
-        chmod(dir_.c_str(), 0700);
-        fs::remove_all(dir_);
-    }
+    nurbsrt::test::TempDir tmp_{"nurbsrt-jobstore"};
 
     // A job with one input and `outputs` outputs (id from n, created at n seconds).
     static JobRecord make_job(int n, int outputs = 2) {
@@ -64,7 +48,7 @@ protected:
         return j;
     }
 
-    std::string dir_, db_;
+    const std::string dir_ = tmp_.path(), db_ = dir_ + "/jobs.db";
 };
 
 TEST_F(JobStoreTest, CreateGetAndListWithPaging) {

@@ -179,6 +179,17 @@ BorderCounts count_changes(const RenderResult& off, const RenderResult& on, int 
     return n;
 }
 
+// The frame without and with 4 anti-aliasing rays: the border and silhouette
+// pixels it changed, and the anti-aliased result.
+std::pair<BorderCounts, RenderResult> antialias_changes(const Scene& scene, const Camera& cam) {
+    RenderOptions off, on;
+    on.antialias = 4;
+    const RenderResult a = render(scene, cam, off);
+    RenderResult b = render(scene, cam, on);
+    const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
+    return {n, std::move(b)};
+}
+
 }  // namespace
 
 namespace {
@@ -345,10 +356,7 @@ TEST(RendererAntialias, FlatFaceBordersGetNoExtraRays) {
     for (Vec4& c : right.surface.cp) c = Vec4{c.x + e1.x * c.w, c.y + e1.y * c.w, c.z + e1.z * c.w, c.w};
     const Scene scene = two_grey_faces(left, right, 8);
     const Camera cam(iso_view(scene, 160, 120));
-    RenderOptions off, on;
-    on.antialias = 4;
-    const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
-    const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
+    const auto [n, b] = antialias_changes(scene, cam);
     std::printf(
         "[ antialias ] two coplanar faces: %d border pixels (%d changed), %d silhouette pixels (%d changed), "
         "%llu refined\n",
@@ -374,10 +382,7 @@ TEST(RendererAntialias, TangentFaceBordersGetNoExtraRays) {
     spec.width = 160;
     spec.height = 120;
     const Camera cam(spec);
-    RenderOptions off, on;
-    on.antialias = 4;
-    const RenderResult a = render(scene, cam, off), b = render(scene, cam, on);
-    const BorderCounts n = count_changes(a, b, cam.width(), cam.height());
+    const auto [n, b] = antialias_changes(scene, cam);
     std::printf(
         "[ antialias ] two tangent half-cylinders: %d seam pixels (%d with a colour change over 1/255 in "
         "their 3x3, %d changed), %d silhouette pixels (%d changed)\n",

@@ -38,14 +38,22 @@ void expect_near(Vec3 a, Vec3 b, double tol) {
     EXPECT_NEAR(a.z, b.z, tol);
 }
 
+// The view's forward, right and up unit vectors (the camera contract's basis).
+struct ViewBasis {
+    Vec3 f, r, u;
+};
+ViewBasis view_basis(const CameraSpec& s) {
+    const Vec3 f = normalize(s.target - s.eye);
+    const Vec3 r = normalize(cross(f, s.up));
+    return {f, r, cross(r, f)};
+}
+
 }  // namespace
 
 TEST(RendererCamera, PixelRayContractPerspective) {
     const CameraSpec s = persp_spec();
     const Camera cam(s);
-    const Vec3 f = normalize(s.target - s.eye);
-    const Vec3 r = normalize(cross(f, s.up));
-    const Vec3 u = cross(r, f);
+    const auto [f, r, u] = view_basis(s);
     const double a = 320.0 / 200.0, t = std::tan(35.0 * M_PI / 360.0);
     for (auto [i, j] : {std::pair{0, 0}, {319, 199}, {160, 100}, {17, 151}}) {
         const double sx = (2 * (i + 0.5) / 320 - 1) * a, sy = 1 - 2 * (j + 0.5) / 200;
@@ -64,9 +72,7 @@ TEST(RendererCamera, PixelRayContractPerspective) {
 TEST(RendererCamera, PixelRayContractOrthographic) {
     const CameraSpec s = ortho_spec();
     const Camera cam(s);
-    const Vec3 f = normalize(s.target - s.eye);
-    const Vec3 r = normalize(cross(f, s.up));
-    const Vec3 u = cross(r, f);
+    const auto [f, r, u] = view_basis(s);
     const double a = 320.0 / 200.0;
     for (auto [i, j] : {std::pair{0, 0}, {319, 199}, {160, 100}, {17, 151}}) {
         const double sx = (2 * (i + 0.5) / 320 - 1) * a, sy = 1 - 2 * (j + 0.5) / 200;
@@ -132,13 +138,14 @@ TEST(RendererCamera, ProjectedPointOnRayIsItsScreenPoint) {
 
 // The projected surface is the projection of the surface (linearity of project_h).
 TEST(RendererCamera, ProjectedSurfaceMatchesProjectedPoints) {
-    NurbsSurface s;
-    s.degree_u = 2;
-    s.degree_v = 1;
-    s.num_u = 3;
-    s.num_v = 2;
-    s.knots_u = {0, 0, 0, 1, 1, 1};
-    s.knots_v = {0, 0, 1, 1};
+    NurbsSurface s{.degree_u = 2,
+                   .degree_v = 1,
+                   .num_u = 3,
+                   .num_v = 2,
+                   .knots_u = {0, 0, 0, 1, 1, 1},
+                   .knots_v = {0, 0, 1, 1},
+                   .cp = {},  // the poles below
+                   .rational = true};
     const double w = std::sqrt(0.5);
     // Quarter cylinder of radius 2, height 3 (exact conic weights).
     const Vec3 pts[3] = {{2, 0, 0}, {2, 2, 0}, {0, 2, 0}};
@@ -148,7 +155,6 @@ TEST(RendererCamera, ProjectedSurfaceMatchesProjectedPoints) {
             const Vec3 p = pts[i] + Vec3{0, 0, 3.0 * j};
             s.cp.push_back({ws[i] * p.x, ws[i] * p.y, ws[i] * p.z, ws[i]});
         }
-    s.rational = true;
     for (const CameraSpec& spec : {persp_spec(), ortho_spec()}) {
         const Camera cam(spec);
         const NurbsSurface ps = project_surface(cam, s);

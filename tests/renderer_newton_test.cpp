@@ -149,6 +149,18 @@ TEST(RendererNewton, HitsMatchAnalyticIntersection) {
     }
 }
 
+// Calls f(i, j, ray, t, start) for every pixel of `cam` whose ray hits the
+// analytic patch at t, with the grid start nearest that exact hit.
+template <class F>
+void for_each_hit(const AnalyticPatch& p, const Camera& cam, const GridStart& grid, F&& f) {
+    for (int j = 0; j < cam.height(); ++j)
+        for (int i = 0; i < cam.width(); ++i) {
+            const Ray ray = cam.pixel_ray(i, j);
+            const std::optional<double> t = p.hit(ray);
+            if (t) f(i, j, ray, *t, grid.nearest(ray.origin + *t * ray.dir));
+        }
+}
+
 TEST(RendererNewton, ProposedAndMartinAgree) {
     int compared = 0;
     double max_duv = 0, max_dt = 0;
@@ -158,25 +170,20 @@ TEST(RendererNewton, ProposedAndMartinAgree) {
         const GridStart grid(p.surface);
         NewtonParams params;
         params.eps = default_newton_eps(p.box, 1e-9);
-        for (int j = 0; j < cam.height(); ++j)
-            for (int i = 0; i < cam.width(); ++i) {
-                const Ray ray = cam.pixel_ray(i, j);
-                const std::optional<double> ta = p.hit(ray);
-                if (!ta) continue;
-                const Vec2 st = grid.nearest(ray.origin + *ta * ray.dir);
-                const NewtonResult a =
-                    newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
-                const NewtonResult b = newton_martin(p.surface, ray, st.x, st.y, full_box(p.surface), params);
-                if (a.status != NewtonStatus::converged || b.status != NewtonStatus::converged) continue;
-                if (std::abs(a.t - *ta) > 1e-6 || std::abs(b.t - *ta) > 1e-6) continue;  // another root
-                ++compared;
-                const double cosi = std::abs(dot(surface_normal(p.surface, a.u, a.v, false), ray.dir));
-                max_duv = std::max({max_duv, std::abs(a.u - b.u), std::abs(a.v - b.v)});
-                max_dt = std::max(max_dt, std::abs(a.t - b.t) / p.box.diagonal() * cosi);
-                EXPECT_NEAR(a.u, b.u, 1e-7) << p.name;
-                EXPECT_NEAR(a.v, b.v, 1e-7) << p.name;
-                EXPECT_LT(std::abs(a.t - b.t) / p.box.diagonal() * cosi, 2e-9) << p.name;
-            }
+        for_each_hit(p, cam, grid, [&](int i, int j, const Ray& ray, double ta, Vec2 st) {
+            const NewtonResult a =
+                newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
+            const NewtonResult b = newton_martin(p.surface, ray, st.x, st.y, full_box(p.surface), params);
+            if (a.status != NewtonStatus::converged || b.status != NewtonStatus::converged) return;
+            if (std::abs(a.t - ta) > 1e-6 || std::abs(b.t - ta) > 1e-6) return;  // another root
+            ++compared;
+            const double cosi = std::abs(dot(surface_normal(p.surface, a.u, a.v, false), ray.dir));
+            max_duv = std::max({max_duv, std::abs(a.u - b.u), std::abs(a.v - b.v)});
+            max_dt = std::max(max_dt, std::abs(a.t - b.t) / p.box.diagonal() * cosi);
+            EXPECT_NEAR(a.u, b.u, 1e-7) << p.name;
+            EXPECT_NEAR(a.v, b.v, 1e-7) << p.name;
+            EXPECT_LT(std::abs(a.t - b.t) / p.box.diagonal() * cosi, 2e-9) << p.name;
+        });
     }
     EXPECT_GT(compared, 1000);
     std::printf("[ proposed vs martin ] %d pixels, max |duv| %.2g, max |dt| |cos|/diag %.2g\n", compared, max_duv,
@@ -279,18 +286,13 @@ TEST(RendererNewton, ToleranceCost) {
             const GridStart grid(p.surface);
             NewtonParams params;
             params.eps = rel * p.box.diagonal();
-            for (int j = 0; j < cam.height(); ++j)
-                for (int i = 0; i < cam.width(); ++i) {
-                    const Ray ray = cam.pixel_ray(i, j);
-                    const std::optional<double> ta = p.hit(ray);
-                    if (!ta) continue;
-                    const Vec2 st = grid.nearest(ray.origin + *ta * ray.dir);
-                    const NewtonResult r =
-                        newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
-                    if (r.status != NewtonStatus::converged) continue;
-                    it += r.iterations;
-                    ++n;
-                }
+            for_each_hit(p, cam, grid, [&](int i, int j, const Ray&, double, Vec2 st) {
+                const NewtonResult r =
+                    newton_proposed(proj, cam, cam.pixel_screen(i, j), st.x, st.y, full_box(p.surface), params);
+                if (r.status != NewtonStatus::converged) return;
+                it += r.iterations;
+                ++n;
+            });
         }
         std::printf("[ eps %.0e diag ] mean proposed iterations %.3f over %d hits\n", rel, double(it) / n, n);
     }
@@ -302,14 +304,14 @@ TEST(RendererNewton, ToleranceCost) {
 // Newton continues from u = 0 and converges; clamped at the box (the old behaviour)
 // it stops on the seam, short of the ray.
 TEST(RendererNewton, StepAcrossSeamWraps) {
-    NurbsSurface s;
-    s.degree_u = 2;
-    s.degree_v = 1;
-    s.num_u = 9;
-    s.num_v = 2;
-    s.knots_u = {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1};
-    s.knots_v = {0, 0, 1, 1};
-    s.rational = true;
+    NurbsSurface s{.degree_u = 2,
+                   .degree_v = 1,
+                   .num_u = 9,
+                   .num_v = 2,
+                   .knots_u = {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1},
+                   .knots_v = {0, 0, 1, 1},
+                   .cp = {},
+                   .rational = true};
     const double w = std::sqrt(0.5);
     const Vec3 circle[9] = {{1, 0, 0},   {1, 1, 0},  {0, 1, 0},  {-1, 1, 0}, {-1, 0, 0},
                             {-1, -1, 0}, {0, -1, 0}, {1, -1, 0}, {1, 0, 0}};

@@ -111,6 +111,16 @@ SphereCheck check_sphere(const RenderResult& r, const Camera& cam, const Analyti
     return c;
 }
 
+// The scene rendered with method m, and its check against the exact sphere.
+std::pair<RenderResult, SphereCheck> render_sphere(const Scene& scene, const Camera& cam, const AnalyticPatch& sphere,
+                                                   NewtonMethod m) {
+    RenderOptions opt;
+    opt.method = m;
+    RenderResult r = render(scene, cam, opt);
+    const SphereCheck c = check_sphere(r, cam, sphere);
+    return {std::move(r), c};
+}
+
 }  // namespace
 
 // Two faces on one sphere octant, split at v = 0.5, each with a deliberately
@@ -156,12 +166,11 @@ TEST(RendererRender, RescueClosesCracksBetweenAdjacentFaces) {
     spec.height = 240;
     const Camera cam(spec);
     for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
-        RenderOptions opt;
-        opt.method = m;
-        const RenderResult r = render(scene, cam, opt);
-        const SphereCheck c = check_sphere(r, cam, sphere);
-        opt.rescue = false;
-        const SphereCheck c0 = check_sphere(render(scene, cam, opt), cam, sphere);
+        const auto [r, c] = render_sphere(scene, cam, sphere, m);
+        RenderOptions no_rescue;
+        no_rescue.method = m;
+        no_rescue.rescue = false;
+        const SphereCheck c0 = check_sphere(render(scene, cam, no_rescue), cam, sphere);
         std::printf(
             "[ split sphere %s ] expected %d: missed %d extra %d holes %d (without rescue: missed %d holes %d); "
             "rescue neighbour %llu silhouette %llu general %llu trim_tolerance %llu\n",
@@ -250,10 +259,7 @@ TEST(RendererRender, SilhouetteMatchesAnalyticSphere) {
         spec.ortho_height = 3.0;
         const Camera cam(spec);
         for (NewtonMethod m : {NewtonMethod::proposed, NewtonMethod::martin}) {
-            RenderOptions opt;
-            opt.method = m;
-            const RenderResult r = render(scene, cam, opt);
-            const SphereCheck c = check_sphere(r, cam, sphere);
+            const auto [r, c] = render_sphere(scene, cam, sphere, m);
             std::printf(
                 "[ coarse sphere %s %s ] expected %d: missed %d extra %d; silhouette rescue %llu general %llu\n",
                 proj == Projection::perspective ? "persp" : "ortho", newton_method_name(m), c.expected_hits, c.missed,

@@ -23,6 +23,16 @@ namespace {
 constexpr double kRadius = 0.7, kHalfPlate = 3.0;
 const Vec3 kCentre{0.2, -0.1, 2.0};
 
+// Appends `p` (its box made) as a face of colour `c`, meshed n x n for the map.
+void add_coloured(Scene& s, AnalyticPatch& p, int n, Color c) {
+    finish_box(p);
+    Face f = make_face(p, static_cast<uint32_t>(s.faces.size() + 1), n);
+    f.color = c;
+    f.has_color = true;
+    s.faces.push_back(f);
+    s.bbox.extend(p.box);
+}
+
 // The eight octants of a sphere: the +x+y+z octant patch turned about z by
 // quarter turns, and mirrored in z for the lower half.
 void add_sphere(Scene& s) {
@@ -37,12 +47,7 @@ void add_sphere(Scene& s) {
                 c = {q.x + kCentre.x * c.w, q.y + kCentre.y * c.w, q.z + kCentre.z * c.w, c.w};
             }
             p.box = BBox{};
-            finish_box(p);
-            Face f = make_face(p, static_cast<uint32_t>(s.faces.size() + 1), 8);
-            f.color = {0.8f, 0.3f, 0.2f};
-            f.has_color = true;
-            s.faces.push_back(f);
-            s.bbox.extend(p.box);
+            add_coloured(s, p, 8, {0.8f, 0.3f, 0.2f});
         }
 }
 
@@ -55,12 +60,7 @@ void add_plate(Scene& s) {
     ns.knots_u = ns.knots_v = {0, 0, 1, 1};
     for (int i = 0; i < 2; ++i)
         for (int j = 0; j < 2; ++j) ns.cp.push_back(hpt({(2 * i - 1) * kHalfPlate, (2 * j - 1) * kHalfPlate, 0}, 1));
-    finish_box(p);
-    Face f = make_face(p, static_cast<uint32_t>(s.faces.size() + 1), 4);
-    f.color = {0.7f, 0.7f, 0.7f};
-    f.has_color = true;
-    s.faces.push_back(f);
-    s.bbox.extend(p.box);
+    add_coloured(s, p, 4, {0.7f, 0.7f, 0.7f});
 }
 
 // Whether the ray from q towards the light meets the sphere (in front of q).

@@ -10,13 +10,7 @@ set -euo pipefail
 BIN=$(realpath "${1:?usage: tests/scale_out.sh path/to/nurbsrt}")
 HERE=$(cd "$(dirname "$0")" && pwd)
 source "$HERE/support/pg.sh"
-if ! pg_available; then
-  echo "scale_out.sh: SKIPPED: PostgreSQL binaries (initdb, pg_ctl, psql) not installed (Debian: postgresql)"
-  exit 0
-fi
-trap pg_stop EXIT
-pg_start
-echo "scale_out.sh: PostgreSQL on 127.0.0.1:$PG_PORT"
+pg_start_or_skip scale_out.sh
 status=0
 # The store's own unit tests (leases, fencing, takeover), in a database of their own.
 UNIT_TESTS="$(dirname "$BIN")/nurbsrt_tests"

@@ -28,33 +28,18 @@ done
 # A part of about 300 faces (310) for the interaction latency, when ../shared/models is there.
 BIG="$HERE/../../shared/models/step/box_sides.STEP"
 
-TMP=$(mktemp -d)
-SERVER_PID=""
-cleanup() {
-  if [ -n "$SERVER_PID" ] && kill -0 "$SERVER_PID" 2>/dev/null; then
-    kill -TERM "$SERVER_PID" 2>/dev/null || true
-    for _ in $(seq 1 50); do kill -0 "$SERVER_PID" 2>/dev/null || break; sleep 0.1; done
-    kill -KILL "$SERVER_PID" 2>/dev/null || true
-  fi
-  rm -rf "$TMP"
-}
-trap cleanup EXIT
+source "$HERE/support/server.sh"
 
 # With an API key required, as a service open to a network would run: the page
 # must send it with every API request (the test types it into the page).
 KEY="web-test-$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')"
-NURBSRT_API_KEYS="$KEY" "$BIN" serve --host 127.0.0.1 --port 0 --port-file "$TMP/port" --data-dir "$TMP/data" \
-  --max-upload-mb 16 --import-timeout 120 --render-timeout 120 2> "$TMP/server.log" &
-SERVER_PID=$!
-for _ in $(seq 1 100); do [ -s "$TMP/port" ] && break; sleep 0.1; done
-if [ ! -s "$TMP/port" ]; then
-  echo "webpage.sh: the server did not start; its log:"; cat "$TMP/server.log"; exit 1
-fi
+NURBSRT_API_KEYS="$KEY" start_server webpage.sh "$BIN" \
+  --max-upload-mb 16 --import-timeout 120 --render-timeout 120
 
 ARTIFACTS="$(dirname "$BIN")/webpage-artifacts"
 rm -rf "$ARTIFACTS"
 status=0
-NURBSRT_URL="http://127.0.0.1:$(cat "$TMP/port")" NURBSRT_WEB_ARTIFACTS="$ARTIFACTS" NURBSRT_WEB_KEY="$KEY" \
+NURBSRT_URL="$URL" NURBSRT_WEB_ARTIFACTS="$ARTIFACTS" NURBSRT_WEB_KEY="$KEY" \
   timeout 600 "$PY" "$HERE/web/webpage_e2e.py" "$STEP" "$OTHER" "$BIG" || status=$?
 if [ $status -ne 0 ]; then
   echo "webpage.sh: FAILED; artifacts in $ARTIFACTS; server log (last 30 lines):"; tail -n 30 "$TMP/server.log"

@@ -32,20 +32,20 @@ namespace nurbsrt {
 static_assert(std::endian::native == std::endian::little, "scene format assumes a little-endian host");
 static_assert(sizeof(double) == 8 && sizeof(float) == 4);
 
+uint64_t scene_checksum(const char* payload, size_t n) {
+    uint64_t h = 14695981039346656037ull;  // FNV-1a 64 offset basis and prime
+    for (size_t i = 0; i < n; ++i) {
+        h ^= static_cast<unsigned char>(payload[i]);
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
 namespace {
 
 constexpr char kMagic[8] = {'N', 'R', 'B', 'S', 'C', 'E', 'N', 'E'};
 constexpr size_t kHeaderSize = 8 + 4 + 8;
 constexpr size_t kTrailerSize = 8;
-
-uint64_t fnv1a64(const char* data, size_t n) {
-    uint64_t h = 14695981039346656037ull;
-    for (size_t i = 0; i < n; ++i) {
-        h ^= static_cast<unsigned char>(data[i]);
-        h *= 1099511628211ull;
-    }
-    return h;
-}
 
 // ---- writer ------------------------------------------------------------------
 
@@ -175,34 +175,11 @@ public:
         p_ += n;
         return s;
     }
-    Vec2 vec2(const char* w) {
-        Vec2 v;
-        v.x = f64(w);
-        v.y = f64(w);
-        return v;
-    }
-    Vec3 vec3(const char* w) {
-        Vec3 v;
-        v.x = f64(w);
-        v.y = f64(w);
-        v.z = f64(w);
-        return v;
-    }
-    Vec4 vec4(const char* w) {
-        Vec4 v;
-        v.x = f64(w);
-        v.y = f64(w);
-        v.z = f64(w);
-        v.w = f64(w);
-        return v;
-    }
-    Color color(const char* w) {
-        Color c;
-        c.r = f32(w);
-        c.g = f32(w);
-        c.b = f32(w);
-        return c;
-    }
+    // Braced lists evaluate left to right: the fields in file order.
+    Vec2 vec2(const char* w) { return Vec2{f64(w), f64(w)}; }
+    Vec3 vec3(const char* w) { return Vec3{f64(w), f64(w), f64(w)}; }
+    Vec4 vec4(const char* w) { return Vec4{f64(w), f64(w), f64(w), f64(w)}; }
+    Color color(const char* w) { return Color{f32(w), f32(w), f32(w)}; }
 
 private:
     const char* p_;
@@ -335,7 +312,7 @@ std::string serialize_scene(const Scene& scene) {
 
     const uint64_t payload_size = w.out.size() - payload_begin;
     std::memcpy(w.out.data() + 12, &payload_size, 8);
-    w.u64(fnv1a64(w.out.data() + payload_begin, payload_size));
+    w.u64(scene_checksum(w.out.data() + payload_begin, payload_size));
     return std::move(w.out);
 }
 
@@ -362,7 +339,7 @@ Scene deserialize_scene(const std::string& bytes) {
     const char* payload = bytes.data() + kHeaderSize;
     uint64_t stored;
     std::memcpy(&stored, payload + payload_size, 8);
-    if (stored != fnv1a64(payload, payload_size)) corrupt("checksum mismatch");
+    if (stored != scene_checksum(payload, payload_size)) corrupt("checksum mismatch");
 
     Reader r(payload, payload_size);
     Scene scene;

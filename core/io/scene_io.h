@@ -8,6 +8,8 @@
 // reads out of bounds and never allocates more than the input could describe.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,8 @@ namespace nurbsrt {
 constexpr unsigned kSceneFormatVersion = 1;
 
 std::string serialize_scene(const Scene& scene);
+// The format's checksum of the payload (FNV-1a, 64 bits), stored after it.
+uint64_t scene_checksum(const char* payload, size_t n);
 Scene deserialize_scene(const std::string& bytes);
 
 // File helpers (throw Error(ErrorCode::io) when the file cannot be written/read).

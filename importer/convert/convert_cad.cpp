@@ -194,15 +194,19 @@ void write_document(const Handle(TDocStd_Document) & doc, const std::string& out
 
 }  // namespace
 
-void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r) {
     OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
-    DocumentCloser closer{model.document};
     r.in_format = model.format;
     r.faces = model.faces.Extent();
     r.read_ms = model.read_ms;
     if (model.document.IsNull())
-        throw Error(ErrorCode::occt_failure,
-                    std::string("XDE reader gave no document for the ") + format_name(r.out_format) + " export");
+        throw Error(ErrorCode::occt_failure, "XDE reader gave no document for the " + target + " export");
+    return model;
+}
+
+void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+    OcctModel model = read_for_export(in_path, format_name(r.out_format), r);
+    DocumentCloser closer{model.document};
 
     const auto t0 = std::chrono::steady_clock::now();
     {

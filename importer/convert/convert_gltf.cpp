@@ -26,13 +26,8 @@
 namespace nurbsrt::occt {
 
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
-    OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
+    OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
-    r.in_format = model.format;
-    r.faces = model.faces.Extent();
-    r.read_ms = model.read_ms;
-    if (model.document.IsNull())
-        throw Error(ErrorCode::occt_failure, "XDE reader gave no document for the glTF export");
 
     // Mesh the shapes the document holds (the writer takes the triangulations
     // from them); parts placed twice share their faces, so are meshed once.

@@ -5,10 +5,17 @@
 #include <string>
 
 #include "importer/importer.h"
+#include "importer/occt_shape.h"
 
 class TopoDS_Shape;
 
 namespace nurbsrt::occt {
+
+// Reads `in_path` with its XDE document (colours, names, assembly) for an export
+// to `target` (the output format's name), filling r.in_format, r.faces and
+// r.read_ms; throws occt_failure when the reader gives no document. The caller
+// closes the document (DocumentCloser).
+OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r);
 
 // STEP or IGES through OCCT's writers (exact geometry, topology kept).
 void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r);

@@ -42,3 +42,16 @@ pg_stop() {
   rm -rf "$PG_DIR"
   PG_DIR=""
 }
+
+# The preamble of a suite that needs PostgreSQL: where the binaries are missing,
+# says "NAME: SKIPPED" and exits 0; else starts one, stopped when the script exits.
+pg_start_or_skip() {
+  local name=$1
+  if ! pg_available; then
+    echo "$name: SKIPPED: PostgreSQL binaries (initdb, pg_ctl, psql) not installed (Debian: postgresql)"
+    exit 0
+  fi
+  trap pg_stop EXIT
+  pg_start
+  echo "$name: PostgreSQL on 127.0.0.1:$PG_PORT"
+}

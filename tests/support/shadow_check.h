@@ -25,16 +25,8 @@
 
 #include <string>
 
-#include "renderer/camera.h"
-#include "renderer/render.h"
-#include "core/scene/scene.h"
-
-namespace nurbsrt {
-class ReferenceIntersector;
-namespace occt {
-struct OcctModel;
-}
-}  // namespace nurbsrt
+// The frame's check: the same inputs (scene, OCCT model, reference, camera, image).
+#include "tests/support/full_frame_check.h"
 
 namespace nurbsrt::test {
 
