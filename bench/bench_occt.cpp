@@ -9,23 +9,10 @@
 #include <numeric>
 
 #include "bench/bench_context.h"
+#include "core/split_mix.h"
 #include "importer/reference/reference_intersector.h"
 
 namespace nurbsrt::bench {
-namespace {
-
-// splitmix64: a fixed, portable sequence (std distributions are implementation-defined).
-struct Rng {
-    uint64_t s;
-    uint64_t next() {
-        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-};
-
-}  // namespace
 
 void run_occt(BenchContext& ctx) {
     // Rays per scene, and a wall-clock cap on casting them: the samples are in
@@ -45,7 +32,7 @@ void run_occt(BenchContext& ctx) {
         // A random permutation prefix of the pixels (partial Fisher-Yates).
         std::vector<uint32_t> order(npx);
         std::iota(order.begin(), order.end(), 0u);
-        Rng rng{0x5eed0f0cc7ull ^ std::hash<std::string>{}(sc.key)};
+        SplitMix64 rng{0x5eed0f0cc7ull ^ std::hash<std::string>{}(sc.key)};
         const size_t n_want = std::min<size_t>(static_cast<size_t>(max_rays), npx);
         for (size_t k = 0; k < n_want; ++k) std::swap(order[k], order[k + rng.next() % (npx - k)]);
 

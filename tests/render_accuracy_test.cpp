@@ -63,6 +63,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "core/split_mix.h"
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
 #include "importer/reference/reference_intersector.h"
@@ -166,17 +167,7 @@ std::vector<AccCase> cases() {
 // ---------------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------------
-// splitmix64: a fixed, portable sequence (std distributions are implementation-defined).
-struct Rng {
-    uint64_t s;
-    uint64_t next() {
-        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    int below(int n) { return static_cast<int>(next() % static_cast<uint64_t>(n)); }
-};
+using Rng = SplitMix64;
 
 uint64_t hash_name(const std::string& s) {
     uint64_t h = 1469598103934665603ull;  // FNV-1a

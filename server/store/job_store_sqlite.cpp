@@ -188,29 +188,19 @@ bool SqliteJobStore::output_progress(const std::string& id, int output, double p
 bool SqliteJobStore::output_succeeded(const std::string& id, int output, int64_t artifact_bytes,
                                       const std::string& result_json, int64_t now_ms, const std::string&) {
     std::lock_guard<std::mutex> lock(m_);
-    Impl::Transaction t(*impl_);
-    Impl::Stmt s(*impl_,
-                 "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = ?, result = ?, "
-                 "finished_ms = ? WHERE job_id = ? AND idx = ? AND state = 'running'");
-    s.bind(1, artifact_bytes).bind(2, result_json).bind(3, now_ms).bind(4, id).bind(5, output).run();
-    NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
-    const bool ok = s.changes() > 0;
-    t.commit();
-    return ok;
+    return impl_->update_output(
+        "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = ?, result = ?, "
+        "finished_ms = ? WHERE job_id = ? AND idx = ? AND state = 'running'",
+        id, output, artifact_bytes, result_json, now_ms);
 }
 
 bool SqliteJobStore::output_failed(const std::string& id, int output, const std::string& code,
                                    const std::string& message, int64_t now_ms, const std::string&) {
     std::lock_guard<std::mutex> lock(m_);
-    Impl::Transaction t(*impl_);
-    Impl::Stmt s(*impl_,
-                 "UPDATE job_outputs SET state = 'failed', error_code = ?, error_message = ?, finished_ms = ? "
-                 "WHERE job_id = ? AND idx = ? AND state IN ('queued', 'running')");
-    s.bind(1, code).bind(2, message).bind(3, now_ms).bind(4, id).bind(5, output).run();
-    NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
-    const bool ok = s.changes() > 0;
-    t.commit();
-    return ok;
+    return impl_->update_output(
+        "UPDATE job_outputs SET state = 'failed', error_code = ?, error_message = ?, finished_ms = ? "
+        "WHERE job_id = ? AND idx = ? AND state IN ('queued', 'running')",
+        id, output, code, message, now_ms);
 }
 
 std::optional<JobState> SqliteJobStore::finish(const std::string& id, int64_t now_ms) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/check.h"
 #include "core/error.h"
 #include "server/store/job_schema.h"
 #include "server/store/job_store_sqlite.h"
@@ -143,6 +144,21 @@ struct SqliteJobStore::Impl {
                (std::string("SELECT ") + kOutputColumns + " FROM job_outputs WHERE job_id = ? ORDER BY idx").c_str());
         s.bind(1, j.id);
         while (s.step()) j.outputs.push_back(output_of_row(s));
+    }
+
+    // Runs `sql`, an UPDATE of one output whose last two parameters are its key
+    // (job id, index) after `values`, in a transaction; whether it changed it.
+    template <class... Values>
+    bool update_output(const char* sql, const std::string& id, int output, const Values&... values) {
+        Transaction t(*this);
+        Stmt s(*this, sql);
+        int k = 1;
+        (s.bind(k++, values), ...);
+        s.bind(k, id).bind(k + 1, output).run();
+        NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
+        const bool changed = s.changes() > 0;
+        t.commit();
+        return changed;
     }
 
     std::optional<JobRecord> get(const std::string& id) {
