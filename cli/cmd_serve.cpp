@@ -22,7 +22,7 @@ struct ServeArgs {
     double artifacts_mb = 0.0;  // 0: half the data directory's file system
     double budget_mb = 0.0;
     double render_mb = static_cast<double>(c.max_render_bytes >> 20);
-    double body_rate_kib = c.min_body_rate_bytes / 1024;
+    double body_rate_kib = c.connection.min_body_rate / 1024;
 };
 
 // Where it listens and keeps its data.
@@ -140,7 +140,7 @@ void add_import_options(CLI::App* cmd, ServeArgs& a) {
 
 // Connections: slow clients, how many, who may call.
 void add_connection_options(CLI::App* cmd, ServeArgs& a) {
-    cmd->add_option("--header-timeout", a.c.header_timeout_s,
+    cmd->add_option("--header-timeout", a.c.connection.header_timeout_s,
                     "seconds for a request's line and headers to arrive (408 beyond); also the grace\n"
                     "before --min-body-rate-kib applies")
         ->envname("NURBSRT_HEADER_TIMEOUT")
@@ -151,11 +151,11 @@ void add_connection_options(CLI::App* cmd, ServeArgs& a) {
         ->envname("NURBSRT_MIN_BODY_RATE_KIB")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    cmd->add_option("--max-connections", a.c.max_connections, "open connections at once; beyond: 503")
+    cmd->add_option("--max-connections", a.c.connection.max_connections, "open connections at once; beyond: 503")
         ->envname("NURBSRT_MAX_CONNECTIONS")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
-    cmd->add_option("--max-connections-per-client", a.c.max_connections_per_client,
+    cmd->add_option("--max-connections-per-client", a.c.connection.max_connections_per_client,
                     "open connections from one client address; beyond: 503")
         ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")
         ->check(CLI::Range(1, 100000))
@@ -268,7 +268,7 @@ void run_serve(ServeArgs& a) {
     c.cache_bytes = static_cast<size_t>(a.cache_mb * (1 << 20));
     c.max_stored_bytes = static_cast<size_t>(a.stored_mb * (1 << 20));
     c.max_artifact_bytes = static_cast<size_t>(a.artifacts_mb * (1 << 20));
-    c.min_body_rate_bytes = a.body_rate_kib * 1024;
+    c.connection.min_body_rate = a.body_rate_kib * 1024;
     const int rc = server::run_server(c);
     if (rc != 0) std::exit(rc);
 }

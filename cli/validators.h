@@ -11,6 +11,8 @@
 #include <string>
 #include <unistd.h>
 
+#include "core/ascii.h"
+
 namespace nurbsrt::cli {
 
 // A file we are going to write: one of `extensions` (lower case, with the dot),
@@ -22,8 +24,7 @@ inline CLI::Validator output_file_validator(std::initializer_list<const char*> e
         [exts = std::vector<std::string>(extensions.begin(), extensions.end()), list](std::string& s) -> std::string {
             namespace fs = std::filesystem;
             const fs::path p(s);
-            std::string ext = p.extension().string();
-            for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            const std::string ext = ascii_lower(p.extension().string());
             bool known = false;
             for (const std::string& e : exts) known = known || ext == e;
             if (!known) return "'" + s + "' must end in one of " + list;

@@ -1,37 +1,32 @@
 #include "core/error.h"
 
+#include "core/enum_names.h"
+
 namespace nurbsrt {
 
+namespace {
+
+constexpr EnumName<ErrorCode> kErrorCodeNames[] = {{ErrorCode::io, "io"},
+                                                   {ErrorCode::unsupported_format, "unsupported_format"},
+                                                   {ErrorCode::unreadable_file, "unreadable_file"},
+                                                   {ErrorCode::no_faces, "no_faces"},
+                                                   {ErrorCode::import_timeout, "import_timeout"},
+                                                   {ErrorCode::import_crashed, "import_crashed"},
+                                                   {ErrorCode::occt_failure, "occt_failure"},
+                                                   {ErrorCode::corrupt_scene, "corrupt_scene"},
+                                                   {ErrorCode::invalid_argument, "invalid_argument"},
+                                                   {ErrorCode::invalid_json, "invalid_json"},
+                                                   {ErrorCode::limit_exceeded, "limit_exceeded"},
+                                                   {ErrorCode::canceled, "canceled"},
+                                                   {ErrorCode::internal, "internal"}};
+static_assert(names_every_value(kErrorCodeNames, ErrorCode::internal));
+
+}  // namespace
+
 const char* error_code_name(ErrorCode code) {
-    switch (code) {
-        case ErrorCode::io:
-            return "io";
-        case ErrorCode::unsupported_format:
-            return "unsupported_format";
-        case ErrorCode::unreadable_file:
-            return "unreadable_file";
-        case ErrorCode::no_faces:
-            return "no_faces";
-        case ErrorCode::import_timeout:
-            return "import_timeout";
-        case ErrorCode::import_crashed:
-            return "import_crashed";
-        case ErrorCode::occt_failure:
-            return "occt_failure";
-        case ErrorCode::corrupt_scene:
-            return "corrupt_scene";
-        case ErrorCode::invalid_argument:
-            return "invalid_argument";
-        case ErrorCode::invalid_json:
-            return "invalid_json";
-        case ErrorCode::limit_exceeded:
-            return "limit_exceeded";
-        case ErrorCode::canceled:
-            return "canceled";
-        case ErrorCode::internal:
-            return "internal";
-    }
-    return "internal";  // out-of-range value cast to ErrorCode
+    return enum_name(kErrorCodeNames, code, "internal");  // "internal": an out-of-range value cast to ErrorCode
 }
+
+std::optional<ErrorCode> error_code_from_name(std::string_view name) { return enum_from_name(kErrorCodeNames, name); }
 
 }  // namespace nurbsrt

@@ -5,8 +5,10 @@
 // a full queue, a missing API key) are server/common/service_error.h's, not these.
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace nurbsrt {
 
@@ -28,6 +30,8 @@ enum class ErrorCode {
 
 // Stable machine-readable name of a code ("unreadable_file", ...), used in JSON errors.
 const char* error_code_name(ErrorCode code);
+// The code of such a name (the isolated import reports its failure by name).
+std::optional<ErrorCode> error_code_from_name(std::string_view name);
 
 class Error : public std::runtime_error {
 public:

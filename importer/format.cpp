@@ -8,6 +8,7 @@
 
 #include "importer/importer.h"
 #include "core/error.h"
+#include "core/ascii.h"
 
 namespace nurbsrt {
 namespace {
@@ -51,10 +52,7 @@ std::string lower_extension(const std::string& path) {
     const size_t slash = path.find_last_of("/\\");
     const size_t dot = path.find_last_of('.');
     if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
-    std::string ext = path.substr(dot + 1);
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
+    return ascii_lower(std::string_view(path).substr(dot + 1));
 }
 
 }  // namespace

@@ -53,13 +53,6 @@ std::string read_small_file(const std::string& path) {
     return ss.str();
 }
 
-ErrorCode error_code_from_name(const std::string& name) {
-    for (int c = 0; c <= static_cast<int>(ErrorCode::internal); ++c) {
-        if (name == error_code_name(static_cast<ErrorCode>(c))) return static_cast<ErrorCode>(c);
-    }
-    return ErrorCode::internal;
-}
-
 // Removes the scratch files on every exit path.
 struct ScratchFiles {
     std::string scene, error;
@@ -246,7 +239,7 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
         throw Error(ErrorCode::import_crashed,
                     what + " process exited with status " + std::to_string(code) + " without a result");
     }
-    throw Error(error_code_from_name(err.substr(0, nl)), err.substr(nl + 1));
+    throw Error(error_code_from_name(err.substr(0, nl)).value_or(ErrorCode::internal), err.substr(nl + 1));
 }
 
 // Test hook: lets integration tests prove that a dying or hanging worker fails

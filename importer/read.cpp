@@ -36,6 +36,7 @@
 
 #include "importer/internal.h"
 #include "core/error.h"
+#include "core/ascii.h"
 
 namespace nurbsrt::occt {
 namespace {
@@ -56,16 +57,11 @@ const char* status_name(IFSelect_ReturnStatus s) {
     return "?";
 }
 
-std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return s;
-}
-
 // Unit names as STEP (".MILLI.", "METRE", "INCH") or IGES ("MM", "IN") spell them,
 // normalised to short lowercase names.
 std::string unit_short_name(std::string raw) {
     std::string s;
-    for (char c : lower(std::move(raw)))
+    for (char c : ascii_lower(std::move(raw)))
         if (std::isalpha(static_cast<unsigned char>(c))) s += c;
     if (s == "mm" || s == "millimetre" || s == "millimeter" || s == "millimetremetre") return "mm";
     if (s == "cm" || s == "centimetre" || s == "centimeter") return "cm";

@@ -1,4 +1,5 @@
 #include "options/image_format.h"
+#include "core/ascii.h"
 
 #include <cctype>
 
@@ -6,7 +7,7 @@ namespace nurbsrt {
 
 ImageFormat image_format_of_extension(std::string ext) {
     if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
-    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    ext = ascii_lower(ext);
     if (ext == "png") return ImageFormat::png;
     if (ext == "jpg" || ext == "jpeg") return ImageFormat::jpeg;
     if (ext == "tif" || ext == "tiff") return ImageFormat::tiff;

@@ -63,12 +63,10 @@ ProblemCode code_for_status(int status) {
 }
 
 ConnectionLimits connection_limits(const ServerConfig& config) {
-    return {.header_timeout_s = config.header_timeout_s,
-            .min_body_rate = config.min_body_rate_bytes,
-            .max_body_bytes = config.max_upload_bytes,
-            .max_connections = config.max_connections,
-            .max_connections_per_client = config.max_connections_per_client,
-            .retry_after_s = config.retry_after_s};
+    ConnectionLimits limits = config.connection;
+    limits.max_body_bytes = config.max_upload_bytes;
+    limits.retry_after_s = config.retry_after_s;
+    return limits;
 }
 
 std::string format_seconds(double s) {
@@ -243,15 +241,16 @@ void install_error_answers(GuardedServer& svr, const ServerConfig& config) {
                 return httplib::Server::HandlerResponse::Handled;
             }
             if (failure == ReadFailure::header_timeout) {
-                send_problem(res, ServiceCode::request_timeout,
-                             "the request headers did not arrive within " + format_seconds(config.header_timeout_s));
+                send_problem(
+                    res, ServiceCode::request_timeout,
+                    "the request headers did not arrive within " + format_seconds(config.connection.header_timeout_s));
                 return httplib::Server::HandlerResponse::Handled;
             }
             if (failure == ReadFailure::body_timeout) {
                 send_problem(res, ServiceCode::request_timeout,
                              "the request body did not arrive in time (at least " +
-                                 std::to_string(static_cast<long long>(config.min_body_rate_bytes / 1024)) +
-                                 " KiB/s on average after " + format_seconds(config.header_timeout_s) + ")");
+                                 std::to_string(static_cast<long long>(config.connection.min_body_rate / 1024)) +
+                                 " KiB/s on average after " + format_seconds(config.connection.header_timeout_s) + ")");
                 return httplib::Server::HandlerResponse::Handled;
             }
             // (A method a known resource does not answer got its 405 before routing.)
@@ -374,10 +373,10 @@ int run_server(const ServerConfig& given) {
                                    {"cache_bytes", config.cache_bytes},
                                    {"api_keys", keys.size()},  // how many, never which
                                    {"cors_origins", config.cors_origins},
-                                   {"header_timeout_s", config.header_timeout_s},
-                                   {"min_body_rate_bytes", config.min_body_rate_bytes},
-                                   {"max_connections", config.max_connections},
-                                   {"max_connections_per_client", config.max_connections_per_client},
+                                   {"header_timeout_s", config.connection.header_timeout_s},
+                                   {"min_body_rate_bytes", config.connection.min_body_rate},
+                                   {"max_connections", config.connection.max_connections},
+                                   {"max_connections_per_client", config.connection.max_connections_per_client},
                                    {"job_runners", config.job_runners},
                                    {"max_queued_jobs", config.max_queued_jobs},
                                    {"job_retention_s", config.job_retention_s},

@@ -288,6 +288,16 @@ function hover(e) {
 }
 
 // ---- compare methods -------------------------------------------------------------
+const COMPARED_METHODS = ['proposed', 'martin'];
+// A column per method from the page's template; its fields get ids `${method}-${field}`.
+for (const method of COMPARED_METHODS) {
+  const column = $('compare-column').content.firstElementChild.cloneNode(true);
+  column.id = `compare-${method}`;
+  for (const field of column.querySelectorAll('[data-field]')) field.id = `${method}-${field.dataset.field}`;
+  column.querySelector('[data-field="name"]').textContent = method;
+  column.querySelector('[data-field="histogram"]').setAttribute('aria-label', `Iteration histogram, ${method}`);
+  $('compare-grid').append(column);
+}
 $('compare').addEventListener('click', async () => {
   if (!state.file || !state.camera) return;
   const button = $('compare');
@@ -295,7 +305,7 @@ $('compare').addEventListener('click', async () => {
   button.textContent = 'Comparing…';
   const results = {};
   try {
-    for (const method of ['proposed', 'martin']) {
+    for (const method of COMPARED_METHODS) {
       const job = { final: true, camera: state.camera.toOption(), override: { method } };
       results[method] = (await render(state.file, requestOptions(job))).statistics;
     }

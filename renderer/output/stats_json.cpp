@@ -4,22 +4,36 @@
 
 namespace nurbsrt {
 
+namespace {
+
+// The stages of a frame and of an import, in the order they run, named as the
+// API's timings_ms and Server-Timing name them.
+template <typename Stats>
+struct StageField {
+    const char* name;
+    double Stats::*ms;
+};
+constexpr StageField<RenderStats> kFrameStages[] = {{"prepare", &RenderStats::prepare_ms},
+                                                    {"frame_setup", &RenderStats::setup_ms},
+                                                    {"preliminary_map", &RenderStats::preliminary_map_ms},
+                                                    {"newton", &RenderStats::newton_ms},
+                                                    {"shadow_map", &RenderStats::shadow_map_ms},
+                                                    {"shade", &RenderStats::shade_ms},
+                                                    {"antialias", &RenderStats::antialias_ms},
+                                                    {"edges", &RenderStats::edges_ms},
+                                                    {"statistics", &RenderStats::statistics_ms}};
+constexpr StageField<ImportTimings> kImportStages[] = {{"read", &ImportTimings::read_ms},
+                                                       {"nurbs_convert", &ImportTimings::nurbs_convert_ms},
+                                                       {"mesh", &ImportTimings::mesh_ms}};
+
+}  // namespace
+
 void add_frame_stages(const RenderStats& s, StageClock& clock) {
-    clock.add("prepare", s.prepare_ms);
-    clock.add("frame_setup", s.setup_ms);
-    clock.add("preliminary_map", s.preliminary_map_ms);
-    clock.add("newton", s.newton_ms);
-    clock.add("shadow_map", s.shadow_map_ms);
-    clock.add("shade", s.shade_ms);
-    clock.add("antialias", s.antialias_ms);
-    clock.add("edges", s.edges_ms);
-    clock.add("statistics", s.statistics_ms);
+    for (const auto& stage : kFrameStages) clock.add(stage.name, s.*stage.ms);
 }
 
 void add_import_stages(const ImportTimings& import, StageClock& clock) {
-    clock.add("read", import.read_ms);
-    clock.add("nurbs_convert", import.nurbs_convert_ms);
-    clock.add("mesh", import.mesh_ms);
+    for (const auto& stage : kImportStages) clock.add(stage.name, import.*stage.ms);
 }
 
 nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& timings) {

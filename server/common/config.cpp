@@ -71,10 +71,11 @@ void ServerConfig::validate() const {
     if (max_faces < 1) fail("max faces must be positive");
     if (!(render_timeout_s > 0)) fail("render timeout must be positive");
     if (!(import_timeout_s > 0)) fail("import timeout must be positive");
-    if (!(header_timeout_s > 0)) fail("header timeout must be positive");
-    if (!(min_body_rate_bytes > 0)) fail("minimum body rate must be positive");
-    if (max_connections < 1 || max_connections > 100000) fail("max connections must be in 1..100000");
-    if (max_connections_per_client < 1 || max_connections_per_client > max_connections)
+    if (!(connection.header_timeout_s > 0)) fail("header timeout must be positive");
+    if (!(connection.min_body_rate > 0)) fail("minimum body rate must be positive");
+    if (connection.max_connections < 1 || connection.max_connections > 100000)
+        fail("max connections must be in 1..100000");
+    if (connection.max_connections_per_client < 1 || connection.max_connections_per_client > connection.max_connections)
         fail("max connections per client must be in 1..max connections");
     if (import_max_entities < 1 || import_max_list_items < 1) fail("import pre-scan limits must be positive");
     if (import_max_nesting < 1 || import_max_nesting > 10000) fail("import max nesting must be in 1..10000");

@@ -10,6 +10,19 @@
 
 namespace nurbsrt::server {
 
+// What one connection and all of them together may take of the service
+// (server/http/http_server.h enforces it).
+struct ConnectionLimits {
+    double header_timeout_s = 10;          // request line + headers, from the first byte
+    double min_body_rate = 64 * 1024;      // bytes/s, averaged, after a grace of header_timeout_s
+    size_t max_body_bytes = 64u << 20;     // the upload limit (payload_max_length)
+    int max_connections = 512;             // open connections in total; beyond: 503
+    int max_connections_per_client = 128;  // per client address; beyond: 503
+    double keep_alive_timeout_s = 5;       // idle wait for the next request on a connection
+    int max_requests_per_connection = 100;
+    int retry_after_s = 2;  // Retry-After of the connection-cap 503
+};
+
 struct ServerConfig {
     std::string host = "127.0.0.1";
     int port = 8080;                // 0: any free port (see port_file)
@@ -44,11 +57,10 @@ struct ServerConfig {
 
     size_t cache_bytes = size_t(512) << 20;  // scene cache capacity (0: no cache)
 
-    // Connections (server/http/http_server.h): slow or numerous clients cost only themselves.
-    double header_timeout_s = 10;            // request line + headers; also the body's grace
-    double min_body_rate_bytes = 64 * 1024;  // average upload rate a body must keep
-    int max_connections = 512;               // open at once; beyond: 503
-    int max_connections_per_client = 128;    // per client address; beyond: 503
+    // Connections (server/http/http_server.h): slow or numerous clients cost only
+    // themselves. Its upload limit and Retry-After are max_upload_bytes and
+    // retry_after_s above, which other answers use too.
+    ConnectionLimits connection;
 
     // API keys (server/http/api_keys.h): a file of keys, and/or a comma-separated list
     // (from the environment only). Neither configured: no authentication. Either

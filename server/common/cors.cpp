@@ -4,16 +4,10 @@
 #include <regex>
 
 #include "core/error.h"
+#include "core/ascii.h"
 
 namespace nurbsrt::server {
-namespace {
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 std::string normalized_origin(const std::string& origin) {
     // A host name, an IPv4 address or a bracketed IPv6 address; a port of up to 5 digits.
@@ -24,7 +18,7 @@ std::string normalized_origin(const std::string& origin) {
                     "CORS origin '" + origin.substr(0, 100) +
                         "' is not an origin: give scheme://host[:port] with http or https, no path, no "
                         "trailing slash, no wildcard (e.g. https://app.example.com)");
-    return lower(origin);
+    return ascii_lower(origin);
 }
 
 CorsPolicy::CorsPolicy(const std::vector<std::string>& origins) {
@@ -33,7 +27,7 @@ CorsPolicy::CorsPolicy(const std::vector<std::string>& origins) {
 
 bool CorsPolicy::allows(const std::string& origin) const {
     if (origin.empty()) return false;
-    const std::string o = lower(origin);
+    const std::string o = ascii_lower(origin);
     for (const std::string& a : origins_)
         if (a == o) return true;
     return false;

@@ -1,29 +1,26 @@
 #include "server/common/service_error.h"
 
+#include "core/enum_names.h"
+
 namespace nurbsrt::server {
 
+namespace {
+
+constexpr EnumName<ServiceCode> kServiceCodeNames[] = {{ServiceCode::not_found, "not_found"},
+                                                       {ServiceCode::method_not_allowed, "method_not_allowed"},
+                                                       {ServiceCode::overloaded, "overloaded"},
+                                                       {ServiceCode::render_timeout, "render_timeout"},
+                                                       {ServiceCode::unauthorized, "unauthorized"},
+                                                       {ServiceCode::request_timeout, "request_timeout"},
+                                                       {ServiceCode::interrupted, "interrupted"},
+                                                       {ServiceCode::malformed_request, "malformed_request"},
+                                                       {ServiceCode::not_implemented, "not_implemented"}};
+static_assert(names_every_value(kServiceCodeNames, ServiceCode::not_implemented));
+
+}  // namespace
+
 const char* service_code_name(ServiceCode code) {
-    switch (code) {
-        case ServiceCode::not_found:
-            return "not_found";
-        case ServiceCode::method_not_allowed:
-            return "method_not_allowed";
-        case ServiceCode::overloaded:
-            return "overloaded";
-        case ServiceCode::render_timeout:
-            return "render_timeout";
-        case ServiceCode::unauthorized:
-            return "unauthorized";
-        case ServiceCode::request_timeout:
-            return "request_timeout";
-        case ServiceCode::interrupted:
-            return "interrupted";
-        case ServiceCode::malformed_request:
-            return "malformed_request";
-        case ServiceCode::not_implemented:
-            return "not_implemented";
-    }
-    return "internal";  // out-of-range value cast to ServiceCode
+    return enum_name(kServiceCodeNames, code, "internal");  // "internal": an out-of-range value cast to ServiceCode
 }
 
 const char* ProblemCode::name() const {

@@ -8,7 +8,7 @@
 namespace nurbsrt::server {
 namespace {
 
-std::string_view trim(std::string_view s) {
+std::string_view trim_space(std::string_view s) {
     while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
     while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
     return s;
@@ -30,7 +30,7 @@ bool constant_time_equal(std::string_view a, std::string_view b) {
 }  // namespace
 
 void ApiKeys::add(std::string_view key, const std::string& where) {
-    key = trim(key);
+    key = trim_space(key);
     if (key.empty()) return;
     if (key.size() < 16)
         throw Error(ErrorCode::invalid_argument, "API key in " + where + " is shorter than 16 characters");
@@ -49,7 +49,7 @@ void ApiKeys::add_file(const std::string& path) {
     const size_t before = keys_.size();
     while (std::getline(in, line)) {
         ++n;
-        const std::string_view t = trim(line);
+        const std::string_view t = trim_space(line);
         if (t.empty() || t.front() == '#') continue;
         add(t, path + ":" + std::to_string(n));
     }
@@ -75,7 +75,7 @@ void ApiKeys::add_list(std::string_view list) {
 }
 
 bool ApiKeys::accepts(std::string_view authorization) const {
-    authorization = trim(authorization);
+    authorization = trim_space(authorization);
     constexpr std::string_view scheme = "bearer ";
     if (authorization.size() <= scheme.size()) return false;
     for (size_t i = 0; i < scheme.size(); ++i)
@@ -84,7 +84,7 @@ bool ApiKeys::accepts(std::string_view authorization) const {
 }
 
 bool ApiKeys::accepts_key(std::string_view key) const {
-    const std::string_view presented = trim(key);
+    const std::string_view presented = trim_space(key);
     if (presented.empty()) return false;
     bool ok = false;
     for (const std::string& k : keys_) ok |= constant_time_equal(presented, k);  // no early exit

@@ -4,6 +4,8 @@
 #include <cctype>
 #include <vector>
 
+#include "core/ascii.h"
+
 namespace nurbsrt::server {
 namespace {
 
@@ -13,13 +15,8 @@ bool is_tchar(char c) {
     return std::string_view("!#$%&'*+-.^_`|~").find(c) != std::string_view::npos;
 }
 
-std::string lower(std::string_view s) {
-    std::string out(s);
-    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return out;
-}
-
-std::string_view trim(std::string_view s) {
+// Without the optional white space around a field value (RFC 9110 §5.6.3: spaces and tabs).
+std::string_view trim_ows(std::string_view s) {
     while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
     while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
     return s;
@@ -75,11 +72,12 @@ std::string check_field_line(std::string_view line, Framing& f) {
     const std::string_view name = line.substr(0, colon);
     if (name.empty() || !std::all_of(name.begin(), name.end(), is_tchar))
         return "the header name '" + excerpt(name) + "' is not a token (no whitespace before the colon, RFC 9112 §5.1)";
-    const std::string_view value = trim(line.substr(colon + 1));
+    const std::string_view value = trim_ows(line.substr(colon + 1));
     if (value.find('\0') != std::string_view::npos) return "the header '" + excerpt(name) + "' holds a NUL byte";
-    const std::string key = lower(name);
+    const std::string key = ascii_lower(name);
     if (key == "content-length") f.content_lengths.push_back(value);
-    if (key == "transfer-encoding") f.transfer_encoding += (f.transfer_encoding.empty() ? "" : ", ") + lower(value);
+    if (key == "transfer-encoding")
+        f.transfer_encoding += (f.transfer_encoding.empty() ? "" : ", ") + ascii_lower(value);
     if (key == "host") ++f.hosts;
     return {};
 }

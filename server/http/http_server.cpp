@@ -37,13 +37,12 @@ constexpr size_t kBodyFramingAllowance = 64 * 1024;
 // quick canned 503) never waits behind the connections it refuses.
 constexpr int kSpareThreads = 32;
 // Waits are cut into steps this long so a stopping server is noticed.
-constexpr int kPollStepMs = 100;
+constexpr std::chrono::milliseconds kPollStep{100};
 // Writes: the answer must drain to the client at all within this time.
-constexpr int kWriteTimeoutMs = 30 * 1000;
+constexpr std::chrono::milliseconds kWriteTimeout = std::chrono::seconds(30);
 // Lingering close: unread input is drained this long at most (and stops after
-// kLingerIdleMs without data), so the client reads the answer, not a reset.
-constexpr int kLingerMs = 2000;
-constexpr int kLingerIdleMs = 500;
+// kLingerIdle without data), so the client reads the answer, not a reset.
+constexpr std::chrono::milliseconds kLinger{2000}, kLingerIdle{500};
 // Read buffer of a connection, as cpp-httplib's own SocketStream (its line
 // reader asks for one byte at a time).
 constexpr size_t kReadBufferBytes = 4096;
@@ -53,7 +52,7 @@ constexpr size_t kReadBufferBytes = 4096;
 constexpr int kProbeSlots = 8;
 // A probe's request line must arrive within this time (probes send it at
 // once); a connection that is slower is refused like any other beyond the caps.
-constexpr int kProbeLineWaitMs = 500;
+constexpr std::chrono::milliseconds kProbeLineWait{500};
 // The request line of a probe fits in this many bytes.
 constexpr size_t kProbeLineBytes = 64;
 // Admission follows the accept order (below); a connection whose turn does not
@@ -154,10 +153,10 @@ std::string address_of(const sockaddr_storage& a, int& port) {
 }
 
 // Waits until `sock` is ready for `events` or `ms` passed; false on timeout or error.
-bool wait_for(socket_t sock, short events, int ms) {
+bool wait_for(socket_t sock, short events, std::chrono::milliseconds timeout) {
     pollfd p{sock, events, 0};
     for (;;) {
-        const int r = ::poll(&p, 1, ms);
+        const int r = ::poll(&p, 1, static_cast<int>(timeout.count()));
         if (r < 0 && errno == EINTR) continue;
         return r > 0;
     }
@@ -165,7 +164,7 @@ bool wait_for(socket_t sock, short events, int ms) {
 
 bool send_all(socket_t sock, const char* data, size_t size) {
     while (size > 0) {
-        if (!wait_for(sock, POLLOUT, kWriteTimeoutMs)) return false;
+        if (!wait_for(sock, POLLOUT, kWriteTimeout)) return false;
         const ssize_t n = ::send(sock, data, size, MSG_NOSIGNAL);
         if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
         if (n <= 0) return false;
@@ -199,8 +198,8 @@ public:
         c_.framing = FramingVerdict{};
     }
 
-    bool is_readable() const override { return c_.buffered() || wait_for(c_.sock, POLLIN, kPollStepMs); }
-    bool is_writable() const override { return wait_for(c_.sock, POLLOUT, kWriteTimeoutMs); }
+    bool is_readable() const override { return c_.buffered() || wait_for(c_.sock, POLLIN, kPollStep); }
+    bool is_writable() const override { return wait_for(c_.sock, POLLOUT, kWriteTimeout); }
 
     ssize_t read(char* ptr, size_t size) override {
         if (c_.failure != ReadFailure::none) return -1;
@@ -263,12 +262,12 @@ private:
     bool wait_readable() {
         for (;;) {
             if (*c_.listening == INVALID_SOCKET) return false;  // stopping: no request waits for its bytes
-            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline() - Clock::now()).count();
-            if (left <= 0) {
+            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline() - Clock::now());
+            if (left.count() <= 0) {
                 c_.failure = in_headers_ ? ReadFailure::header_timeout : ReadFailure::body_timeout;
                 return false;
             }
-            if (wait_for(c_.sock, POLLIN, static_cast<int>(std::min<long long>(left, kPollStepMs)))) return true;
+            if (wait_for(c_.sock, POLLIN, std::min(left, kPollStep))) return true;
         }
     }
 
@@ -307,13 +306,13 @@ private:
 };
 
 // True when the connection's first bytes (peeked, not consumed) are the
-// request line of a health probe, arriving within kProbeLineWaitMs.
+// request line of a health probe, arriving within kProbeLineWait.
 bool is_health_probe(socket_t sock) {
-    const auto until = Clock::now() + std::chrono::milliseconds(kProbeLineWaitMs);
+    const auto until = Clock::now() + kProbeLineWait;
     char line[kProbeLineBytes + 1] = {};
     for (;;) {
-        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
-        if (left <= 0 || !wait_for(sock, POLLIN, static_cast<int>(left))) return false;
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now());
+        if (left.count() <= 0 || !wait_for(sock, POLLIN, left)) return false;
         const ssize_t n = ::recv(sock, line, kProbeLineBytes, MSG_PEEK);
         if (n <= 0) return false;
         const std::string_view head(line, static_cast<size_t>(n));
@@ -331,9 +330,9 @@ bool is_health_probe(socket_t sock) {
 // briefly (the client may still be sending a body we did not read).
 void close_lingering(socket_t sock) {
     ::shutdown(sock, SHUT_WR);
-    const auto until = Clock::now() + std::chrono::milliseconds(kLingerMs);
+    const auto until = Clock::now() + kLinger;
     char sink[16 * 1024];
-    while (Clock::now() < until && wait_for(sock, POLLIN, kLingerIdleMs)) {
+    while (Clock::now() < until && wait_for(sock, POLLIN, kLingerIdle)) {
         const ssize_t n = ::recv(sock, sink, sizeof sink, 0);
         if (n <= 0 && !(n < 0 && errno == EINTR)) break;
     }
@@ -466,12 +465,13 @@ bool GuardedServer::serve_connection(socket_t sock, const std::string& remote_ip
     t_connection = &c;
 
     bool ok = false;
-    const int idle_ms = static_cast<int>(limits_.keep_alive_timeout_s * 1000);
+    const auto idle = std::chrono::milliseconds(static_cast<long long>(limits_.keep_alive_timeout_s * 1000));
     for (int served = 0; served < max_requests && svr_sock_ != INVALID_SOCKET; ++served) {
         // Wait for the next request's first byte (a stopping server ends the wait).
         bool readable = c.buffered();
-        for (int waited = 0; !readable && waited < idle_ms && svr_sock_ != INVALID_SOCKET; waited += kPollStepMs)
-            readable = wait_for(sock, POLLIN, std::min(kPollStepMs, idle_ms - waited));
+        for (std::chrono::milliseconds waited{0}; !readable && waited < idle && svr_sock_ != INVALID_SOCKET;
+             waited += kPollStep)
+            readable = wait_for(sock, POLLIN, std::min(kPollStep, idle - waited));
         if (!readable) break;
 
         RequestStream stream(c, limits_);

@@ -34,6 +34,7 @@
 #include <memory>
 #include <string>
 
+#include "server/common/config.h"
 #include "server/http/http_framing.h"
 
 namespace nurbsrt::server {
@@ -41,17 +42,6 @@ namespace nurbsrt::server {
 // Request line + headers: cpp-httplib caps one line at 8 KiB but not their
 // number; 64 KiB is 8 such lines and far above what browsers and curl send.
 inline constexpr size_t kMaxRequestHeaderBytes = 64 * 1024;
-
-struct ConnectionLimits {
-    double header_timeout_s = 10;          // request line + headers, from the first byte
-    double min_body_rate = 64 * 1024;      // bytes/s, averaged, after a grace of header_timeout_s
-    size_t max_body_bytes = 64u << 20;     // the upload limit (payload_max_length)
-    int max_connections = 512;             // open connections in total; beyond: 503
-    int max_connections_per_client = 128;  // per client address; beyond: 503
-    double keep_alive_timeout_s = 5;       // idle wait for the next request on a connection
-    int max_requests_per_connection = 100;
-    int retry_after_s = 2;  // Retry-After of the connection-cap 503
-};
 
 // Why reading the current request stopped early (for the error handler's answer).
 // bad_framing: its head breaks RFC 9112's framing rules (server/http/http_framing.h).

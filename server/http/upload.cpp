@@ -8,14 +8,10 @@
 #include "core/error.h"
 #include "core/json_limits.h"
 #include "options/query_values.h"
+#include "core/ascii.h"
 
 namespace nurbsrt::server {
 namespace {
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
 
 // As nlohmann::json checks it when writing a string (the parser checks the same).
 bool is_utf8(const std::string& s) {
@@ -124,7 +120,7 @@ Upload read_upload(const httplib::Request& req, std::initializer_list<const char
     if (req.is_multipart_form_data()) {
         read_multipart(req, form_options, options, up);
     } else {
-        const std::string type = lower(req.get_header_value("Content-Type"));
+        const std::string type = ascii_lower(req.get_header_value("Content-Type"));
         const std::string base = type.substr(0, type.find(';'));
         if (base == "application/json") {
             read_json_body(req.body, options, up);

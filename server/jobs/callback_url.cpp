@@ -8,13 +8,16 @@
 #include <cctype>
 
 #include "core/error.h"
+#include "core/ascii.h"
 
 namespace nurbsrt::server {
 namespace {
 
 // A URL longer than this is no receiver's address but an attempt to store data.
 constexpr size_t kMaxCallbackUrlLength = 2048;
-[[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, "callback_url " + what); }
+[[noreturn]] void bad_callback_url(const std::string& what) {
+    throw Error(ErrorCode::invalid_argument, "callback_url " + what);
+}
 
 bool public_v4(uint32_t a) {  // host byte order
     auto in = [a](uint32_t net, int bits) { return (a >> (32 - bits)) == (net >> (32 - bits)); };
@@ -56,7 +59,7 @@ bool literal_address(const std::string& host, sockaddr_storage& out) {
 }
 
 bool is_localhost_name(std::string host) {
-    std::transform(host.begin(), host.end(), host.begin(), [](unsigned char c) { return std::tolower(c); });
+    host = ascii_lower(host);
     if (!host.empty() && host.back() == '.') host.pop_back();
     return host == "localhost" || (host.size() > 10 && host.compare(host.size() - 10, 10, ".localhost") == 0);
 }
@@ -64,21 +67,22 @@ bool is_localhost_name(std::string host) {
 }  // namespace
 
 CallbackUrl check_callback_url(const std::string& url, bool allow_private) {
-    if (url.empty()) bad("must not be empty");
+    if (url.empty()) bad_callback_url("must not be empty");
     if (url.size() > kMaxCallbackUrlLength)
-        bad("is " + std::to_string(url.size()) + " characters; at most " + std::to_string(kMaxCallbackUrlLength));
+        bad_callback_url("is " + std::to_string(url.size()) + " characters; at most " +
+                         std::to_string(kMaxCallbackUrlLength));
     for (unsigned char c : url)
-        if (c <= 0x20 || c >= 0x7f) bad("must be an ASCII URL without spaces or control characters (percent-encode)");
+        if (c <= 0x20 || c >= 0x7f)
+            bad_callback_url("must be an ASCII URL without spaces or control characters (percent-encode)");
     const size_t colon = url.find("://");
-    std::string scheme = colon == std::string::npos ? "" : url.substr(0, colon);
-    std::transform(scheme.begin(), scheme.end(), scheme.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (scheme != "http" && scheme != "https") bad("must be an http:// or https:// URL");
+    const std::string scheme = colon == std::string::npos ? "" : ascii_lower(std::string_view(url).substr(0, colon));
+    if (scheme != "http" && scheme != "https") bad_callback_url("must be an http:// or https:// URL");
     const size_t authority_end = url.find_first_of("/?#", colon + 3);
     const std::string authority =
         url.substr(colon + 3, authority_end == std::string::npos ? std::string::npos : authority_end - colon - 3);
     if (authority.find('@') != std::string::npos)
-        bad("must not carry user information (user:password@): receivers check the signature instead");
-    if (url.find('#') != std::string::npos) bad("must not have a fragment (#...)");
+        bad_callback_url("must not carry user information (user:password@): receivers check the signature instead");
+    if (url.find('#') != std::string::npos) bad_callback_url("must not have a fragment (#...)");
     // host[:port], the host a name, an IPv4 address or a bracketed IPv6 one
     // (parsed by hand: std::regex recurses per character and a long hostile
     // authority could exhaust the stack).
@@ -87,13 +91,13 @@ CallbackUrl check_callback_url(const std::string& url, bool allow_private) {
     std::string port;
     if (!authority.empty() && authority.front() == '[') {
         const size_t close = authority.find(']');
-        if (close == std::string::npos) bad("has no valid host[:port]");
+        if (close == std::string::npos) bad_callback_url("has no valid host[:port]");
         u.host = authority.substr(1, close - 1);
         const std::string rest = authority.substr(close + 1);
-        if (!rest.empty() && rest.front() != ':') bad("has no valid host[:port]");
+        if (!rest.empty() && rest.front() != ':') bad_callback_url("has no valid host[:port]");
         if (!rest.empty()) port = rest.substr(1);
         if (u.host.empty() || u.host.find_first_not_of("0123456789abcdefABCDEF:.") != std::string::npos)
-            bad("has an invalid IPv6 host address");
+            bad_callback_url("has an invalid IPv6 host address");
     } else {
         const size_t c = authority.find(':');
         u.host = authority.substr(0, c);
@@ -101,21 +105,22 @@ CallbackUrl check_callback_url(const std::string& url, bool allow_private) {
         if (u.host.empty() ||
             u.host.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") !=
                 std::string::npos)
-            bad("has no valid host[:port]");
+            bad_callback_url("has no valid host[:port]");
     }
-    if (authority.find(':') != std::string::npos && authority.back() == ':') bad("has an empty port");
+    if (authority.find(':') != std::string::npos && authority.back() == ':') bad_callback_url("has an empty port");
     if (!port.empty() && (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos))
-        bad("has a port outside 1..65535");
+        bad_callback_url("has a port outside 1..65535");
     u.port = !port.empty() ? std::stoi(port) : (scheme == "https" ? 443 : 80);
-    if (u.port < 1 || u.port > 65535) bad("has a port outside 1..65535");
+    if (u.port < 1 || u.port > 65535) bad_callback_url("has a port outside 1..65535");
     u.target = authority_end == std::string::npos ? "/" : url.substr(authority_end);
     if (u.target.front() == '?') u.target = "/" + u.target;
     sockaddr_storage address;
     const bool literal = literal_address(u.host, address);
-    if (!literal && u.host.find(':') != std::string::npos) bad("has an invalid IPv6 host address");
+    if (!literal && u.host.find(':') != std::string::npos) bad_callback_url("has an invalid IPv6 host address");
     if (!allow_private &&
         (is_localhost_name(u.host) || (literal && !is_public_address(reinterpret_cast<sockaddr*>(&address)))))
-        bad("points at a loopback, private or link-local address; this service sends callbacks only to public "
+        bad_callback_url(
+            "points at a loopback, private or link-local address; this service sends callbacks only to public "
             "addresses (it is started with --webhook-allow-private to allow others)");
     return u;
 }

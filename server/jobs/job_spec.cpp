@@ -16,7 +16,7 @@ namespace {
 
 using nlohmann::json;
 
-[[noreturn]] void bad(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
+[[noreturn]] void bad_spec(const std::string& what) { throw Error(ErrorCode::invalid_argument, what); }
 
 // The input an output refers to: its index among the `file` parts, or its
 // filename when that names exactly one of them.
@@ -24,8 +24,8 @@ int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::
     if (v.is_number_integer()) {
         const long long i = v.get<long long>();
         if (i < 0 || i >= static_cast<long long>(inputs.size()))
-            bad(where + ": 'file' " + std::to_string(i) + " is out of range (" + std::to_string(inputs.size()) +
-                " file(s) uploaded)");
+            bad_spec(where + ": 'file' " + std::to_string(i) + " is out of range (" + std::to_string(inputs.size()) +
+                     " file(s) uploaded)");
         return static_cast<int>(i);
     }
     if (v.is_string()) {
@@ -34,33 +34,34 @@ int resolve_file(const json& v, const std::vector<JobInput>& inputs, const std::
         for (const JobInput& in : inputs)
             if (in.filename == name) {
                 if (found >= 0)
-                    bad(where + ": several uploaded files are named '" + name.substr(0, 64) + "'; use the index");
+                    bad_spec(where + ": several uploaded files are named '" + name.substr(0, 64) + "'; use the index");
                 found = in.index;
             }
-        if (found < 0) bad(where + ": no uploaded file is named '" + name.substr(0, 64) + "'");
+        if (found < 0) bad_spec(where + ": no uploaded file is named '" + name.substr(0, 64) + "'");
         return found;
     }
-    bad(where + ": 'file' must be the index of a file part or its filename");
+    bad_spec(where + ": 'file' must be the index of a file part or its filename");
 }
 
 }  // namespace
 
 JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>& inputs, const ServerConfig& config) {
     const json j = parse_json_or_throw(job_json, kRequestJsonLimits, "the 'job' part");
-    if (!j.is_object()) bad("the 'job' part must be a JSON object");
+    if (!j.is_object()) bad_spec("the 'job' part must be a JSON object");
     for (const auto& [key, v] : j.items())
-        if (key != "outputs" && key != "callback_url") bad("unknown job field '" + key.substr(0, 64) + "'");
+        if (key != "outputs" && key != "callback_url") bad_spec("unknown job field '" + key.substr(0, 64) + "'");
     JobSpec spec;
     if (j.contains("callback_url")) {
-        if (!j["callback_url"].is_string()) bad("'callback_url' must be a string (an http or https URL)");
+        if (!j["callback_url"].is_string()) bad_spec("'callback_url' must be a string (an http or https URL)");
         spec.callback_url = j["callback_url"].get<std::string>();
         if (config.webhook_secret.empty())
-            bad("'callback_url' needs a signing secret, and this service has none (it is started with "
+            bad_spec(
+                "'callback_url' needs a signing secret, and this service has none (it is started with "
                 "NURBSRT_WEBHOOK_SECRET or --webhook-secret-file to sign callbacks)");
         check_callback_url(spec.callback_url, config.webhook_allow_private);
     }
     if (!j.contains("outputs") || !j["outputs"].is_array() || j["outputs"].empty())
-        bad("the job needs a non-empty 'outputs' array");
+        bad_spec("the job needs a non-empty 'outputs' array");
     const json& list = j["outputs"];
     if (list.size() > static_cast<size_t>(config.max_job_outputs))
         throw Error(ErrorCode::limit_exceeded, "the job has " + std::to_string(list.size()) +
@@ -70,23 +71,23 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
     for (size_t i = 0; i < list.size(); ++i) {
         const std::string where = "output " + std::to_string(i);
         const json& o = list[i];
-        if (!o.is_object()) bad(where + " must be an object");
-        if (!o.contains("file")) bad(where + ": 'file' is required");
-        if (!o.contains("type") || !o["type"].is_string()) bad(where + ": 'type' must be render or conversion");
+        if (!o.is_object()) bad_spec(where + " must be an object");
+        if (!o.contains("file")) bad_spec(where + ": 'file' is required");
+        if (!o.contains("type") || !o["type"].is_string()) bad_spec(where + ": 'type' must be render or conversion");
         JobOutput out;
         out.index = static_cast<int>(i);
         out.file = resolve_file(o["file"], inputs, where);
         const std::optional<OutputKind> kind = parse_output_kind(o["type"].get<std::string>());
-        if (!kind) bad(where + ": 'type' must be render or conversion");
+        if (!kind) bad_spec(where + ": 'type' must be render or conversion");
         out.kind = *kind;
         std::string extension;
         if (out.kind == OutputKind::render) {
             for (const auto& [key, v] : o.items())
                 if (key != "file" && key != "type" && key != "options")
-                    bad(where + ": unknown field '" + key.substr(0, 64) + "' of a render");
+                    bad_spec(where + ": unknown field '" + key.substr(0, 64) + "' of a render");
             json options = o.value("options", json::object());
             if (options.is_null()) options = json::object();  // null: every option's default
-            if (!options.is_object()) bad(where + ": 'options' must be an object");
+            if (!options.is_object()) bad_spec(where + ": 'options' must be an object");
             // A null option is its default: kept out of the stored options (and the job document).
             for (auto it = options.begin(); it != options.end();)
                 it = it->is_null() ? options.erase(it) : std::next(it);
@@ -101,7 +102,8 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
                 r = parse_render_options(out.options_json);
                 check_render_limits(config, r);
                 if (r.aovs)
-                    bad("option 'aovs' is for POST /v1/renders with Accept: application/json; "
+                    bad_spec(
+                        "option 'aovs' is for POST /v1/renders with Accept: application/json; "
                         "a job's render gets the AOVs with format exr");
             } catch (const Error& e) {
                 throw Error(e.code(), where + ": " + e.what());
@@ -111,11 +113,12 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
         } else {
             for (const auto& [key, v] : o.items())
                 if (key != "file" && key != "type" && key != "format")
-                    bad(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
+                    bad_spec(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
             if (!o.contains("format") || !o["format"].is_string())
-                bad(where + ": a conversion needs 'format' (step, iges, stl, glb or json)");
+                bad_spec(where + ": a conversion needs 'format' (step, iges, stl, glb or json)");
             const ConversionFormat f = conversion_format_from_name(o["format"].get<std::string>());
-            if (f == ConversionFormat::unknown) bad(where + ": 'format' must be one of step, iges, stl, glb, json");
+            if (f == ConversionFormat::unknown)
+                bad_spec(where + ": 'format' must be one of step, iges, stl, glb, json");
             out.options_json = json{{"format", conversion_format_short_name(f)}}.dump();
             extension = conversion_format_extension(f);
             out.content_type = conversion_format_content_type(f);
@@ -125,7 +128,7 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
         outputs.push_back(std::move(out));
     }
     for (size_t f = 0; f < used.size(); ++f)
-        if (!used[f]) bad("file " + std::to_string(f) + " has no outputs");
+        if (!used[f]) bad_spec("file " + std::to_string(f) + " has no outputs");
     return spec;
 }
 

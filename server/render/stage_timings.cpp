@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <utility>
 
 #include "importer/importer.h"
 #include "importer/isolated.h"
@@ -18,11 +19,14 @@ bool listed(std::span<const char* const> stages, const std::string& name) {
 }  // namespace
 
 void add_conversion_stages(const ConvertReport& report, const IsolationTimings& isolated, StageClock& stages) {
+    // In the order they run: the worker's prescan, then its conversion, then the
+    // hand-over and the isolation around it.
     stages.add("prescan", isolated.prescan_ms);
-    stages.add("read", report.read_ms);
-    stages.add("mesh", report.mesh_ms);
-    stages.add("write", report.write_ms);
-    stages.add("verify", report.verify_ms);
+    for (const auto& [name, ms] : {std::pair{"read", report.read_ms},
+                                   {"mesh", report.mesh_ms},
+                                   {"write", report.write_ms},
+                                   {"verify", report.verify_ms}})
+        stages.add(name, ms);
     stages.add("transfer", isolated.transfer_ms);
     stages.add("isolation", isolated.isolation_ms);
 }

@@ -9,6 +9,7 @@
 #include "server/render/context.h"
 #include "server/http/problem.h"
 #include "server/common/redact.h"
+#include "core/ascii.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -19,11 +20,6 @@ struct ThreadNote {
     std::string request_id, code;
 };
 thread_local ThreadNote t_note;
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
 
 }  // namespace
 
@@ -61,7 +57,7 @@ void send_problem_with_status(httplib::Response& res, int status, ProblemCode co
 }
 
 bool wants_json(const httplib::Request& req) {
-    return lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
+    return ascii_lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
 }
 
 PageQuery parse_page_query(const httplib::Request& req, std::initializer_list<const char*> extra) {

@@ -19,6 +19,7 @@
 #include "server/jobs/job_document.h"
 #include "server/jobs/job_spec.h"
 #include "server/routes/routes.h"
+#include "server/store/page_cursor.h"
 #include "server/common/service_error.h"
 
 namespace nurbsrt::server {
@@ -81,29 +82,6 @@ void handle_job_submit(ServerContext& ctx, const httplib::Request& req, httplib:
     send_json(res, job_json(job), 202);
 }
 
-// Cursors are opaque to clients: the order's letter and the last job's
-// sequence number in hex, so a cursor cannot be used with the other order.
-std::string make_cursor(bool newest_first, int64_t seq) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%c%llx", newest_first ? 'n' : 'o', static_cast<unsigned long long>(seq));
-    return buf;
-}
-
-int64_t parse_cursor(const std::string& c, bool newest_first) {
-    const auto bad = [] {
-        return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
-    };
-    if (c.size() < 2 || c.size() > 17 || c[0] != (newest_first ? 'n' : 'o')) throw bad();
-    int64_t v = 0;
-    for (size_t i = 1; i < c.size(); ++i) {
-        const char ch = c[i];
-        const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
-        if (d < 0 || v > (INT64_MAX >> 4)) throw bad();
-        v = v * 16 + d;
-    }
-    return v;
-}
-
 void handle_job_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     const PageQuery q = parse_page_query(req, {"state"});
     const int limit = q.limit;
@@ -115,12 +93,13 @@ void handle_job_list(ServerContext& ctx, const httplib::Request& req, httplib::R
             throw Error(ErrorCode::invalid_argument, "'state' must be queued, running, succeeded, failed or canceled");
     }
     std::optional<int64_t> after;
-    if (req.has_param("cursor")) after = parse_cursor(req.get_param_value("cursor"), newest);
+    if (req.has_param("cursor")) after = parse_page_cursor(req.get_param_value("cursor"), newest, false).key;
     const JobPage page = jobs_of(ctx).store().list(state, newest, limit, after);
     json list = json::array();
     for (const JobRecord& j : page.jobs) list.push_back(job_json(j));
-    send_json(res, {{"jobs", list},
-                    {"next_cursor", page.next_after ? json(make_cursor(newest, *page.next_after)) : json(nullptr)}});
+    send_json(res,
+              {{"jobs", list},
+               {"next_cursor", page.next_after ? json(format_page_cursor(newest, *page.next_after)) : json(nullptr)}});
 }
 
 std::string checked_id(const std::string& id) {

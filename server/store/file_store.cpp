@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "server/store/durable_file.h"
+#include "server/store/page_cursor.h"
 #include "server/common/request_log.h"
 #include "server/common/service_error.h"
 
@@ -76,33 +77,6 @@ std::optional<StoredFile> read_record(const std::string& path) {
     } catch (const json::exception&) {
         return std::nullopt;  // a record from a newer or broken writer names no file
     }
-}
-
-// Cursors are opaque to clients: the order's letter, the last file's creation
-// time in hex and its id, so a cursor cannot be used with the other order.
-std::string make_cursor(bool newest_first, const StoredFile& f) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%c%llx.", newest_first ? 'n' : 'o', static_cast<unsigned long long>(f.created_ms));
-    return buf + f.id;
-}
-
-std::pair<int64_t, std::string> parse_cursor(const std::string& c, bool newest_first) {
-    const auto bad = [] {
-        return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
-    };
-    const size_t dot = c.find('.');
-    if (c.size() < 3 || c[0] != (newest_first ? 'n' : 'o') || dot == std::string::npos || dot < 2 || dot > 17)
-        throw bad();
-    int64_t v = 0;
-    for (size_t i = 1; i < dot; ++i) {
-        const char ch = c[i];
-        const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
-        if (d < 0 || v > (INT64_MAX >> 4)) throw bad();
-        v = v * 16 + d;
-    }
-    const std::string id = c.substr(dot + 1);
-    if (!FileStore::valid_id(id)) throw bad();
-    return {v, id};
 }
 
 }  // namespace
@@ -200,7 +174,12 @@ std::vector<StoredFile> FileStore::all() const {
 
 FilePage FileStore::list(bool newest_first, int limit, const std::optional<std::string>& cursor) const {
     std::optional<std::pair<int64_t, std::string>> after;
-    if (cursor) after = parse_cursor(*cursor, newest_first);
+    if (cursor) {
+        PageCursor c = parse_page_cursor(*cursor, newest_first, true);
+        if (!valid_id(c.id))
+            throw Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
+        after = std::pair{c.key, std::move(c.id)};
+    }
     std::vector<StoredFile> files = all();
     const auto key = [](const StoredFile& f) { return std::make_pair(f.created_ms, f.id); };
     std::sort(files.begin(), files.end(), [&](const StoredFile& a, const StoredFile& b) {
@@ -210,7 +189,7 @@ FilePage FileStore::list(bool newest_first, int limit, const std::optional<std::
     for (const StoredFile& f : files) {
         if (after && (newest_first ? key(f) >= *after : key(f) <= *after)) continue;
         if (static_cast<int>(page.files.size()) == limit) {
-            page.next_cursor = make_cursor(newest_first, page.files.back());
+            page.next_cursor = format_page_cursor(newest_first, page.files.back().created_ms, page.files.back().id);
             break;
         }
         page.files.push_back(f);

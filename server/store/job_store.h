@@ -207,6 +207,35 @@ public:
     virtual std::string describe() const = 0;
 };
 
+// The overrides that every backend declares alike (the SQLite and PostgreSQL
+// stores), listed once: a method added to JobStore is declared by both here.
+// Each backend declares the rest (recover, renew, shared, lease_ms, describe)
+// itself, where they differ.
+#define NURBSRT_JOB_STORE_OVERRIDES                                                                                    \
+    void create(JobRecord& job) override;                                                                              \
+    std::optional<JobRecord> get(const std::string& id) override;                                                      \
+    bool exists(const std::string& id) override;                                                                       \
+    JobPage list(const std::optional<JobState>& state, bool newest_first, int limit, std::optional<int64_t> after_seq) \
+        override;                                                                                                      \
+    std::map<JobState, int64_t> count_by_state() override;                                                             \
+    int64_t artifact_bytes() override;                                                                                 \
+    std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 3) override;                                 \
+    bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;    \
+    bool output_progress(const std::string& id, int output, double progress, const std::string& lease = {}) override;  \
+    bool output_succeeded(const std::string& id, int output, int64_t artifact_bytes, const std::string& result_json,   \
+                          int64_t now_ms, const std::string& lease = {}) override;                                     \
+    bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,         \
+                       int64_t now_ms, const std::string& lease = {}) override;                                        \
+    std::optional<JobState> finish(const std::string& id, int64_t now_ms) override;                                    \
+    void requeue(const JobClaim& claim) override;                                                                      \
+    DeleteOutcome delete_job(const std::string& id, int64_t now_ms) override;                                          \
+    bool remove(const std::string& id) override;                                                                       \
+    bool running(const std::string& id) override;                                                                      \
+    std::vector<std::string> finished_before(int64_t before_ms) override;                                              \
+    std::vector<std::string> all_ids() override;                                                                       \
+    std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) override;                                 \
+    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override
+
 // SQLite in one file (created when needed). Throws Error(io) with a clear
 // message when the file cannot be opened or written, is not a SQLite
 // database, or has a schema of a newer version.

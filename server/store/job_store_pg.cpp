@@ -10,7 +10,7 @@ namespace nurbsrt::server {
 namespace {
 
 // 1: jobs, inputs, outputs (with the leases); 2: the webhook columns of jobs (job_schema.h).
-constexpr int kSchemaVersion = 2;
+constexpr int kPgSchemaVersion = 2;
 // Any constant: instances starting together migrate one after the other.
 constexpr const char* kMigrationLock = "7353021";
 
@@ -42,15 +42,15 @@ void PgJobStore::migrate() {
     conn_->exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
     const PgResult r = conn_->exec("SELECT COALESCE(MAX(version), 0) FROM schema_version");
     const int version = static_cast<int>(r.i64(0, 0));
-    if (version > kSchemaVersion)
+    if (version > kPgSchemaVersion)
         throw Error(ErrorCode::io, "job store " + conn_->where() + " has schema version " + std::to_string(version) +
-                                       ", newer than this nurbsrt's " + std::to_string(kSchemaVersion) +
+                                       ", newer than this nurbsrt's " + std::to_string(kPgSchemaVersion) +
                                        ": run the newer nurbsrt, or point --job-store at another database");
-    if (version < kSchemaVersion) {
+    if (version < kPgSchemaVersion) {
         if (version < 1) conn_->exec(job_schema_v1(SqlDialect::postgres).c_str());
         if (version < 2) conn_->exec(job_schema_v2(SqlDialect::postgres).c_str());
         conn_->exec("DELETE FROM schema_version");
-        conn_->exec("INSERT INTO schema_version(version) VALUES ($1)", {std::to_string(kSchemaVersion)});
+        conn_->exec("INSERT INTO schema_version(version) VALUES ($1)", {std::to_string(kPgSchemaVersion)});
     }
     t.commit();
 }

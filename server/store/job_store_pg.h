@@ -24,31 +24,9 @@ public:
     PgJobStore(const std::string& url, std::string instance, double lease_s);
     ~PgJobStore() override;
 
-    void create(JobRecord& job) override;
-    std::optional<JobRecord> get(const std::string& id) override;
-    bool exists(const std::string& id) override;
-    JobPage list(const std::optional<JobState>& state, bool newest_first, int limit,
-                 std::optional<int64_t> after_seq) override;
-    std::map<JobState, int64_t> count_by_state() override;
-    int64_t artifact_bytes() override;
-    std::optional<JobClaim> claim_next(int64_t now_ms, int max_attempts = 3) override;
-    bool output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease = {}) override;
-    bool output_progress(const std::string& id, int output, double progress, const std::string& lease = {}) override;
-    bool output_succeeded(const std::string& id, int output, int64_t artifact_bytes, const std::string& result_json,
-                          int64_t now_ms, const std::string& lease = {}) override;
-    bool output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
-                       int64_t now_ms, const std::string& lease = {}) override;
-    std::optional<JobState> finish(const std::string& id, int64_t now_ms) override;
-    void requeue(const JobClaim& claim) override;
-    DeleteOutcome delete_job(const std::string& id, int64_t now_ms) override;
-    bool remove(const std::string& id) override;
-    bool running(const std::string& id) override;
+    NURBSRT_JOB_STORE_OVERRIDES;
     bool renew(const JobClaim& claim) override;
     RecoveryReport recover(int, int64_t) override { return {}; }
-    std::vector<std::string> finished_before(int64_t before_ms) override;
-    std::vector<std::string> all_ids() override;
-    std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) override;
-    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override;
     bool shared() const override { return true; }
     int64_t lease_ms() const override { return lease_ms_; }
     std::string describe() const override { return conn_->where(); }

@@ -15,6 +15,7 @@
 
 #include "renderer/image_module.h"
 #include "renderer/render.h"
+#include "core/ascii.h"
 
 namespace nurbsrt {
 namespace {
@@ -82,9 +83,7 @@ void size_thread_pool() {
 // The lower-cased extension of a file name ("" without one).
 std::string extension_of(const std::string& name) {
     const size_t dot_pos = name.rfind('.');
-    std::string ext = dot_pos == std::string::npos ? "" : name.substr(dot_pos + 1);
-    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    return ext;
+    return dot_pos == std::string::npos ? "" : ascii_lower(std::string_view(name).substr(dot_pos + 1));
 }
 
 // An image as OpenImageIO takes it: its spec and its pixels in that layout.
