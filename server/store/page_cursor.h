@@ -29,7 +29,9 @@ inline std::string format_page_cursor(bool newest_first, int64_t key, std::strin
 // Throws Error(invalid_argument) unless `c` is a cursor of this order, with an
 // id exactly when `with_id` (the caller checks the id's own form).
 inline PageCursor parse_page_cursor(std::string_view c, bool newest_first, bool with_id) {
-    const auto bad = [] { return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page"); };
+    const auto bad = [] {
+        return Error(ErrorCode::invalid_argument, "invalid cursor: use next_cursor of a previous page");
+    };
     constexpr size_t kMaxHexDigits = 16;  // an int64_t
     const size_t dot = with_id ? c.find('.') : c.size();
     if (c.empty() || c[0] != (newest_first ? 'n' : 'o') || dot == std::string_view::npos || dot < 2 ||
