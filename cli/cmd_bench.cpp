@@ -10,6 +10,7 @@
 #include "bench/bench.h"
 #include "cli/commands.h"
 #include "core/error.h"
+#include "cli/validators.h"
 
 namespace nurbsrt::cli {
 namespace {
@@ -54,11 +55,11 @@ void add_bench_command(CLI::App& app) {
     cmd->add_option("--runs", o->runs,
                     "minimum timed runs per figure (default 9, --quick 2); a full run's Table 1 and "
                     "precision figures go on until each variant has 4 s of frames")
-        ->check(CLI::Range(1, 100));
+        ->check(in_range(1, 100));
     cmd->add_option("--threads", o->threads, "render threads for all but the thread-scaling figures")
-        ->check(CLI::Range(1, 1024))
+        ->check(in_range(1, 1024))
         ->capture_default_str();
-    cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")->check(CLI::Range(16, 8192));
+    cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")->check(in_range(16, 8192));
     cmd->add_option("--only", *only,
                     "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling,look");
     cmd->add_flag("-q,--quiet", *quiet, "no progress on stderr");

@@ -12,6 +12,7 @@
 #include "cli/commands.h"
 #include "importer/importer.h"
 #include "importer/isolated.h"
+#include "cli/validators.h"
 
 namespace nurbsrt::cli {
 namespace {
@@ -146,6 +147,7 @@ void add_info_command(CLI::App& app) {
     struct Args {
         std::string file;
         bool json = false, faces = false, isolated = false;
+        bool no_attributes = false;
         ImportOptions options;
         double time_limit_s = 300;
     };
@@ -164,11 +166,13 @@ void add_info_command(CLI::App& app) {
         ->check(CLI::PositiveNumber);
     cmd->add_option("--mesh-deflection", a->options.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
-        ->check(CLI::Range(1e-6, 0.5))
+        ->check(in_range(1e-6, 0.5))
         ->capture_default_str();
-    cmd->add_flag("!--no-attributes", a->options.read_attributes,
-                  "skip colours and names (plain readers instead of XDE; faster)");
+    // A plain flag, applied in the callback: CLI11 2.1 prints a negated flag's
+    // default into the help ("--no-attributes{false}").
+    cmd->add_flag("--no-attributes", a->no_attributes, "skip colours and names (plain readers instead of XDE; faster)");
     cmd->callback([a] {
+        a->options.read_attributes = !a->no_attributes;
         const auto t0 = std::chrono::steady_clock::now();
         Scene scene;
         if (a->isolated) {

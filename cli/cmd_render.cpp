@@ -141,9 +141,9 @@ CLI::Validator point_check() {
 
 void add_camera_options(CLI::App* cmd, Args& a) {
     cmd->add_option("--width", a.width, "image width in pixels (default 800; given alone, the height keeps 4:3)")
-        ->check(CLI::Range(1, 16384));
+        ->check(in_range(1, 16384));
     cmd->add_option("--height", a.height, "image height in pixels (default 600; given alone, the width keeps 4:3)")
-        ->check(CLI::Range(1, 16384));
+        ->check(in_range(1, 16384));
     cmd->add_option("--view", a.view,
                     "named view fitted to the model, Z up, looking along: front +Y, back -Y, left +X, right -X, "
                     "top -Z, bottom +Z (up +Y for these two), iso (-1,-1,-1) from the +X+Y+Z octant")
@@ -153,12 +153,12 @@ void add_camera_options(CLI::App* cmd, Args& a) {
         ->check(point_check());
     cmd->add_option("--target", a.target, "point looked at, x,y,z")->check(point_check());
     cmd->add_option("--up", a.up, "up vector x,y,z")->check(point_check());
-    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")->check(CLI::Range(0.01, 179.0));
+    cmd->add_option("--fov", a.fov, "vertical field of view in degrees (perspective)")->check(in_range(0.01, 179.0));
     cmd->add_option("--ortho-height", a.ortho_height, "orthographic view height in model units (implies orthographic)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--fit-margin", a.fit_margin,
                     "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
-        ->check(CLI::Range(0.0, kMaxFitMargin))
+        ->check(in_range(0.0, kMaxFitMargin))
         ->capture_default_str();
     cmd->add_option("--projection", a.projection, "perspective or orthographic")
         ->check(CLI::IsMember({"perspective", "orthographic"}))
@@ -174,19 +174,19 @@ void add_solver_options(CLI::App* cmd, Args& a) {
         ->check(CLI::IsMember({"float", "rgb8"}))
         ->capture_default_str();
     cmd->add_option("--threads", a.threads, "worker threads (0: all cores)")
-        ->check(CLI::Range(0, 1024))
+        ->check(in_range(0, 1024))
         ->capture_default_str();
     cmd->add_option("--tolerance", a.tolerance,
                     "Newton stop tolerance, paper eq. (12): distance of the hit from the pixel ray as a fraction of "
                     "the bounding-box diagonal (same for both methods)")
-        ->check(CLI::Range(1e-15, 1e-3))
+        ->check(in_range(1e-15, 1e-3))
         ->capture_default_str();
 }
 
 void add_import_options(CLI::App* cmd, Args& a) {
     cmd->add_option("--mesh-deflection", a.load.import.mesh_relative_deflection,
                     "preliminary-map mesh deflection, fraction of the bounding-box diagonal")
-        ->check(CLI::Range(1e-6, 0.5))
+        ->check(in_range(1e-6, 0.5))
         ->capture_default_str();
     cmd->add_flag("--isolated", a.load.isolated, "import in a child process with a time limit");
     cmd->add_flag("-q,--quiet", a.quiet, "no progress messages on stderr");
@@ -273,6 +273,7 @@ void run_render(const Args& a) {
         std::fprintf(stderr, fmt, xs...);
         std::fputc('\n', stderr);
     };
+    locate_image_module();                  // a missing module fails now, not after the import
     const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
     say("importing %zu model(s)", a.models.size());
     // --stats timings: stages marked end to end from t0, so they sum to the total.

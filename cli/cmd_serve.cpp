@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "server/server.h"
+#include "cli/validators.h"
 
 namespace nurbsrt::cli {
 
@@ -30,7 +31,7 @@ void add_listen_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--host", a.c.host, "address to listen on")->envname("NURBSRT_HOST")->capture_default_str();
     cmd->add_option("--port", a.c.port, "TCP port (0: any free port, see --port-file)")
         ->envname("NURBSRT_PORT")
-        ->check(CLI::Range(0, 65535))
+        ->check(in_range(0, 65535))
         ->capture_default_str();
     cmd->add_option("--port-file", a.c.port_file, "write the bound port to this file once listening")
         ->envname("NURBSRT_PORT_FILE");
@@ -44,11 +45,11 @@ void add_listen_options(CLI::App* cmd, ServeArgs& a) {
 void add_capacity_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--workers", a.c.workers, "imports/conversions running at once")
         ->envname("NURBSRT_WORKERS")
-        ->check(CLI::Range(1, 256))
+        ->check(in_range(1, 256))
         ->capture_default_str();
     cmd->add_option("--max-queue", a.c.max_queue, "requests waiting for a worker; beyond: 503 + Retry-After")
         ->envname("NURBSRT_MAX_QUEUE")
-        ->check(CLI::Range(0, 10000))
+        ->check(in_range(0, 10000))
         ->capture_default_str();
     cmd->add_option("--queue-timeout", a.c.queue_timeout_s, "longest wait for a worker, seconds; then 503")
         ->envname("NURBSRT_QUEUE_TIMEOUT")
@@ -56,15 +57,15 @@ void add_capacity_options(CLI::App* cmd, ServeArgs& a) {
         ->capture_default_str();
     cmd->add_option("--retry-after", a.c.retry_after_s, "Retry-After seconds on 503")
         ->envname("NURBSRT_RETRY_AFTER")
-        ->check(CLI::Range(1, 3600))
+        ->check(in_range(1, 3600))
         ->capture_default_str();
     cmd->add_option("--render-threads", a.c.render_threads, "threads per render (0: all cores)")
         ->envname("NURBSRT_RENDER_THREADS")
-        ->check(CLI::Range(0, 1024))
+        ->check(in_range(0, 1024))
         ->capture_default_str();
     cmd->add_option("--max-renders", a.c.max_renders, "renders at once, sharing the cores (cheap ones first)")
         ->envname("NURBSRT_MAX_RENDERS")
-        ->check(CLI::Range(1, 256))
+        ->check(in_range(1, 256))
         ->capture_default_str();
     cmd->add_option("--memory-budget-mb", a.budget_mb,
                     "memory of the whole service, MiB: renders wait (or 503) rather than exceed it "
@@ -91,7 +92,7 @@ void add_render_limit_options(CLI::App* cmd, ServeArgs& a) {
         ->capture_default_str();
     cmd->add_option("--max-dimension", a.c.max_dimension, "largest image width or height, pixels")
         ->envname("NURBSRT_MAX_DIMENSION")
-        ->check(CLI::Range(1, 16384))
+        ->check(in_range(1, 16384))
         ->capture_default_str();
     cmd->add_option("--max-pixels", a.c.max_pixels, "largest image, width x height")
         ->envname("NURBSRT_MAX_PIXELS")
@@ -130,7 +131,7 @@ void add_import_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--import-max-nesting", a.c.import_max_nesting,
                     "deepest nesting of parentheses in a STEP upload (422 beyond)")
         ->envname("NURBSRT_IMPORT_MAX_NESTING")
-        ->check(CLI::Range(1, 10000))
+        ->check(in_range(1, 10000))
         ->capture_default_str();
     cmd->add_option("--cache-mb", a.cache_mb, "scene cache capacity, MiB (0: no cache)")
         ->envname("NURBSRT_CACHE_MB")
@@ -153,12 +154,12 @@ void add_connection_options(CLI::App* cmd, ServeArgs& a) {
         ->capture_default_str();
     cmd->add_option("--max-connections", a.c.connection.max_connections, "open connections at once; beyond: 503")
         ->envname("NURBSRT_MAX_CONNECTIONS")
-        ->check(CLI::Range(1, 100000))
+        ->check(in_range(1, 100000))
         ->capture_default_str();
     cmd->add_option("--max-connections-per-client", a.c.connection.max_connections_per_client,
                     "open connections from one client address; beyond: 503")
         ->envname("NURBSRT_MAX_CONNECTIONS_PER_CLIENT")
-        ->check(CLI::Range(1, 100000))
+        ->check(in_range(1, 100000))
         ->capture_default_str();
     cmd->add_option("--api-keys-file", a.c.api_keys_file,
                     "require 'Authorization: Bearer <key>' (or 'X-Api-Key: <key>') with a key from this\n"
@@ -177,25 +178,25 @@ void add_connection_options(CLI::App* cmd, ServeArgs& a) {
 void add_job_options(CLI::App* cmd, ServeArgs& a) {
     cmd->add_option("--job-runners", a.c.job_runners, "batch jobs running at once (their work shares --workers)")
         ->envname("NURBSRT_JOB_RUNNERS")
-        ->check(CLI::Range(1, 256))
+        ->check(in_range(1, 256))
         ->capture_default_str();
     cmd->add_option("--max-queued-jobs", a.c.max_queued_jobs, "batch jobs waiting to run; beyond: 503 + Retry-After")
         ->envname("NURBSRT_MAX_QUEUED_JOBS")
-        ->check(CLI::Range(1, 1000000))
+        ->check(in_range(1, 1000000))
         ->capture_default_str();
     cmd->add_option("--max-job-files", a.c.max_job_files, "most files in one batch job")
         ->envname("NURBSRT_MAX_JOB_FILES")
-        ->check(CLI::Range(1, 10000))
+        ->check(in_range(1, 10000))
         ->capture_default_str();
     cmd->add_option("--max-job-outputs", a.c.max_job_outputs, "most outputs (renders + conversions) of one batch job")
         ->envname("NURBSRT_MAX_JOB_OUTPUTS")
-        ->check(CLI::Range(1, 10000))
+        ->check(in_range(1, 10000))
         ->capture_default_str();
     cmd->add_option("--max-output-attempts", a.c.max_output_attempts,
                     "runs of one job output that a crash of the service (or a lost instance) may cut\n"
                     "short before the output fails with code interrupted; a graceful stop does not count")
         ->envname("NURBSRT_MAX_OUTPUT_ATTEMPTS")
-        ->check(CLI::Range(1, 100))
+        ->check(in_range(1, 100))
         ->capture_default_str();
     cmd->add_option("--job-retention", a.c.job_retention_s,
                     "seconds a finished job (and its artifacts) is kept before it is deleted")
@@ -224,7 +225,7 @@ void add_job_options(CLI::App* cmd, ServeArgs& a) {
                     "PostgreSQL job store: an output a dead instance was running is taken over by another\n"
                     "this long after its last heartbeat (renewed every third of it)")
         ->envname("NURBSRT_LEASE_SECONDS")
-        ->check(CLI::Range(1.0, 86400.0))
+        ->check(in_range(1.0, 86400.0))
         ->capture_default_str();
     cmd->add_option("--instance-id", a.c.instance_id,
                     "this instance's name in leases, logs and metrics (default: host name + random suffix)")
@@ -243,16 +244,16 @@ void add_webhook_options(CLI::App* cmd, ServeArgs& a) {
         ->envname("NURBSRT_WEBHOOK_ALLOW_PRIVATE");
     cmd->add_option("--webhook-attempts", a.c.webhook_attempts, "attempts per job callback before it is given up")
         ->envname("NURBSRT_WEBHOOK_ATTEMPTS")
-        ->check(CLI::Range(1, 100))
+        ->check(in_range(1, 100))
         ->capture_default_str();
     cmd->add_option("--webhook-backoff", a.c.webhook_backoff_s,
                     "seconds before the second attempt of a callback; doubled after each (at most an hour)")
         ->envname("NURBSRT_WEBHOOK_BACKOFF")
-        ->check(CLI::Range(0.01, 3600.0))
+        ->check(in_range(0.01, 3600.0))
         ->capture_default_str();
     cmd->add_option("--webhook-timeout", a.c.webhook_timeout_s, "seconds a callback receiver has to connect and answer")
         ->envname("NURBSRT_WEBHOOK_TIMEOUT")
-        ->check(CLI::Range(0.1, 300.0))
+        ->check(in_range(0.1, 300.0))
         ->capture_default_str();
 }
 

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "cli/commands.h"
 #include "core/error.h"
@@ -33,6 +34,16 @@ int main(int argc, char** argv) {
     nurbsrt::cli::add_import_worker_command(app);
     nurbsrt::cli::add_convert_worker_command(app);
 
+    // CLI11 answers a mistyped command with "A subcommand is required".
+    const auto named = [&](const CLI::App* s) { return s->check_name(argv[1]); };
+    if (argc > 1 && argv[1][0] != '-' && app.get_subcommands(named).empty()) {
+        std::string commands;
+        for (const CLI::App* sub : app.get_subcommands([](const CLI::App* s) { return !s->get_group().empty(); }))
+            commands += (commands.empty() ? "" : ", ") + sub->get_name();
+        std::fprintf(stderr, "nurbsrt: unknown command '%s'; commands: %s\nRun with --help for more information.\n",
+                     argv[1], commands.c_str());
+        return 2;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -9,11 +9,28 @@
 #include <filesystem>
 #include <initializer_list>
 #include <string>
+#include <type_traits>
 #include <unistd.h>
 
 #include "core/ascii.h"
 
 namespace nurbsrt::cli {
+
+// CLI::Range, with a message that says what is wrong: CLI11 2.1 answers text
+// that is no number ("--width abc") with "not in range". A range of integers
+// takes whole numbers only.
+template <typename T>
+CLI::Validator in_range(T lo, T hi) {
+    const CLI::Range range(lo, hi);
+    return CLI::Validator(
+        [range](std::string& s) -> std::string {
+            T value{};
+            if (!CLI::detail::lexical_cast(s, value))
+                return "'" + s + "' is not " + (std::is_integral_v<T> ? "a whole number" : "a number");
+            return range(s);
+        },
+        range.get_description());
+}
 
 // A file we are going to write: one of `extensions` (lower case, with the dot),
 // in a directory that exists and that we may write.

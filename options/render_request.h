@@ -82,6 +82,7 @@ struct RenderRequest {
     // scene's bounding-box diagonal: the CLI's --tolerance; the API keeps the default.
     double tolerance = kDefaultRelativeTolerance;
     OutputFormat format = output_format(ImageFormat::png);
+    bool format_given = false;             // the request named it (else the service may take it from Accept)
     std::optional<Background> background;  // unset: default_background(format)
     unsigned aovs = 0;                     // aov_bit() of each AOV asked for
     ImageLook look;

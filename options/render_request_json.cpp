@@ -189,6 +189,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
         } else if (key == "format") {
             r.format =
                 output_format(image_format_of_extension(one_of(v, key, {"png", "jpeg", "jpg", "tiff", "tif", "exr"})));
+            r.format_given = true;
         } else if (key == "background") {
             r.background = background(v, key);
         } else if (key == "aovs") {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 
 namespace nurbsrt {
 
@@ -22,6 +23,15 @@ enum ImageWriteStatus : int { kImageWritten = 0, kImageFormatUnsupported = 1, kI
 inline constexpr const char* kImageModuleFile = "libnurbsrt_image.so";
 inline constexpr const char* kImageWriteSymbol = "nurbsrt_write_image_v1";
 inline constexpr const char* kImageEncodeSymbol = "nurbsrt_encode_image_v1";
+
+// The path the module will be loaded from: beside the executable, else the
+// first directory of LD_LIBRARY_PATH or of the system's library directories
+// that holds it. Throws Error(internal) naming the file and where it was looked
+// for when none does. Cheap (a few stat calls, nothing loaded): a program that
+// will write an image calls it before its other work, so that an install
+// without the module fails at once, not after an import or at the first
+// render; the loading itself still overlaps that work (ImageWriterPreload).
+std::string locate_image_module();
 
 // Loads the module on a thread of its own while the program goes on: a program
 // that will write an image creates one early, so that the loading overlaps its

@@ -323,7 +323,10 @@ int run_server(const ServerConfig& given) {
     sigaddset(&stop_signals, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
     signal(SIGPIPE, SIG_IGN);
-    // Every render encodes an image: load the writer now, not in the first request.
+    // Every render encodes an image: a service without its writer module must not
+    // start (it would answer ready and fail every render), and it loads the
+    // writer now, not in the first request.
+    locate_image_module();
     const ImageWriterPreload image_writer;
 
     ApiKeys keys;

@@ -126,13 +126,43 @@ TEST(Cli, MissingImageModuleIsAClearError) {
     fs::copy_file(NURBSRT_BINARY, bin, fs::copy_options::overwrite_existing);
     const CliRun info = run_nurbsrt("info --json " + kScrew, "", bin.string());
     EXPECT_EQ(info.status, 0) << info.err;
+    // The render fails before its import (it says nothing of importing), naming the file and where it looked.
     const CliRun render =
-        run_nurbsrt("render " + kScrew + " -o " + (dir / "x.png").string() + " --width 64 --quiet", "", bin.string());
-    EXPECT_NE(render.status, 0);
+        run_nurbsrt("render " + kScrew + " -o " + (dir / "x.png").string() + " --width 64", "", bin.string());
+    EXPECT_EQ(render.status, 1);
     EXPECT_NE(render.err.find("cannot load the image writer module"), std::string::npos) << render.err;
-    EXPECT_NE(render.err.find("libnurbsrt_image.so"), std::string::npos) << render.err;
+    EXPECT_NE(render.err.find("libnurbsrt_image.so is not beside the executable (" + dir.string() + ")"),
+              std::string::npos)
+        << render.err;
+    EXPECT_EQ(render.err.find("importing"), std::string::npos) << render.err;
     EXPECT_FALSE(fs::exists(dir / "x.png"));
+    // A service without it does not start (it would answer ready and fail every render).
+    const CliRun serve = run_nurbsrt("serve --port 0 --data-dir " + (dir / "data").string(), "", bin.string());
+    EXPECT_EQ(serve.status, 1);
+    EXPECT_NE(serve.err.find("libnurbsrt_image.so is not beside the executable"), std::string::npos) << serve.err;
     fs::remove_all(dir);
+}
+
+TEST(Cli, UsageErrorsSayWhatIsWrong) {
+    const CliRun word = run_nurbsrt("render " + kScrew + " -o /tmp/never.png --width abc");
+    EXPECT_EQ(word.status, 2);
+    EXPECT_NE(word.err.find("--width: 'abc' is not a whole number"), std::string::npos) << word.err;
+    const CliRun real = run_nurbsrt("render " + kScrew + " -o /tmp/never.png --fov wide");
+    EXPECT_NE(real.err.find("--fov: 'wide' is not a number"), std::string::npos) << real.err;
+    const CliRun range = run_nurbsrt("render " + kScrew + " -o /tmp/never.png --width 0");
+    EXPECT_EQ(range.status, 2);
+    EXPECT_NE(range.err.find("not in range 1 to 16384"), std::string::npos) << range.err;
+    const CliRun command = run_nurbsrt("rendr " + kScrew);
+    EXPECT_EQ(command.status, 2);
+    EXPECT_NE(command.err.find("unknown command 'rendr'; commands: render, info, convert, serve, bench"),
+              std::string::npos)
+        << command.err;
+    for (const char* sub : {"render", "info", "convert", "serve", "bench"}) {
+        const CliRun help = run_nurbsrt(std::string(sub) + " --help");
+        EXPECT_EQ(help.status, 0);
+        EXPECT_EQ(help.out.find("{false}"), std::string::npos) << sub << ":\n" << help.out;
+        EXPECT_EQ(help.out.find("{true}"), std::string::npos) << sub << ":\n" << help.out;
+    }
 }
 
 TEST(Cli, IsolatedInfoMatchesInProcess) {

@@ -2,11 +2,17 @@
 #include "renderer/image_module.h"
 
 #include <dlfcn.h>
+#include <unistd.h>
 #include <tbb/parallel_for.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 #include "core/error.h"
 #include "core/process/executable_path.h"
@@ -24,6 +30,44 @@ struct ImageModule {
     WriteFn write = nullptr;
     EncodeFn encode = nullptr;
 };
+
+}  // namespace
+
+std::string locate_image_module() {
+    std::vector<std::string> dirs;
+    const std::string beside = beside_executable(kImageModuleFile);
+    dirs.push_back(beside.substr(0, beside.rfind('/')));
+    // dlopen's own order for a bare name: LD_LIBRARY_PATH, then the directories
+    // of ld.so.cache (those /etc/ld.so.conf.d names, on Debian), then /lib, /usr/lib.
+    if (const char* env = std::getenv("LD_LIBRARY_PATH")) {
+        std::string_view rest = env;
+        while (!rest.empty()) {
+            const size_t colon = rest.find(':');
+            if (colon != 0) dirs.emplace_back(rest.substr(0, colon));
+            rest = colon == std::string_view::npos ? std::string_view{} : rest.substr(colon + 1);
+        }
+    }
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator("/etc/ld.so.conf.d", ec)) {
+        if (entry.path().extension() != ".conf") continue;
+        std::ifstream conf(entry.path());
+        for (std::string line; std::getline(conf, line);)
+            if (!line.empty() && line[0] == '/') dirs.push_back(line.substr(0, line.find_first_of(" \t#")));
+    }
+    dirs.emplace_back("/lib");
+    dirs.emplace_back("/usr/lib");
+    std::string looked;
+    for (const std::string& d : dirs) {
+        const std::string path = (d.empty() ? "." : d) + "/" + kImageModuleFile;
+        if (::access(path.c_str(), R_OK) == 0) return path;
+        looked += (looked.empty() ? "" : ", ") + (d.empty() ? "." : d);
+    }
+    throw Error(ErrorCode::internal, std::string("cannot load the image writer module: ") + kImageModuleFile +
+                                         " is not beside the executable (" + dirs.front() +
+                                         ") nor on the library path (looked in " + looked + ")");
+}
+
+namespace {
 
 // Loads the module once per process (beside the executable first, then the
 // library search path) and never unloads it. RTLD_LOCAL: its libraries' symbols

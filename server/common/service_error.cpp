@@ -6,15 +6,12 @@ namespace nurbsrt::server {
 
 namespace {
 
-constexpr EnumName<ServiceCode> kServiceCodeNames[] = {{ServiceCode::not_found, "not_found"},
-                                                       {ServiceCode::method_not_allowed, "method_not_allowed"},
-                                                       {ServiceCode::overloaded, "overloaded"},
-                                                       {ServiceCode::render_timeout, "render_timeout"},
-                                                       {ServiceCode::unauthorized, "unauthorized"},
-                                                       {ServiceCode::request_timeout, "request_timeout"},
-                                                       {ServiceCode::interrupted, "interrupted"},
-                                                       {ServiceCode::malformed_request, "malformed_request"},
-                                                       {ServiceCode::not_implemented, "not_implemented"}};
+constexpr EnumName<ServiceCode> kServiceCodeNames[] = {
+    {ServiceCode::not_found, "not_found"},           {ServiceCode::method_not_allowed, "method_not_allowed"},
+    {ServiceCode::overloaded, "overloaded"},         {ServiceCode::render_timeout, "render_timeout"},
+    {ServiceCode::unauthorized, "unauthorized"},     {ServiceCode::request_timeout, "request_timeout"},
+    {ServiceCode::interrupted, "interrupted"},       {ServiceCode::malformed_request, "malformed_request"},
+    {ServiceCode::not_acceptable, "not_acceptable"}, {ServiceCode::not_implemented, "not_implemented"}};
 static_assert(names_every_value(kServiceCodeNames, ServiceCode::not_implemented));
 
 }  // namespace

@@ -26,6 +26,7 @@ enum class ServiceCode {
     request_timeout,     // the request's headers or body did not arrive in time (server/http/http_server.h)
     interrupted,         // a job's run was cut short by service restarts too often (server/jobs/job_runner.h)
     malformed_request,  // the request's HTTP framing or header syntax is invalid (RFC 9112; server/http/http_framing.h)
+    not_acceptable,     // the Accept header admits none of the answer's media types (RFC 9110 §15.5.7: 406)
     not_implemented,  // a transfer coding other than chunked (RFC 9112 §6.1: 501); the last code (tests iterate up to it)
 };
 

@@ -15,13 +15,6 @@ bool is_tchar(char c) {
     return std::string_view("!#$%&'*+-.^_`|~").find(c) != std::string_view::npos;
 }
 
-// Without the optional white space around a field value (RFC 9110 §5.6.3: spaces and tabs).
-std::string_view trim_ows(std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-    return s;
-}
-
 // A bounded excerpt of client text for a message (printable ASCII only).
 std::string excerpt(std::string_view s) {
     constexpr size_t kMaxExcerpt = 64;
@@ -132,6 +125,12 @@ FramingVerdict check_request_head(std::string_view head) {
     if (v.body != BodyFraming::none && body_is_unread(method))
         return refuse("a " + std::string(method) + " request carries no body: send it without one");
     return v;
+}
+
+std::string_view trim_ows(std::string_view s) {
+    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+    return s;
 }
 
 }  // namespace nurbsrt::server

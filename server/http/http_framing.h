@@ -36,4 +36,8 @@ struct FramingVerdict {
 // blank line that ends them.
 FramingVerdict check_request_head(std::string_view head);
 
+// `s` without the optional white space around a field value (RFC 9110 §5.6.3:
+// spaces and tabs).
+std::string_view trim_ows(std::string_view s);
+
 }  // namespace nurbsrt::server

@@ -49,6 +49,8 @@ int service_status(ServiceCode code) {
             return 503;
         case ServiceCode::malformed_request:
             return 400;
+        case ServiceCode::not_acceptable:
+            return 406;
         case ServiceCode::not_implemented:
             return 501;
         case ServiceCode::render_timeout:
@@ -109,6 +111,8 @@ const char* service_title(ServiceCode code) {
             return "Interrupted by a service restart";
         case ServiceCode::malformed_request:
             return "Malformed request";
+        case ServiceCode::not_acceptable:
+            return "Not acceptable";
         case ServiceCode::not_implemented:
             return "Not implemented";
     }

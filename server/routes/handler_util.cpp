@@ -9,7 +9,7 @@
 #include "server/render/context.h"
 #include "server/http/problem.h"
 #include "server/common/redact.h"
-#include "core/ascii.h"
+#include "server/http/negotiation.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -56,8 +56,17 @@ void send_problem_with_status(httplib::Response& res, int status, ProblemCode co
     note_problem_code(code.name());
 }
 
-bool wants_json(const httplib::Request& req) {
-    return ascii_lower(req.get_header_value("Accept")).find("application/json") != std::string::npos;
+void send_json(httplib::Response& res, const nlohmann::json& body, int status) {
+    res.status = status;
+    res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), kJsonMediaType);
+}
+
+std::string negotiate_answer(const httplib::Request& req, const std::vector<std::string>& offers) {
+    if (auto chosen = negotiate_media_type(req.get_header_value("Accept"), offers)) return *chosen;
+    std::string list;
+    for (const std::string& o : offers) list += (list.empty() ? "" : ", ") + o;
+    throw ServiceError(ServiceCode::not_acceptable,
+                       "the Accept header admits none of the media types of this answer: " + list);
 }
 
 PageQuery parse_page_query(const httplib::Request& req, std::initializer_list<const char*> extra) {

@@ -4,10 +4,12 @@
 #pragma once
 
 #include <httplib.h>
+#include <nlohmann/json_fwd.hpp>
 
 #include <initializer_list>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "server/common/service_error.h"
@@ -84,7 +86,13 @@ httplib::Server::Handler guarded(Ctx& ctx, F f) {
 inline constexpr const char* kBulkJsonContentType = "application/json; charset=utf-8";
 
 // True when the client asked for JSON (Accept contains application/json).
-bool wants_json(const httplib::Request& req);
+// The media type of the answer among `offers`, most preferred first, as the
+// request's Accept header admits them (RFC 9110 §12.5.1); a request that admits
+// none is refused 406 (code not_acceptable) with the list it could have had.
+std::string negotiate_answer(const httplib::Request& req, const std::vector<std::string>& offers);
+inline constexpr const char* kJsonMediaType = "application/json";
+// A JSON answer (invalid UTF-8 in client text replaced, never an exception).
+void send_json(httplib::Response& res, const nlohmann::json& body, int status = 200);
 
 // For a request naming a stored file (upload.file_id, server/store/file_store.h):
 // loads its record and bytes into `stored` and points upload.bytes and

@@ -11,6 +11,8 @@
 #include "server/common/base64.h"
 #include "server/render/context.h"
 #include "server/http/http_server.h"
+#include "core/ascii.h"
+#include "server/http/negotiation.h"
 #include "server/routes/handler_util.h"
 #include "options/render_request.h"
 #include "server/routes/routes.h"
@@ -56,6 +58,12 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     StageClock stages(GuardedServer::request_received_at());
     Upload upload = read_upload(req, {"format"});
     const ConversionFormat format = parse_conversion_format(upload.options_json);
+    // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.
+    // A NURBS JSON file is application/json itself: the wrapper only when Accept names that type.
+    const std::string file_type = conversion_format_content_type(format);
+    const bool json_answer = negotiate_answer(req, {file_type, kJsonMediaType}) == kJsonMediaType &&
+                             (file_type != kJsonMediaType ||
+                              ascii_lower(req.get_header_value("Accept")).find(kJsonMediaType) != std::string::npos);
     StoredContent stored;
     if (!upload.file_id.empty()) load_stored_file(ctx, upload, stored);
     const std::string& bytes = *upload.bytes;
@@ -87,7 +95,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     stages.mark("transfer");  // the converted file into this process
 
     const std::string content_type = conversion_format_content_type(format);
-    if (wants_json(req)) {
+    if (json_answer) {
         nlohmann::json body = {{"request_id", request_id(res)},
                                {"input_format", format_name(report.in_format)},
                                {"output_format", conversion_format_name(report.output)},
@@ -105,7 +113,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         res.set_content(body.dump(), kBulkJsonContentType);
     } else {
         res.set_header("Content-Disposition",
-                       "attachment; filename=\"" + download_name(upload.filename, download_extension(format)) + "\"");
+                       attachment_disposition(download_name(upload.filename, download_extension(format))));
         if (!report.warnings.empty()) res.set_header("X-Nurbsrt-Warnings", warnings_header(report.warnings));
         res.set_content(data, content_type.c_str());
         stages.mark("response");

@@ -18,6 +18,7 @@
 #include "server/http/etag.h"
 #include "server/store/file_store.h"
 #include "server/http/http_server.h"
+#include "server/http/negotiation.h"
 #include "server/routes/handler_util.h"
 #include "server/common/rfc3339.h"
 #include "server/store/job_store.h"
@@ -74,11 +75,6 @@ json file_json(const ServerContext& ctx, const StoredFile& f) {
             {"pinned", f.pinned},
             {"expires_at", f.pinned ? json(nullptr) : json(rfc3339_utc(f.created_ms + retention_ms))},
             {"summary", summary}};
-}
-
-void send_json(httplib::Response& res, const json& body, int status = 200) {
-    res.status = status;
-    res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
 ServiceError no_such_file(const std::string& id) {
@@ -229,8 +225,10 @@ void handle_file_content(ServerContext& ctx, const httplib::Request& req, httpli
     }
     const StoredContent c = ctx.files.open(id);
     const bool step = c.file.format == "STEP";
-    res.set_header("Content-Disposition",
-                   "attachment; filename=\"" + download_name(c.file.filename, step ? ".stp" : ".igs") + "\"");
+    // The name it was stored under, byte for byte (a client's label, never a path).
+    res.set_header(
+        "Content-Disposition",
+        attachment_disposition(c.file.filename.empty() ? (step ? "model.stp" : "model.igs") : c.file.filename));
     res.set_content(*c.bytes, step ? "model/step" : "model/iges");
 }
 

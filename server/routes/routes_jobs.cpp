@@ -33,11 +33,6 @@ using nlohmann::json;
 // one small GET.
 constexpr int kJobPollAfterS = 1;
 
-void send_json(httplib::Response& res, const json& body, int status = 200) {
-    res.status = status;
-    res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
-}
-
 JobService& jobs_of(ServerContext& ctx) {
     if (!ctx.jobs) throw Error(ErrorCode::internal, "the job service is not running");
     return *ctx.jobs;

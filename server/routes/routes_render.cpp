@@ -32,15 +32,34 @@ nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
     return out;
 }
 
+// The answer's media type (RFC 9110 §12.5.1): the image in the format the
+// options name, or, when they name none, in the one Accept prefers (PNG for
+// */*); or JSON. True for JSON; else `r.format` is the image's.
+bool choose_answer(const httplib::Request& req, RenderRequest& r) {
+    std::vector<std::string> offers;
+    if (r.format_given)
+        offers.push_back(r.format.content_type);
+    else
+        for (const ImageFormat kind : {ImageFormat::png, ImageFormat::jpeg, ImageFormat::tiff, ImageFormat::exr})
+            offers.push_back(output_format(kind).content_type);
+    offers.push_back(kJsonMediaType);
+    const std::string answer = negotiate_answer(req, offers);
+    if (answer == kJsonMediaType) return true;
+    for (const ImageFormat kind : {ImageFormat::png, ImageFormat::jpeg, ImageFormat::tiff, ImageFormat::exr})
+        if (output_format(kind).content_type == answer) r.format = output_format(kind);
+    return false;
+}
+
 }  // namespace
 
 void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
     // The stages (timings_ms, Server-Timing) run from the request's arrival.
     const auto t0 = GuardedServer::request_received_at();
     Upload upload = read_upload(req);
-    const RenderRequest r = parse_render_options(upload.options_json);
+    RenderRequest r = parse_render_options(upload.options_json);
     check_render_limits(ctx.config, r);
-    if (r.aovs && !wants_json(req))
+    const bool json_answer = choose_answer(req, r);
+    if (r.aovs && !json_answer)
         throw Error(ErrorCode::invalid_argument,
                     "option 'aovs' needs a JSON answer: send 'Accept: application/json' (or use format exr)");
     StoredContent stored;
@@ -49,8 +68,8 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
         // The image of a stored file is known by its content and options
         // before any work: a client holding it gets 304 without a render.
         // JSON answers carry timings and a request id, so they get no tag.
-        if (!wants_json(req)) {
-            const std::string etag = render_etag(stored.file.id, upload.options_json);
+        if (!json_answer) {
+            const std::string etag = render_etag(stored.file.id, upload.options_json + "\n" + r.format.content_type);
             res.set_header("ETag", etag);
             res.set_header("Vary", "Accept");
             if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
@@ -74,7 +93,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
         res.set_header("Server-Timing",
                        server_timing(stages, kRenderStages, {{"cache", rendered.cache_hit ? "hit" : "miss"}}));
     };
-    if (!wants_json(req)) {
+    if (!json_answer) {
         res.set_content(rendered.bytes, r.format.content_type.c_str());
         stages.mark("response");
         set_timing_header();

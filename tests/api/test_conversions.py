@@ -240,7 +240,7 @@ def test_format_as_form_field_and_download_named_after_the_upload(url):
     r = requests.post(url + "/v1/conversions", files=files, timeout=TIMEOUT)
     assert r.status_code == 200, r.text[:300]
     assert r.headers["Content-Type"] == "model/step"
-    assert r.headers["Content-Disposition"] == 'attachment; filename="MyBearingv2.stp"'
+    assert r.headers["Content-Disposition"] == "attachment; filename=\"MyBearingv2.stp\"; filename*=UTF-8''MyBearingv2.stp"
     assert r.content.startswith(b"ISO-10303-21;")
     # The format in two places is refused, not resolved one way.
     check_problem(requests.post(url + "/v1/conversions", files=files, params={"format": "iges"}, timeout=TIMEOUT),
@@ -250,4 +250,4 @@ def test_format_as_form_field_and_download_named_after_the_upload(url):
     # A name with nothing usable left falls back to "converted".
     r = requests.post(url + "/v1/conversions", files={"file": ("(((.step", SCREW.read_bytes()),
                                                       "format": (None, "iges")}, timeout=TIMEOUT)
-    assert r.headers["Content-Disposition"] == 'attachment; filename="converted.igs"'
+    assert r.headers["Content-Disposition"] == "attachment; filename=\"converted.igs\"; filename*=UTF-8''converted.igs"

@@ -64,6 +64,19 @@ def test_upload_multipart_and_raw(url):
     assert stored(r)["filename"] == "cd.step"
 
 
+def test_content_comes_back_under_its_name_byte_for_byte(url):
+    # screw.step stays .step (not .stp), a UTF-8 name stays UTF-8 in RFC 8187's form,
+    # with a printable-ASCII stand-in for clients that only read filename="...".
+    for n, (name, quoted, encoded) in enumerate([("screw.step", "screw.step", "screw.step"),
+                                                 ("Gehäuse v2.STEP", "Geh__use v2.STEP", "Geh%C3%A4use%20v2.STEP")]):
+        data = fresh(url, variant(60 + n))
+        f = stored(post_raw(url, "/v1/files", data, params={"filename": name}))
+        assert f["filename"] == name
+        c = requests.get(f"{url}/v1/files/{f['id']}/content", timeout=TIMEOUT)
+        assert c.status_code == 200 and c.content == data and c.headers["Content-Type"] == "model/step"
+        assert c.headers["Content-Disposition"] == f"attachment; filename=\"{quoted}\"; filename*=UTF-8''{encoded}"
+
+
 def test_format_is_sniffed_not_taken_from_the_name(url):
     data = fresh(url, variant(4))
     f = stored(upload(url, data, "looks-like.igs"))
@@ -94,7 +107,8 @@ def test_get_content_list_and_delete(url):
     assert c.status_code == 200 and c.content == datas[0]
     assert c.headers["Content-Type"] == "model/step"
     assert c.headers["ETag"] == f'"{ids[0]}"'
-    assert c.headers["Content-Disposition"] == 'attachment; filename="p0.stp"'
+    # The name it was stored under, byte for byte (RFC 6266 with RFC 8187's UTF-8 form).
+    assert c.headers["Content-Disposition"] == "attachment; filename=\"p0.step\"; filename*=UTF-8''p0.step"
     again = requests.get(f"{url}/v1/files/{ids[0]}/content", headers={"If-None-Match": c.headers["ETag"]},
                          timeout=TIMEOUT)
     assert again.status_code == 304 and again.content == b""
@@ -227,7 +241,8 @@ def test_conversion_by_file_id(url):
     # A download is named after the stored file.
     d = requests.post(url + "/v1/conversions", files=[("file_id", (None, file_id)), ("format", (None, "iges"))],
                       timeout=TIMEOUT)
-    assert d.status_code == 200 and d.headers["Content-Disposition"] == 'attachment; filename="bolt.igs"'
+    assert d.status_code == 200
+    assert d.headers["Content-Disposition"] == "attachment; filename=\"bolt.igs\"; filename*=UTF-8''bolt.igs"
 
 
 def test_job_by_file_id_survives_the_file_deleted(url):

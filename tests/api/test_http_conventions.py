@@ -168,6 +168,54 @@ def test_post_without_any_body_is_400_at_once(url, path, expected):
     assert expected in problem["detail"]
 
 
+# ---- proactive negotiation (RFC 9110 §12.5.1): Accept decides the answer, 406 when it admits none ----------
+
+IMAGE_MAGIC = {"image/png": b"\x89PNG", "image/jpeg": b"\xff\xd8\xff", "image/tiff": b"II*\x00",
+               "image/x-exr": b"\x76\x2f\x31\x01"}
+
+
+@pytest.mark.parametrize("accept,content_type", [
+    (None, "image/png"), ("*/*", "image/png"), ("image/jpeg", "image/jpeg"), ("image/tiff", "image/tiff"),
+    ("image/x-exr", "image/x-exr"), ("image/png;q=0.5, image/jpeg", "image/jpeg"), ("image/*", "image/png"),
+    ("application/json, */*", "application/json"),
+])
+def test_render_answers_what_accept_prefers(url, accept, content_type):
+    r = post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 48, "height": 32},
+                 headers={"Accept": accept} if accept else {})
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"].startswith(content_type)
+    if content_type == "application/json":
+        assert r.json()["format"] == "png"
+    else:
+        assert r.content.startswith(IMAGE_MAGIC[content_type])
+
+
+def test_render_refuses_what_accept_does_not_admit(url):
+    for accept in ("application/xml", "text/html", "image/gif", "image/png;q=0, application/json;q=0"):
+        r = post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 48}, headers={"Accept": accept})
+        check_problem(r, 406, "not_acceptable")
+        for offered in ("image/png", "image/jpeg", "image/tiff", "image/x-exr", "application/json"):
+            assert offered in r.json()["detail"], (accept, r.json()["detail"])
+    # A format the options name is the only image on offer: Accept must admit it (or JSON).
+    r = post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 48, "format": "png"},
+                 headers={"Accept": "image/jpeg"})
+    check_problem(r, 406, "not_acceptable")
+    assert "image/png" in r.json()["detail"] and "image/jpeg" not in r.json()["detail"]
+    r = post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 48, "format": "jpeg"},
+                 headers={"Accept": "image/*"})
+    assert r.status_code == 200 and r.headers["Content-Type"] == "image/jpeg"
+
+
+def test_conversion_refuses_what_accept_does_not_admit(url):
+    r = requests.post(url + "/v1/conversions", files={"file": ("screw.step", SCREW.read_bytes()), "format": (None, "stl")},
+                      headers={"Accept": "application/xml"}, timeout=TIMEOUT)
+    check_problem(r, 406, "not_acceptable")
+    assert "model/stl" in r.json()["detail"] and "application/json" in r.json()["detail"]
+    r = requests.post(url + "/v1/conversions", files={"file": ("screw.step", SCREW.read_bytes()), "format": (None, "stl")},
+                      headers={"Accept": "model/*"}, timeout=TIMEOUT)
+    assert r.status_code == 200 and r.headers["Content-Type"] == "model/stl"
+
+
 # ---- conversions: format as a form field, download names ----------------------------------------------
 
 @pytest.mark.parametrize("upload_name,fmt,download,magic", [
@@ -179,7 +227,7 @@ def test_conversion_format_as_form_field_and_download_name(url, upload_name, fmt
     r = requests.post(url + "/v1/conversions", files={"file": (upload_name, SCREW.read_bytes()), "format": (None, fmt)},
                       timeout=TIMEOUT)
     assert r.status_code == 200, r.text[:300]
-    assert r.headers["Content-Disposition"] == f'attachment; filename="{download}"'
+    assert r.headers["Content-Disposition"] == f"attachment; filename=\"{download}\"; filename*=UTF-8''{download}"
     if magic:
         assert r.content.startswith(magic)
     if fmt == "iges":
