@@ -3,9 +3,17 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <unistd.h>
 
 #include "cli/commands.h"
 #include "cli/validators.h"
+#include "cli/warnings.h"
 #include "importer/importer.h"
 
 namespace nurbsrt::cli {
@@ -30,12 +38,45 @@ void add_convert_command(CLI::App& app) {
                            "          nurbsrt convert part.igs part.glb");
     auto in = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
+    auto flags = std::make_shared<std::pair<bool, bool>>();  // quiet, strict
     cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
     cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")
         ->required()
         ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
-    cmd->callback([in, out] {
-        const ConvertReport r = convert_file(*in, *out);
+    cmd->add_flag("-q,--quiet", flags->first, "no summary or warnings on stderr");
+    cmd->add_flag("--strict", flags->second,
+                  "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
+    cmd->callback([in, out, flags] {
+        const auto [quiet, strict] = *flags;
+        // Written under a temporary name beside OUT with OUT's extension (the
+        // writer picks the format by it), renamed when it is kept: OUT exists
+        // only complete, and not at all when --strict refuses it.
+        const std::filesystem::path target(*out);
+        const std::filesystem::path partial =
+            target.parent_path() /
+            ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) + target.extension().string());
+        ConvertReport r;
+        try {
+            r = convert_file(*in, partial.string());
+        } catch (...) {
+            std::error_code ec;
+            std::filesystem::remove(partial, ec);
+            throw;
+        }
+        std::vector<std::string> warnings;
+        if (r.unmeshed_faces > 0)
+            warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
+                               *out);
+        warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+        try {
+            report_warnings(warnings, quiet, strict);
+        } catch (const WarningsRefused&) {
+            std::error_code ec;
+            std::filesystem::remove(partial, ec);
+            throw;
+        }
+        std::filesystem::rename(partial, target);
+        if (quiet) return;
         std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(), format_name(r.in_format),
                      r.faces, out->c_str(), conversion_format_name(r.output));
         if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
@@ -44,10 +85,6 @@ void add_convert_command(CLI::App& app) {
         std::fprintf(stderr, ", write %.1f ms", r.write_ms);
         if (r.verify_ms > 0) std::fprintf(stderr, ", read back %.1f ms", r.verify_ms);
         std::fputc('\n', stderr);
-        if (r.unmeshed_faces > 0)
-            std::fprintf(stderr, "nurbsrt: warning: %d face(s) could not be meshed and are missing from %s\n",
-                         r.unmeshed_faces, out->c_str());
-        for (const std::string& w : r.warnings) std::fprintf(stderr, "nurbsrt: warning: %s\n", w.c_str());
     });
 }
 

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "cli/commands.h"
+#include "cli/warnings.h"
 #include "cli/scene_file.h"
 #include "cli/validators.h"
 #include "core/error.h"
@@ -59,6 +60,7 @@ struct Args {
     bool shadows = false;
     LoadOptions load;
     bool quiet = false;
+    bool strict = false;
 };
 
 // The request model of the flags (options/render_request.h): the texts CLI11
@@ -189,7 +191,9 @@ void add_import_options(CLI::App* cmd, Args& a) {
         ->check(in_range(1e-6, 0.5))
         ->capture_default_str();
     cmd->add_flag("--isolated", a.load.isolated, "import in a child process with a time limit");
-    cmd->add_flag("-q,--quiet", a.quiet, "no progress messages on stderr");
+    cmd->add_flag("-q,--quiet", a.quiet, "no progress messages or warnings on stderr");
+    cmd->add_flag("--strict", a.strict,
+                  "fail with exit status 3, writing nothing, when the import has warnings (a face left empty, ...)");
 }
 
 void add_look_options(CLI::App* cmd, Args& a) {
@@ -287,6 +291,7 @@ void run_render(const Args& a) {
         stages.add("transfer", isolation.transfer_ms);
     }
     stages.mark("assemble");  // the rest: scene files, placing and joining the models
+    report_warnings(scene.warnings, a.quiet, a.strict);
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cli/commands.h"
+#include "cli/warnings.h"
 #include "core/error.h"
 #include "core/process/heap_tuning.h"
 
@@ -25,7 +26,8 @@ int main(int argc, char** argv) {
         "     unreadable_file, no_faces, import_timeout or io\n"
         "  2  bad command line: unknown option, bad value, missing input, an output\n"
         "     path or format that cannot be written; all checked before any import,\n"
-        "     with CLI11's message naming the option");
+        "     with CLI11's message naming the option\n"
+        "  3  --strict, and the command had warnings (printed above); nothing written");
     nurbsrt::cli::add_render_command(app);
     nurbsrt::cli::add_info_command(app);
     nurbsrt::cli::add_convert_command(app);
@@ -49,6 +51,9 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         const int rc = app.exit(e);
         return rc == 0 ? 0 : 2;
+    } catch (const nurbsrt::cli::WarningsRefused& e) {
+        std::fprintf(stderr, "nurbsrt: error [strict]: %s\n", e.what());
+        return 3;
     } catch (const nurbsrt::Error& e) {
         std::fprintf(stderr, "nurbsrt: error [%s]: %s\n", nurbsrt::error_code_name(e.code()), e.what());
         return 1;

@@ -223,6 +223,56 @@ TEST(Cli, ConvertPrintsWhatTheOutputLoses) {
     EXPECT_EQ(stp.err.find("nurbsrt: warning"), std::string::npos) << stp.err;
 }
 
+// --quiet silences the warnings; --strict refuses them: exit 3 and no OUT, not
+// even a partial one beside it.
+TEST(Cli, ConvertStrictRefusesWhatTheOutputLoses) {
+    const std::string in = nurbsrt::test::assembly();
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-strict-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun quiet = run_nurbsrt("convert -q " + in + " " + (dir / "q.igs").string());
+    ASSERT_EQ(quiet.status, 0) << quiet.err;
+    EXPECT_EQ(quiet.err, "");
+    EXPECT_TRUE(fs::exists(dir / "q.igs"));
+    const CliRun strict = run_nurbsrt("convert --strict " + in + " " + (dir / "s.igs").string());
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_NE(strict.err.find("nurbsrt: warning: IGES has no assembly structure"), std::string::npos) << strict.err;
+    EXPECT_NE(strict.err.find("nurbsrt: error [strict]: 2 warning(s), refused by --strict; nothing was written"),
+              std::string::npos)
+        << strict.err;
+    EXPECT_FALSE(fs::exists(dir / "s.igs"));
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}), 1) << "a partial file was left";
+    const CliRun kept = run_nurbsrt("convert --strict " + in + " " + (dir / "s.stp").string());
+    EXPECT_EQ(kept.status, 0) << kept.err;  // STEP loses nothing: nothing to refuse
+    EXPECT_TRUE(fs::exists(dir / "s.stp"));
+    fs::remove_all(dir);
+}
+
+// A render says what its import worked around (this turbine's face 2: BRepMesh
+// leaves part of it without triangles, filled from a grid) unless --quiet, and
+// --strict refuses it before rendering.
+TEST(Cli, RenderWarningsAndStrict) {
+    NURBSRT_REQUIRE_SHARED_MODELS();
+    const std::string in = nurbsrt::test::shared_model("step/ec_turbine-A.stp");
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-rwarn-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string out = " -o " + (dir / "t.png").string() + " --width 32 --height 24";
+    const CliRun plain = run_nurbsrt("render " + in + out);
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    EXPECT_NE(plain.err.find("nurbsrt: warning: ec_turbine-A.stp: face 2: BRepMesh left part of it without triangles"),
+              std::string::npos)
+        << plain.err;
+    const CliRun quiet = run_nurbsrt("render -q " + in + out);
+    ASSERT_EQ(quiet.status, 0) << quiet.err;
+    EXPECT_EQ(quiet.err.find("warning"), std::string::npos) << quiet.err;
+    fs::remove(dir / "t.png");
+    const CliRun strict = run_nurbsrt("render --strict " + in + out);
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_NE(strict.err.find("refused by --strict; nothing was written"), std::string::npos) << strict.err;
+    EXPECT_EQ(strict.err.find("rendering"), std::string::npos) << strict.err;
+    EXPECT_FALSE(fs::exists(dir / "t.png"));
+    fs::remove_all(dir);
+}
+
 // The mesh and JSON outputs by extension: each file starts as its format says,
 // and the message names the format and the triangle count.
 TEST(Cli, ConvertToMeshAndJsonOutputs) {

@@ -21,6 +21,27 @@ struct ThreadNote {
 };
 thread_local ThreadNote t_note;
 
+// Headers bigger than a few KiB are refused by some proxies (nginx's default
+// buffer is 4-8 KiB); the full list is in the JSON answer.
+constexpr size_t kMaxWarningsHeader = 4096;
+
+// "N; [..JSON array..]" in ASCII (a header is no place for UTF-8), cut to
+// whole entries under kMaxWarningsHeader.
+std::string warnings_header(const std::vector<std::string>& warnings) {
+    nlohmann::json list = nlohmann::json::array();
+    const std::string head = std::to_string(warnings.size()) + "; ";
+    for (const std::string& w : warnings) {
+        list.push_back(w);
+        if (head.size() + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).size() + 8 >
+            kMaxWarningsHeader) {
+            list.erase(list.size() - 1);
+            list.push_back("...");
+            break;
+        }
+    }
+    return head + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
+}
+
 }  // namespace
 
 std::string request_id(const httplib::Response& res) { return res.get_header_value("X-Request-Id"); }
@@ -54,6 +75,10 @@ void send_problem_with_status(httplib::Response& res, int status, ProblemCode co
     res.status = p.status;
     res.set_content(p.body, kProblemContentType);
     note_problem_code(code.name());
+}
+
+void set_warnings_header(httplib::Response& res, const std::vector<std::string>& warnings) {
+    if (!warnings.empty()) res.set_header("X-Nurbsrt-Warnings", warnings_header(warnings));
 }
 
 void send_json(httplib::Response& res, const nlohmann::json& body, int status) {

@@ -91,6 +91,10 @@ inline constexpr const char* kBulkJsonContentType = "application/json; charset=u
 // none is refused 406 (code not_acceptable) with the list it could have had.
 std::string negotiate_answer(const httplib::Request& req, const std::vector<std::string>& offers);
 inline constexpr const char* kJsonMediaType = "application/json";
+// X-Nurbsrt-Warnings: the count and the first warnings as a JSON array in
+// ASCII, cut under a few KiB (the full list is in the JSON answer); none
+// without warnings. On every render and conversion answer, image or JSON.
+void set_warnings_header(httplib::Response& res, const std::vector<std::string>& warnings);
 // A JSON answer (invalid UTF-8 in client text replaced, never an exception).
 void send_json(httplib::Response& res, const nlohmann::json& body, int status = 200);
 

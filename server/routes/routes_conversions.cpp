@@ -29,27 +29,6 @@ const char* download_extension(ConversionFormat f) {
     return f == ConversionFormat::step ? ".stp" : conversion_format_extension(f);
 }
 
-// Headers bigger than a few KiB are refused by some proxies (nginx's default
-// buffer is 4-8 KiB); the full list is in the JSON answer.
-constexpr size_t kMaxWarningsHeader = 4096;
-
-// "N; [..JSON array..]" in ASCII (a header is no place for UTF-8), cut to
-// whole entries under kMaxWarningsHeader.
-std::string warnings_header(const std::vector<std::string>& warnings) {
-    nlohmann::json list = nlohmann::json::array();
-    const std::string head = std::to_string(warnings.size()) + "; ";
-    for (const std::string& w : warnings) {
-        list.push_back(w);
-        if (head.size() + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).size() + 8 >
-            kMaxWarningsHeader) {
-            list.erase(list.size() - 1);
-            list.push_back("...");
-            break;
-        }
-    }
-    return head + list.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
-}
-
 }  // namespace
 
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
@@ -114,7 +93,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     } else {
         res.set_header("Content-Disposition",
                        attachment_disposition(download_name(upload.filename, download_extension(format))));
-        if (!report.warnings.empty()) res.set_header("X-Nurbsrt-Warnings", warnings_header(report.warnings));
+        set_warnings_header(res, report.warnings);
         res.set_content(data, content_type.c_str());
         stages.mark("response");
         res.set_header("Server-Timing", server_timing(stages, kConversionStages));

@@ -93,6 +93,7 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
         res.set_header("Server-Timing",
                        server_timing(stages, kRenderStages, {{"cache", rendered.cache_hit ? "hit" : "miss"}}));
     };
+    set_warnings_header(res, rendered.warnings);
     if (!json_answer) {
         res.set_content(rendered.bytes, r.format.content_type.c_str());
         stages.mark("response");
@@ -104,7 +105,8 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
                            {"content_type", r.format.content_type},
                            {"width", r.width},
                            {"height", r.height},
-                           {"image_base64", base64_encode(rendered.bytes)}};
+                           {"image_base64", base64_encode(rendered.bytes)},
+                           {"warnings", rendered.warnings}};
     if (!rendered.aovs.empty()) body["aovs"] = aovs_json(rendered.aovs);
     // The last stage, this answer, ends before its serialization: the text
     // cannot hold the time it takes to write itself.

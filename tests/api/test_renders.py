@@ -340,3 +340,23 @@ def test_eye_alone_looks_at_the_model_centre(url):
         assert all(abs(t - c) < 1e-6 for t, c in zip(cam["target"], centre)), (cam["target"], centre)
         if projection == "orthographic":
             assert 0 < cam["ortho_height"] < info["bbox"]["diagonal"] / 0.9 + 1e-9, cam
+
+
+def test_warnings_reach_every_render_answer(url):
+    """What the import worked around is on the image answer (X-Nurbsrt-Warnings) and
+    the JSON one (header, `warnings`, statistics.warnings) alike; a clean file has none."""
+    turbine = MODELS / "step" / "ec_turbine-A.stp"
+    if not turbine.is_file():
+        pytest.skip(f"{turbine} is absent")
+    data = turbine.read_bytes()
+    image = post_raw(url, "/v1/renders", data, params={"width": 48, "height": 32})
+    assert image.status_code == 200, image.text[:300]
+    count, _, listed = image.headers["X-Nurbsrt-Warnings"].partition("; ")
+    assert int(count) >= 1 and any(w.startswith("face 2: BRepMesh left part of it") for w in json.loads(listed))
+    j = post_raw(url, "/v1/renders", data, params={"width": 48, "height": 32}, headers={"Accept": "application/json"})
+    assert j.status_code == 200
+    validate(j.json(), "RenderResponse")
+    assert j.headers["X-Nurbsrt-Warnings"] == image.headers["X-Nurbsrt-Warnings"]
+    assert j.json()["warnings"] == j.json()["statistics"]["warnings"] and len(j.json()["warnings"]) == int(count)
+    clean = post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"width": 48}, headers={"Accept": "application/json"})
+    assert "X-Nurbsrt-Warnings" not in clean.headers and clean.json()["warnings"] == []
