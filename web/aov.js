@@ -15,6 +15,11 @@ export function decodeAovs(aovs) {
   return out;
 }
 
+// The views of "Look inside", [value, label]: the shaded image, then one per AOV
+// that paint() draws; the page's select is filled from this list.
+export const LOOKS = [['shaded', 'shaded'], ['depth', 'depth'], ['face', 'face id'], ['normal', 'normals'],
+  ['uv', '(u, v)'], ['iterations', 'Newton iterations']];
+
 // The AOVs each view needs; hovering needs z, face, uv and iterations.
 export const HOVER_AOVS = ['z', 'face', 'uv', 'iterations'];
 export function aovsFor(look) {

@@ -8,11 +8,12 @@ import { apiKey, setApiKey, render, base64Bytes } from './api.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
 import { bindInteraction } from './interaction.js';
-import { decodeAovs, aovsFor, paint, drawLegend, describePixel } from './aov.js';
+import { decodeAovs, aovsFor, paint, drawLegend, describePixel, LOOKS } from './aov.js';
 import { showStages, showHistogram, histogramBounds, fmt } from './stats.js';
 import { bindJobs, bindConversions } from './jobs.js';
 
 const $ = (id) => document.getElementById(id);
+for (const [value, label] of LOOKS) $('look').append(new Option(label, value));
 const PREVIEW_DIVISOR = 4;
 // The service's range of edge_width, px (api_schema/openapi.json).
 const EDGE_WIDTH_MIN = 0.25, EDGE_WIDTH_MAX = 16;
