@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstdio>
+#include <exception>
 #include <future>
 #include <thread>
 
@@ -86,10 +87,22 @@ RenderResult render_bounded(ServerContext& ctx, std::shared_ptr<const PreparedSc
                             const std::function<bool()>& should_stop) {
     auto cancel = std::make_shared<std::atomic<bool>>(false);
     options.cancel = cancel;
-    auto task = std::make_shared<std::packaged_task<RenderResult()>>(
-        [scene, camera, options, ticket] { return render(*scene, camera, options); });
-    std::future<RenderResult> result = task->get_future();
-    std::thread([task] { (*task)(); }).detach();
+    // The thread lets go of its share of the ticket before the result is ready:
+    // once the caller has the frame, only the caller's share holds the memory
+    // (a share kept until the thread exits outlived the answer, and the
+    // reservation showed in /metrics after it, under load).
+    auto promise = std::make_shared<std::promise<RenderResult>>();
+    std::future<RenderResult> result = promise->get_future();
+    std::thread([promise, scene, camera, options, ticket]() mutable {
+        try {
+            RenderResult r = render(*scene, camera, options);
+            ticket.reset();
+            promise->set_value(std::move(r));
+        } catch (...) {
+            ticket.reset();
+            promise->set_exception(std::current_exception());
+        }
+    }).detach();
     const auto deadline = clock_type::now() + std::chrono::duration_cast<clock_type::duration>(
                                                   std::chrono::duration<double>(ctx.config.render_timeout_s));
     // Short waits so that an external cancel is seen promptly, never past the
