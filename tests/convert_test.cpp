@@ -273,6 +273,15 @@ TEST(ConvertGlb, AssemblyKeepsInstancesNamesAndColour) {
                         std::abs(c[2].get<double>() - nurbsrt::test::kAssemblyColor.b) < 1e-3;
     }
     EXPECT_TRUE(colour_found) << g.at("materials").dump();
+    // Painted parts, not chrome: metallic 0 in every material (glTF's default is 1),
+    // and every primitive has one (without, viewers take glTF's default material).
+    for (const json& m : g.at("materials")) {
+        const json& pbr = m.at("pbrMetallicRoughness");
+        EXPECT_EQ(pbr.value("metallicFactor", 1.0), 0.0) << m.dump();
+        EXPECT_NEAR(pbr.value("roughnessFactor", 1.0), 0.5, 1e-6) << m.dump();
+    }
+    for (const json& mesh : g.at("meshes"))
+        for (const json& p : mesh.at("primitives")) EXPECT_TRUE(p.contains("material")) << mesh.dump();
 }
 
 // A patch rebuilt from its JSON only (no nurbsrt code involved in reading).

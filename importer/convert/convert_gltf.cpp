@@ -18,12 +18,46 @@
 #include <BRep_Builder.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <XCAFDoc_VisMaterial.hxx>
+#include <XCAFDoc_VisMaterialPBR.hxx>
+#include <XCAFDoc_VisMaterialTool.hxx>
+#include <XCAFPrs_Style.hxx>
+#include <Quantity_ColorRGBA.hxx>
 
 #include "importer/convert/convert_writers.h"
 #include "importer/internal.h"
 #include "core/error.h"
 
 namespace nurbsrt::occt {
+namespace {
+
+// Roughness of painted or anodised CAD parts in glTF's metallic-roughness model:
+// a broad, soft highlight (0: mirror, 1: chalk).
+constexpr float kPaintRoughness = 0.5f;
+
+// Painted CAD, not polished metal: a colour without a material gives OCCT's
+// writer a metallic factor of 1, glTF's default (glTF 2.0 §3.9.2), and viewers
+// show every part as chrome. One PBR material, metallic 0, on every free shape
+// of the document (styles are inherited down the assembly) and as the writer's
+// default; the parts' own colours still set its base colour.
+XCAFPrs_Style paint_material(const Handle(TDocStd_Document) & doc, const TDF_LabelSequence& roots) {
+    Handle(XCAFDoc_VisMaterial) paint = new XCAFDoc_VisMaterial();
+    XCAFDoc_VisMaterialPBR pbr;
+    pbr.IsDefined = Standard_True;
+    pbr.Metallic = 0.0f;
+    pbr.Roughness = kPaintRoughness;
+    pbr.BaseColor =
+        Quantity_ColorRGBA(Quantity_Color(0.8, 0.8, 0.8, Quantity_TOC_RGB), 1.0f);  // core/scene's default grey
+    paint->SetPbrMaterial(pbr);
+    const Handle(XCAFDoc_VisMaterialTool) materials = XCAFDoc_DocumentTool::VisMaterialTool(doc->Main());
+    const TDF_Label label = materials->AddMaterial(paint, "paint");
+    for (const TDF_Label& root : roots) materials->SetShapeMaterial(root, label);
+    XCAFPrs_Style style;
+    style.SetMaterial(paint);
+    return style;
+}
+
+}  // namespace
 
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "glTF", r);
@@ -48,6 +82,7 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
         cs.SetInputCoordinateSystem(RWMesh_CoordinateSystem_Zup);
         cs.SetOutputLengthUnit(1.0);                                 // glTF: metres
         cs.SetOutputCoordinateSystem(RWMesh_CoordinateSystem_glTF);  // Y-up
+        writer.SetDefaultStyle(paint_material(model.document, roots));
         TColStd_IndexedDataMapOfStringString info;
         info.Add("generator", "nurbsrt");
         if (!writer.Perform(model.document, info, Message_ProgressRange()))
