@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -20,6 +21,46 @@ namespace {
 using nlohmann::json;
 
 json vec_json(Vec3 v) { return json::array({v.x, v.y, v.z}); }
+
+// The assembly tree, depth first: a node names its parent by id.
+json parts_json(const Scene& scene) {
+    json parts = json::array();
+    for (const Part& p : scene.parts) {
+        const json color = p.has_color ? json::array({p.color.r, p.color.g, p.color.b}) : json(nullptr);
+        const json bbox =
+            p.bbox.empty() ? json(nullptr) : json{{"min", vec_json(p.bbox.lo)}, {"max", vec_json(p.bbox.hi)}};
+        parts.push_back({{"id", p.id},
+                         {"name", p.name},
+                         {"parent", p.parent < 0 ? json(nullptr) : json(scene.parts[static_cast<size_t>(p.parent)].id)},
+                         {"color", color},
+                         {"placement", p.placement},
+                         {"faces", p.faces},
+                         {"bbox", bbox}});
+    }
+    return parts;
+}
+
+// "  0/1/2  name  N faces  colour r,g,b  at (x, y, z)", indented by depth.
+void print_parts(const json& parts) {
+    if (parts.empty()) return;
+    std::printf("parts:       %zu in the assembly tree (id, name, faces, own colour, origin in mm)\n", parts.size());
+    for (const json& p : parts) {
+        const std::string id = p["id"].get<std::string>();
+        const auto depth = static_cast<int>(std::count(id.begin(), id.end(), '/'));
+        std::string color;
+        if (!p["color"].is_null()) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "  colour %.3g,%.3g,%.3g", p["color"][0].get<double>(),
+                          p["color"][1].get<double>(), p["color"][2].get<double>());
+            color = buf;
+        }
+        const json& m = p["placement"];
+        std::printf(
+            "  %*s%-*s %s  %u faces%s  at (%.6g, %.6g, %.6g)\n", 2 * depth, "", 10 - 2 * depth > 0 ? 10 - 2 * depth : 1,
+            id.c_str(), p["name"].get<std::string>().empty() ? "(unnamed)" : p["name"].get<std::string>().c_str(),
+            p["faces"].get<unsigned>(), color.c_str(), m[3].get<double>(), m[7].get<double>(), m[11].get<double>());
+    }
+}
 
 json face_json(const Face& f, const Scene& scene) {
     const NurbsSurface& s = f.surface;
@@ -87,6 +128,7 @@ json scene_summary(const Scene& scene, bool per_face, double total_ms) {
           {"mesh", scene.timings.mesh_ms},
           {"total", total_ms}}},
         {"warnings", scene.warnings},
+        {"parts", parts_json(scene)},
     };
     if (per_face) {
         json faces = json::array();
@@ -127,6 +169,7 @@ void print_text(const json& j) {
     std::printf("timings:     read %.1f ms, nurbs_convert %.1f ms, mesh %.1f ms, total %.1f ms\n",
                 t["read"].get<double>(), t["nurbs_convert"].get<double>(), t["mesh"].get<double>(),
                 t["total"].get<double>());
+    print_parts(j["parts"]);
     for (const auto& w : j["warnings"]) std::printf("warning:     %s\n", w.get<std::string>().c_str());
     if (j.contains("face_list")) {
         std::printf("\n%6s %7s %9s %4s %4s %6s %6s  %s\n", "face", "degree", "poles", "rat", "rev", "loops", "tris",

@@ -11,6 +11,7 @@
 
 #include "importer/internal.h"
 #include "core/error.h"
+#include "core/scene/scene_ops.h"
 
 namespace nurbsrt {
 namespace {
@@ -110,6 +111,7 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
     scene.format = format_name(model.format);
     scene.units = model.units;
     scene.bodies = model.bodies;
+    scene.parts = model.parts;
     scene.warnings = model.warnings;
 
     const int n = model.faces.Extent();
@@ -220,6 +222,7 @@ Scene import_file(const std::string& path, const ImportOptions& options) {
         }
         for (std::string& m : mesh_warnings) scene.warnings.push_back(std::move(m));
         if (scene.bbox.empty()) scene.bbox = geometric;
+        summarize_parts(scene);
         scene.timings.nurbs_convert_ms += occt::ms_since(t_assemble);
     } catch (const Standard_Failure& f) {
         throw Error(ErrorCode::occt_failure, "import: " + occt::failure_text(f));

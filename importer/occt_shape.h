@@ -34,6 +34,7 @@ struct OcctModel {
     TopTools_IndexedMapOfShape faces;        // TopExp::MapShapes(shape, TopAbs_FACE, faces)
     std::vector<FaceAttributes> attributes;  // attributes[i-1] for face i (empty when not read)
     std::vector<Body> bodies;
+    std::vector<Part> parts;  // the XDE assembly tree (read_attributes only), depth first
     std::vector<std::string> warnings;
     double read_ms = 0;
     // The XDE document (colours, names, assembly structure), only when

@@ -30,6 +30,7 @@
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XCAFPrs.hxx>
+#include <gp_Trsf.hxx>
 #include <XCAFPrs_DocumentExplorer.hxx>
 #include <XCAFPrs_IndexedDataMapOfShapeStyle.hxx>
 #include <XCAFPrs_Style.hxx>
@@ -150,21 +151,59 @@ void assign_bodies(OcctModel& m) {
     if (std::find(done.begin(), done.end(), false) != done.end()) claim(m.shape);
 }
 
+// The assembly tree as the document explorer walks it, depth first: each node's
+// parent is the last node one level up, its id the path of child positions.
+class PartTree {
+public:
+    explicit PartTree(std::vector<Part>& parts) : parts_(parts) {}
+
+    int32_t add(int depth, const std::string& name, const XCAFPrs_Style& style, const gp_Trsf& placement) {
+        // Deeper than one below the current path cannot come from a depth-first walk: a root then.
+        if (depth < 0 || static_cast<size_t>(depth) > path_.size()) depth = 0;
+        path_.resize(static_cast<size_t>(depth));
+        children_.resize(static_cast<size_t>(depth));
+        Part p;
+        p.parent = depth > 0 ? path_.back() : -1;
+        const int position = depth > 0 ? children_.back()++ : roots_++;
+        p.id = (depth > 0 ? parts_[static_cast<size_t>(p.parent)].id + "/" : std::string()) + std::to_string(position);
+        p.name = name;
+        if (style.IsSetColorSurf()) {
+            p.has_color = true;
+            p.color = to_color(style.GetColorSurf());
+        }
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) p.placement[static_cast<size_t>(4 * r + c)] = placement.Value(r + 1, c + 1);
+        const auto index = static_cast<int32_t>(parts_.size());
+        parts_.push_back(std::move(p));
+        path_.push_back(index);
+        children_.push_back(0);
+        return index;
+    }
+
+private:
+    std::vector<Part>& parts_;
+    std::vector<int32_t> path_;  // the parts from a root down to the last one added
+    std::vector<int> children_;  // children so far of each part on the path
+    int roots_ = 0;
+};
+
 // Names and colours from the XDE document, matched to our faces by located
 // TShape. Follows what RWMesh_FaceIterator does for glTF export: the node's
 // style is the default; styles of sub-shapes (faces, solids) of the part override it.
 void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document) & doc) {
     size_t unmatched = 0;
     std::vector<bool> body_named(m.bodies.size(), false);
-    for (XCAFPrs_DocumentExplorer ex(doc, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More(); ex.Next()) {
+    PartTree tree(m.parts);
+    for (XCAFPrs_DocumentExplorer ex(doc, XCAFPrs_DocumentExplorerFlags_None); ex.More(); ex.Next()) {
         const XCAFPrs_DocumentNode& node = ex.Current();
-        TopoDS_Shape part;
-        if (!XCAFDoc_ShapeTool::GetShape(node.RefLabel, part) || part.IsNull()) continue;
-        part.Location(node.Location, false);
-
         std::string name = label_name(node.Label);
         if (name.empty()) name = label_name(node.RefLabel);
         const XCAFPrs_Style& style = node.Style;
+        const int32_t leaf = tree.add(ex.CurrentDepth(), name, style, node.Location.Transformation());
+        if (node.IsAssembly) continue;  // its parts follow, depth first
+        TopoDS_Shape part;
+        if (!XCAFDoc_ShapeTool::GetShape(node.RefLabel, part) || part.IsNull()) continue;
+        part.Location(node.Location, false);
 
         // Sub-shape styles, most specific last so that faces win over solids.
         XCAFPrs_IndexedDataMapOfShapeStyle styles;
@@ -212,6 +251,7 @@ void apply_xde_attributes(OcctModel& m, const Handle(TDocStd_Document) & doc) {
                 m.bodies[a.body].has_color = true;
                 m.bodies[a.body].color = a.color;
             }
+            if (a.body < m.bodies.size() && m.bodies[a.body].part < 0) m.bodies[a.body].part = leaf;
             if (a.body < m.bodies.size() && !body_named[a.body]) {
                 body_named[a.body] = true;
                 Body& b = m.bodies[a.body];

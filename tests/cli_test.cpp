@@ -165,6 +165,29 @@ TEST(Cli, UsageErrorsSayWhatIsWrong) {
     }
 }
 
+// info prints the assembly tree: ids (paths of child positions), names, faces, colours, origins.
+TEST(Cli, InfoPrintsTheAssemblyTree) {
+    const std::string in = nurbsrt::test::assembly();
+    const CliRun j = run_nurbsrt("info --json " + in);
+    ASSERT_EQ(j.status, 0) << j.err;
+    const auto parts = nlohmann::json::parse(j.out).at("parts");
+    ASSERT_EQ(parts.size(), 3u) << parts.dump();
+    EXPECT_EQ(parts[0]["id"], "0");
+    EXPECT_TRUE(parts[0]["parent"].is_null());
+    EXPECT_EQ(parts[2]["id"], "0/1");
+    EXPECT_EQ(parts[2]["parent"], "0");
+    EXPECT_EQ(parts[2]["name"], nurbsrt::test::kAssemblyInstanceNames[1]);
+    EXPECT_EQ(parts[2]["faces"], nurbsrt::test::kAssemblyPartFaces);
+    EXPECT_EQ(parts[2]["placement"][3], nurbsrt::test::kAssemblyOffsets[1].x);
+    EXPECT_EQ(parts[2]["bbox"]["min"].size(), 3u);
+    const CliRun text = run_nurbsrt("info " + in);
+    ASSERT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("parts:       3 in the assembly tree"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("    0/1      bracket_right  7 faces  colour 0.9,0.1,0.2  at (60, 25, 5)"),
+              std::string::npos)
+        << text.out;
+}
+
 TEST(Cli, IsolatedInfoMatchesInProcess) {
     const CliRun a = run_nurbsrt("info --json " + kScrew);
     const CliRun b = run_nurbsrt("info --json --isolated " + kScrew);
@@ -175,6 +198,7 @@ TEST(Cli, IsolatedInfoMatchesInProcess) {
     EXPECT_EQ(ja["bbox"], jb["bbox"]);
     EXPECT_EQ(ja["poles"], jb["poles"]);
     EXPECT_EQ(ja["mesh"], jb["mesh"]);
+    EXPECT_EQ(ja["parts"], jb["parts"]);
 }
 
 TEST(Cli, UnreadableFileIsATypedError) {

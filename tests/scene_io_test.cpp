@@ -53,6 +53,7 @@ void expect_same(const std::string& a, const std::string& b) { EXPECT_EQ(a, b); 
 void expect_same(const TrimLoop& a, const TrimLoop& b);
 void expect_same(const Face& a, const Face& b);
 void expect_same(const Body& a, const Body& b);
+void expect_same(const Part& a, const Part& b);
 
 template <class T>
 void expect_same(const std::vector<T>& a, const std::vector<T>& b) {
@@ -100,6 +101,19 @@ void expect_same(const Body& a, const Body& b) {
     EXPECT_EQ(a.name, b.name);
     EXPECT_EQ(a.has_color, b.has_color);
     expect_same(a.color, b.color);
+    EXPECT_EQ(a.part, b.part);
+}
+
+void expect_same(const Part& a, const Part& b) {
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.parent, b.parent);
+    for (size_t i = 0; i < a.placement.size(); ++i) expect_same(a.placement[i], b.placement[i]);
+    EXPECT_EQ(a.has_color, b.has_color);
+    expect_same(a.color, b.color);
+    EXPECT_EQ(a.faces, b.faces);
+    expect_same(a.bbox.lo, b.bbox.lo);
+    expect_same(a.bbox.hi, b.bbox.hi);
 }
 
 void expect_same(const Scene& a, const Scene& b) {
@@ -113,6 +127,7 @@ void expect_same(const Scene& a, const Scene& b) {
     EXPECT_BITS(a.timings.mesh_ms, b.timings.mesh_ms);
     expect_same(a.warnings, b.warnings);
     expect_same(a.bodies, b.bodies);
+    expect_same(a.parts, b.parts);
     expect_same(a.faces, b.faces);
 }
 
@@ -174,7 +189,20 @@ Scene make_full_scene() {
     s.bbox.extend(Vec3{4, 5, -6});
     s.timings = {12.5, 1.0 / 3.0, std::numeric_limits<double>::denorm_min()};
     s.warnings = {"face 2: mesh fallback to uv grid", "", "healed loop\nwith newline"};
-    s.bodies = {{"Body A", true, {1.0f, 0.0f, 0.5f}}, {"", false, {}}};
+    s.bodies = {{"Body A", true, {1.0f, 0.0f, 0.5f}, 1}, {"", false, {}, 2}};
+    s.parts.resize(3);
+    s.parts[0].id = "0";
+    s.parts[0].name = "assembly";
+    s.parts[1].id = "0/0";
+    s.parts[1].name = "Gehäuse";
+    s.parts[1].parent = 0;
+    s.parts[1].has_color = true;
+    s.parts[1].color = {0.1f, 0.2f, 0.3f};
+    s.parts[1].placement = {0, -1, 0, 12.5, 1, 0, 0, -1.0 / 3.0, 0, 0, 1, 1e-300};
+    s.parts[2].id = "0/1";
+    s.parts[2].parent = 0;
+    s.parts[2].faces = 7;
+    s.parts[2].bbox.extend(Vec3{-1, -2, -3});
     s.faces = {make_face(1, false), make_face(2, true), make_face(3, true)};
     return s;
 }
@@ -279,10 +307,12 @@ TEST(SceneIo, HugeCountsWithValidChecksum) {
     const size_t source_len_at = 20;
     const size_t warnings_at = 20 + 14 + 12 + 10 + 48 + 24;
     const size_t bodies_at = warnings_at + 8 + (8 + 2) * 2;
-    const size_t faces_at = bodies_at + 8 + (8 + 1 + 1 + 12);
+    const size_t parts_at = bodies_at + 8 + (8 + 1 + 1 + 12 + 4);  // a body: name "b", has_color, Color, part
+    const size_t faces_at = parts_at + 8;                          // no parts
     ASSERT_EQ(read_u64(bytes, source_len_at), 6u);
     ASSERT_EQ(read_u64(bytes, warnings_at), 2u);
     ASSERT_EQ(read_u64(bytes, bodies_at), 1u);
+    ASSERT_EQ(read_u64(bytes, parts_at), 0u);
     ASSERT_EQ(read_u64(bytes, faces_at), 1u);
     // Counts whose allocation would throw bad_alloc / length_error (or take gigabytes) if the
     // reader trusted them: they must be rejected against the bytes left, as corrupt_scene.
@@ -290,6 +320,7 @@ TEST(SceneIo, HugeCountsWithValidChecksum) {
         expect_corrupt(forge_u64(bytes, source_len_at, huge), "string length", "exceeds");
         expect_corrupt(forge_u64(bytes, warnings_at, huge), "warnings count", "exceeds");
         expect_corrupt(forge_u64(bytes, bodies_at, huge), "bodies count", "exceeds");
+        expect_corrupt(forge_u64(bytes, parts_at, huge), "parts count", "exceeds");
         expect_corrupt(forge_u64(bytes, faces_at, huge), "faces count", "exceeds");
     }
     // Every 8-byte window of the payload overwritten with a huge value and re-checksummed:

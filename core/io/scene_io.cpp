@@ -5,7 +5,9 @@
 //   bbox: 6 f64 (lo.xyz, hi.xyz)
 //   timings: 3 f64 (read, nurbs_convert, mesh)
 //   warnings: count, str...
-//   bodies: count, { str name, bool has_color, Color }...
+//   bodies: count, { str name, bool has_color, Color, i32 part }...
+//   parts: count, { str id, str name, i32 parent, 12 f64 placement, bool has_color, Color,
+//                   u32 faces, bbox: 6 f64 }...
 //   faces: count, {
 //     u32 index,
 //     surface: i32 degree_u, degree_v, num_u, num_v, bool rational,
@@ -278,8 +280,36 @@ void read_face(Reader& r, Face& f, size_t fi) {
     f.body = r.u32("face body");
 }
 
+// A node of the assembly tree, in the order of the layout above.
+void write_part(Writer& w, const Part& p) {
+    w.str(p.id);
+    w.str(p.name);
+    w.i32(p.parent);
+    for (const double v : p.placement) w.f64(v);
+    w.u8(p.has_color);
+    w.color(p.color);
+    w.u32(p.faces);
+    for (const Vec3 corner : {p.bbox.lo, p.bbox.hi}) w.vec3(corner);
+}
+
+// The part at `index`; its parent must come before it (depth first: no cycle).
+void read_part(Reader& r, Part& p, size_t index) {
+    p.id = r.str("part id");
+    p.name = r.str("part name");
+    p.parent = r.i32("part parent");
+    if (p.parent < -1 || p.parent >= static_cast<int64_t>(index))
+        corrupt("part " + std::to_string(index) + " has parent " + std::to_string(p.parent));
+    for (double& v : p.placement) v = r.f64("part placement");
+    p.has_color = r.boolean("part has_color");
+    p.color = r.color("part color");
+    p.faces = r.u32("part faces");
+    p.bbox.lo = r.vec3("part bbox");
+    p.bbox.hi = r.vec3("part bbox");
+}
+
 // Smallest possible encoded sizes, used to bound counts before allocating.
-constexpr size_t kMinBodyBytes = 8 + 1 + 12;
+constexpr size_t kMinBodyBytes = 8 + 1 + 12 + 4;
+constexpr size_t kMinPartBytes = 8 + 8 + 4 + 1 + 12 + 12 * 8 + 4 + 6 * 8;
 constexpr size_t kMinFaceBytes = 4 + (16 + 1 + 8 + 8 + 8) + 32 + 1 + 8 + 8 + 8 + 8 + 8 + 1 + 1 + 12 + 8 + 4;
 
 }  // namespace
@@ -306,7 +336,10 @@ std::string serialize_scene(const Scene& scene) {
         w.str(b.name);
         w.u8(b.has_color);
         w.color(b.color);
+        w.i32(b.part);
     }
+    w.u64(scene.parts.size());
+    for (const Part& p : scene.parts) write_part(w, p);
     w.u64(scene.faces.size());
     for (const Face& f : scene.faces) write_face(w, f);
 
@@ -358,7 +391,13 @@ Scene deserialize_scene(const std::string& bytes) {
         b.name = r.str("body name");
         b.has_color = r.boolean("body has_color");
         b.color = r.color("body color");
+        b.part = r.i32("body part");
     }
+    scene.parts.resize(r.count("parts", kMinPartBytes));
+    for (size_t i = 0; i < scene.parts.size(); ++i) read_part(r, scene.parts[i], i);
+    for (size_t i = 0; i < scene.bodies.size(); ++i)
+        if (scene.bodies[i].part < -1 || scene.bodies[i].part >= static_cast<int64_t>(scene.parts.size()))
+            corrupt("body " + std::to_string(i) + " names part " + std::to_string(scene.bodies[i].part));
     scene.faces.resize(r.count("faces", kMinFaceBytes));
     for (size_t i = 0; i < scene.faces.size(); ++i) read_face(r, scene.faces[i], i);
     if (r.remaining() != 0) corrupt(std::to_string(r.remaining()) + " unexpected bytes after the last face");

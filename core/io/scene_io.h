@@ -17,7 +17,8 @@
 
 namespace nurbsrt {
 
-constexpr unsigned kSceneFormatVersion = 1;
+// 2: bodies name their part, and the assembly tree (Scene::parts) follows them.
+constexpr unsigned kSceneFormatVersion = 2;
 
 std::string serialize_scene(const Scene& scene);
 // The format's checksum of the payload (FNV-1a, 64 bits), stored after it.

@@ -4,6 +4,7 @@
 // (faces[i].index == i + 1; 0 is background).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -75,6 +76,25 @@ struct Body {
     std::string name;
     bool has_color = false;
     Color color;
+    int32_t part = -1;  // the leaf of Scene::parts that places it; -1 when the file was read without its tree
+};
+
+// A node of the file's assembly tree (XDE), in depth-first order: an assembly,
+// or a part that an assembly places (its faces are the bodies whose `part` it
+// is). `id` is the path of child positions from the first root ("0", "0/3/1"),
+// the same for every import of the same file; a scene of several files numbers
+// their roots on ("1", "2", ...).
+struct Part {
+    std::string id;
+    std::string name;
+    int32_t parent = -1;  // index into Scene::parts, always lower than this one's; -1 for a root
+    bool has_color = false;
+    Color color;
+    // Where the file places it: a 3x4 row-major rigid transform into the
+    // file's world, millimetres (rows: x, y, z; columns: the axes, then the origin).
+    std::array<double, 12> placement{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    uint32_t faces = 0;  // faces of the scene under this node (summarize_parts)
+    BBox bbox;           // of those faces' map meshes
 };
 
 // Wall-clock times of the import stages, milliseconds (reported in the render statistics).
@@ -91,6 +111,7 @@ struct Scene {
     BBox bbox;                // of all faces (surfaces' trimmed extent, via the meshes)
     std::vector<Face> faces;
     std::vector<Body> bodies;
+    std::vector<Part> parts;  // the assembly tree; empty when read without attributes
     ImportTimings timings;
     std::vector<std::string> warnings;  // things the import worked around (mesh fallback, healed loops, ...)
 };

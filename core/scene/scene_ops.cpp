@@ -1,6 +1,10 @@
 #include "core/scene/scene_ops.h"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+
+#include "core/check.h"
 
 namespace nurbsrt {
 
@@ -76,6 +80,40 @@ void transform_scene(Scene& scene, const Affine& xf) {
                                  c & 4 ? scene.bbox.hi.z : scene.bbox.lo.z}));
     }
     scene.bbox = box;
+    for (Part& p : scene.parts) p.placement = (xf * Affine{p.placement}).m;
+    summarize_parts(scene);
+}
+
+namespace {
+
+// "3/1/2" with `more` added to its first position ("3" + 2 -> "5/1/2").
+std::string renumbered_root(const std::string& id, size_t more) {
+    const size_t slash = id.find('/');
+    size_t root = 0;
+    for (size_t i = 0; i < std::min(slash, id.size()); ++i) {
+        if (id[i] < '0' || id[i] > '9') return id;  // not a path of positions: kept as it is
+        root = root * 10 + static_cast<size_t>(id[i] - '0');
+    }
+    return std::to_string(root + more) + (slash == std::string::npos ? "" : id.substr(slash));
+}
+
+}  // namespace
+
+void summarize_parts(Scene& scene) {
+    for (Part& p : scene.parts) {
+        p.faces = 0;
+        p.bbox = BBox{};
+    }
+    for (const Face& f : scene.faces) {
+        if (f.body >= scene.bodies.size()) continue;
+        BBox box;
+        for (const Vec3& v : f.mesh.xyz) box.extend(v);
+        for (int32_t p = scene.bodies[f.body].part; p >= 0; p = scene.parts[static_cast<size_t>(p)].parent) {
+            NURBSRT_CHECK(static_cast<size_t>(p) < scene.parts.size());
+            ++scene.parts[static_cast<size_t>(p)].faces;
+            scene.parts[static_cast<size_t>(p)].bbox.extend(box);
+        }
+    }
 }
 
 void append_scene(Scene& dst, const Scene& src) {
@@ -87,7 +125,20 @@ void append_scene(Scene& dst, const Scene& src) {
         dst.faces.back().index = f.index + face_offset;
         dst.faces.back().body = f.body + body_offset;
     }
-    dst.bodies.insert(dst.bodies.end(), src.bodies.begin(), src.bodies.end());
+    const int32_t part_offset = static_cast<int32_t>(dst.parts.size());
+    for (const Body& b : src.bodies) {
+        dst.bodies.push_back(b);
+        if (b.part >= 0) dst.bodies.back().part = b.part + part_offset;
+    }
+    // Part ids are paths from the first root: src's roots come after dst's.
+    size_t roots = 0;
+    for (const Part& p : dst.parts) roots += p.parent < 0;
+    for (const Part& p : src.parts) {
+        Part moved = p;
+        if (p.parent >= 0) moved.parent = p.parent + part_offset;
+        moved.id = renumbered_root(p.id, roots);
+        dst.parts.push_back(std::move(moved));
+    }
     dst.bbox.extend(src.bbox);
     dst.timings.read_ms += src.timings.read_ms;
     dst.timings.nurbs_convert_ms += src.timings.nurbs_convert_ms;

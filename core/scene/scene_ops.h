@@ -30,7 +30,12 @@ struct Affine {
 void transform_scene(Scene& scene, const Affine& xf);
 
 // Appends `src` to `dst`: faces renumbered after dst's (index contract: the
-// concatenation order), bodies appended, boxes, timings and warnings merged.
+// concatenation order), bodies and parts appended (src's roots numbered after
+// dst's in the part ids), boxes, timings and warnings merged.
 void append_scene(Scene& dst, const Scene& src);
+
+// Sets each part's face count and box from the faces of the bodies it places
+// and of its children's (the importer calls it once its faces are meshed).
+void summarize_parts(Scene& scene);
 
 }  // namespace nurbsrt

@@ -27,6 +27,7 @@ size_t scene_memory_bytes(const Scene& s) {
              f.mesh.triangles.size() * sizeof(uint32_t);
     }
     for (const Body& b : s.bodies) n += sizeof(Body) + b.name.size();
+    for (const Part& p : s.parts) n += sizeof(Part) + p.id.size() + p.name.size();
     for (const std::string& w : s.warnings) n += sizeof(std::string) + w.size();
     return n;
 }
