@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <memory>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <unistd.h>
@@ -38,44 +37,42 @@ void add_convert_command(CLI::App& app) {
                            "          nurbsrt convert part.igs part.glb");
     auto in = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
-    auto flags = std::make_shared<std::pair<bool, bool>>();  // quiet, strict
+    struct Flags {
+        bool quiet = false, strict = false;
+    };
+    auto flags = std::make_shared<Flags>();
     cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
     cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")
         ->required()
         ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
-    cmd->add_flag("-q,--quiet", flags->first, "no summary or warnings on stderr");
-    cmd->add_flag("--strict", flags->second,
+    cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
+    cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
     cmd->callback([in, out, flags] {
         const auto [quiet, strict] = *flags;
+        // Removes the partial file on every way out but the rename below.
+        struct PartialFile {
+            std::filesystem::path path;
+            ~PartialFile() {
+                std::error_code ec;
+                if (!path.empty()) std::filesystem::remove(path, ec);
+            }
+        };
         // Written under a temporary name beside OUT with OUT's extension (the
         // writer picks the format by it), renamed when it is kept: OUT exists
         // only complete, and not at all when --strict refuses it.
         const std::filesystem::path target(*out);
-        const std::filesystem::path partial =
-            target.parent_path() /
-            ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) + target.extension().string());
-        ConvertReport r;
-        try {
-            r = convert_file(*in, partial.string());
-        } catch (...) {
-            std::error_code ec;
-            std::filesystem::remove(partial, ec);
-            throw;
-        }
+        PartialFile partial{target.parent_path() / ("." + target.stem().string() + ".partial-" +
+                                                    std::to_string(::getpid()) + target.extension().string())};
+        const ConvertReport r = convert_file(*in, partial.path.string());
         std::vector<std::string> warnings;
         if (r.unmeshed_faces > 0)
             warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
                                *out);
         warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
-        try {
-            report_warnings(warnings, quiet, strict);
-        } catch (const WarningsRefused&) {
-            std::error_code ec;
-            std::filesystem::remove(partial, ec);
-            throw;
-        }
-        std::filesystem::rename(partial, target);
+        report_warnings(warnings, quiet, strict);
+        std::filesystem::rename(partial.path, target);
+        partial.path.clear();
         if (quiet) return;
         std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(), format_name(r.in_format),
                      r.faces, out->c_str(), conversion_format_name(r.output));

@@ -61,10 +61,11 @@ std::optional<std::string> negotiate_media_type(std::string_view accept, const s
     int best_specificity = 0;
     for (const std::string& offer : offers) {
         // The quality of an offer is that of the most specific range naming it.
+        const std::string type = ascii_lower(offer);
         int most = 0;
         double q = 0;
         for (const MediaRange& r : ranges) {
-            const int s = specificity(r.type, ascii_lower(offer));
+            const int s = specificity(r.type, type);
             if (s > most || (s == most && s > 0 && r.q > q)) most = s, q = r.q;
         }
         if (most == 0 || q <= 0) continue;

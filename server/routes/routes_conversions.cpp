@@ -73,7 +73,6 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     ticket.reset();
     stages.mark("transfer");  // the converted file into this process
 
-    const std::string content_type = conversion_format_content_type(format);
     if (json_answer) {
         nlohmann::json body = {{"request_id", request_id(res)},
                                {"input_format", format_name(report.in_format)},
@@ -82,7 +81,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                {"triangles", report.triangles},
                                {"unmeshed_faces", report.unmeshed_faces},
                                {"warnings", report.warnings},
-                               {"content_type", content_type},
+                               {"content_type", file_type},
                                {"data_base64", base64_encode(data)}};
         // The last stage, this answer, ends before its serialization: the text
         // cannot hold the time it takes to write itself.
@@ -94,7 +93,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         res.set_header("Content-Disposition",
                        attachment_disposition(download_name(upload.filename, download_extension(format))));
         set_warnings_header(res, report.warnings);
-        res.set_content(data, content_type.c_str());
+        res.set_content(data, file_type.c_str());
         stages.mark("response");
         res.set_header("Server-Timing", server_timing(stages, kConversionStages));
     }

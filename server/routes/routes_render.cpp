@@ -36,17 +36,20 @@ nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
 // options name, or, when they name none, in the one Accept prefers (PNG for
 // */*); or JSON. True for JSON; else `r.format` is the image's.
 bool choose_answer(const httplib::Request& req, RenderRequest& r) {
+    // The API's image formats, PNG first: the default.
+    static const std::vector<OutputFormat> kImageFormats = {
+        output_format(ImageFormat::png), output_format(ImageFormat::jpeg), output_format(ImageFormat::tiff),
+        output_format(ImageFormat::exr)};
     std::vector<std::string> offers;
     if (r.format_given)
         offers.push_back(r.format.content_type);
     else
-        for (const ImageFormat kind : {ImageFormat::png, ImageFormat::jpeg, ImageFormat::tiff, ImageFormat::exr})
-            offers.push_back(output_format(kind).content_type);
+        for (const OutputFormat& f : kImageFormats) offers.push_back(f.content_type);
     offers.push_back(kJsonMediaType);
     const std::string answer = negotiate_answer(req, offers);
     if (answer == kJsonMediaType) return true;
-    for (const ImageFormat kind : {ImageFormat::png, ImageFormat::jpeg, ImageFormat::tiff, ImageFormat::exr})
-        if (output_format(kind).content_type == answer) r.format = output_format(kind);
+    for (const OutputFormat& f : kImageFormats)
+        if (f.content_type == answer) r.format = f;
     return false;
 }
 
