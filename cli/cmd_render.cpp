@@ -58,6 +58,9 @@ struct Args {
     std::string edge_color;
     double edge_width = 1.0;
     bool shadows = false;
+    std::vector<std::string> sections;  // "px,py,pz,nx,ny,nz" each
+    std::string section_mode = "union";
+    bool no_caps = false, hatch = false;
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -89,6 +92,13 @@ RenderRequest request_of(const Args& a) {
     if (!a.edge_color.empty()) r.look.edge_color = parse_rgb(a.edge_color, "--edge-color");
     r.look.edge_width = a.edge_width;
     r.look.shadows = a.shadows;
+    if (a.sections.size() > kMaxSectionPlanes)  // a usage error (exit 2), as the API's 400
+        throw CLI::ValidationError("--section", "at most " + std::to_string(kMaxSectionPlanes) + " planes (got " +
+                                                    std::to_string(a.sections.size()) + ")");
+    for (const std::string& plane : a.sections) r.sections.planes.push_back(parse_section_plane(plane, "--section"));
+    r.sections.mode = *parse_section_mode(a.section_mode);
+    r.sections.caps = !a.no_caps;
+    r.sections.hatch = a.hatch;
     return r;
 }
 
@@ -216,6 +226,16 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->capture_default_str();
     cmd->add_flag("--shadows", a.shadows,
                   "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
+    cmd->add_option("--section", a.sections,
+                    "section plane px,py,pz,nx,ny,nz: removes the side the normal points to (repeatable, at most " +
+                        std::to_string(kMaxSectionPlanes) + ")")
+        ->check(shared_check([](const std::string& s) { parse_section_plane(s, "the value"); }, "PX,PY,PZ,NX,NY,NZ"));
+    cmd->add_option("--section-mode", a.section_mode,
+                    "union: remove every plane's half-space; cutaway: only where all planes' half-spaces meet")
+        ->check(CLI::IsMember({"union", "cutaway"}))
+        ->capture_default_str();
+    cmd->add_flag("--no-caps", a.no_caps, "cut closed bodies open (no caps on the section planes)");
+    cmd->add_flag("--hatch", a.hatch, "hatching lines over the section caps");
 }
 
 // Progress on stderr: live on a terminal; otherwise a line per 10% once the

@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Reader.hxx>
 #include <IGESControl_Reader.hxx>
@@ -127,6 +128,17 @@ Color to_color(const Quantity_Color& c) {
     return Color{static_cast<float>(c.Red()), static_cast<float>(c.Green()), static_cast<float>(c.Blue())};
 }
 
+// Whether a solid's or shell's every shell is closed (BRep_Tool::IsClosed: each
+// edge shared by two faces of the shell, seams counted twice); none: not closed.
+bool all_shells_closed(const TopoDS_Shape& group) {
+    bool any = false;
+    for (TopExp_Explorer ex(group, TopAbs_SHELL); ex.More(); ex.Next()) {
+        if (!BRep_Tool::IsClosed(ex.Current())) return false;
+        any = true;
+    }
+    return any;
+}
+
 // Bodies by topology: every solid, then every shell outside solids, then all
 // remaining free faces as one body. Same for both reader modes, so the body
 // numbering does not depend on read_attributes.
@@ -134,7 +146,7 @@ void assign_bodies(OcctModel& m) {
     const int n = m.faces.Extent();
     m.attributes.assign(static_cast<size_t>(n), FaceAttributes{});
     std::vector<bool> done(static_cast<size_t>(n), false);
-    auto claim = [&](const TopoDS_Shape& group) {
+    auto claim = [&](const TopoDS_Shape& group, bool closed) {
         bool any = false;
         const uint32_t body = static_cast<uint32_t>(m.bodies.size());
         for (TopExp_Explorer ex(group, TopAbs_FACE); ex.More(); ex.Next()) {
@@ -144,11 +156,16 @@ void assign_bodies(OcctModel& m) {
             m.attributes[static_cast<size_t>(i - 1)].body = body;
             any = true;
         }
-        if (any) m.bodies.push_back(Body{});
+        if (!any) return;
+        Body made;
+        made.closed = closed;
+        m.bodies.push_back(made);
     };
-    for (TopExp_Explorer ex(m.shape, TopAbs_SOLID); ex.More(); ex.Next()) claim(ex.Current());
-    for (TopExp_Explorer ex(m.shape, TopAbs_SHELL, TopAbs_SOLID); ex.More(); ex.Next()) claim(ex.Current());
-    if (std::find(done.begin(), done.end(), false) != done.end()) claim(m.shape);
+    for (TopExp_Explorer ex(m.shape, TopAbs_SOLID); ex.More(); ex.Next())
+        claim(ex.Current(), all_shells_closed(ex.Current()));
+    for (TopExp_Explorer ex(m.shape, TopAbs_SHELL, TopAbs_SOLID); ex.More(); ex.Next())
+        claim(ex.Current(), all_shells_closed(ex.Current()));
+    if (std::find(done.begin(), done.end(), false) != done.end()) claim(m.shape, false);
 }
 
 // The assembly tree as the document explorer walks it, depth first: each node's

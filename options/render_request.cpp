@@ -58,6 +58,33 @@ Vec3 parse_point(const std::string& text, const std::string& what) {
     return checked_point({(*xyz)[0], (*xyz)[1], (*xyz)[2]}, what);
 }
 
+SectionPlane checked_section_plane(Vec3 point, Vec3 normal, const std::string& what) {
+    SectionPlane plane;
+    plane.point = checked_point(point, what + "'s point");
+    checked_point(normal, what + "'s normal");
+    const double len = length(normal);
+    // A normal this short has no direction left to normalise (and 0 has none).
+    if (!(len > 1e-12)) throw Error(ErrorCode::invalid_argument, what + "'s normal must not be zero");
+    plane.normal = (1.0 / len) * normal;
+    return plane;
+}
+
+SectionPlane parse_section_plane(const std::string& text, const std::string& what) {
+    const auto v = decimal_list(text, 6, 6);
+    if (!v)
+        throw Error(ErrorCode::invalid_argument, what +
+                                                     " must be px,py,pz,nx,ny,nz: a point and a normal, six decimal "
+                                                     "numbers (got '" +
+                                                     text.substr(0, 64) + "')");
+    return checked_section_plane({(*v)[0], (*v)[1], (*v)[2]}, {(*v)[3], (*v)[4], (*v)[5]}, what);
+}
+
+void check_section_count(size_t planes, const std::string& what) {
+    if (planes > kMaxSectionPlanes)
+        throw Error(ErrorCode::invalid_argument, what + " holds " + std::to_string(planes) + " planes; at most " +
+                                                     std::to_string(kMaxSectionPlanes) + " are allowed");
+}
+
 int default_antialias(ImageFormat format) {
     return format == ImageFormat::png || format == ImageFormat::jpeg ? kDefaultAntialias : 0;
 }
@@ -155,6 +182,7 @@ RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
     options.newton.eps = default_newton_eps(scene.bbox, r.tolerance);
     apply_background(r.background.value_or(default_background(r.format.kind)), options);
     apply_look(r.look, r.format.kind, options);
+    options.sections = r.sections;
     return options;
 }
 

@@ -69,6 +69,15 @@ inline constexpr Aov kAllAovs[] = {Aov::z, Aov::face, Aov::normal, Aov::uv, Aov:
 constexpr unsigned aov_bit(Aov a) { return 1u << static_cast<unsigned>(a); }
 const char* aov_name(Aov a);  // z, face, normal, uv, iterations
 
+// Section planes (renderer/section.h), the same checks for the API and the CLI.
+// A plane: its point (checked_point) and a finite, non-zero normal, made unit.
+// Throws Error(invalid_argument) naming `what`.
+SectionPlane checked_section_plane(Vec3 point, Vec3 normal, const std::string& what);
+// "px,py,pz,nx,ny,nz" (the CLI's --section, a query parameter's plane).
+SectionPlane parse_section_plane(const std::string& text, const std::string& what);
+// More than kMaxSectionPlanes planes: Error(invalid_argument) naming `what`.
+void check_section_count(size_t planes, const std::string& what);
+
 struct RenderRequest {
     int width = kDefaultWidth, height = kDefaultHeight;
     std::string view = "iso";
@@ -86,6 +95,7 @@ struct RenderRequest {
     std::optional<Background> background;  // unset: default_background(format)
     unsigned aovs = 0;                     // aov_bit() of each AOV asked for
     ImageLook look;
+    Sections sections;  // planes (checked, unit normals), mode, caps, hatching
 };
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).

@@ -120,7 +120,8 @@ unsigned aov_bits(const json& v, const std::string& key) {
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
-    "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
+    "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin, sections, section_mode, "
+    "section_caps, section_hatch";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -164,6 +165,38 @@ std::string quoted_name(const std::string& key) {
     return q;
 }
 
+// "sections": [{"point": [x, y, z], "normal": [x, y, z]}, ...] or, as a
+// query parameter, "px,py,pz,nx,ny,nz;..." (planes separated by semicolons).
+std::vector<SectionPlane> section_planes(const json& v, const std::string& key) {
+    std::vector<SectionPlane> planes;
+    const std::string what = "option '" + key + "'";
+    if (v.is_string()) {
+        const std::string s = v.get<std::string>();
+        for (size_t start = 0; start <= s.size();) {
+            const size_t semi = std::min(s.find(';', start), s.size());
+            check_section_count(planes.size() + 1, what);
+            planes.push_back(
+                parse_section_plane(s.substr(start, semi - start), what + " plane " + std::to_string(planes.size())));
+            start = semi + 1;
+        }
+        return planes;
+    }
+    if (!v.is_array()) bad(what + " must be an array of planes {\"point\": [x,y,z], \"normal\": [x,y,z]}");
+    check_section_count(v.size(), what);
+    for (size_t k = 0; k < v.size(); ++k) {
+        const std::string where = key + "[" + std::to_string(k) + "]";
+        const json& p = v[k];
+        if (!p.is_object() || !p.contains("point") || !p.contains("normal"))
+            bad("option '" + where + "' must be an object with a point and a normal");
+        for (const auto& [pk, pv] : p.items())
+            if (pk != "point" && pk != "normal")
+                bad("unknown option " + quoted_name(pk) + " in '" + where + "' (a plane has point and normal)");
+        planes.push_back(checked_section_plane(vec3(p.at("point"), where + ".point"),
+                                               vec3(p.at("normal"), where + ".normal"), "option '" + where + "'"));
+    }
+    return planes;
+}
+
 json parse_object(const std::string& options_json) {
     const json o = parse_json_or_throw(options_json, kRequestJsonLimits, "the options");
     if (!o.is_object()) bad("options must be a JSON object");
@@ -205,6 +238,14 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.look.edge_width = parse_edge_width(number(v, key), "option '" + key + "'");
         } else if (key == "shadows") {
             r.look.shadows = boolean(v, key);
+        } else if (key == "sections") {
+            r.sections.planes = section_planes(v, key);
+        } else if (key == "section_mode") {
+            r.sections.mode = *parse_section_mode(one_of(v, key, {"union", "cutaway"}));
+        } else if (key == "section_caps") {
+            r.sections.caps = boolean(v, key);
+        } else if (key == "section_hatch") {
+            r.sections.hatch = boolean(v, key);
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items())

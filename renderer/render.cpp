@@ -98,7 +98,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
     throw_if_canceled(options);
     const PreliminaryMap map =
-        render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()});
+        render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()}, &options.sections);
     throw_if_canceled(options);
     st.preliminary_map_ms = lap();
 
@@ -164,6 +164,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
         st.shadowed_pixels = static_cast<uint64_t>(std::count(res.image.shadow.begin(), res.image.shadow.end(), 1));
     }
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
+    st.section_planes = static_cast<int>(options.sections.planes.size());
+    st.open_bodies_cut = open_bodies_cut(scene, options.sections);
     st.map_triangles = prepared.map_mesh().triangles();
     throw_if_canceled(options);
     progress.finish();

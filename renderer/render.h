@@ -17,6 +17,7 @@
 #include "renderer/camera.h"
 #include "renderer/method.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/section.h"
 
 namespace nurbsrt {
 
@@ -46,6 +47,9 @@ struct RenderOptions {
     // Exact shadows of the key light (shadow_rays.h): a second preliminary map
     // from the light, and Newton along the light ray of every shaded sample.
     bool shadows = false;
+    // Section planes (section.h): the half-spaces they remove are left out of the
+    // frame, its map, its shadows; closed bodies show caps where they are cut.
+    Sections sections;
     Color background{0, 0, 0};   // of pixels no face covers
     float background_alpha = 0;  // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
@@ -64,7 +68,7 @@ struct RenderImage {
     std::vector<float> rgba;          // 4 per pixel, linear
     std::vector<float> z;             // hit distance t, +inf for background
     std::vector<float> normal;        // 3 per pixel: world-space shading normal (facing the viewer), 0 background
-    std::vector<uint32_t> face;       // face index, 0 background
+    std::vector<uint32_t> face;       // face index, 0 background; kCapFace + body on a section cap
     std::vector<float> u, v;          // parameters of the hit
     std::vector<uint8_t> iterations;  // Newton iterations of the pixel's final solve
     // 1 where the key light is blocked at the pixel-centre hit (RenderOptions::shadows;
@@ -72,6 +76,11 @@ struct RenderImage {
     // darkness is their orientation, not a cast shadow.
     std::vector<uint8_t> shadow;
 };
+
+// The face AOV of a section cap (section.h) of body b is kCapFace + b: above any
+// face index a scene can hold, one value per body, so a cap is told from faces
+// and caps of different bodies from each other.
+inline constexpr uint32_t kCapFace = 0x80000000u;
 
 struct RenderStats {
     NewtonMethod method = NewtonMethod::proposed;
@@ -112,6 +121,11 @@ struct RenderStats {
     // pixels whose centre the key light does not reach.
     bool shadows = false;
     int shadow_map_size = 0;
+    // Sections (RenderOptions::sections): the planes, the pixels showing a cap,
+    // and the cut bodies that got no caps because they are open shells (their
+    // insides show).
+    int section_planes = 0;
+    uint64_t cap_pixels = 0, open_bodies_cut = 0;
     uint64_t shadow_rays = 0, shadowed_pixels = 0;
     // Stage times of the frame, end to end on one clock (each includes the small
     // set-up before its pass), so that with prepare_ms they sum to total_ms.

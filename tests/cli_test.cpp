@@ -457,6 +457,29 @@ TEST(CliRender, ShadowsFlagInStats) {
     fs::remove_all(dir);
 }
 
+// A section plane through the screw's centre, towards the iso eye: caps counted,
+// none with --no-caps; more planes than allowed is a usage error before the import.
+TEST(CliRender, SectionsInStats) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-sections-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string plane = " --section=-17.9,-0.84,-13.4,1,0,0";
+    for (const bool caps : {true, false}) {
+        const CliRun r = run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --stats - -o " +
+                                     (dir / "s.png").string() + plane + " --hatch" + (caps ? "" : " --no-caps"));
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json st = nlohmann::json::parse(r.out);
+        EXPECT_EQ(st["sections"]["planes"], 1);
+        EXPECT_EQ(st["sections"]["cap_pixels"].get<uint64_t>() > 100, caps) << st["sections"];
+    }
+    std::string seven;
+    for (int k = 0; k < 7; ++k) seven += plane;
+    const CliRun r = run_nurbsrt("render " + kScrew + seven + " -o " + (dir / "t.png").string());
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--section: at most 6 planes (got 7)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("importing"), std::string::npos) << r.err;
+    fs::remove_all(dir);
+}
+
 // Every option is checked before any import: a usage error exits 2 with
 // CLI11's message naming the flag, and the import never starts (the progress
 // line "importing" is the first thing a render prints once the options are good).
@@ -483,6 +506,9 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o " + out + " --eye 1,1,1 --target 1,1,1", "--target: camera: eye and target must differ"},
         {"-o " + out + " --eye 0,0,9 --target 0,0,0 --up 0,0,2", "--up: camera: up must not be parallel"},
         {"-o " + out + " --fit-margin 0.6", "--fit-margin: Value 0.6 not in range"},
+        {"-o " + out + " --section=0,0,0,0,0,0", "--section: the value's normal must not be zero"},
+        {"-o " + out + " --section 1,2", "--section: the value must be px,py,pz,nx,ny,nz"},
+        {"-o " + out + " --section-mode half", "--section-mode: half not in {union,cutaway}"},
         {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},
     };
     for (const auto& c : cases) {

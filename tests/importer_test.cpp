@@ -54,6 +54,8 @@
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
 #include "core/error.h"
+#include "core/io/scene_io.h"
+#include "core/io/scene_json.h"
 #include "core/scene/nurbs.h"
 #include "core/scene/scene.h"
 #include "core/scene/trim.h"
@@ -1075,3 +1077,17 @@ TEST(Format, DiscIgsWithoutLineBreaksIsIges) {
 }
 
 }  // namespace
+
+// A section plane caps closed bodies only (renderer/section.h): solids are
+// closed, an IGES file's free faces are not, and the flag survives the scene
+// file the isolated import hands back and the NURBS JSON.
+TEST(Import, BodiesSayWhetherTheyAreClosed) {
+    const Scene solid = nurbsrt::import_file(T::box_with_holes());
+    ASSERT_FALSE(solid.bodies.empty());
+    for (const nurbsrt::Body& b : solid.bodies) EXPECT_TRUE(b.closed);
+    const Scene faces = nurbsrt::import_file("/usr/share/opencascade/data/iges/bearing.iges");
+    ASSERT_FALSE(faces.bodies.empty());
+    for (const nurbsrt::Body& b : faces.bodies) EXPECT_FALSE(b.closed);
+    EXPECT_TRUE(nurbsrt::deserialize_scene(nurbsrt::serialize_scene(solid)).bodies.front().closed);
+    EXPECT_TRUE(nurbsrt::scene_from_json(nurbsrt::scene_to_json(solid)).bodies.front().closed);
+}

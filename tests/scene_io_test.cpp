@@ -307,8 +307,9 @@ TEST(SceneIo, HugeCountsWithValidChecksum) {
     const size_t source_len_at = 20;
     const size_t warnings_at = 20 + 14 + 12 + 10 + 48 + 24;
     const size_t bodies_at = warnings_at + 8 + (8 + 2) * 2;
-    const size_t parts_at = bodies_at + 8 + (8 + 1 + 1 + 12 + 4);  // a body: name "b", has_color, Color, part
-    const size_t faces_at = parts_at + 8;                          // no parts
+    const size_t parts_at =
+        bodies_at + 8 + (8 + 1 + 1 + 12 + 4 + 1);  // a body: name "b", has_color, Color, part, closed
+    const size_t faces_at = parts_at + 8;          // no parts
     ASSERT_EQ(read_u64(bytes, source_len_at), 6u);
     ASSERT_EQ(read_u64(bytes, warnings_at), 2u);
     ASSERT_EQ(read_u64(bytes, bodies_at), 1u);

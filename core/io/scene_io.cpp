@@ -5,7 +5,7 @@
 //   bbox: 6 f64 (lo.xyz, hi.xyz)
 //   timings: 3 f64 (read, nurbs_convert, mesh)
 //   warnings: count, str...
-//   bodies: count, { str name, bool has_color, Color, i32 part }...
+//   bodies: count, { str name, bool has_color, Color, i32 part, bool closed }...
 //   parts: count, { str id, str name, i32 parent, 12 f64 placement, bool has_color, Color,
 //                   u32 faces, bbox: 6 f64 }...
 //   faces: count, {
@@ -308,7 +308,7 @@ void read_part(Reader& r, Part& p, size_t index) {
 }
 
 // Smallest possible encoded sizes, used to bound counts before allocating.
-constexpr size_t kMinBodyBytes = 8 + 1 + 12 + 4;
+constexpr size_t kMinBodyBytes = 8 + 1 + 12 + 4 + 1;
 constexpr size_t kMinPartBytes = 8 + 8 + 4 + 1 + 12 + 12 * 8 + 4 + 6 * 8;
 constexpr size_t kMinFaceBytes = 4 + (16 + 1 + 8 + 8 + 8) + 32 + 1 + 8 + 8 + 8 + 8 + 8 + 1 + 1 + 12 + 8 + 4;
 
@@ -337,6 +337,7 @@ std::string serialize_scene(const Scene& scene) {
         w.u8(b.has_color);
         w.color(b.color);
         w.i32(b.part);
+        w.u8(b.closed);
     }
     w.u64(scene.parts.size());
     for (const Part& p : scene.parts) write_part(w, p);
@@ -392,6 +393,7 @@ Scene deserialize_scene(const std::string& bytes) {
         b.has_color = r.boolean("body has_color");
         b.color = r.color("body color");
         b.part = r.i32("body part");
+        b.closed = r.boolean("body closed");
     }
     scene.parts.resize(r.count("parts", kMinPartBytes));
     for (size_t i = 0; i < scene.parts.size(); ++i) read_part(r, scene.parts[i], i);

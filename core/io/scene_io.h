@@ -18,7 +18,8 @@
 namespace nurbsrt {
 
 // 2: bodies name their part, and the assembly tree (Scene::parts) follows them.
-constexpr unsigned kSceneFormatVersion = 2;
+// 3: bodies say whether they are closed (Body::closed).
+constexpr unsigned kSceneFormatVersion = 3;
 
 std::string serialize_scene(const Scene& scene);
 // The format's checksum of the payload (FNV-1a, 64 bits), stored after it.

@@ -66,7 +66,8 @@ json face_json(const Face& f) {
 
 json scene_json(const Scene& scene) {
     json bodies = json::array();
-    for (const Body& b : scene.bodies) bodies.push_back({{"name", b.name}, {"color", color(b.has_color, b.color)}});
+    for (const Body& b : scene.bodies)
+        bodies.push_back({{"name", b.name}, {"color", color(b.has_color, b.color)}, {"closed", b.closed}});
     json faces = json::array();
     for (const Face& f : scene.faces) faces.push_back(face_json(f));
     const json bbox = scene.bbox.empty() ? json(nullptr)

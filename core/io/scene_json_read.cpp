@@ -170,6 +170,12 @@ Scene scene_from_json(const std::string& text) {
         body.name = string_field(bodies[b], "name");
         read_color(field(bodies[b], "color", "bodies"), body.has_color, body.color,
                    "bodies[" + std::to_string(b) + "]");
+        // Optional (documents written before it existed): an open body is cut without caps.
+        if (bodies[b].contains("closed")) {
+            const json& closed = bodies[b].at("closed");
+            if (!closed.is_boolean()) bad("bodies[" + std::to_string(b) + "].closed", "must be true or false");
+            body.closed = closed.get<bool>();
+        }
         scene.bodies.push_back(std::move(body));
     }
     for (size_t i = 0; i < faces.size(); ++i) scene.faces.push_back(read_face(faces[i], i));

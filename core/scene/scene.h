@@ -77,6 +77,9 @@ struct Body {
     bool has_color = false;
     Color color;
     int32_t part = -1;  // the leaf of Scene::parts that places it; -1 when the file was read without its tree
+    // Every shell of it closed (each edge shared by two of its faces): a section
+    // plane through it shows a cap where the ray is inside (renderer/section.h).
+    bool closed = false;
 };
 
 // A node of the file's assembly tree (XDE), in depth-first order: an assembly,

@@ -102,6 +102,7 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
             return kBehind;
     }
     if (crossing) *crossing = r.t;
+    if (removed_by_sections(sp, r.t)) return kTrimmed;
     Outcome o = kConverged;
     if (!ff.trim.inside({r.u, r.v})) {
         if (!near || !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return kTrimmed;
@@ -109,6 +110,13 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
     }
     set_hit(ctx.scene.faces[id - 1], id, r.u, r.v, r.t, r.Cu, r.Cv, hit);
     return o;
+}
+
+bool Solver::removed_by_sections(ScreenPoint sp, double t) const {
+    const Sections& sections = ctx.options.sections;
+    if (!sections.active()) return false;
+    const Ray ray = ctx.camera.ray(sp);
+    return sections.removes(ray.origin + t * ray.dir);
 }
 
 // Adjacent faces of a CAD model meet only within their edges' tolerance: a ray
@@ -141,7 +149,7 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
     const double gap = length(q - t * ray.dir);
     const double across = std::max(u_border ? length(c.Pu) : 0.0, v_border ? length(c.Pv) : 0.0);
     const double band = std::min(ff.near_uv * across, kMaxBorderGapPixels * ctx.pixel_footprint(t));
-    if (!(t > 0) || !(gap <= band)) return false;
+    if (!(t > 0) || !(gap <= band) || removed_by_sections(sp, t)) return false;
     set_hit(ctx.scene.faces[id - 1], id, r.u, r.v, t, c.Pu, c.Pv, hit);
     return true;
 }

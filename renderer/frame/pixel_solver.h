@@ -56,6 +56,9 @@ private:
     const NurbsSurface& iterated_surface(uint32_t id) const;
     // Its power-form patches, or null where it has none.
     const SurfacePatches* iterated_patches(uint32_t id) const;
+    // Whether the point at distance t on the ray through sp is removed by a
+    // section plane (section.h): such a root is rejected like one outside the trim.
+    bool removed_by_sections(ScreenPoint sp, double t) const;
     bool border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, PixelHit& hit) const;
 };
 

@@ -50,6 +50,93 @@ void main() {
 }
 )";
 
+// With section planes (section.h): each vertex carries its signed distance from
+// up to six planes (positive on the removed side), interpolated across the
+// triangle, and fragments on the removed side are discarded. A distance is
+// affine in the model point, so its perspective-correct interpolation is the
+// fragment's own distance (up to float rounding): the map is clipped to the
+// mesh's exact cut. Discarding rather than gl_ClipDistance, because a cut-away
+// (removing the planes' intersection) keeps a union of half-spaces, which
+// clipping (an intersection) cannot express.
+const char* kCutVertexShader = R"(#version 450 core
+layout(location = 0) in vec4 a_clip;
+layout(location = 1) in vec2 a_uv;
+layout(location = 2) in uint a_face;
+layout(location = 3) in vec3 a_d0;
+layout(location = 4) in vec3 a_d1;
+layout(location = 5) in uint a_body;
+out vec2 v_uv;
+out vec3 v_d0;
+out vec3 v_d1;
+flat out uint v_face;
+flat out uint v_body;
+void main() {
+    v_uv = a_uv;
+    v_face = a_face;
+    v_body = a_body;
+    v_d0 = a_d0;
+    v_d1 = a_d1;
+    gl_Position = a_clip;
+}
+)";
+
+// The removal test of the sectioned programs' fragment shaders.
+#define NURBSRT_SECTION_DISCARD                                                    \
+    "    float d[6] = float[6](v_d0.x, v_d0.y, v_d0.z, v_d1.x, v_d1.y, v_d1.z);\n" \
+    "    bool any_removed = false, all_removed = true;\n"                          \
+    "    for (int k = 0; k < u_planes; ++k) {\n"                                   \
+    "        bool removed = d[k] > 0.0;\n"                                         \
+    "        any_removed = any_removed || removed;\n"                              \
+    "        all_removed = all_removed && removed;\n"                              \
+    "    }\n"                                                                      \
+    "    if (u_cutaway ? all_removed : any_removed) discard;\n"
+
+const char* kCutFragmentShader =
+    "#version 450 core\n"
+    "in vec2 v_uv;\n"
+    "in vec3 v_d0;\n"
+    "in vec3 v_d1;\n"
+    "flat in uint v_face;\n"
+    "uniform int u_planes;\n"
+    "uniform bool u_cutaway;\n"
+    "layout(location = 0) out uint o_face;\n"
+    "layout(location = 1) out float o_u;\n"
+    "layout(location = 2) out float o_v;\n"
+    "void main() {\n" NURBSRT_SECTION_DISCARD
+    "    o_face = v_face;\n"
+    "    o_u = v_uv.x;\n"
+    "    o_v = v_uv.y;\n"
+    "}\n";
+
+// The inside layer of a sectioned frame with caps (PreliminaryMap::inside):
+// every kept fragment of a closed body XORs 1 + the body's index into the
+// pixel (GL_XOR logic op, no depth test), so that a pixel ends with 1 + the
+// closed body holding the ray where it enters the kept space (each body the ray
+// crosses an even number of times there cancels out), or 0 outside all of them.
+// A body's index travels as the face id does (a flat integer attribute of
+// kCutVertexShader, which both sectioned programs share; 0 for faces of open
+// bodies, which XOR nothing).
+const char* kInsideFragmentShader =
+    "#version 450 core\n"
+    "in vec3 v_d0;\n"
+    "in vec3 v_d1;\n"
+    "flat in uint v_body;\n"
+    "uniform int u_planes;\n"
+    "uniform bool u_cutaway;\n"
+    "layout(location = 0) out uint o_inside;\n"
+    "void main() {\n" NURBSRT_SECTION_DISCARD
+    "    o_inside = v_body;\n"
+    "}\n";
+#undef NURBSRT_SECTION_DISCARD
+
+// A band read back bottom row first, its rows swapped end for end into the
+// map's top-first order.
+template <class T>
+void flip_rows(T* block, int rows, size_t width) {
+    for (int r = 0; r < rows / 2; ++r)
+        std::swap_ranges(block + r * width, block + (r + 1) * width, block + (rows - 1 - r) * width);
+}
+
 [[noreturn]] void fail(const std::string& what) { throw Error(ErrorCode::internal, "preliminary map: " + what); }
 
 }  // namespace
@@ -57,24 +144,39 @@ void main() {
 struct MapRenderer::Impl {
     GlContext gl;
     GLuint program = 0, vao = 0;
+    // The sectioned frames' programs (kCutVertexShader, kInsideVertexShader) and their uniforms.
+    GLuint cut_program = 0, inside_program = 0;
+    GLint cut_planes = -1, cut_cutaway = -1, inside_planes = -1, inside_cutaway = -1;
     // vbo_clip: clip-space positions, rewritten every frame; vbo_uv, vbo_face and
-    // ebo: the map mesh's camera-independent data of PreparedScene `uploaded`.
-    GLuint vbo_clip = 0, vbo_uv = 0, vbo_face = 0, ebo = 0;
+    // ebo: the map mesh's camera-independent data of PreparedScene `uploaded`;
+    // vbo_dist: the section planes' distances of a sectioned frame (6 a vertex).
+    // vbo_body: per vertex 1 + its closed body, 0 for open ones (the inside layer).
+    GLuint vbo_clip = 0, vbo_uv = 0, vbo_face = 0, ebo = 0, vbo_dist = 0, vbo_body = 0;
     uint64_t uploaded = 0;  // PreparedScene::id of the static buffers' contents, 0: none
     // One attachment per map array (face, u, v), so that each is read back
     // straight into its PreliminaryMap vector, with no interleaved copy to split.
     GLuint fbo = 0, tex_face = 0, tex_u = 0, tex_v = 0, rb_depth = 0;
     int fb_w = 0, fb_h = 0;
+    GLuint fbo_inside = 0, tex_inside = 0;  // the inside layer's, made for the first frame with caps
+    int inside_w = 0, inside_h = 0;
 
     Impl() {
         program = gl.link_program(kVertexShader, kFragmentShader, "preliminary map");
+        cut_program = gl.link_program(kCutVertexShader, kCutFragmentShader, "sectioned preliminary map");
+        cut_planes = glGetUniformLocation(cut_program, "u_planes");
+        cut_cutaway = glGetUniformLocation(cut_program, "u_cutaway");
+        inside_program = gl.link_program(kCutVertexShader, kInsideFragmentShader, "inside layer");
+        inside_planes = glGetUniformLocation(inside_program, "u_planes");
+        inside_cutaway = glGetUniformLocation(inside_program, "u_cutaway");
         glGenVertexArrays(1, &vao);
-        GLuint bufs[4];
-        glGenBuffers(4, bufs);
+        GLuint bufs[6];
+        glGenBuffers(6, bufs);
+        vbo_body = bufs[5];
         vbo_clip = bufs[0];
         vbo_uv = bufs[1];
         vbo_face = bufs[2];
         ebo = bufs[3];
+        vbo_dist = bufs[4];
         glBindVertexArray(vao);
         glBindBuffer(GL_ARRAY_BUFFER, vbo_clip);
         glEnableVertexAttribArray(0);
@@ -85,6 +187,13 @@ struct MapRenderer::Impl {
         glBindBuffer(GL_ARRAY_BUFFER, vbo_face);
         glEnableVertexAttribArray(2);
         glVertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(uint32_t), nullptr);
+        // Attributes 3 and 4 are enabled only for sectioned frames (set_sections).
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_dist);
+        glVertexAttribPointer(3, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+        glVertexAttribPointer(4, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                              reinterpret_cast<const void*>(3 * sizeof(float)));
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_body);
+        glVertexAttribIPointer(5, 1, GL_UNSIGNED_INT, sizeof(uint32_t), nullptr);
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);  // part of the VAO's state
         gl.release_current();
     }
@@ -105,14 +214,108 @@ struct MapRenderer::Impl {
     ~Impl() {
         make_current();
         release_fbo();
-        const GLuint bufs[4] = {vbo_clip, vbo_uv, vbo_face, ebo};
-        glDeleteBuffers(4, bufs);
+        release_inside_fbo();
+        const GLuint bufs[6] = {vbo_clip, vbo_uv, vbo_face, ebo, vbo_dist, vbo_body};
+        glDeleteBuffers(6, bufs);
         glDeleteVertexArrays(1, &vao);
         glDeleteProgram(program);
+        glDeleteProgram(cut_program);
+        glDeleteProgram(inside_program);
         gl.release_current();
     }
 
     void make_current() { gl.make_current(); }
+
+    // Selects the program of a frame with or without section planes, and for one
+    // with them uploads every vertex's distances (in double, then float).
+    void use_program(const PreparedScene& ps, const MapMesh& mesh, const Sections* sections) {
+        const bool cut = sections && sections->active();
+        glBindVertexArray(vao);
+        if (!cut) {
+            glDisableVertexAttribArray(3);
+            glDisableVertexAttribArray(4);
+            glDisableVertexAttribArray(5);
+            glUseProgram(program);
+            return;
+        }
+        const size_t planes = std::min(sections->planes.size(), kMaxSectionPlanes);
+        std::vector<float> dist(6 * mesh.xyz.size(), 0.0f);
+        for (size_t k = 0; k < mesh.xyz.size(); ++k)
+            for (size_t p = 0; p < planes; ++p)
+                dist[6 * k + p] = static_cast<float>(sections->planes[p].distance(mesh.xyz[k]));
+        glBindBuffer(GL_ARRAY_BUFFER, vbo_dist);
+        glBufferData(GL_ARRAY_BUFFER, dist.size() * sizeof(float), dist.data(), GL_STREAM_DRAW);
+        glEnableVertexAttribArray(3);
+        glEnableVertexAttribArray(4);
+        const GLint cutaway = sections->mode == SectionMode::cutaway ? 1 : 0;
+        glDisableVertexAttribArray(5);
+        if (sections->caps) {
+            const Scene& scene = ps.scene();
+            std::vector<uint32_t> body(mesh.face.size(), 0);
+            for (size_t k = 0; k < mesh.face.size(); ++k) {
+                const uint32_t f = mesh.face[k];
+                if (f < 1 || f > scene.faces.size()) continue;
+                const uint32_t b = scene.faces[f - 1].body;
+                if (b < scene.bodies.size() && scene.bodies[b].closed) body[k] = b + 1;
+            }
+            glBindBuffer(GL_ARRAY_BUFFER, vbo_body);
+            glBufferData(GL_ARRAY_BUFFER, body.size() * sizeof(uint32_t), body.data(), GL_STREAM_DRAW);
+            glEnableVertexAttribArray(5);
+            glUseProgram(inside_program);
+            glUniform1i(inside_planes, static_cast<GLint>(planes));
+            glUniform1i(inside_cutaway, cutaway);
+        }
+        glUseProgram(cut_program);
+        glUniform1i(cut_planes, static_cast<GLint>(planes));
+        glUniform1i(cut_cutaway, cutaway);
+    }
+
+    // The inside layer of one band (kInsideFragmentShader) into its own
+    // framebuffer, read into map.inside like the other layers.
+    void draw_inside(PreliminaryMap& map, int y_lo, int rows, GLsizei indices) {
+        ensure_inside_fbo(fb_w, fb_h);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo_inside);
+        const GLuint zero[4] = {0, 0, 0, 0};
+        glClearBufferuiv(GL_COLOR, 0, zero);
+        glUseProgram(inside_program);
+        glDisable(GL_DEPTH_TEST);
+        glEnable(GL_COLOR_LOGIC_OP);
+        glLogicOp(GL_XOR);
+        glDrawElements(GL_TRIANGLES, indices, GL_UNSIGNED_INT, nullptr);
+        glDisable(GL_COLOR_LOGIC_OP);
+        glEnable(GL_DEPTH_TEST);
+        const size_t W = static_cast<size_t>(map.width);
+        uint32_t* block = map.inside.data() + static_cast<size_t>(map.height - y_lo - rows) * W;
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glReadBuffer(GL_COLOR_ATTACHMENT0);
+        glReadPixels(0, 0, map.width, rows, GL_RED_INTEGER, GL_UNSIGNED_INT, block);
+        flip_rows(block, rows, W);
+        glUseProgram(cut_program);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    }
+
+    void ensure_inside_fbo(int w, int h) {
+        if (fbo_inside && inside_w == w && inside_h == h) return;
+        release_inside_fbo();
+        glGenFramebuffers(1, &fbo_inside);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo_inside);
+        glGenTextures(1, &tex_inside);
+        glBindTexture(GL_TEXTURE_2D, tex_inside);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, w, h);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex_inside, 0);
+        const GLenum buf = GL_COLOR_ATTACHMENT0;
+        glDrawBuffers(1, &buf);
+        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) fail("inside framebuffer incomplete");
+        inside_w = w;
+        inside_h = h;
+    }
+
+    void release_inside_fbo() {
+        if (!fbo_inside) return;
+        glDeleteFramebuffers(1, &fbo_inside);
+        glDeleteTextures(1, &tex_inside);
+        fbo_inside = tex_inside = 0;
+    }
 
     void release_fbo() {
         if (!fbo) return;
@@ -193,13 +396,9 @@ void read_back_band(PreliminaryMap& map, int y_lo, int rows, const Scene& scene,
     glReadBuffer(GL_COLOR_ATTACHMENT2);
     glReadPixels(0, 0, map.width, rows, GL_RED, GL_FLOAT, map.v.data() + first);
     if (glGetError() != GL_NO_ERROR) fail("OpenGL error while rendering");
-    auto flip = [&](auto* block) {
-        for (int r = 0; r < rows / 2; ++r)
-            std::swap_ranges(block + r * W, block + (r + 1) * W, block + (rows - 1 - r) * W);
-    };
-    flip(map.face.data() + first);
-    flip(map.u.data() + first);
-    flip(map.v.data() + first);
+    flip_rows(map.face.data() + first, rows, W);
+    flip_rows(map.u.data() + first, rows, W);
+    flip_rows(map.v.data() + first, rows, W);
     if (precision != MapPrecision::rgb8) return;
     for (size_t k = first; k < first + npx; ++k) {
         const uint32_t id = map.face[k];
@@ -219,7 +418,7 @@ struct ReleaseOnExit {
 }  // namespace
 
 PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera, MapPrecision precision,
-                                   const MapBands& bands) {
+                                   const MapBands& bands, const Sections* sections) {
     const int W = camera.width(), H = camera.height();
     GLint max_size = 0, max_viewport[2] = {0, 0};
     impl_->make_current();
@@ -255,8 +454,7 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
             clip[4 * k + 3] = float(c.w);
         }
         impl_->upload_static(ps);
-        glUseProgram(impl_->program);
-        glBindVertexArray(impl_->vao);
+        impl_->use_program(ps, mesh, sections);
         glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo_clip);
         glBufferData(GL_ARRAY_BUFFER, clip.size() * sizeof(float), clip.data(), GL_STREAM_DRAW);
     }
@@ -268,6 +466,8 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
     map.face.resize(npx);
     map.u.resize(npx);
     map.v.resize(npx);
+    const bool inside = draw && sections && sections->active() && sections->caps;
+    if (inside) map.inside.resize(npx);
     // Bands bottom-up in GL's rows. The whole frame's viewport, shifted so that
     // the band's bottom row lands on framebuffer row 0: the same integer shift
     // for every vertex, so each pixel of a band sees the same clip-space
@@ -286,6 +486,7 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         glClearBufferfv(GL_DEPTH, 0, &one);
         if (draw) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
         read_back_band(map, y_lo, rows, ps.scene(), precision);
+        if (inside) impl_->draw_inside(map, y_lo, rows, static_cast<GLsizei>(mesh.indices.size()));
     }
     return map;
 }
@@ -326,7 +527,7 @@ MapRendererPool& map_renderer_pool() {
 }  // namespace
 
 PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
-                                      const MapBands& bands) {
+                                      const MapBands& bands, const Sections* sections) {
     MapRendererPool& pool = map_renderer_pool();
     std::unique_ptr<MapRenderer> renderer = pool.acquire();
     // A renderer whose frame threw goes back too: every error path leaves its
@@ -336,7 +537,7 @@ PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& 
         std::unique_ptr<MapRenderer>& r;
         ~GiveBack() { pool.release(std::move(r)); }
     } give_back{pool, renderer};
-    return renderer->render(scene, camera, precision, bands);
+    return renderer->render(scene, camera, precision, bands, sections);
 }
 
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera, MapPrecision precision) {

@@ -46,6 +46,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/method.h"
+#include "renderer/section.h"
 #include "core/scene/scene.h"
 
 namespace nurbsrt {
@@ -56,6 +57,10 @@ struct PreliminaryMap {
     int width = 0, height = 0;
     std::vector<uint32_t> face;  // width * height, row-major, row 0 = top; 0 = background
     std::vector<float> u, v;     // start parameters where face != 0
+    // Sectioned frames with caps only (else empty): 1 + the closed body whose
+    // inside the pixel's ray enters the kept space in, by the map meshes'
+    // crossings (kInsideFragmentShader); 0 for none.
+    std::vector<uint32_t> inside;
     size_t index(int i, int j) const { return static_cast<size_t>(j) * width + i; }
 };
 
@@ -81,8 +86,9 @@ public:
     MapRenderer(const MapRenderer&) = delete;
     MapRenderer& operator=(const MapRenderer&) = delete;
 
+    // sections: drawn without the half-spaces they remove (null or none: all of it).
     PreliminaryMap render(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
-                          const MapBands& bands = {});
+                          const MapBands& bands = {}, const Sections* sections = nullptr);
 
     // Triangles drawn by the last render (for statistics).
     size_t last_triangles() const { return last_triangles_; }
@@ -95,7 +101,8 @@ private:
 
 // Renders with a MapRenderer borrowed from the process-wide pool (see above).
 PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera,
-                                      MapPrecision precision = MapPrecision::float32, const MapBands& bands = {});
+                                      MapPrecision precision = MapPrecision::float32, const MapBands& bands = {},
+                                      const Sections* sections = nullptr);
 // Convenience for one map of a Scene: prepares it first.
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera,
                                       MapPrecision precision = MapPrecision::float32);

@@ -19,6 +19,7 @@ void frame_statistics(const FrameContext& c, const FrameBuffers& b, const Render
     const size_t last_bin = st.iteration_histogram.size() - 1;
     for (size_t k = 0; k < c.pixels(); ++k) {
         st.pixels_hit += img.face[k] != 0;
+        st.cap_pixels += img.face[k] >= kCapFace;
         ++by_rescue[b.rescued[k]];
         ++by_outcome[b.outcome[k]];
         if (b.outcome[k] == kNone) continue;

@@ -68,6 +68,8 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
                     {"map_size", s.shadow_map_size},
                     {"rays", s.shadow_rays},
                     {"shadowed_pixels", s.shadowed_pixels}};
+    j["sections"] = {
+        {"planes", s.section_planes}, {"cap_pixels", s.cap_pixels}, {"open_bodies_cut", s.open_bodies_cut}};
     j["timings_ms"] = timings;
     return j;
 }

@@ -253,7 +253,9 @@ private:
             return 1;
         }
         Vec3 n;
-        const Vec3 rgb = shader_.colour(best, c_.camera.ray(sp), n);
+        const int pi = std::clamp(static_cast<int>(c_.camera.pixel_x(sp.sx)), 0, c_.width - 1);
+        const int pj = std::clamp(static_cast<int>(c_.camera.pixel_y(sp.sy)), 0, c_.height - 1);
+        const Vec3 rgb = shader_.colour(best, c_.camera.ray(sp), n, nullptr, nullptr, c_.map.index(pi, pj));
         out[0] = rgb.x, out[1] = rgb.y, out[2] = rgb.z, out[3] = 1.0;
         return 1;
     }

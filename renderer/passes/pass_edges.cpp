@@ -86,7 +86,15 @@ std::vector<uint8_t> neighbour_differences(const FrameContext& c, const FrameBuf
             const PixelHit& p = hits[k];
             const float* a = normal + 3 * k;
             auto dir = [&] { return c.camera.pixel_ray(i, j).dir; };
-            auto differs = [&](size_t n) { return hits_differ(c, p, hits[n], a, normal + 3 * n, dir); };
+            auto differs = [&](size_t n) {
+                // Section caps (render.h kCapFace): a cap differs from anything
+                // but a cap of the same body; two of its planes meet at a crease.
+                if (face[k] >= kCapFace || face[n] >= kCapFace) {
+                    const float* q = normal + 3 * n;
+                    return face[k] != face[n] || a[0] * q[0] + a[1] * q[1] + a[2] * q[2] < kCreaseCos;
+                }
+                return hits_differ(c, p, hits[n], a, normal + 3 * n, dir);
+            };
             uint8_t bits = 0;
             if (i + 1 < W && differs(k + 1)) bits |= kDiffRight;
             if (!last_row) {

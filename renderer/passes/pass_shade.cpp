@@ -39,9 +39,17 @@ double power(double x) {
 }  // namespace
 
 Shader::Shader(const FrameContext& c, const KeyLightShadows* shadows)
-    : scene_(c.scene), rig_(light_rig(c.camera)), shadows_(shadows) {}
+    : scene_(c.scene), caps_(c.scene, c.options.sections, c.map), rig_(light_rig(c.camera)), shadows_(shadows) {}
 
-Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed) const {
+Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed, CapHit* cap, size_t pixel) const {
+    CapHit found;
+    if (caps_.find(h, ray, pixel, found)) {
+        if (cap) *cap = found;
+        n = found.normal;
+        // A cap point lies on no face: face 0 leaves out the shadow test's own-face shortcut.
+        return lit(caps_.colour(found, ray), ray.origin + found.t * ray.dir, n, ray, 0, 0, 0, shadowed);
+    }
+    if (cap) cap->plane = -1;
     const Face& f = scene_.faces[h.face - 1];
     // The solve's normal (exact at the double-precision hit); the limits of
     // surface_normal only where its partials were degenerate.
@@ -51,7 +59,11 @@ Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed) 
     Color col = f.color;
     if (!f.has_color && f.body < scene_.bodies.size() && scene_.bodies[f.body].has_color)
         col = scene_.bodies[f.body].color;
-    const bool blocked = shadows_ && shadows_->blocked(ray.origin + h.t * ray.dir, n, h.face, h.u, h.v);
+    return lit(col, ray.origin + h.t * ray.dir, n, ray, h.face, h.u, h.v, shadowed);
+}
+
+Vec3 Shader::lit(Color col, Vec3 p, Vec3 n, const Ray& ray, uint32_t face, double u, double v, bool* shadowed) const {
+    const bool blocked = shadows_ && shadows_->blocked(p, n, face, u, v);
     if (shadowed) *shadowed = blocked;
     const double key = blocked ? 0.0 : std::max(0.0, dot(n, rig_.key));
     const double ambient = kAmbientGround + (kAmbientSky - kAmbientGround) * 0.5 * (1 + dot(n, rig_.sky));
@@ -93,16 +105,22 @@ void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers&
             }
             Vec3 n;
             bool shadowed = false;
-            const Vec3 rgb = shader.colour(h, camera.pixel_ray(i, j), n, &shadowed);
+            CapHit cap;
+            const Vec3 rgb = shader.colour(h, camera.pixel_ray(i, j), n, &shadowed, &cap, k);
             if (shadowed) img.shadow[k] = 1;
             px[0] = static_cast<float>(rgb.x);
             px[1] = static_cast<float>(rgb.y);
             px[2] = static_cast<float>(rgb.z);
             px[3] = 1.0f;
-            img.z[k] = static_cast<float>(h.t);
             img.normal[3 * k] = static_cast<float>(n.x);
             img.normal[3 * k + 1] = static_cast<float>(n.y);
             img.normal[3 * k + 2] = static_cast<float>(n.z);
+            if (cap.plane >= 0) {  // a cap: its depth and body (render.h kCapFace), no (u, v)
+                img.z[k] = static_cast<float>(cap.t);
+                img.face[k] = kCapFace + cap.body;
+                continue;
+            }
+            img.z[k] = static_cast<float>(h.t);
             img.face[k] = h.face;
             img.u[k] = h.u;
             img.v[k] = h.v;

@@ -21,6 +21,7 @@
 #include "renderer/passes/lighting.h"
 #include "renderer/frame/pixel_solver.h"
 #include "renderer/render.h"
+#include "renderer/passes/section_caps.h"
 #include "renderer/passes/shadow_rays.h"
 
 namespace nurbsrt {
@@ -46,11 +47,20 @@ public:
     explicit Shader(const FrameContext& c, const KeyLightShadows* shadows = nullptr);
     // Linear RGB of hit h on `ray`; n receives the shading normal (facing the
     // viewer), *shadowed (when given) whether the key light is blocked there.
-    Vec3 colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed = nullptr) const;
+    // Where h is the inside of a closed body cut by a section plane, the colour
+    // is the cap's (section_caps.h), and *cap (when given) receives it; else
+    // cap->plane is -1. `pixel`: the map index of the pixel the ray passes
+    // through (the map's inside layer there, section_caps.h).
+    Vec3 colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed = nullptr, CapHit* cap = nullptr,
+                size_t pixel = 0) const;
     const KeyLightShadows* shadows() const { return shadows_; }
+    const SectionCaps& caps() const { return caps_; }
 
 private:
+    // The lights' share at point p with shading normal n, times colour col.
+    Vec3 lit(Color col, Vec3 p, Vec3 n, const Ray& ray, uint32_t face, double u, double v, bool* shadowed) const;
     const Scene& scene_;
+    SectionCaps caps_;
     LightRig rig_;
     const KeyLightShadows* shadows_;
 };

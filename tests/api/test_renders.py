@@ -282,6 +282,58 @@ def test_bad_antialias_and_edge_options(url, params, field):
     assert field in body["detail"], body
 
 
+# A plane through the screw's bounding-box centre, its normal (+x) towards the
+# iso view's eye: the near half is removed and the cut faces the camera.
+SCREW_SECTION = "-17.9,-0.84,-13.4,1,0,0"
+
+
+def test_section_plane_cuts_and_caps(url):
+    """A section plane removes its half exactly, closed bodies show caps (the
+    statistics count them, the face AOV marks them above 2^31), without caps the
+    inside shows; the JSON form means what the query form means."""
+    step = SCREW.read_bytes()
+    stats_plain, plain = render_png(url, step, antialias=0)
+    stats_cut, cut = render_png(url, step, antialias=0, sections=SCREW_SECTION)
+    stats_open, opened = render_png(url, step, antialias=0, sections=SCREW_SECTION, section_caps="false")
+    assert stats_plain["sections"] == {"planes": 0, "cap_pixels": 0, "open_bodies_cut": 0}
+    assert stats_cut["sections"]["planes"] == 1 and stats_cut["sections"]["cap_pixels"] > 500, stats_cut["sections"]
+    assert stats_open["sections"]["cap_pixels"] == 0
+    assert cut != plain and opened != cut
+    r = post_raw(url, "/v1/renders", step, params={"width": 160, "height": 120, "antialias": 0,
+                                                   "sections": SCREW_SECTION, "aovs": "face"},
+                 headers={"Accept": "application/json"})
+    assert r.status_code == 200, r.text[:300]
+    faces = struct.unpack("<%dI" % (160 * 120), base64.b64decode(r.json()["aovs"]["face"]["data"]))
+    assert sum(f >= 2 ** 31 for f in faces) == stats_cut["sections"]["cap_pixels"]
+    files = {"file": ("s.step", step), "options": (None, json.dumps(
+        {"width": 160, "height": 120, "antialias": 0,
+         "sections": [{"point": [-17.9, -0.84, -13.4], "normal": [2, 0, 0]}]}))}
+    r = requests.post(url + "/v1/renders", files=files, timeout=TIMEOUT)
+    from test_jobs import png_pixels
+    width, _, ch, rows = png_pixels(r.content)
+    assert [row[i:i + ch] for row in rows for i in range(0, width * ch, ch)] == cut
+
+
+@pytest.mark.parametrize("params,field", [
+    ({"sections": "0,0,0,0,0,0"}, "normal"), ({"sections": "0,0,0,1,0"}, "sections"),
+    ({"sections": ";".join(["0,0,0,1,0,0"] * 7)}, "sections"), ({"sections": "0,0,0,nan,0,1"}, "sections"),
+    ({"section_mode": "half"}, "section_mode"), ({"section_caps": "maybe"}, "section_caps"),
+])
+def test_bad_section_options(url, params, field):
+    body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params=params), 400, "invalid_argument")
+    assert field in body["detail"], body
+
+
+def test_bad_section_planes_in_json(url):
+    for planes, field in [([{"point": [0, 0, 0], "normal": [0, 0, 0]}], "normal"),
+                          ([{"point": [0, 0, 0], "normal": [0, 0, 1], "side": 1}], "side"),
+                          ([{"point": [0, 0, 0]}], "sections[0]"),
+                          ([{"point": [0, 0, 0], "normal": [0, 0, 1]}] * 7, "sections")]:
+        files = {"file": ("s.step", SCREW.read_bytes()), "options": (None, json.dumps({"sections": planes}))}
+        body = check_problem(requests.post(url + "/v1/renders", files=files, timeout=TIMEOUT), 400, "invalid_argument")
+        assert field in body["detail"], body
+
+
 def hit_box(png):
     """Bounding box (x0, y0, x1, y1) of the non-transparent pixels, and the image size."""
     from test_jobs import png_pixels
