@@ -47,7 +47,7 @@ struct Args {
     std::string eye, target, up;
     double fov = 0, ortho_height = 0;
     double fit_margin = kDefaultFitMargin;
-    std::string projection = "perspective";
+    std::string projection;  // empty: resolved_projection's default
     std::string method = "proposed";
     std::string map_precision = "float";
     int threads = 0;
@@ -77,9 +77,9 @@ RenderRequest request_of(const Args& a) {
     if (!a.eye.empty()) r.eye = parse_point(a.eye, "--eye");
     if (!a.target.empty()) r.target = parse_point(a.target, "--target");
     if (!a.up.empty()) r.up = parse_point(a.up, "--up");
-    r.projection =
-        (a.projection == "orthographic" || a.ortho_height > 0) ? Projection::orthographic : Projection::perspective;
-    if (a.fov > 0) r.fov_deg = a.fov;
+    if (!a.projection.empty())
+        r.projection = a.projection == "orthographic" ? Projection::orthographic : Projection::perspective;
+    if (a.fov > 0) r.fov_deg = a.fov;  // a field of view means perspective unless --projection says otherwise
     if (a.ortho_height > 0) r.ortho_height = a.ortho_height;
     r.fit_margin = a.fit_margin;
     r.method = *parse_newton_method(a.method);
@@ -172,9 +172,10 @@ void add_camera_options(CLI::App* cmd, Args& a) {
                     "empty border left on each side of a fitted view, as a fraction of the frame's width and height")
         ->check(in_range(0.0, kMaxFitMargin))
         ->capture_default_str();
-    cmd->add_option("--projection", a.projection, "perspective or orthographic")
-        ->check(CLI::IsMember({"perspective", "orthographic"}))
-        ->capture_default_str();
+    cmd->add_option("--projection", a.projection,
+                    "perspective or orthographic (default: orthographic for the named views, as CAD draws them; "
+                    "perspective with --eye or --fov)")
+        ->check(CLI::IsMember({"perspective", "orthographic"}));
 }
 
 void add_solver_options(CLI::App* cmd, Args& a) {

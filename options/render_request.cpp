@@ -141,13 +141,20 @@ void complete_size(std::optional<int> width, std::optional<int> height, int& out
     out_height = height ? *height : width ? keep_aspect(*width, kDefaultWidth, kDefaultHeight) : kDefaultHeight;
 }
 
+Projection resolved_projection(const RenderRequest& r) {
+    if (r.projection) return *r.projection;
+    if (r.ortho_height) return Projection::orthographic;
+    if (r.fov_deg || r.eye) return Projection::perspective;
+    return Projection::orthographic;
+}
+
 namespace {
 
 CameraSpec base_spec(const RenderRequest& r) {
     CameraSpec base;
     base.width = r.width;
     base.height = r.height;
-    base.projection = r.projection;
+    base.projection = resolved_projection(r);
     if (r.fov_deg) base.fov_deg = *r.fov_deg;
     return base;
 }

@@ -81,7 +81,8 @@ void check_section_count(size_t planes, const std::string& what);
 struct RenderRequest {
     int width = kDefaultWidth, height = kDefaultHeight;
     std::string view = "iso";
-    Projection projection = Projection::perspective;
+    // Unset: resolved_projection() below decides.
+    std::optional<Projection> projection;
     std::optional<double> fov_deg, ortho_height;
     std::optional<Vec3> eye, target, up;
     double fit_margin = kDefaultFitMargin;  // of the frame, each side (named views, and an eye alone)
@@ -108,6 +109,12 @@ RenderRequest parse_render_options(const std::string& options_json);
 constexpr double kMaxCoordinate = 1e12;
 Vec3 checked_point(Vec3 p, const std::string& what);
 Vec3 parse_point(const std::string& text, const std::string& what);
+
+// The projection of the request: the one given; else orthographic where an
+// orthographic height is given, perspective where a field of view or an eye is
+// (a camera placed by hand); else orthographic: named views are the drawing's
+// views (iso a true isometric), as CAD shows them.
+Projection resolved_projection(const RenderRequest& r);
 
 // The camera for a scene: the named view fitted to it, then explicit values.
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene);

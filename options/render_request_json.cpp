@@ -142,7 +142,6 @@ bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
         const double h = number(v, key);
         if (!(h > 0)) bad("option 'ortho_height' must be positive");
         r.ortho_height = h;
-        r.projection = Projection::orthographic;
     } else if (key == "fit_margin") {
         const double m = number(v, key);
         if (!(m >= 0 && m <= kMaxFitMargin)) bad("option 'fit_margin' must be in [0, 0.45]");

@@ -229,7 +229,7 @@ def test_job_with_several_files_and_outputs(url, tmp_path):
     assert png_size(png) == (96, 72)
     assert exr_size(exr) == (64, 48)
     stats = job["outputs"][0]["statistics"]
-    assert (stats["width"], stats["height"], stats["camera"]["projection"]) == (96, 72, "perspective")
+    assert (stats["width"], stats["height"], stats["camera"]["projection"]) == (96, 72, "orthographic")  # a named view
     assert stats["pixels_hit"] > 0
 
     # The conversions re-import with the faces of their inputs.
