@@ -61,6 +61,7 @@ struct Args {
     std::vector<std::string> sections;  // "px,py,pz,nx,ny,nz" each
     std::string section_mode = "union";
     bool no_caps = false, hatch = false;
+    std::vector<std::string> hide, only, part_colors;  // part_colors: "PATTERN=r,g,b"
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -99,6 +100,12 @@ RenderRequest request_of(const Args& a) {
     r.sections.mode = *parse_section_mode(a.section_mode);
     r.sections.caps = !a.no_caps;
     r.sections.hatch = a.hatch;
+    r.parts.hide = a.hide;
+    r.parts.only = a.only;
+    for (const std::string& pc : a.part_colors) {
+        const size_t eq = pc.rfind('=');  // a name may hold '=', a colour does not
+        r.parts.color.emplace_back(pc.substr(0, eq), parse_rgb(pc.substr(eq + 1), "--part-color"));
+    }
     return r;
 }
 
@@ -237,6 +244,23 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->capture_default_str();
     cmd->add_flag("--no-caps", a.no_caps, "cut closed bodies open (no caps on the section planes)");
     cmd->add_flag("--hatch", a.hatch, "hatching lines over the section caps");
+    const auto pattern_check = [](const char* flag) {
+        return shared_check([flag](const std::string& s) { check_part_pattern(s, "the value"); }, "ID|GLOB");
+    };
+    cmd->add_option("--hide", a.hide, "leave out a part: its id (0/3/1, see nurbsrt info) or a name glob (repeatable)")
+        ->check(pattern_check("--hide"));
+    cmd->add_option("--only", a.only, "show only these parts: id or name glob (repeatable)")
+        ->check(pattern_check("--only"));
+    cmd->add_option("--part-color", a.part_colors, "colour a part: ID_OR_GLOB=r,g,b in [0,1] (repeatable)")
+        ->check(shared_check(
+            [](const std::string& s) {
+                const size_t eq = s.rfind('=');
+                if (eq == std::string::npos || eq == 0)
+                    throw Error(ErrorCode::invalid_argument, "the value must be ID_OR_GLOB=r,g,b");
+                check_part_pattern(s.substr(0, eq), "the value's part");
+                parse_rgb(s.substr(eq + 1), "the value's colour");
+            },
+            "ID|GLOB=R,G,B"));
 }
 
 // Progress on stderr: live on a terminal; otherwise a line per 10% once the
@@ -316,8 +340,8 @@ void run_render(const Args& a) {
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-    const Camera camera(camera_spec_for(request, scene));
     RenderOptions options = render_options_for(request, scene);
+    const Camera camera(camera_spec_for(request, scene, options.hidden_faces));
     options.threads = a.threads;
     say("rendering %dx%d with %s", camera.width(), camera.height(), a.method.c_str());
     auto progress = std::make_shared<ProgressPrinter>(t0);

@@ -178,8 +178,8 @@ void check_camera_without_scene(const RenderRequest& r) {
     (void)checked;
 }
 
-CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene) {
-    return fitted_camera(view_request(r), scene, base_spec(r));
+CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces) {
+    return fitted_camera(view_request(r), scene, base_spec(r), hidden_faces);
 }
 
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
@@ -190,6 +190,7 @@ RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
     apply_background(r.background.value_or(default_background(r.format.kind)), options);
     apply_look(r.look, r.format.kind, options);
     options.sections = r.sections;
+    apply_part_selection(r.parts, scene, options);
     return options;
 }
 

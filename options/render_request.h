@@ -14,6 +14,7 @@
 #include "renderer/camera.h"
 #include "renderer/render.h"
 #include "options/image_format.h"
+#include "options/part_selection.h"
 
 namespace nurbsrt {
 
@@ -96,7 +97,8 @@ struct RenderRequest {
     std::optional<Background> background;  // unset: default_background(format)
     unsigned aovs = 0;                     // aov_bit() of each AOV asked for
     ImageLook look;
-    Sections sections;  // planes (checked, unit normals), mode, caps, hatching
+    Sections sections;    // planes (checked, unit normals), mode, caps, hatching
+    PartSelection parts;  // hidden, isolated and recoloured parts (options/part_selection.h)
 };
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).
@@ -117,7 +119,8 @@ Vec3 parse_point(const std::string& text, const std::string& what);
 Projection resolved_projection(const RenderRequest& r);
 
 // The camera for a scene: the named view fitted to it, then explicit values.
-CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene);
+// Named views frame the faces shown (render_options_for's hidden_faces left out).
+CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces = {});
 // Every camera check that needs no scene (up along the view direction, eye at
 // the target, field of view, orthographic height), made by the renderer's own
 // Camera on the view fitted to a unit box: usage errors found before any import,

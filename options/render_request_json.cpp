@@ -121,7 +121,7 @@ constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_d
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
     "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin, sections, section_mode, "
-    "section_caps, section_hatch";
+    "section_caps, section_hatch, parts";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -196,6 +196,43 @@ std::vector<SectionPlane> section_planes(const json& v, const std::string& key) 
     return planes;
 }
 
+// "parts": {"hide": [pattern, ...], "only": [...], "color": {pattern: "r,g,b" or
+// [r, g, b]}}; as a query parameter, that object as JSON text.
+PartSelection part_selection(const json& given, const std::string& key) {
+    const json v =
+        given.is_string() ? parse_json_or_throw(given.get<std::string>(), kRequestJsonLimits, "option 'parts'") : given;
+    if (!v.is_object()) bad("option '" + key + "' must be an object with hide, only and color");
+    PartSelection sel;
+    for (const auto& [k, list] : v.items()) {
+        const std::string where = key + "." + k;
+        if (k == "hide" || k == "only") {
+            if (!list.is_array()) bad("option '" + where + "' must be an array of part ids or name globs");
+            if (list.size() > kMaxPartPatterns)
+                bad("option '" + where + "' holds more than " + std::to_string(kMaxPartPatterns) + " patterns");
+            std::vector<std::string>& out = k == "hide" ? sel.hide : sel.only;
+            for (size_t n = 0; n < list.size(); ++n) {
+                const std::string what = "option '" + where + "[" + std::to_string(n) + "]'";
+                if (!list[n].is_string()) bad(what + " must be a string");
+                check_part_pattern(list[n].get<std::string>(), what);
+                out.push_back(list[n].get<std::string>());
+            }
+        } else if (k == "color") {
+            if (!list.is_object()) bad("option '" + where + "' must be an object {part id or name glob: colour}");
+            if (list.size() > kMaxPartPatterns)
+                bad("option '" + where + "' holds more than " + std::to_string(kMaxPartPatterns) + " patterns");
+            for (const auto& [pattern, c] : list.items()) {
+                const std::string what = "option '" + where + "'";
+                check_part_pattern(pattern, what + " key");
+                sel.color.emplace_back(pattern, c.is_string() ? parse_rgb(c.get<std::string>(), what)
+                                                              : parse_rgb(background_text(c, where, 3), what));
+            }
+        } else {
+            bad("unknown option " + quoted_name(k) + " in '" + key + "' (parts options: hide, only, color)");
+        }
+    }
+    return sel;
+}
+
 json parse_object(const std::string& options_json) {
     const json o = parse_json_or_throw(options_json, kRequestJsonLimits, "the options");
     if (!o.is_object()) bad("options must be a JSON object");
@@ -245,6 +282,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.sections.caps = boolean(v, key);
         } else if (key == "section_hatch") {
             r.sections.hatch = boolean(v, key);
+        } else if (key == "parts") {
+            r.parts = part_selection(v, key);
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items())

@@ -172,8 +172,11 @@ struct ViewRequest {
     std::optional<double> ortho_height;
     double fit_margin = kDefaultFitMargin;
 };
-// The camera of `request` over `scene` (the scene's geometry as fit_view uses it).
-CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base);
+// The camera of `request` over `scene` (the scene's geometry as fit_view uses
+// it), without the faces `hidden_faces` marks (per face, or empty): a view
+// frames what it shows.
+CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base,
+                         const std::vector<uint8_t>& hidden_faces = {});
 // The same over a box (its 8 corners), for checks made before any model exists.
 CameraSpec fitted_camera(const ViewRequest& request, const BBox& box, const CameraSpec& base);
 

@@ -97,8 +97,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
 
     // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
     throw_if_canceled(options);
-    const PreliminaryMap map =
-        render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()}, &options.sections);
+    const PreliminaryMap map = render_preliminary_map(
+        prepared, camera, options.map_precision, {0, options.cancel.get()}, {&options.sections, &options.hidden_faces});
     throw_if_canceled(options);
     st.preliminary_map_ms = lap();
 
@@ -166,6 +166,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.section_planes = static_cast<int>(options.sections.planes.size());
     st.open_bodies_cut = open_bodies_cut(scene, options.sections);
+    st.hidden_faces = static_cast<uint64_t>(std::count(options.hidden_faces.begin(), options.hidden_faces.end(), 1));
+    for (const std::optional<Color>& c : options.face_colors) st.recoloured_faces += c.has_value();
     st.map_triangles = prepared.map_mesh().triangles();
     throw_if_canceled(options);
     progress.finish();

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,10 @@ struct RenderOptions {
     // Section planes (section.h): the half-spaces they remove are left out of the
     // frame, its map, its shadows; closed bodies show caps where they are cut.
     Sections sections;
+    // Per face (index - 1), or empty for none: faces left out of the frame (its
+    // map, its solves, its shadows), and colours that replace the file's.
+    std::vector<uint8_t> hidden_faces;
+    std::vector<std::optional<Color>> face_colors;
     Color background{0, 0, 0};   // of pixels no face covers
     float background_alpha = 0;  // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
@@ -126,6 +131,8 @@ struct RenderStats {
     // insides show).
     int section_planes = 0;
     uint64_t cap_pixels = 0, open_bodies_cut = 0;
+    // Parts (RenderOptions::hidden_faces, face_colors): faces left out, faces recoloured.
+    uint64_t hidden_faces = 0, recoloured_faces = 0;
     uint64_t shadow_rays = 0, shadowed_pixels = 0;
     // Stage times of the frame, end to end on one clock (each includes the small
     // set-up before its pass), so that with prepare_ms they sum to total_ms.

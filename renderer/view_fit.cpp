@@ -185,9 +185,11 @@ std::vector<Vec3> corners(const BBox& box) {
 }
 
 // The scene's geometry for fitting: mesh vertices (strided) and their slack.
-std::vector<Vec3> fit_points_of(const Scene& scene, double& slack) {
+// Faces marked in `hidden` (per face, or empty) are left out.
+std::vector<Vec3> fit_points_of(const Scene& scene, const std::vector<uint8_t>& hidden, double& slack) {
+    const auto shown = [&](size_t i) { return hidden.empty() || !hidden[i]; };
     size_t n = 0;
-    for (const Face& f : scene.faces) n += f.mesh.xyz.size();
+    for (size_t i = 0; i < scene.faces.size(); ++i) n += shown(i) ? scene.faces[i].mesh.xyz.size() : 0;
     slack = 0;
     if (n == 0) return corners(scene.bbox);
     slack = kMeshSlackOfDiagonal * scene.bbox.diagonal();
@@ -195,9 +197,10 @@ std::vector<Vec3> fit_points_of(const Scene& scene, double& slack) {
     std::vector<Vec3> pts;
     pts.reserve(n / stride + 8);
     size_t k = 0;
-    for (const Face& f : scene.faces)
-        for (const Vec3& p : f.mesh.xyz)
-            if (k++ % stride == 0) pts.push_back(p);
+    for (size_t i = 0; i < scene.faces.size(); ++i)
+        if (shown(i))
+            for (const Vec3& p : scene.faces[i].mesh.xyz)
+                if (k++ % stride == 0) pts.push_back(p);
     return pts;
 }
 
@@ -265,14 +268,15 @@ CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, 
 
 CameraSpec fit_view(const std::string& name, const Scene& scene, const CameraSpec& base, double margin) {
     double slack = 0;
-    const std::vector<Vec3> pts = fit_points_of(scene, slack);
+    const std::vector<Vec3> pts = fit_points_of(scene, {}, slack);
     if (pts.empty()) throw Error(ErrorCode::invalid_argument, "cannot fit a view to an empty scene");
     return fit_points(find_view(name), pts, base, margin, slack);
 }
 
-CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base) {
+CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base,
+                         const std::vector<uint8_t>& hidden_faces) {
     double slack = 0;
-    const std::vector<Vec3> pts = fit_points_of(scene, slack);
+    const std::vector<Vec3> pts = fit_points_of(scene, hidden_faces, slack);
     if (pts.empty() && !request.eye) throw Error(ErrorCode::invalid_argument, "cannot fit a view to an empty scene");
     return fitted(request, pts, slack, base);
 }

@@ -509,6 +509,8 @@ TEST(CliRender, BadOptionsFailBeforeTheImport) {
         {"-o " + out + " --section=0,0,0,0,0,0", "--section: the value's normal must not be zero"},
         {"-o " + out + " --section 1,2", "--section: the value must be px,py,pz,nx,ny,nz"},
         {"-o " + out + " --section-mode half", "--section-mode: half not in {union,cutaway}"},
+        {"-o " + out + " --part-color nut", "--part-color: the value must be ID_OR_GLOB=r,g,b"},
+        {"-o " + out + " --part-color nut=2,0,0", "--part-color: the value's colour has a component outside [0, 1]"},
         {"-o " + out + " --width 100 /nonexistent-dir/b.step", "MODEL: File does not exist: /nonexistent-dir/b.step"},
     };
     for (const auto& c : cases) {

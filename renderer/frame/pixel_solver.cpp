@@ -76,6 +76,8 @@ SurfaceDerivs Solver::start_derivs(uint32_t id, double u0, double v0) const {
 Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const NewtonParams& p, bool near,
                       PixelHit& hit, const SurfaceDerivs* start, double* crossing) const {
     NURBSRT_DCHECK(id >= 1 && id <= ctx.faces);  // face ids are 1-based, 0 is the background
+    // A hidden face (RenderOptions::hidden_faces) has no points, like a trimmed-away part.
+    if (!ctx.options.hidden_faces.empty() && ctx.options.hidden_faces[id - 1]) return kTrimmed;
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
     const Camera& camera = ctx.camera;
     const NurbsSurface& surface = iterated_surface(id);

@@ -211,6 +211,25 @@ struct MapRenderer::Impl {
         uploaded = ps.id();
     }
 
+    // The element buffer holding only the triangles of faces not hidden (a
+    // triangle's vertices all belong to one face); the next frame uploads the
+    // whole list again (upload_static). Returns the index count.
+    GLsizei upload_shown(const PreparedScene& ps, const std::vector<uint8_t>& hidden) {
+        const MapMesh& m = ps.map_mesh();
+        std::vector<uint32_t> shown;
+        shown.reserve(m.indices.size());
+        for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+            const uint32_t f = m.face[m.indices[t]];
+            if (f >= 1 && f <= hidden.size() && hidden[f - 1]) continue;
+            shown.insert(shown.end(), m.indices.begin() + static_cast<std::ptrdiff_t>(t),
+                         m.indices.begin() + static_cast<std::ptrdiff_t>(t + 3));
+        }
+        glBindVertexArray(vao);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, shown.size() * sizeof(uint32_t), shown.data(), GL_STREAM_DRAW);
+        uploaded = 0;
+        return static_cast<GLsizei>(shown.size());
+    }
+
     ~Impl() {
         make_current();
         release_fbo();
@@ -418,7 +437,8 @@ struct ReleaseOnExit {
 }  // namespace
 
 PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera, MapPrecision precision,
-                                   const MapBands& bands, const Sections* sections) {
+                                   const MapBands& bands, const MapClip& left_out) {
+    const Sections* sections = left_out.sections;
     const int W = camera.width(), H = camera.height();
     GLint max_size = 0, max_viewport[2] = {0, 0};
     impl_->make_current();
@@ -435,8 +455,8 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
     double znear = 0, zfar = 0;
     depth_range(ps.scene(), camera, znear, zfar);
     const MapMesh& mesh = ps.map_mesh();
-    const bool draw = zfar > znear && !mesh.indices.empty();
-    last_triangles_ = draw ? mesh.triangles() : 0;
+    bool draw = zfar > znear && !mesh.indices.empty();
+    GLsizei drawn = static_cast<GLsizei>(mesh.indices.size());
 
     glBindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
     glDisable(GL_CULL_FACE);
@@ -454,11 +474,15 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
             clip[4 * k + 3] = float(c.w);
         }
         impl_->upload_static(ps);
+        if (left_out.hidden_faces && !left_out.hidden_faces->empty())
+            drawn = impl_->upload_shown(ps, *left_out.hidden_faces);
+        draw = drawn > 0;
         impl_->use_program(ps, mesh, sections);
         glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo_clip);
         glBufferData(GL_ARRAY_BUFFER, clip.size() * sizeof(float), clip.data(), GL_STREAM_DRAW);
     }
 
+    last_triangles_ = draw ? static_cast<size_t>(drawn) / 3 : 0;
     PreliminaryMap map;
     map.width = W;
     map.height = H;
@@ -484,9 +508,9 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         glClearBufferfv(GL_COLOR, 1, zero_f);
         glClearBufferfv(GL_COLOR, 2, zero_f);
         glClearBufferfv(GL_DEPTH, 0, &one);
-        if (draw) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh.indices.size()), GL_UNSIGNED_INT, nullptr);
+        if (draw) glDrawElements(GL_TRIANGLES, drawn, GL_UNSIGNED_INT, nullptr);
         read_back_band(map, y_lo, rows, ps.scene(), precision);
-        if (inside) impl_->draw_inside(map, y_lo, rows, static_cast<GLsizei>(mesh.indices.size()));
+        if (inside) impl_->draw_inside(map, y_lo, rows, drawn);
     }
     return map;
 }
@@ -527,7 +551,7 @@ MapRendererPool& map_renderer_pool() {
 }  // namespace
 
 PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
-                                      const MapBands& bands, const Sections* sections) {
+                                      const MapBands& bands, const MapClip& clip) {
     MapRendererPool& pool = map_renderer_pool();
     std::unique_ptr<MapRenderer> renderer = pool.acquire();
     // A renderer whose frame threw goes back too: every error path leaves its
@@ -537,7 +561,7 @@ PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& 
         std::unique_ptr<MapRenderer>& r;
         ~GiveBack() { pool.release(std::move(r)); }
     } give_back{pool, renderer};
-    return renderer->render(scene, camera, precision, bands, sections);
+    return renderer->render(scene, camera, precision, bands, clip);
 }
 
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera, MapPrecision precision) {

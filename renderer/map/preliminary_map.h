@@ -73,6 +73,13 @@ struct PreliminaryMap {
 // share at these sizes.
 inline constexpr size_t kMapBandPixels = size_t(1) << 22;
 
+// What a frame leaves out of its map: the half-spaces of section planes, and
+// hidden faces (per face, index - 1; empty: none). Null members: nothing.
+struct MapClip {
+    const Sections* sections = nullptr;
+    const std::vector<uint8_t>* hidden_faces = nullptr;
+};
+
 struct MapBands {
     int rows = 0;  // rows per band; 0: kMapBandPixels / width
     // Checked between bands: when it is true, Error(canceled) is thrown.
@@ -86,9 +93,9 @@ public:
     MapRenderer(const MapRenderer&) = delete;
     MapRenderer& operator=(const MapRenderer&) = delete;
 
-    // sections: drawn without the half-spaces they remove (null or none: all of it).
+    // clip: drawn without what it leaves out (MapClip).
     PreliminaryMap render(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
-                          const MapBands& bands = {}, const Sections* sections = nullptr);
+                          const MapBands& bands = {}, const MapClip& clip = {});
 
     // Triangles drawn by the last render (for statistics).
     size_t last_triangles() const { return last_triangles_; }
@@ -102,7 +109,7 @@ private:
 // Renders with a MapRenderer borrowed from the process-wide pool (see above).
 PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera,
                                       MapPrecision precision = MapPrecision::float32, const MapBands& bands = {},
-                                      const Sections* sections = nullptr);
+                                      const MapClip& clip = {});
 // Convenience for one map of a Scene: prepares it first.
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera,
                                       MapPrecision precision = MapPrecision::float32);

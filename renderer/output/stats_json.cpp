@@ -70,6 +70,7 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
                     {"shadowed_pixels", s.shadowed_pixels}};
     j["sections"] = {
         {"planes", s.section_planes}, {"cap_pixels", s.cap_pixels}, {"open_bodies_cut", s.open_bodies_cut}};
+    j["parts"] = {{"hidden_faces", s.hidden_faces}, {"recoloured_faces", s.recoloured_faces}};
     j["timings_ms"] = timings;
     return j;
 }

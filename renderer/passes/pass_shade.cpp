@@ -39,7 +39,11 @@ double power(double x) {
 }  // namespace
 
 Shader::Shader(const FrameContext& c, const KeyLightShadows* shadows)
-    : scene_(c.scene), caps_(c.scene, c.options.sections, c.map), rig_(light_rig(c.camera)), shadows_(shadows) {}
+    : scene_(c.scene),
+      face_colors_(c.options.face_colors),
+      caps_(c.scene, c.options, c.map),
+      rig_(light_rig(c.camera)),
+      shadows_(shadows) {}
 
 Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed, CapHit* cap, size_t pixel) const {
     CapHit found;
@@ -59,6 +63,7 @@ Vec3 Shader::colour(const PixelHit& h, const Ray& ray, Vec3& n, bool* shadowed, 
     Color col = f.color;
     if (!f.has_color && f.body < scene_.bodies.size() && scene_.bodies[f.body].has_color)
         col = scene_.bodies[f.body].color;
+    if (!face_colors_.empty() && face_colors_[h.face - 1]) col = *face_colors_[h.face - 1];
     return lit(col, ray.origin + h.t * ray.dir, n, ray, h.face, h.u, h.v, shadowed);
 }
 

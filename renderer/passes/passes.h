@@ -60,6 +60,7 @@ private:
     // The lights' share at point p with shading normal n, times colour col.
     Vec3 lit(Color col, Vec3 p, Vec3 n, const Ray& ray, uint32_t face, double u, double v, bool* shadowed) const;
     const Scene& scene_;
+    const std::vector<std::optional<Color>>& face_colors_;  // RenderOptions::face_colors
     SectionCaps caps_;
     LightRig rig_;
     const KeyLightShadows* shadows_;

@@ -29,6 +29,17 @@ void plane_axes(Vec3 n, Vec3& a, Vec3& b) {
 
 }  // namespace
 
+SectionCaps::SectionCaps(const Scene& scene, const RenderOptions& options, const PreliminaryMap& map)
+    : scene_(scene), sections_(options.sections), map_(map) {
+    if (!active() || options.face_colors.empty()) return;
+    body_colors_.assign(scene.bodies.size(), std::nullopt);
+    for (size_t i = 0; i < scene.faces.size() && i < options.face_colors.size(); ++i) {
+        const uint32_t b = scene.faces[i].body;
+        if (b < body_colors_.size() && !body_colors_[b] && options.face_colors[i])
+            body_colors_[b] = options.face_colors[i];
+    }
+}
+
 bool SectionCaps::find(const PixelHit& h, const Ray& ray, size_t pixel, CapHit& cap) const {
     if (!active() || !h.face) return false;
     const Face& f = scene_.faces[h.face - 1];
@@ -60,6 +71,7 @@ bool SectionCaps::find(const PixelHit& h, const Ray& ray, size_t pixel, CapHit& 
 Color SectionCaps::colour(const CapHit& cap, const Ray& ray) const {
     const Body& body = scene_.bodies[cap.body];
     Color c = body.has_color ? body.color : Color{};
+    if (cap.body < body_colors_.size() && body_colors_[cap.body]) c = *body_colors_[cap.body];
     float shade = kCapShade;
     if (sections_.hatch) {
         const SectionPlane& plane = sections_.planes[static_cast<size_t>(cap.plane)];

@@ -12,9 +12,12 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <vector>
 
 #include "core/scene/scene.h"
 #include "renderer/frame/frame.h"
+#include "renderer/render.h"
 #include "renderer/section.h"
 
 namespace nurbsrt {
@@ -28,8 +31,9 @@ struct CapHit {
 
 class SectionCaps {
 public:
-    SectionCaps(const Scene& scene, const Sections& sections, const PreliminaryMap& map)
-        : scene_(scene), sections_(sections), map_(map) {}
+    // options: the sections, and the face colours a body's cap takes (its first
+    // recoloured face's, else the body's own).
+    SectionCaps(const Scene& scene, const RenderOptions& options, const PreliminaryMap& map);
     bool active() const { return sections_.active() && sections_.caps; }
     // Whether hit h of `ray`, through the map's pixel `pixel`, shows a cap
     // instead; then `cap` receives it.
@@ -41,6 +45,7 @@ private:
     const Scene& scene_;
     const Sections& sections_;
     const PreliminaryMap& map_;
+    std::vector<std::optional<Color>> body_colors_;  // per body where a face of it is recoloured
 };
 
 // Open bodies that a section plane cuts (their map meshes have kept and

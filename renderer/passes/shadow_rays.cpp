@@ -104,7 +104,7 @@ KeyLightShadows::KeyLightShadows(const FrameContext& view, const Solver& view_so
       size_(light_map_size(view.width, view.height)),
       camera_(light_view(view.scene, key, size_)),
       map_(render_preliminary_map(view.prepared, camera_, MapPrecision::float32, {0, view.options.cancel.get()},
-                                  &view.options.sections)),
+                                  {&view.options.sections, &view.options.hidden_faces})),
       progress_(no_progress_, 1),
       ctx_{view.prepared, view.scene, camera_, map_, view.options, view.arena, progress_, size_, size_, view.nfaces},
       projected_(project_faces(ctx_)),

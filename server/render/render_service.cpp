@@ -218,8 +218,8 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     if (scene.faces.size() > ctx.config.max_faces)
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
-    const Camera camera(camera_spec_for(r, scene));
     RenderOptions options = render_options_for(r, scene);
+    const Camera camera(camera_spec_for(r, scene, options.hidden_faces));
     options.threads = ctx.config.render_threads;
     options.progress = control.progress;
     const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows});
