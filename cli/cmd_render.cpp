@@ -58,6 +58,8 @@ struct Args {
     std::string edge_color;
     double edge_width = 1.0;
     bool shadows = false;
+    bool ground = false;
+    std::optional<double> ground_height;
     std::vector<std::string> sections;  // "px,py,pz,nx,ny,nz" each
     std::string section_mode = "union";
     bool no_caps = false, hatch = false;
@@ -93,6 +95,8 @@ RenderRequest request_of(const Args& a) {
     if (!a.edge_color.empty()) r.look.edge_color = parse_rgb(a.edge_color, "--edge-color");
     r.look.edge_width = a.edge_width;
     r.look.shadows = a.shadows;
+    r.look.ground = a.ground || a.ground_height.has_value();
+    r.look.ground_height = a.ground_height;
     if (a.sections.size() > kMaxSectionPlanes)  // a usage error (exit 2), as the API's 400
         throw CLI::ValidationError("--section", "at most " + std::to_string(kMaxSectionPlanes) + " planes (got " +
                                                     std::to_string(a.sections.size()) + ")");
@@ -234,6 +238,15 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->capture_default_str();
     cmd->add_flag("--shadows", a.shadows,
                   "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
+    cmd->add_flag("--ground", a.ground,
+                  "a ground under the model that takes the key light's exact shadows (turns --shadows on): a grey "
+                  "floor over an opaque background, only the shadow over a transparent one");
+    cmd->add_option("--ground-height", a.ground_height, "the ground's height z (default: the model's lowest point)")
+        ->check(shared_check(
+            [](const std::string& s) {
+                checked_point({std::stod(s), 0, 0}, "the value");
+            },
+            "Z"));
     cmd->add_option("--section", a.sections,
                     "section plane px,py,pz,nx,ny,nz: removes the side the normal points to (repeatable, at most " +
                         std::to_string(kMaxSectionPlanes) + ")")

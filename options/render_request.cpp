@@ -126,6 +126,8 @@ void apply_look(const ImageLook& look, ImageFormat format, RenderOptions& option
     options.edge_color = look.edge_color;
     options.edge_width = static_cast<float>(look.edge_width);
     options.shadows = look.shadows;
+    options.ground = look.ground;
+    options.ground_height = look.ground_height;
 }
 
 Background default_background(ImageFormat format) {

@@ -47,6 +47,8 @@ struct ImageLook {
     Color edge_color{0.02f, 0.02f, 0.02f};
     double edge_width = 1.0;
     bool shadows = false;
+    bool ground = false;                  // RenderOptions::ground
+    std::optional<double> ground_height;  // checked_point's bounds
 };
 // On for PNG and JPEG, pictures for people; off for TIFF and EXR, which carry
 // exact per-pixel values into other tools (one centre sample per pixel).

@@ -121,7 +121,7 @@ constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_d
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
     "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin, sections, section_mode, "
-    "section_caps, section_hatch, parts";
+    "section_caps, section_hatch, parts, ground, ground_height";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -274,6 +274,10 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.look.edge_width = parse_edge_width(number(v, key), "option '" + key + "'");
         } else if (key == "shadows") {
             r.look.shadows = boolean(v, key);
+        } else if (key == "ground") {
+            r.look.ground = boolean(v, key);
+        } else if (key == "ground_height") {
+            r.look.ground_height = checked_point({number(v, key), 0, 0}, "option '" + key + "'").x;
         } else if (key == "sections") {
             r.sections.planes = section_planes(v, key);
         } else if (key == "section_mode") {

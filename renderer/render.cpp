@@ -138,8 +138,8 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     // 5. Shading from the exact normal, with the key light's exact shadows
     // when asked for (their map drawn first); AOVs.
     std::optional<KeyLightShadows> shadows;
-    st.shadows = options.shadows;
-    if (options.shadows) {
+    st.shadows = options.shadows || options.ground;  // the ground takes the key light's shadows
+    if (st.shadows) {
         throw_if_canceled(options);
         shadows.emplace(ctx, solver, light_rig(camera).key);
         st.shadow_map_size = shadows->map_size();
@@ -161,11 +161,14 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
 
     if (shadows) {
         st.shadow_rays = shadows->rays();  // the pixel centres' and the anti-aliasing samples'
-        st.shadowed_pixels = static_cast<uint64_t>(std::count(res.image.shadow.begin(), res.image.shadow.end(), 1));
+        // The ground's shadowed pixels are background in the AOVs (face 0).
+        for (size_t k = 0; k < res.image.shadow.size(); ++k)
+            if (res.image.shadow[k]) ++(res.image.face[k] ? st.shadowed_pixels : st.ground_shadowed_pixels);
     }
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.section_planes = static_cast<int>(options.sections.planes.size());
     st.open_bodies_cut = open_bodies_cut(scene, options.sections);
+    st.ground = options.ground;
     st.hidden_faces = static_cast<uint64_t>(std::count(options.hidden_faces.begin(), options.hidden_faces.end(), 1));
     for (const std::optional<Color>& c : options.face_colors) st.recoloured_faces += c.has_value();
     st.map_triangles = prepared.map_mesh().triangles();
@@ -173,7 +176,7 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     progress.finish();
     st.statistics_ms = lap();
     st.total_ms = std::chrono::duration<double, std::milli>(last - t_total).count();
-    check_image_contract(res.image, options.shadows);
+    check_image_contract(res.image, st.shadows);
     return res;
 }
 

@@ -55,6 +55,14 @@ struct RenderOptions {
     // map, its solves, its shadows), and colours that replace the file's.
     std::vector<uint8_t> hidden_faces;
     std::vector<std::optional<Color>> face_colors;
+    // A ground plane under the model (z = ground_height, model units; unset: the
+    // scene's lowest point; Z is up as in the named views) that takes the key
+    // light's exact shadows (it turns them on). Over an opaque background it is
+    // a light grey floor; over a transparent one a shadow catcher: transparent
+    // but where shadowed, black with alpha kShadowCatcherAlpha. The AOVs keep
+    // it background (face 0).
+    bool ground = false;
+    std::optional<double> ground_height;
     Color background{0, 0, 0};   // of pixels no face covers
     float background_alpha = 0;  // their alpha: 0 transparent, 1 opaque
     // Called with the fraction done in (0, 1], from the rendering threads (one call
@@ -86,6 +94,12 @@ struct RenderImage {
 // face index a scene can hold, one value per body, so a cap is told from faces
 // and caps of different bodies from each other.
 inline constexpr uint32_t kCapFace = 0x80000000u;
+
+// The ground's floor colour (linear; a light grey that reads as a table top
+// under any part colour), and a shadow catcher's alpha where the key light is
+// blocked: about the darkening the floor's shadow shows.
+inline constexpr Color kGroundColor{0.75f, 0.75f, 0.75f};
+inline constexpr float kShadowCatcherAlpha = 0.5f;
 
 struct RenderStats {
     NewtonMethod method = NewtonMethod::proposed;
@@ -129,6 +143,8 @@ struct RenderStats {
     // Sections (RenderOptions::sections): the planes, the pixels showing a cap,
     // and the cut bodies that got no caps because they are open shells (their
     // insides show).
+    bool ground = false;
+    uint64_t ground_shadowed_pixels = 0;  // background pixels on the ground the key light does not reach
     int section_planes = 0;
     uint64_t cap_pixels = 0, open_bodies_cut = 0;
     // Parts (RenderOptions::hidden_faces, face_colors): faces left out, faces recoloured.

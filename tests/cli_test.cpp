@@ -457,6 +457,22 @@ TEST(CliRender, ShadowsFlagInStats) {
     fs::remove_all(dir);
 }
 
+// --ground turns the key light's shadows on and catches them under the part.
+TEST(CliRender, GroundInStats) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-ground-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun r = run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --ground --stats - -o " +
+                                 (dir / "g.png").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json st = nlohmann::json::parse(r.out);
+    EXPECT_EQ(st["shadows"]["enabled"], true);
+    EXPECT_EQ(st["shadows"]["ground"], true);
+    EXPECT_GT(st["shadows"]["ground_shadowed_pixels"].get<uint64_t>(), 0u) << st["shadows"];
+    const CliRun bad = run_nurbsrt("render " + kScrew + " --ground-height x -o " + (dir / "h.png").string());
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    fs::remove_all(dir);
+}
+
 // A section plane through the screw's centre, towards the iso eye: caps counted,
 // none with --no-caps; more planes than allowed is a usage error before the import.
 TEST(CliRender, SectionsInStats) {

@@ -64,10 +64,9 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
                    {"general", s.rescue_general},     {"trim_tolerance", s.rescue_trim_tolerance},
                    {"nearer_sheet", s.rescue_nearer}, {"holes", s.holes}};
     j["antialias"] = {{"rays_per_edge_pixel", s.antialias}, {"pixels", s.antialias_pixels}, {"rays", s.antialias_rays}};
-    j["shadows"] = {{"enabled", s.shadows},
-                    {"map_size", s.shadow_map_size},
-                    {"rays", s.shadow_rays},
-                    {"shadowed_pixels", s.shadowed_pixels}};
+    j["shadows"] = {{"enabled", s.shadows},  {"map_size", s.shadow_map_size},
+                    {"rays", s.shadow_rays}, {"shadowed_pixels", s.shadowed_pixels},
+                    {"ground", s.ground},    {"ground_shadowed_pixels", s.ground_shadowed_pixels}};
     j["sections"] = {
         {"planes", s.section_planes}, {"cap_pixels", s.cap_pixels}, {"open_bodies_cut", s.open_bodies_cut}};
     j["parts"] = {{"hidden_faces", s.hidden_faces}, {"recoloured_faces", s.recoloured_faces}};

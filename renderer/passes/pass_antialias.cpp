@@ -244,12 +244,11 @@ private:
         // As in the rescue: inside the trim wins unless a near-trim hit is in front.
         if (best_near.face && best_near.t < best.t) best = best_near;
         face = best.face;
-        if (!best.face) {
-            const float a = c_.options.background_alpha;
-            out[0] = c_.options.background.r * a;
-            out[1] = c_.options.background.g * a;
-            out[2] = c_.options.background.b * a;
-            out[3] = a;
+        if (!best.face) {  // background or ground, premultiplied like every sample here
+            float bg[4];
+            shader_.background(c_.camera.ray(sp), bg);
+            for (int q = 0; q < 3; ++q) out[q] = double(bg[q]) * bg[3];
+            out[3] = bg[3];
             return 1;
         }
         Vec3 n;

@@ -40,6 +40,8 @@ double power(double x) {
 
 Shader::Shader(const FrameContext& c, const KeyLightShadows* shadows)
     : scene_(c.scene),
+      options_(c.options),
+      ground_z_(c.options.ground_height.value_or(c.scene.bbox.lo.z)),
       face_colors_(c.options.face_colors),
       caps_(c.scene, c.options, c.map),
       rig_(light_rig(c.camera)),
@@ -81,10 +83,36 @@ Vec3 Shader::lit(Color col, Vec3 p, Vec3 n, const Ray& ray, uint32_t face, doubl
     return {col.r * diffuse + specular, col.g * diffuse + specular, col.b * diffuse + specular};
 }
 
+bool Shader::background(const Ray& ray, float rgba[4], bool* shadowed) const {
+    const RenderOptions& o = options_;
+    rgba[0] = o.background.r;
+    rgba[1] = o.background.g;
+    rgba[2] = o.background.b;
+    rgba[3] = o.background_alpha;
+    if (shadowed) *shadowed = false;
+    if (!o.ground || ray.dir.z == 0) return false;
+    const double t = (ground_z_ - ray.origin.z) / ray.dir.z;
+    if (!(t > 0) || !std::isfinite(t)) return false;
+    bool blocked = false;
+    const Vec3 p = ray.origin + t * ray.dir, up{0, 0, 1};
+    if (o.background_alpha > 0) {  // a floor: lit like a face
+        Vec3 n = dot(up, ray.dir) > 0 ? -1.0 * up : up;
+        const Vec3 rgb = lit(kGroundColor, p, n, ray, 0, 0, 0, &blocked);
+        rgba[0] = static_cast<float>(rgb.x);
+        rgba[1] = static_cast<float>(rgb.y);
+        rgba[2] = static_cast<float>(rgb.z);
+        rgba[3] = 1.0f;
+    } else {  // a shadow catcher: only its shadow shows
+        blocked = shadows_ && dot(up, ray.dir) < 0 && shadows_->blocked(p, up, 0, 0, 0);
+        if (blocked) rgba[0] = rgba[1] = rgba[2] = 0.0f, rgba[3] = kShadowCatcherAlpha;
+    }
+    if (shadowed) *shadowed = blocked;
+    return true;
+}
+
 void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers& b, RenderImage& img) {
     const size_t npx = c.pixels();
     const Camera& camera = c.camera;
-    const RenderOptions& options = c.options;
     img.width = c.width;
     img.height = c.height;
     assign_cancelable(img.rgba, 4 * npx, 0.0f, c);
@@ -102,10 +130,8 @@ void shade_pass(const FrameContext& c, const Shader& shader, const FrameBuffers&
             float* px = &img.rgba[4 * k];
             img.iterations[k] = h.iterations;
             if (!h.face) {
-                px[0] = options.background.r;
-                px[1] = options.background.g;
-                px[2] = options.background.b;
-                px[3] = options.background_alpha;
+                bool shadowed = false;
+                if (shader.background(camera.pixel_ray(i, j), px, &shadowed) && shadowed) img.shadow[k] = 1;
                 continue;
             }
             Vec3 n;

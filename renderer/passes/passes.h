@@ -55,11 +55,17 @@ public:
                 size_t pixel = 0) const;
     const KeyLightShadows* shadows() const { return shadows_; }
     const SectionCaps& caps() const { return caps_; }
+    // The RGBA of a ray that meets no face: the ground where it meets it
+    // (RenderOptions::ground), else the background. Returns whether it is on
+    // the ground; *shadowed (when given): whether the key light is blocked there.
+    bool background(const Ray& ray, float rgba[4], bool* shadowed = nullptr) const;
 
 private:
     // The lights' share at point p with shading normal n, times colour col.
     Vec3 lit(Color col, Vec3 p, Vec3 n, const Ray& ray, uint32_t face, double u, double v, bool* shadowed) const;
     const Scene& scene_;
+    const RenderOptions& options_;
+    double ground_z_;                                       // the ground's height, when options_.ground
     const std::vector<std::optional<Color>>& face_colors_;  // RenderOptions::face_colors
     SectionCaps caps_;
     LightRig rig_;

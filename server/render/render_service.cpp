@@ -222,7 +222,8 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const Camera camera(camera_spec_for(r, scene, options.hidden_faces));
     options.threads = ctx.config.render_threads;
     options.progress = control.progress;
-    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows});
+    const FrameCost cost =
+        estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows || options.ground});
     check_frame_cost(ctx.config, cost);
     const RenderPriority priority = priority_for(cost);
     options.priority = priority;

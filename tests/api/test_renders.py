@@ -260,7 +260,8 @@ def test_shadows_darken_only_shadowed_pixels(url):
     step = (OCCT_DATA / "step" / "linkrods.step").read_bytes()
     stats_plain, plain = render_png(url, step, antialias=0)
     stats_shadow, shadowed = render_png(url, step, antialias=0, shadows="true")
-    assert stats_plain["shadows"] == {"enabled": False, "map_size": 0, "rays": 0, "shadowed_pixels": 0}
+    assert stats_plain["shadows"] == {"enabled": False, "map_size": 0, "rays": 0, "shadowed_pixels": 0,
+                                      "ground": False, "ground_shadowed_pixels": 0}
     sh = stats_shadow["shadows"]
     assert sh["enabled"] and sh["map_size"] >= 256 and sh["rays"] > 0 and sh["shadowed_pixels"] > 0, sh
     assert stats_shadow["timings_ms"]["shadow_map"] > 0
@@ -271,11 +272,30 @@ def test_shadows_darken_only_shadowed_pixels(url):
     assert 0 < darker <= sh["shadowed_pixels"] + 2, (darker, sh)  # sRGB rounding may hide a few
 
 
+def test_ground_takes_the_shadow(url):
+    """A ground under the part: over a transparent background only its shadow
+    shows (black, alpha 0.5), over an opaque one a lit floor covers the
+    background; both cast the same exact shadow, and the AOVs keep it background."""
+    step = (OCCT_DATA / "step" / "linkrods.step").read_bytes()
+    stats_plain, plain = render_png(url, step, antialias=0)
+    stats, catcher = render_png(url, step, antialias=0, ground="true")
+    sh = stats["shadows"]
+    assert sh["enabled"] and sh["ground"] and sh["ground_shadowed_pixels"] > 100, sh
+    assert stats["pixels_hit"] == stats_plain["pixels_hit"]
+    shadow = [p for p in catcher if p[3] in (127, 128) and p[:3] == b"\0\0\0"]
+    assert len(shadow) == sh["ground_shadowed_pixels"]
+    assert all(p[3] in (0, 127, 128, 255) for p in catcher)
+    stats_floor, floor = render_png(url, step, antialias=0, ground="true", background="1,1,1")
+    assert stats_floor["shadows"]["ground_shadowed_pixels"] == sh["ground_shadowed_pixels"]
+    assert all(p[3] == 255 for p in floor)
+    assert sum(p[:3] == b"\xff\xff\xff" for p in floor) < 0.01 * len(floor)  # the floor hides the background
+
+
 @pytest.mark.parametrize("params,field", [
     ({"antialias": -1}, "antialias"), ({"antialias": 65}, "antialias"), ({"antialias": 2.5}, "antialias"),
     ({"antialias": "many"}, "antialias"), ({"edges": "yes"}, "edges"), ({"edge_width": 0}, "edge_width"),
     ({"edge_width": 100}, "edge_width"), ({"edge_color": "1,0"}, "edge_color"), ({"edge_color": "2,0,0"}, "edge_color"),
-    ({"shadows": "maybe"}, "shadows"),
+    ({"shadows": "maybe"}, "shadows"), ({"ground": "yes"}, "ground"), ({"ground_height": "low"}, "ground_height"),
 ])
 def test_bad_antialias_and_edge_options(url, params, field):
     body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params=params), 400, "invalid_argument")
