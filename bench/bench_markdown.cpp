@@ -302,7 +302,7 @@ void scaling(std::string& o, const json& t) {
 }
 
 void look(std::string& o, const json& t) {
-    o += "## Image options: anti-aliasing + feature lines, shadows\n\n";
+    o += "## Image options: anti-aliasing + feature lines, shadows, a section, a ground\n\n";
     o += "Whole-frame times of one prepared scene and camera rendered three ways, interleaved and their order "
          "rotated from run to run (at least " +
          std::to_string(n(t, "min_runs")) +
@@ -312,28 +312,42 @@ void look(std::string& o, const json& t) {
          std::to_string(n(t, "threads")) + " thread(s): `plain` (one ray per pixel), `aa_edges` (" +
          std::to_string(n(t, "antialias_rays")) +
          " extra samples per edge pixel, exact rays where an edge can cross them, and feature lines), `shadows` "
-         "(the key light's map and Newton along light rays). Ratios to `plain` from the medians, in brackets from "
+         "(the key light's map and Newton along light rays), `section` (a plane through the box centre facing the "
+         "eye, caps on), `ground` (a shadow catcher under the part). Ratios to `plain` from the medians, in brackets "
+         "from "
          "the minima (interference from other work only adds time); targets: aa_edges <= " +
          num(d(t, "target_aa_edges_over_plain"), 1) + "x, shadows <= " + num(d(t, "target_shadows_over_plain"), 1) +
-         "x.\n\n";
-    o += "| scene | runs | plain ms (min) | aa_edges ms (min) | shadows ms (min) | aa_edges / plain | shadows / plain "
-         "|\n|---|---:|---:|---:|---:|---:|---:|\n";
+         "x, section <= " + num(d(t, "target_section_over_plain"), 2) +
+         "x, ground <= " + num(d(t, "target_ground_over_plain"), 1) + "x.\n\n";
+    o +=
+        "| scene | runs | plain ms (min) | aa_edges ms (min) | shadows ms (min) | section ms (min) | ground ms (min) | "
+        "aa_edges / plain | shadows / plain | section / plain | ground / plain "
+        "|\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     auto ratio = [](const json& r) {
         return "**" + num(d(r, "median"), 2) + "x** (" + num(d(r, "min"), 2) + "x) " +
                (r.value("meets_target", false) ? "ok" : "over " + num(d(r, "target"), 1) + "x");
     };
     for (const json& r : t["rows"]) {
         o += "| " + s(r, "title") + " | " + std::to_string(n(r, "runs"));
-        for (const char* v : {"plain", "aa_edges", "shadows"})
+        for (const char* v : {"plain", "aa_edges", "shadows", "section", "ground"})
             o += " | " + ms(d(r[v], "frame_ms")) + " (" + ms(d(r[v], "frame_ms_min")) + ")";
-        o += " | " + ratio(r["aa_edges_over_plain"]) + " | " + ratio(r["shadows_over_plain"]) + " |\n";
+        for (const char* q : {"aa_edges_over_plain", "shadows_over_plain", "section_over_plain", "ground_over_plain"})
+            o += " | " + ratio(r[q]);
+        o += " |\n";
+    }
+    if (t.contains("sheet")) {
+        const json& sh = t["sheet"];
+        o += "\nContact sheet (" + s(sh, "scene") + ", views front, top, right, iso, uncached: import, prepare, " +
+             "frames): one request " + ms(d(sh, "sheet_ms")) + " ms against four " + ms(d(sh, "separate_ms")) +
+             " ms: **" + num(d(sh, "sheet_over_separate"), 2) + "x** (target <= " + num(d(sh, "target"), 2) + "x" +
+             (sh.value("meets_target", false) ? ", ok" : ", over") + ").\n";
     }
     o += "\nWhere the extra time goes: median stage times, ms (`shadow_map` draws the light's map; the light rays' "
          "solves are part of `shade` and `antialias`).\n\n";
     o += "| scene | variant | map | Newton | shade | antialias | edges | shadow_map | frame |\n"
          "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : t["rows"])
-        for (const char* v : {"plain", "aa_edges", "shadows"}) {
+        for (const char* v : {"plain", "aa_edges", "shadows", "section", "ground"}) {
             const json& st = r[v]["stages_ms"];
             o += "| " + s(r, "title") + " | " + v;
             for (const char* k : {"map", "newton", "shade", "antialias", "edges", "shadow_map"})

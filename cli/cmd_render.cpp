@@ -64,6 +64,7 @@ struct Args {
     std::string section_mode = "union";
     bool no_caps = false, hatch = false;
     std::vector<std::string> hide, only, part_colors;  // part_colors: "PATTERN=r,g,b"
+    std::string views;                                 // "front,top,..." of a contact sheet
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -104,6 +105,7 @@ RenderRequest request_of(const Args& a) {
     r.sections.mode = *parse_section_mode(a.section_mode);
     r.sections.caps = !a.no_caps;
     r.sections.hatch = a.hatch;
+    if (!a.views.empty()) r.views = parse_views(a.views, "--views");
     r.parts.hide = a.hide;
     r.parts.only = a.only;
     for (const std::string& pc : a.part_colors) {
@@ -238,6 +240,11 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->capture_default_str();
     cmd->add_flag("--shadows", a.shadows,
                   "exact shadows of the key light (a preliminary map from the light, Newton along light rays)");
+    cmd->add_option("--views", a.views,
+                    "several named views in one image, a labelled contact sheet (about square), each view "
+                    "--width x --height: e.g. front,top,right,iso (at most " +
+                        std::to_string(kMaxViews) + ")")
+        ->check(shared_check([](const std::string& s) { parse_views(s, "the value"); }, "V1,V2,..."));
     cmd->add_flag("--ground", a.ground,
                   "a ground under the model that takes the key light's exact shadows (turns --shadows on): a grey "
                   "floor over an opaque background, only the shadow over a transparent one");
@@ -306,10 +313,20 @@ private:
     int next_decile_ = 1;
 };
 
-void write_stats(const Args& a, const RenderRequest& r, const Scene& scene, const Camera& camera,
-                 const RenderResult& result, StageClock& stages) {
-    nlohmann::json j = render_stats_json(result.stats, nlohmann::json::object());
-    j["camera"] = camera_json(camera);
+// The frames of a request: one, or one per view of a contact sheet.
+struct Frames {
+    std::vector<Camera> cameras;
+    std::vector<RenderResult> results;
+};
+
+void write_stats(const Args& a, const RenderRequest& r, const Scene& scene, const Frames& frames, StageClock& stages) {
+    nlohmann::json j = render_stats_json(frames.results[0].stats, nlohmann::json::object());
+    j["camera"] = camera_json(frames.cameras[0]);
+    if (!r.views.empty()) {  // a sheet: the first view above, every view here
+        j["views"] = nlohmann::json::array();
+        for (size_t v = 0; v < r.views.size(); ++v)
+            j["views"].push_back(view_stats_json(r.views[v], frames.cameras[v], frames.results[v].stats));
+    }
     j["map_precision"] = map_precision_option(r.map_precision);
     j["warnings"] = scene.warnings;
     stages.mark("statistics");
@@ -354,24 +371,43 @@ void run_render(const Args& a) {
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
     RenderOptions options = render_options_for(request, scene);
-    const Camera camera(camera_spec_for(request, scene, options.hidden_faces));
+    Frames frames;
+    for (const CameraSpec& spec : camera_specs_for(request, scene, options.hidden_faces))
+        frames.cameras.emplace_back(spec);
     options.threads = a.threads;
-    say("rendering %dx%d with %s", camera.width(), camera.height(), a.method.c_str());
+    say("rendering %zu view(s) of %dx%d with %s", frames.cameras.size(), frames.cameras[0].width(),
+        frames.cameras[0].height(), a.method.c_str());
     auto progress = std::make_shared<ProgressPrinter>(t0);
     if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
     stages.mark("frame_setup");
-    const RenderResult result = render(scene, camera, options);
-    add_frame_stages(result.stats, stages);
-    stages.mark("frame_setup");  // the rest of the call of render()
+    // One prepare() for every view (render(scene, ...) would prepare per frame).
+    const PreparedScene prepared = prepare(scene, a.threads);
+    stages.add("prepare", prepared.prepare_ms());
+    for (const Camera& camera : frames.cameras) {
+        frames.results.push_back(render(prepared, camera, options));
+        add_frame_stages(frames.results.back().stats, stages);
+    }
+    stages.mark("frame_setup");  // the rest of the calls of render()
     progress->finish();
-    say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms", result.stats.pixels_hit,
-        result.stats.mean_iterations, result.stats.total_ms);
+    for (const RenderResult& result : frames.results)
+        say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms", result.stats.pixels_hit,
+            result.stats.mean_iterations, result.stats.total_ms);
 
-    write_image(result.image, a.output);
-    if (!a.aov.empty()) write_image(result.image, a.aov);
+    const RenderImage* image = &frames.results[0].image;
+    RenderImage sheet;
+    if (!request.views.empty()) {
+        std::vector<const RenderImage*> images;
+        for (const RenderResult& result : frames.results) images.push_back(&result.image);
+        const float empty[4] = {options.background.r, options.background.g, options.background.b,
+                                options.background_alpha};
+        sheet = compose_sheet(images, request.views, sheet_columns(images.size()), empty);
+        image = &sheet;
+    }
+    write_image(*image, a.output);
+    if (!a.aov.empty()) write_image(*image, a.aov);
     stages.mark("encode");
     say("wrote %s%s%s", a.output.c_str(), a.aov.empty() ? "" : " and ", a.aov.c_str());
-    if (!a.stats.empty()) write_stats(a, request, scene, camera, result, stages);
+    if (!a.stats.empty()) write_stats(a, request, scene, frames, stages);
 }
 
 }  // namespace

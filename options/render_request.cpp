@@ -184,6 +184,39 @@ CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std
     return fitted_camera(view_request(r), scene, base_spec(r), hidden_faces);
 }
 
+std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& scene,
+                                         const std::vector<uint8_t>& hidden_faces) {
+    if (r.views.empty()) return {camera_spec_for(r, scene, hidden_faces)};
+    std::vector<CameraSpec> specs;
+    RenderRequest one = r;
+    for (const std::string& v : r.views) {
+        one.view = v;
+        specs.push_back(camera_spec_for(one, scene, hidden_faces));
+    }
+    return specs;
+}
+
+std::vector<std::string> checked_views(const std::vector<std::string>& names, const std::string& what) {
+    if (names.empty() || names.size() > kMaxViews)
+        throw Error(ErrorCode::invalid_argument, what + " must name 1 to " + std::to_string(kMaxViews) +
+                                                     " views (got " + std::to_string(names.size()) + ")");
+    for (const std::string& n : names)
+        if (!is_named_view(n))
+            throw Error(ErrorCode::invalid_argument, what + " names an unknown view '" + n.substr(0, 64) +
+                                                         "' (iso, front, back, left, right, top, bottom)");
+    return names;
+}
+
+std::vector<std::string> parse_views(const std::string& text, const std::string& what) {
+    std::vector<std::string> names;
+    for (size_t start = 0; start <= text.size() && names.size() <= kMaxViews;) {
+        const size_t comma = std::min(text.find(',', start), text.size());
+        names.push_back(text.substr(start, comma - start));
+        start = comma + 1;
+    }
+    return checked_views(names, what);
+}
+
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
     RenderOptions options;
     options.method = r.method;

@@ -81,6 +81,11 @@ SectionPlane parse_section_plane(const std::string& text, const std::string& wha
 // More than kMaxSectionPlanes planes: Error(invalid_argument) naming `what`.
 void check_section_count(size_t planes, const std::string& what);
 
+// Several named views of one import in one request (RenderRequest::views): a
+// contact sheet of 2 to 6 views is the catalogue's use; 16 (a 4x4 sheet) is
+// the most a sheet can show legibly.
+inline constexpr size_t kMaxViews = 16;
+
 struct RenderRequest {
     int width = kDefaultWidth, height = kDefaultHeight;
     std::string view = "iso";
@@ -101,7 +106,15 @@ struct RenderRequest {
     ImageLook look;
     Sections sections;    // planes (checked, unit normals), mode, caps, hatching
     PartSelection parts;  // hidden, isolated and recoloured parts (options/part_selection.h)
+    // Named views of a contact sheet (compose_sheet), each width x height; empty:
+    // the one `view`.
+    std::vector<std::string> views;
 };
+
+// "front,top,right,iso" (the CLI's --views, a query parameter) or a list's
+// names: 1 to kMaxViews known views. Throws Error(invalid_argument) naming `what`.
+std::vector<std::string> checked_views(const std::vector<std::string>& names, const std::string& what);
+std::vector<std::string> parse_views(const std::string& text, const std::string& what);
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).
 RenderRequest parse_render_options(const std::string& options_json);
@@ -121,6 +134,10 @@ Vec3 parse_point(const std::string& text, const std::string& what);
 Projection resolved_projection(const RenderRequest& r);
 
 // The camera for a scene: the named view fitted to it, then explicit values.
+// The cameras of a request: one per entry of `views`, else the one of `view`
+// (camera_spec_for each).
+std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& scene,
+                                         const std::vector<uint8_t>& hidden_faces = {});
 // Named views frame the faces shown (render_options_for's hidden_faces left out).
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces = {});
 // Every camera check that needs no scene (up along the view direction, eye at

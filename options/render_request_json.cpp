@@ -121,7 +121,7 @@ constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_d
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
     "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin, sections, section_mode, "
-    "section_caps, section_hatch, parts, ground, ground_height";
+    "section_caps, section_hatch, parts, ground, ground_height, views";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -288,6 +288,15 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.sections.hatch = boolean(v, key);
         } else if (key == "parts") {
             r.parts = part_selection(v, key);
+        } else if (key == "views") {
+            if (v.is_string()) {
+                r.views = parse_views(v.get<std::string>(), "option '" + key + "'");
+            } else {
+                if (!v.is_array()) bad("option 'views' must be an array of view names");
+                std::vector<std::string> names;
+                for (const json& x : v) names.push_back(text(x, key));
+                r.views = checked_views(names, "option '" + key + "'");
+            }
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items())

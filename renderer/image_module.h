@@ -23,6 +23,7 @@ enum ImageWriteStatus : int { kImageWritten = 0, kImageFormatUnsupported = 1, kI
 inline constexpr const char* kImageModuleFile = "libnurbsrt_image.so";
 inline constexpr const char* kImageWriteSymbol = "nurbsrt_write_image_v1";
 inline constexpr const char* kImageEncodeSymbol = "nurbsrt_encode_image_v1";
+inline constexpr const char* kImageLabelSymbol = "nurbsrt_draw_label_v1";
 
 // The path the module will be loaded from: beside the executable, else the
 // first directory of LD_LIBRARY_PATH or of the system's library directories
@@ -58,6 +59,11 @@ extern "C" int nurbsrt_write_image_v1(const nurbsrt::RenderImage* image, const c
 // Encodes `image` as a file of format `format_name` (an extension: png, tif, ...)
 // would hold it, and hands the bytes to `sink` once; on failure sink is not
 // called and the message is set as above. Never throws.
+// Draws `text` into image->rgba with its top-left corner at pixel (x, y),
+// `size` pixels high, in colour rgb (linear) at full alpha, with a font of the
+// system's (DejaVu Sans, Debian's fonts-dejavu-core). Never throws.
+extern "C" int nurbsrt_draw_label_v1(nurbsrt::RenderImage* image, int x, int y, int size, const char* text,
+                                     const float rgb[3], char* message, size_t message_size);
 extern "C" int nurbsrt_encode_image_v1(const nurbsrt::RenderImage* image, const char* format_name,
                                        void (*sink)(void* context, const void* bytes, size_t size), void* context,
                                        char* message, size_t message_size);

@@ -29,5 +29,8 @@ nlohmann::json render_stats_json(const RenderStats& stats, const nlohmann::json&
 // The camera a frame was rendered with: eye, target, up, projection, and the
 // one size that applies to it (fov_deg for perspective, ortho_height for orthographic).
 nlohmann::json camera_json(const Camera& camera);
+// One view of a contact sheet: its name, camera and frame statistics (their
+// own stage times as timings_ms: the frame's stages).
+nlohmann::json view_stats_json(const std::string& view, const Camera& camera, const RenderStats& stats);
 
 }  // namespace nurbsrt

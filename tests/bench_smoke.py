@@ -196,7 +196,7 @@ def main():
     check([r["scene"] for r in lk["rows"]] == keys, "look: one row per scene")
     for r in lk["rows"]:
         w = f"look {r['scene']}"
-        for v in ("plain", "aa_edges", "shadows"):
+        for v in ("plain", "aa_edges", "shadows", "section", "ground"):
             positive(r, f"{v}.frame_ms", w)
             positive(r, f"{v}.frame_ms_min", w)
             check(len(r[v]["frame_ms_runs"]) == r["runs"] >= runs, f"{w}: {v} runs")
@@ -208,12 +208,20 @@ def main():
         positive(r, "shadows.stages_ms.shadow_map", w)
         positive(r, "shadows.shadow_rays", w)
         check(r["plain"]["antialias_rays"] == 0 and r["plain"]["shadow_rays"] == 0, f"{w}: plain traced extra rays")
-        for ratio in ("aa_edges_over_plain", "shadows_over_plain"):
+        nonneg(r, "section_cap_pixels", w)  # open shells (the ducks) have no caps
+        positive(r, "ground.shadow_rays", w)
+        for ratio in ("aa_edges_over_plain", "shadows_over_plain", "section_over_plain", "ground_over_plain"):
             for f in ("median", "min", "pair_median", "target"):
                 positive(r, f"{ratio}.{f}", w)
             check(isinstance(get(r, f"{ratio}.meets_target"), bool), f"{w}: {ratio}.meets_target")
         check(abs(r["aa_edges_over_plain"]["median"] - r["aa_edges"]["frame_ms"] / r["plain"]["frame_ms"]) < 1e-9 *
               r["aa_edges_over_plain"]["median"] + 1e-12, f"{w}: aa_edges/plain is the ratio of the medians")
+
+    sheet = lk["sheet"]
+    for f in ("sheet_ms", "separate_ms", "sheet_over_separate", "target"):
+        positive(sheet, f, "look sheet")
+    check(sheet["sheet_ms"] < sheet["separate_ms"], "look sheet: one import for four views costs less than four")
+    check("Contact sheet" in report, "Markdown report lacks the contact sheet line")
 
     for heading in ("## Table 1", "## Map precision", "## Exact peer", "## Tessellating peer",
                     "## Frame vs mesh tracer", "## Scaling", "## Image options"):

@@ -457,6 +457,33 @@ TEST(CliRender, ShadowsFlagInStats) {
     fs::remove_all(dir);
 }
 
+// --views: one import, a labelled sheet of the views (2 x 2 cells here), each
+// view's statistics; a bad list is a usage error before the import.
+TEST(CliRender, ViewsMakeAContactSheet) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-views-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string png = (dir / "sheet.png").string();
+    const CliRun r =
+        run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --views front,top,right --stats - -o " + png);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json st = nlohmann::json::parse(r.out);
+    ASSERT_EQ(st["views"].size(), 3u);
+    EXPECT_EQ(st["views"][2]["view"], "right");
+    std::ifstream in(png, std::ios::binary);
+    std::string head(24, '\0');
+    in.read(head.data(), 24);
+    const auto be32 = [&](int at) {
+        return (uint32_t(uint8_t(head[at])) << 24) | (uint32_t(uint8_t(head[at + 1])) << 16) |
+               (uint32_t(uint8_t(head[at + 2])) << 8) | uint32_t(uint8_t(head[at + 3]));
+    };
+    EXPECT_EQ(be32(16), 192u);  // 2 columns
+    EXPECT_EQ(be32(20), 144u);  // 2 rows
+    const CliRun bad = run_nurbsrt("render " + kScrew + " --views front,side -o " + (dir / "b.png").string());
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    EXPECT_NE(bad.err.find("--views: the value names an unknown view 'side'"), std::string::npos) << bad.err;
+    fs::remove_all(dir);
+}
+
 // --ground turns the key light's shadows on and catches them under the part.
 TEST(CliRender, GroundInStats) {
     const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-ground-" + std::to_string(::getpid()));

@@ -24,11 +24,13 @@ namespace {
 
 using WriteFn = decltype(&nurbsrt_write_image_v1);
 using EncodeFn = decltype(&nurbsrt_encode_image_v1);
+using LabelFn = decltype(&nurbsrt_draw_label_v1);
 
 // The module's entry points.
 struct ImageModule {
     WriteFn write = nullptr;
     EncodeFn encode = nullptr;
+    LabelFn label = nullptr;
 };
 
 }  // namespace
@@ -86,9 +88,12 @@ const ImageModule& load_writer() {
     ImageModule found;
     found.write = reinterpret_cast<WriteFn>(dlsym(handle, kImageWriteSymbol));
     found.encode = reinterpret_cast<EncodeFn>(dlsym(handle, kImageEncodeSymbol));
-    if (!found.write || !found.encode)
-        throw Error(ErrorCode::internal, std::string("image writer module without ") +
-                                             (found.write ? kImageEncodeSymbol : kImageWriteSymbol));
+    found.label = reinterpret_cast<LabelFn>(dlsym(handle, kImageLabelSymbol));
+    if (!found.write || !found.encode || !found.label)
+        throw Error(ErrorCode::internal,
+                    std::string("image writer module without ") + (!found.write    ? kImageWriteSymbol
+                                                                   : !found.encode ? kImageEncodeSymbol
+                                                                                   : kImageLabelSymbol));
     module = found;
     return module;
 }
@@ -142,6 +147,12 @@ ImageWriterPreload::~ImageWriterPreload() {
 void write_image(const RenderImage& image, const std::string& path) {
     char message[1024];
     check_status(load_writer().write(&image, path.c_str(), message, sizeof message), message);
+}
+
+void draw_label(RenderImage& image, int x, int y, int size, const std::string& text, Color colour) {
+    char message[1024];
+    const float rgb[3] = {colour.r, colour.g, colour.b};
+    check_status(load_writer().label(&image, x, y, size, text.c_str(), rgb, message, sizeof message), message);
 }
 
 std::string encode_image(const RenderImage& image, const std::string& format_name) {

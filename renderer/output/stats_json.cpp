@@ -74,6 +74,14 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
     return j;
 }
 
+nlohmann::json view_stats_json(const std::string& view, const Camera& camera, const RenderStats& stats) {
+    StageClock frame;
+    add_frame_stages(stats, frame);
+    nlohmann::json timings = nlohmann::json::object();
+    for (const StageClock::Stage& s : frame.stages()) timings[s.name] = s.ms;
+    return {{"view", view}, {"camera", camera_json(camera)}, {"statistics", render_stats_json(stats, timings)}};
+}
+
 nlohmann::json camera_json(const Camera& camera) {
     const CameraSpec& cs = camera.spec();
     nlohmann::json j = {{"eye", {cs.eye.x, cs.eye.y, cs.eye.z}},

@@ -1,5 +1,7 @@
 #include "server/jobs/job_document.h"
 
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "server/common/rfc3339.h"
@@ -18,7 +20,9 @@ json timestamp(int64_t ms) {
 
 json span(int64_t from, int64_t to) {
     if (from <= 0 || to <= 0) return nullptr;
-    return to - from;
+    // Stamps come from the system clock, which a time service may step back
+    // between two of them (a -32 ms queue time was seen once): a span is never negative.
+    return std::max<int64_t>(0, to - from);
 }
 
 json parse_or_null(const std::string& text) {

@@ -219,11 +219,15 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
     RenderOptions options = render_options_for(r, scene);
-    const Camera camera(camera_spec_for(r, scene, options.hidden_faces));
+    std::vector<Camera> cameras;
+    for (const CameraSpec& spec : camera_specs_for(r, scene, options.hidden_faces)) cameras.emplace_back(spec);
     options.threads = ctx.config.render_threads;
     options.progress = control.progress;
-    const FrameCost cost =
-        estimate_frame_cost(*prepared, r.width, r.height, {options.antialias, options.shadows || options.ground});
+    // A contact sheet's frames are estimated as one frame of all their pixels
+    // (their buffers are alive together until the sheet is composed).
+    const int frames = static_cast<int>(cameras.size());
+    const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height * frames,
+                                               {options.antialias, options.shadows || options.ground});
     check_frame_cost(ctx.config, cost);
     const RenderPriority priority = priority_for(cost);
     options.priority = priority;
@@ -233,18 +237,31 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     std::shared_ptr<AdmissionGate::Ticket> ticket = admit(ctx, ctx.render_gate, cost.memory_bytes, wait);
     stages.mark("queue");
 
-    const RenderResult result =
-        render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop);
-    add_frame_stages(result.stats, stages);
-    stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
+    std::vector<RenderResult> results;
+    for (const Camera& camera : cameras) {
+        results.push_back(render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop));
+        add_frame_stages(results.back().stats, stages);
+        stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
+    }
+    const RenderImage* image = &results[0].image;
+    RenderImage sheet;
+    if (!r.views.empty()) {
+        std::vector<const RenderImage*> images;
+        for (const RenderResult& res : results) images.push_back(&res.image);
+        const float empty[4] = {options.background.r, options.background.g, options.background.b,
+                                options.background_alpha};
+        sheet = compose_sheet(images, r.views, sheet_columns(images.size()), empty);
+        image = &sheet;
+        for (size_t v = 0; v < r.views.size(); ++v) out.views.push_back({r.views[v], cameras[v], results[v].stats});
+    }
 
-    out.bytes = encode_image(result.image, r.format.name);
-    out.aovs = aov_buffers(result.image, r.aovs);
+    out.bytes = encode_image(*image, r.format.name);
+    out.aovs = aov_buffers(*image, r.aovs);
     ticket.reset();
     stages.mark("encode");
 
-    out.stats = result.stats;
-    out.camera = camera;
+    out.stats = results[0].stats;
+    out.camera = cameras[0];
     out.map_precision = r.map_precision;
     out.cost = cost;
     out.priority = priority;
@@ -261,6 +278,11 @@ nlohmann::json statistics_json(const RenderedImage& image) {
                          {"core_seconds", image.cost.core_seconds},
                          {"priority", priority_name(image.priority)}};
     if (image.camera) stats["camera"] = camera_json(*image.camera);
+    if (!image.views.empty()) {  // a contact sheet: the first view above, every view here
+        stats["views"] = nlohmann::json::array();
+        for (const RenderedImage::View& v : image.views)
+            stats["views"].push_back(view_stats_json(v.name, v.camera, v.stats));
+    }
     stats["map_precision"] = map_precision_option(image.map_precision);
     stats["warnings"] = image.warnings;
     stats["cache"] = image.cache_hit ? "hit" : "miss";

@@ -37,7 +37,14 @@ struct RenderedImage {
     // What the Statistics object of the answer and of a job's result says,
     // serialised once, at the edge (statistics_json).
     RenderStats stats;
-    std::optional<Camera> camera;
+    std::optional<Camera> camera;  // the first view's on a contact sheet
+    // A contact sheet's views (RenderRequest::views): name, camera, frame statistics.
+    struct View {
+        std::string name;
+        Camera camera;
+        RenderStats stats;
+    };
+    std::vector<View> views;
     MapPrecision map_precision = MapPrecision::float32;
     FrameCost cost;
     RenderPriority priority = RenderPriority::normal;

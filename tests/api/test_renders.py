@@ -387,6 +387,36 @@ def test_bad_parts_options(url):
         assert field in body["detail"], body
 
 
+def test_views_make_a_labelled_contact_sheet(url):
+    """Four views of one upload in one image: a 2 x 2 sheet of 160 x 120 cells,
+    the statistics of each view, one import."""
+    step = SCREW.read_bytes()
+    r = post_raw(url, "/v1/renders", step, headers={"Accept": "application/json"},
+                 params={"width": 160, "height": 120, "views": "front,top,right,iso", "aovs": "face"})
+    assert r.status_code == 200, r.text[:300]
+    body = r.json()
+    validate(body, "RenderResponse")
+    from test_jobs import png_pixels
+    width, height, _, _ = png_pixels(base64.b64decode(body["image_base64"]))
+    assert (width, height) == (320, 240)
+    views = body["statistics"]["views"]
+    assert [v["view"] for v in views] == ["front", "top", "right", "iso"]
+    assert all(v["statistics"]["pixels_hit"] > 0 and v["camera"]["projection"] == "orthographic" for v in views)
+    faces = struct.unpack("<%dI" % (320 * 240), base64.b64decode(body["aovs"]["face"]["data"]))
+    for cell in range(4):  # every cell shows the part
+        x0, y0 = 160 * (cell % 2), 120 * (cell // 2)
+        assert any(faces[(y0 + y) * 320 + x0 + x] for y in range(120) for x in range(160)), cell
+    assert server_timing(r)["read"] >= 0 and sum(1 for v in views) == 4
+
+
+@pytest.mark.parametrize("params,field", [
+    ({"views": ""}, "views"), ({"views": "front,side"}, "side"), ({"views": ",".join(["iso"] * 17)}, "1 to 16"),
+])
+def test_bad_views(url, params, field):
+    body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params=params), 400, "invalid_argument")
+    assert field in body["detail"], body
+
+
 def hit_box(png):
     """Bounding box (x0, y0, x1, y1) of the non-transparent pixels, and the image size."""
     from test_jobs import png_pixels

@@ -3,6 +3,8 @@
 // (renderer/image_module.h says why), with two entry points of C linkage: to a
 // file, and into memory (a service answer, with no file to write and read back).
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -219,5 +221,27 @@ extern "C" int nurbsrt_encode_image_v1(const nurbsrt::RenderImage* image, const 
         text = std::string("cannot encode a ") + format_name + " image: " + e.what();
     }
     nurbsrt::copy_message(text, message, message_size);
+    return status;
+}
+
+extern "C" int nurbsrt_draw_label_v1(nurbsrt::RenderImage* image, int x, int y, int size, const char* text,
+                                     const float rgb[3], char* message, size_t message_size) {
+    std::string why;
+    int status = nurbsrt::kImageIoError;
+    try {
+        // The frame's own float RGBA, drawn into in place (ImageBuf over caller memory).
+        OIIO::ImageSpec spec(image->width, image->height, 4, OIIO::TypeDesc::FLOAT);
+        OIIO::ImageBuf buf(spec, image->rgba.data());
+        const float colour[4] = {rgb[0], rgb[1], rgb[2], 1.0f};
+        if (OIIO::ImageBufAlgo::render_text(buf, x, y + size, text, size, "DejaVuSans", colour,
+                                            OIIO::ImageBufAlgo::TextAlignX::Left,
+                                            OIIO::ImageBufAlgo::TextAlignY::Baseline))
+            status = nurbsrt::kImageWritten;
+        else
+            why = "cannot draw a label: " + buf.geterror();
+    } catch (const std::exception& e) {  // no exception crosses the module's C boundary
+        why = std::string("cannot draw a label: ") + e.what();
+    }
+    nurbsrt::copy_message(why, message, message_size);
     return status;
 }
