@@ -31,7 +31,7 @@ PACKAGES=(
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev occt-misc libtbb-dev
   libfontconfig-dev
-  libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev
+  libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev fonts-dejavu-core
   libsqlite3-dev sqlite3 libembree-dev
   libpq-dev postgresql
   iproute2
@@ -39,6 +39,7 @@ PACKAGES=(
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
   chromium python3-websocket
 )
+# fonts-dejavu-core: the labels of contact sheets (OpenImageIO draws DejaVu Sans).
 # npm: tests/spectral.sh lints the OpenAPI document with Spectral from the npm
 # registry. Only where no npm is on PATH: a Node.js from elsewhere (NodeSource's
 # nodejs package bundles npm) conflicts with Debian's npm package.
