@@ -25,11 +25,11 @@ namespace {
 // up to a second frame plus its shading.
 constexpr double kTargetAaEdges = 1.6;
 constexpr double kTargetShadows = 2.2;
-// A section draws the map's inside layer too and solves the removed side's
-// starts again; at most a third more. The ground adds the background's light
-// rays to the shadows'.
+// A section draws the map twice (the inside layer) but solves only the kept
+// side: at most a third more. The ground adds a light ray per background pixel
+// on it (in a framed view about as many as the part's own) to the shadows'.
 constexpr double kTargetSection = 1.35;
-constexpr double kTargetGround = 2.5;
+constexpr double kTargetGround = 3.0;
 // The contact sheet: four views of an uncached file in one request against
 // four requests, each importing again. The import dominates small frames, so
 // one import for four frames should cost well under half.

@@ -303,7 +303,7 @@ void scaling(std::string& o, const json& t) {
 
 void look(std::string& o, const json& t) {
     o += "## Image options: anti-aliasing + feature lines, shadows, a section, a ground\n\n";
-    o += "Whole-frame times of one prepared scene and camera rendered three ways, interleaved and their order "
+    o += "Whole-frame times of one prepared scene and camera rendered five ways, interleaved and their order "
          "rotated from run to run (at least " +
          std::to_string(n(t, "min_runs")) +
          (d(t, "min_ms") > 0 ? " runs, more until each variant has " + num(d(t, "min_ms") / 1e3, 0) + " s of frames"
