@@ -63,8 +63,8 @@ struct Args {
     std::vector<std::string> sections;  // "px,py,pz,nx,ny,nz" each
     std::string section_mode = "union";
     bool no_caps = false, hatch = false;
-    std::vector<std::string> hide, only, part_colors;  // part_colors: "PATTERN=r,g,b"
-    std::string views;                                 // "front,top,..." of a contact sheet
+    std::vector<std::string> hide, only, ghost, part_colors;  // part_colors: "PATTERN=r,g,b"
+    std::string views;                                        // "front,top,..." of a contact sheet
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -108,6 +108,7 @@ RenderRequest request_of(const Args& a) {
     if (!a.views.empty()) r.views = parse_views(a.views, "--views");
     r.parts.hide = a.hide;
     r.parts.only = a.only;
+    r.parts.ghost = a.ghost;
     for (const std::string& pc : a.part_colors) {
         const size_t eq = pc.rfind('=');  // a name may hold '=', a colour does not
         r.parts.color.emplace_back(pc.substr(0, eq), parse_rgb(pc.substr(eq + 1), "--part-color"));
@@ -271,6 +272,9 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->check(pattern_check("--hide"));
     cmd->add_option("--only", a.only, "show only these parts: id or name glob (repeatable)")
         ->check(pattern_check("--only"));
+    cmd->add_option("--ghost", a.ghost,
+                    "draw a part see-through over what lies behind it: id or name glob (repeatable)")
+        ->check(pattern_check("--ghost"));
     cmd->add_option("--part-color", a.part_colors, "colour a part: ID_OR_GLOB=r,g,b in [0,1] (repeatable)")
         ->check(shared_check(
             [](const std::string& s) {

@@ -87,6 +87,14 @@ void apply_part_selection(const PartSelection& selection, const Scene& scene, Re
     bool any_hidden = false;
     for (uint8_t h : hidden) any_hidden |= h != 0;
     if (any_hidden) options.hidden_faces = std::move(hidden);
+    if (!selection.ghost.empty()) {
+        options.ghost_faces.assign(n, 0);
+        for (size_t k = 0; k < selection.ghost.size(); ++k) {
+            const std::vector<uint8_t> f =
+                selected_faces(scene, selection.ghost[k], "parts.ghost[" + std::to_string(k) + "]");
+            for (size_t i = 0; i < n; ++i) options.ghost_faces[i] |= f[i];
+        }
+    }
     if (selection.color.empty()) return;
     options.face_colors.assign(n, std::nullopt);
     for (const auto& [pattern, colour] : selection.color) {

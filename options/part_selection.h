@@ -1,5 +1,5 @@
 // Parts of an assembly chosen by the request (RenderRequest::parts): hidden,
-// isolated (`only`) or recoloured, by id ("0/3/1", Part::id) or by a name glob
+// isolated (`only`), see-through (`ghost`) or recoloured, by id ("0/3/1", Part::id) or by a name glob
 // ("nut*", fnmatch's * ? [...]); a node stands for its whole subtree. Resolved
 // against the imported scene into the renderer's per-face options
 // (RenderOptions::hidden_faces, face_colors): the scene itself stays as it was
@@ -22,16 +22,16 @@ namespace nurbsrt {
 inline constexpr size_t kMaxPartPatterns = 256;
 
 struct PartSelection {
-    std::vector<std::string> hide, only;
+    std::vector<std::string> hide, only, ghost;
     std::vector<std::pair<std::string, Color>> color;  // pattern -> colour, later entries win
-    bool empty() const { return hide.empty() && only.empty() && color.empty(); }
+    bool empty() const { return hide.empty() && only.empty() && ghost.empty() && color.empty(); }
 };
 
 // A pattern as the request gives it: non-empty, at most 256 bytes, printable.
 // Throws Error(invalid_argument) naming `what`.
 void check_part_pattern(const std::string& pattern, const std::string& what);
 
-// Sets options.hidden_faces and options.face_colors for `scene`. Throws
+// Sets options.hidden_faces, ghost_faces and face_colors for `scene`. Throws
 // Error(invalid_argument) naming the request field (parts.hide[2], ...) for a
 // pattern no part matches, listing a few of the scene's part ids and names.
 void apply_part_selection(const PartSelection& selection, const Scene& scene, RenderOptions& options);

@@ -201,15 +201,15 @@ std::vector<SectionPlane> section_planes(const json& v, const std::string& key) 
 PartSelection part_selection(const json& given, const std::string& key) {
     const json v =
         given.is_string() ? parse_json_or_throw(given.get<std::string>(), kRequestJsonLimits, "option 'parts'") : given;
-    if (!v.is_object()) bad("option '" + key + "' must be an object with hide, only and color");
+    if (!v.is_object()) bad("option '" + key + "' must be an object with hide, only, ghost and color");
     PartSelection sel;
     for (const auto& [k, list] : v.items()) {
         const std::string where = key + "." + k;
-        if (k == "hide" || k == "only") {
+        if (k == "hide" || k == "only" || k == "ghost") {
             if (!list.is_array()) bad("option '" + where + "' must be an array of part ids or name globs");
             if (list.size() > kMaxPartPatterns)
                 bad("option '" + where + "' holds more than " + std::to_string(kMaxPartPatterns) + " patterns");
-            std::vector<std::string>& out = k == "hide" ? sel.hide : sel.only;
+            std::vector<std::string>& out = k == "hide" ? sel.hide : k == "only" ? sel.only : sel.ghost;
             for (size_t n = 0; n < list.size(); ++n) {
                 const std::string what = "option '" + where + "[" + std::to_string(n) + "]'";
                 if (!list[n].is_string()) bad(what + " must be a string");
@@ -227,7 +227,7 @@ PartSelection part_selection(const json& given, const std::string& key) {
                                                               : parse_rgb(background_text(c, where, 3), what));
             }
         } else {
-            bad("unknown option " + quoted_name(k) + " in '" + key + "' (parts options: hide, only, color)");
+            bad("unknown option " + quoted_name(k) + " in '" + key + "' (parts options: hide, only, ghost, color)");
         }
     }
     return sel;

@@ -68,7 +68,10 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     return res;
 }
 
-RenderResult render(const PreparedScene& prepared, const Camera& camera, const RenderOptions& options) {
+namespace {
+
+// One frame: the passes of passes.h (render() adds the ghosts' second frame).
+RenderResult render_frame(const PreparedScene& prepared, const Camera& camera, const RenderOptions& options) {
     const auto t_total = Clock::now();
     const Scene& scene = prepared.scene();
     const int W = camera.width(), H = camera.height();
@@ -178,6 +181,49 @@ RenderResult render(const PreparedScene& prepared, const Camera& camera, const R
     st.total_ms = std::chrono::duration<double, std::milli>(last - t_total).count();
     check_image_contract(res.image, st.shadows);
     return res;
+}
+
+bool any_set(const std::vector<uint8_t>& v) { return std::find(v.begin(), v.end(), 1) != v.end(); }
+
+}  // namespace
+
+RenderResult render(const PreparedScene& prepared, const Camera& camera, const RenderOptions& options) {
+    if (!any_set(options.ghost_faces)) return render_frame(prepared, camera, options);
+    NURBSRT_CHECK(options.ghost_faces.size() == prepared.scene().faces.size());
+    RenderResult front = render_frame(prepared, camera, options);
+    // Behind the ghosts: the same frame with every ghost face left out too.
+    RenderOptions behind_options = options;
+    behind_options.ghost_faces.clear();
+    behind_options.hidden_faces.resize(options.ghost_faces.size(), 0);
+    for (size_t i = 0; i < options.ghost_faces.size(); ++i) behind_options.hidden_faces[i] |= options.ghost_faces[i];
+    const RenderResult behind = render_frame(prepared, camera, behind_options);
+    RenderImage& im = front.image;
+    const float a = std::clamp(options.ghost_opacity, 0.0f, 1.0f);
+    uint64_t ghost_pixels = 0;
+    for (size_t k = 0; k < im.face.size(); ++k) {
+        const uint32_t f = im.face[k];
+        if (f < 1 || f > options.ghost_faces.size() || !options.ghost_faces[f - 1]) continue;
+        ++ghost_pixels;
+        // "over" with the ghost in front (Porter & Duff 1984), straight alpha in and out.
+        float* px = &im.rgba[4 * k];
+        const float* b = &behind.image.rgba[4 * k];
+        const float alpha = a + (1 - a) * b[3];
+        for (int c = 0; c < 3; ++c) px[c] = alpha > 0 ? (a * px[c] + (1 - a) * b[3] * b[c]) / alpha : 0.0f;
+        px[3] = alpha;
+    }
+    RenderStats& st = front.stats;
+    // The stages of both frames, so that they still sum to total_ms.
+    const RenderStats& bs = behind.stats;
+    for (double RenderStats::*stage :
+         {&RenderStats::setup_ms, &RenderStats::preliminary_map_ms, &RenderStats::newton_ms,
+          &RenderStats::shadow_map_ms, &RenderStats::shade_ms, &RenderStats::antialias_ms, &RenderStats::edges_ms,
+          &RenderStats::statistics_ms, &RenderStats::newton_primary_ms})
+        st.*stage += bs.*stage;
+    st.ghost_faces = static_cast<uint64_t>(std::count(options.ghost_faces.begin(), options.ghost_faces.end(), 1));
+    st.ghost_pixels = ghost_pixels;
+    st.ghost_behind_ms = behind.stats.total_ms;
+    st.total_ms += behind.stats.total_ms;
+    return front;
 }
 
 }  // namespace nurbsrt

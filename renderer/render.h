@@ -55,6 +55,13 @@ struct RenderOptions {
     // map, its solves, its shadows), and colours that replace the file's.
     std::vector<uint8_t> hidden_faces;
     std::vector<std::optional<Color>> face_colors;
+    // Per face, or empty: faces drawn see-through. A ray's first ghost surface is
+    // blended, with opacity ghost_opacity, over what the ray meets behind it
+    // with every ghost face left out: a second frame of the same scene (one
+    // ghost layer; ghost surfaces behind the first are not drawn). The AOVs are
+    // the first surface's.
+    std::vector<uint8_t> ghost_faces;
+    float ghost_opacity = 0.25f;
     // A ground plane under the model (z = ground_height, model units; unset: the
     // scene's lowest point; Z is up as in the named views) that takes the key
     // light's exact shadows (it turns them on). Over an opaque background it is
@@ -149,6 +156,10 @@ struct RenderStats {
     uint64_t cap_pixels = 0, open_bodies_cut = 0;
     // Parts (RenderOptions::hidden_faces, face_colors): faces left out, faces recoloured.
     uint64_t hidden_faces = 0, recoloured_faces = 0;
+    // Ghosts (RenderOptions::ghost_faces): the faces, the pixels whose first
+    // surface is one, and the frame behind them (its own total, part of total_ms).
+    uint64_t ghost_faces = 0, ghost_pixels = 0;
+    double ghost_behind_ms = 0;
     uint64_t shadow_rays = 0, shadowed_pixels = 0;
     // Stage times of the frame, end to end on one clock (each includes the small
     // set-up before its pass), so that with prepare_ms they sum to total_ms.

@@ -95,6 +95,38 @@ TEST(PartSelection, ColoursReplaceTheFilesAndTheSubtreeFollowsItsNode) {
     EXPECT_TRUE(blue && green);
 }
 
+// A ghost is blended over what lies behind it (a second frame without the
+// ghost faces): over the transparent background its pixels are partly
+// transparent, the AOVs still show its faces, the frame's stages sum as before.
+TEST(PartSelection, GhostIsSeeThrough) {
+    const Scene& s = assembly();
+    const std::set<uint32_t> left = faces_named(s, "bracket_left");
+    RenderRequest r;
+    r.width = 160;
+    r.height = 120;
+    const RenderResult plain = render_with(r);
+    r.parts.ghost = {"bracket_left"};
+    const RenderResult ghost = render_with(r);
+    EXPECT_EQ(ghost.stats.ghost_faces, left.size());
+    EXPECT_GT(ghost.stats.ghost_pixels, 0u);
+    EXPECT_GT(ghost.stats.ghost_behind_ms, 0.0);
+    EXPECT_EQ(ghost.image.face, plain.image.face);  // the AOVs: the first surface
+    uint64_t see_through = 0;
+    for (size_t k = 0; k < ghost.image.face.size(); ++k) {
+        const bool is_ghost = left.count(ghost.image.face[k]) > 0;
+        const float a = ghost.image.rgba[4 * k + 3];
+        if (is_ghost)
+            see_through += a < 1.0f;
+        else
+            EXPECT_EQ(a, plain.image.rgba[4 * k + 3]) << k;
+    }
+    EXPECT_EQ(see_through, ghost.stats.ghost_pixels);  // nothing behind the left bracket: background shows
+    const RenderStats& st = ghost.stats;
+    EXPECT_NEAR(st.setup_ms + st.preliminary_map_ms + st.newton_ms + st.shadow_map_ms + st.shade_ms + st.antialias_ms +
+                    st.edges_ms + st.statistics_ms + st.prepare_ms,
+                st.total_ms, 1e-6 * st.total_ms + 1e-9);
+}
+
 TEST(PartSelection, PatternMatchingNothingNamesTheFieldAndListsParts) {
     RenderRequest r;
     r.parts.hide = {"bracket_left", "gear*"};
@@ -121,7 +153,7 @@ TEST(PartSelection, JsonFormsAndRefusals) {
     const RenderRequest q = parse_render_options(R"({"parts": "{\"hide\": [\"a*\"]}"})");  // a query parameter's text
     EXPECT_EQ(q.parts.hide, std::vector<std::string>{"a*"});
     for (const char* bad :
-         {R"({"parts": {"ghost": ["a"]}})", R"({"parts": {"hide": "a"}})", R"({"parts": {"hide": [1]}})",
+         {R"({"parts": {"spin": ["a"]}})", R"({"parts": {"hide": "a"}})", R"({"parts": {"hide": [1]}})",
           R"({"parts": {"color": {"a": "2,0,0"}}})", R"({"parts": []})", R"({"parts": {"only": [""]}})"}) {
         try {
             parse_render_options(bad);

@@ -365,22 +365,27 @@ def test_parts_hidden_isolated_and_recoloured(url):
         pytest.skip("../shared/models is absent: the assembly as1 is not there")
     data = as1.read_bytes()
     stats_all, _ = render_png(url, data, antialias=0)
-    assert stats_all["parts"] == {"hidden_faces": 0, "recoloured_faces": 0}
+    assert stats_all["parts"] == {"hidden_faces": 0, "recoloured_faces": 0, "ghost_faces": 0, "ghost_pixels": 0,
+                                  "ghost_behind_ms": 0}
     r = post_raw(url, "/v1/renders", data, headers={"Accept": "application/json"}, params={
         "width": 160, "height": 120, "antialias": 0,
         "parts": json.dumps({"hide": ["l-bracket-assembly_*"], "color": {"rod_1": "0,0,1"}})})
     assert r.status_code == 200, r.text[:300]
     stats = r.json()["statistics"]
-    assert stats["parts"] == {"hidden_faces": 122, "recoloured_faces": 4}, stats["parts"]
+    assert (stats["parts"]["hidden_faces"], stats["parts"]["recoloured_faces"]) == (122, 4), stats["parts"]
     timing = server_timing(r)
     assert timing.get("import", 0) == 0 and timing["read"] == 0 and timing["prepare"] == 0, timing
     stats_only, _ = render_png(url, data, antialias=0, parts=json.dumps({"only": ["0/2"]}))
     assert stats_only["parts"]["hidden_faces"] == 160 - 18
+    stats_ghost, ghosted = render_png(url, data, antialias=0, parts=json.dumps({"ghost": ["l-bracket-assembly_1"]}))
+    assert stats_ghost["parts"]["ghost_faces"] == 61 and stats_ghost["parts"]["ghost_pixels"] > 0, stats_ghost["parts"]
+    assert stats_ghost["parts"]["ghost_behind_ms"] > 0
 
 
 def test_bad_parts_options(url):
     for parts, field in [({"hide": ["gear*"]}, "parts.hide[0] 'gear*' matches no part"),
-                         ({"ghost": ["a"]}, "ghost"), ({"only": "a"}, "parts.only"),
+                         ({"explode": ["a"]}, "explode"), ({"ghost": ["gear*"]}, "parts.ghost[0]"),
+                         ({"only": "a"}, "parts.only"),
                          ({"color": {"a": [2, 0, 0]}}, "parts.color")]:
         body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"parts": json.dumps(parts)}),
                              400, "invalid_argument")
