@@ -23,12 +23,15 @@ void add_convert_command(CLI::App& app) {
                            "Convert a STEP or IGES file. The input format is recognised from the content,\n"
                            "the output format from OUT's extension:\n"
                            "  .stp/.step  STEP AP214 (exact geometry) with face colours, names, layers and\n"
-                           "              the assembly structure\n"
+                           "              the assembly structure (IGES groups of named members become\n"
+                           "              assemblies, one part per member)\n"
                            "  .igs/.iges  IGES 5.3, BRep mode (exact geometry) with face colours, names and\n"
                            "              layers; IGES has no assemblies: instances become a flat list\n"
-                           "              (STEP/IGES: the written file is read back; what it lost is printed\n"
-                           "              as warnings)\n"
-                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal)\n"
+                           "              (STEP/IGES: written in the source's length unit unless --units\n"
+                           "              names another; the written file is read back; what it lost is\n"
+                           "              printed as warnings)\n"
+                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal;\n"
+                           "              triangles of no area or repeated are left out, and counted)\n"
                            "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
                            "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
                            "  .json       the NURBS patches (degrees, knots, homogeneous control points, trim\n"
@@ -41,14 +44,19 @@ void add_convert_command(CLI::App& app) {
         bool quiet = false, strict = false;
     };
     auto flags = std::make_shared<Flags>();
+    auto units = std::make_shared<std::string>();
     cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
     cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")
         ->required()
         ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
+    cmd->add_option("--units", *units,
+                    "STEP/IGES outputs: the length unit to write (the geometry is scaled to it); default: the\n"
+                    "source's")
+        ->check(CLI::IsMember(length_unit_names()));
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([in, out, flags] {
+    cmd->callback([in, out, flags, units] {
         const auto [quiet, strict] = *flags;
         // Removes the partial file on every way out but the rename below.
         struct PartialFile {
@@ -64,7 +72,9 @@ void add_convert_command(CLI::App& app) {
         const std::filesystem::path target(*out);
         PartialFile partial{target.parent_path() / ("." + target.stem().string() + ".partial-" +
                                                     std::to_string(::getpid()) + target.extension().string())};
-        const ConvertReport r = convert_file(*in, partial.path.string());
+        ConvertOptions options;
+        options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
+        const ConvertReport r = convert_file(*in, partial.path.string(), options);
         std::vector<std::string> warnings;
         if (r.unmeshed_faces > 0)
             warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
@@ -74,9 +84,13 @@ void add_convert_command(CLI::App& app) {
         std::filesystem::rename(partial.path, target);
         partial.path.clear();
         if (quiet) return;
-        std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(), format_name(r.in_format),
-                     r.faces, out->c_str(), conversion_format_name(r.output));
+        std::fprintf(stderr, "nurbsrt: converted %s (%s, %s, %d faces) to %s (%s", in->c_str(),
+                     format_name(r.in_format), r.in_units.empty() ? "no unit declared" : r.in_units.c_str(), r.faces,
+                     out->c_str(), conversion_format_name(r.output));
+        if (!r.out_units.empty()) std::fprintf(stderr, ", %s", r.out_units.c_str());
         if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
+        if (r.degenerate_triangles > 0)
+            std::fprintf(stderr, " (%lld of no area or repeated left out)", r.degenerate_triangles);
         std::fprintf(stderr, "): read %.1f ms", r.read_ms);
         if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);
         std::fprintf(stderr, ", write %.1f ms", r.write_ms);

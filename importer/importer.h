@@ -3,7 +3,9 @@
 // everything that touches OCCT lives in importer/*.cpp.
 #pragma once
 
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/scene/scene.h"
@@ -69,6 +71,29 @@ const char* conversion_format_content_type(ConversionFormat f);
 // The CadFormat of a STEP/IGES output; CadFormat::unknown for the others.
 CadFormat cad_format_of(ConversionFormat f);
 
+// The length units a CAD file can declare: IGES 5.3's list (global parameter
+// 14), which OCCT's STEP writer offers as well. `unknown`: none declared, or
+// for an option, "the source's".
+enum class LengthUnit { unknown, inch, mm, foot, mile, m, km, mil, micron, cm, microinch };
+// "inch", "mm", "foot", "mile", "m", "km", "mil", "micron", "cm", "microinch"; "" for unknown.
+const char* length_unit_name(LengthUnit u);
+// By those names; nullopt for any other text (no aliases: parsed once at the edge).
+std::optional<LengthUnit> length_unit_from_name(std::string_view name);
+// Those names, in that order (the values an option may take).
+std::vector<std::string> length_unit_names();
+// IGES 5.3 global parameter 14 (1 inch, 2 mm, 4 foot, ... 11 microinch) both ways;
+// unknown for 3 (a unit named only by parameter 15) and anything out of range.
+int iges_unit_flag(LengthUnit u);
+LengthUnit length_unit_from_iges_flag(int flag);
+
+// What a conversion may change beyond the output format.
+struct ConvertOptions {
+    // STEP/IGES outputs: the length unit written (geometry scaled to it);
+    // unknown keeps the source's declared unit (mm when it declares none).
+    // Mesh outputs have their own: STL mm, glb metres.
+    LengthUnit units = LengthUnit::unknown;
+};
+
 // Writes the geometry of `in_path` to `out_path`, the output format taken from
 // the extension (see ConversionFormat). Throws nurbsrt::Error (unsupported_format
 // for an unknown extension, io, unreadable_file, no_faces, occt_failure).
@@ -77,8 +102,14 @@ struct ConvertReport {
     CadFormat out_format = CadFormat::unknown;            // STEP/IGES outputs; unknown for mesh and JSON outputs
     ConversionFormat output = ConversionFormat::unknown;  // every output, including STEP/IGES
     int faces = 0;
-    long long triangles = 0;                        // STL and glb: triangles written; 0 otherwise
-    int unmeshed_faces = 0;                         // STL and glb: faces BRepMesh left empty (missing)
+    long long triangles = 0;  // STL and glb: triangles written; 0 otherwise
+    int unmeshed_faces = 0;   // STL and glb: faces BRepMesh left empty (missing)
+    // STL and glb: triangles BRepMesh made that were left out: of no area at
+    // the precision the file stores (float), or repeating another of their face.
+    long long degenerate_triangles = 0;
+    // The length unit the source declares ("" none) and the one the output is
+    // written in (STEP/IGES: what the written file declares; STL mm; glb m).
+    std::string in_units, out_units;
     double read_ms = 0, mesh_ms = 0, write_ms = 0;  // mesh_ms: BRepMesh (STL, glb) or the import's
                                                     // conversion + meshing (JSON); 0 for STEP/IGES
     double verify_ms = 0;                           // STEP/IGES: reading the written file back and
@@ -88,6 +119,6 @@ struct ConvertReport {
     // sentence each without line breaks; empty when all of it was kept.
     std::vector<std::string> warnings;
 };
-ConvertReport convert_file(const std::string& in_path, const std::string& out_path);
+ConvertReport convert_file(const std::string& in_path, const std::string& out_path, const ConvertOptions& options = {});
 
 }  // namespace nurbsrt

@@ -96,30 +96,7 @@ std::string iges_units(const IGESControl_Reader& reader) {
     const IGESData_GlobalSection& gs = model->GlobalSection();
     const Handle(TCollection_HAsciiString) name = gs.UnitName();
     if (!name.IsNull() && name->Length() > 0) return unit_short_name(name->ToCString());
-    switch (gs.UnitFlag()) {  // IGES 5.3 global parameter 14
-        case 1:
-            return "inch";
-        case 2:
-            return "mm";
-        case 4:
-            return "foot";
-        case 5:
-            return "mile";
-        case 6:
-            return "m";
-        case 7:
-            return "km";
-        case 8:
-            return "mil";
-        case 9:
-            return "micron";
-        case 10:
-            return "cm";
-        case 11:
-            return "microinch";
-        default:
-            return {};
-    }
+    return length_unit_name(length_unit_from_iges_flag(gs.UnitFlag()));  // IGES 5.3 global parameter 14
 }
 
 Color to_color(const Quantity_Color& c) {

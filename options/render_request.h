@@ -111,7 +111,14 @@ void check_camera_without_scene(const RenderRequest& r);
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene);
 
 // Options for the conversions endpoint: {"format": "step" | "stp" | "iges" | "igs" |
-// "stl" | "glb" | "json"}; anything else is Error(invalid_argument).
+// "stl" | "glb" | "json", "units": a length_unit_names() name (STEP/IGES only)};
+// anything else is Error(invalid_argument).
+struct ConversionRequest {
+    ConversionFormat format = ConversionFormat::unknown;
+    ConvertOptions options;
+};
+ConversionRequest parse_conversion_request(const std::string& options_json);
+// Its format alone.
 ConversionFormat parse_conversion_format(const std::string& options_json);
 
 }  // namespace nurbsrt

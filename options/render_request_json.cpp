@@ -220,17 +220,37 @@ RenderRequest parse_render_options(const std::string& options_json) {
     return r;
 }
 
-ConversionFormat parse_conversion_format(const std::string& options_json) {
+ConversionRequest parse_conversion_request(const std::string& options_json) {
     const json o = parse_object(options_json);
-    std::string format;
+    std::string format, units;
     for (const auto& [key, v] : o.items()) {
-        if (key != "format") bad("unknown option " + quoted_name(key) + " (a conversion takes only 'format')");
-        format = text(v, key);
+        if (key == "format")
+            format = text(v, key);
+        else if (key == "units")
+            units = text(v, key);
+        else
+            bad("unknown option " + quoted_name(key) + " (a conversion takes 'format' and 'units')");
     }
     if (format.empty()) bad("option 'format' is required (step, iges, stl, glb or json)");
-    const ConversionFormat f = conversion_format_from_name(format);
-    if (f == ConversionFormat::unknown) bad("option 'format' must be step, iges, stl, glb or json");
-    return f;
+    ConversionRequest r;
+    r.format = conversion_format_from_name(format);
+    if (r.format == ConversionFormat::unknown) bad("option 'format' must be step, iges, stl, glb or json");
+    if (!units.empty()) {
+        const std::optional<LengthUnit> unit = length_unit_from_name(units);
+        if (!unit) {
+            std::string names;
+            for (const std::string& n : length_unit_names()) names += (names.empty() ? "" : ", ") + n;
+            bad("option 'units' must be one of " + names);
+        }
+        if (cad_format_of(r.format) == CadFormat::unknown)
+            bad("option 'units' applies to step and iges outputs only (" + format + " has a unit of its own)");
+        r.options.units = *unit;
+    }
+    return r;
+}
+
+ConversionFormat parse_conversion_format(const std::string& options_json) {
+    return parse_conversion_request(options_json).format;
 }
 
 }  // namespace nurbsrt

@@ -327,6 +327,28 @@ TEST(Cli, ConvertToMeshAndJsonOutputs) {
     fs::remove_all(dir);
 }
 
+// --units writes STEP/IGES in the unit asked; without it the source's unit is
+// kept (an inch IGES file gives an inch STEP file); the summary says both.
+TEST(Cli, ConvertKeepsOrWritesTheUnitAsked) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-units-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string igs = (dir / "inch.igs").string(), stp = (dir / "inch.stp").string();
+    const CliRun to_inch = run_nurbsrt("convert --units inch " + kScrew + " " + igs);
+    ASSERT_EQ(to_inch.status, 0) << to_inch.err;
+    EXPECT_NE(to_inch.err.find("(STEP, mm, 10 faces) to " + igs + " (IGES, inch)"), std::string::npos) << to_inch.err;
+    const CliRun kept = run_nurbsrt("convert " + igs + " " + stp);
+    ASSERT_EQ(kept.status, 0) << kept.err;
+    EXPECT_NE(kept.err.find("(IGES, inch, 10 faces) to " + stp + " (STEP, inch)"), std::string::npos) << kept.err;
+    const CliRun bad = run_nurbsrt("convert --units furlong " + kScrew + " " + stp);
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    EXPECT_NE(bad.err.find("--units"), std::string::npos) << bad.err;
+    const CliRun mesh = run_nurbsrt("convert --units inch " + kScrew + " " + (dir / "s.stl").string());
+    EXPECT_NE(mesh.status, 0);
+    EXPECT_NE(mesh.err.find("'units'"), std::string::npos) << mesh.err;
+    EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    fs::remove_all(dir);
+}
+
 }  // namespace
 
 namespace {

@@ -17,11 +17,14 @@
 #include <IGESControl_Controller.hxx>
 #include <Interface_Static.hxx>
 #include <STEPCAFControl_Writer.hxx>
+#include <STEPControl_Controller.hxx>
 #include <Standard_Failure.hxx>
 #include <TDF_ChildIterator.hxx>
 #include <TDF_LabelMap.hxx>
 #include <TDF_LabelSequence.hxx>
+#include <TopAbs_ShapeEnum.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_Editor.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XCAFPrs_DocumentExplorer.hxx>
 
@@ -124,6 +127,15 @@ int faces_losing_colour(const XdeContent& in, const XdeContent& out) {
     return lost;
 }
 
+// XCAFDoc_ShapeTool names a label it makes for an unnamed shape after the
+// shape's type (its auto-naming; the IGES reader makes such labels for
+// coloured faces): a name the source never had, which no target must keep.
+bool is_generated_name(const std::string& name) {
+    static const char* const kTypeNames[] = {"COMPOUND", "COMPSOLID", "SOLID",  "SHELL", "FACE",
+                                             "WIRE",     "EDGE",      "VERTEX", "SHAPE"};
+    return std::any_of(std::begin(kTypeNames), std::end(kTypeNames), [&](const char* t) { return name == t; });
+}
+
 std::string listed_names(const std::vector<std::string>& names) {
     std::string s;
     for (size_t i = 0; i < names.size() && i < kNamesListed; ++i) s += (i ? ", '" : "'") + names[i] + "'";
@@ -157,22 +169,55 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     std::vector<std::string> missing;
     std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
                         std::back_inserter(missing));
+    std::erase_if(missing, is_generated_name);
     if (!missing.empty())
         w.push_back(std::to_string(missing.size()) + " of " + std::to_string(in.names.size()) +
                     " name(s) not in the written " + fmt + " file: " + listed_names(missing));
     return w;
 }
 
-// The document written by OCCT's XDE writers; callers hold exchange_mutex and
-// catch Standard_Failure.
-void write_document(const Handle(TDocStd_Document) & doc, const std::string& out_path, CadFormat out_format) {
+// The unit a conversion writes: the one asked for, else the first the source
+// declares (a STEP file can declare several contexts; its shapes take the
+// first), else mm, what OCCT's readers deliver.
+LengthUnit target_unit(const std::string& declared, LengthUnit asked) {
+    if (asked != LengthUnit::unknown) return asked;
+    const LengthUnit first =
+        length_unit_from_name(declared.substr(0, declared.find(','))).value_or(LengthUnit::unknown);
+    return first != LengthUnit::unknown ? first : LengthUnit::mm;
+}
+
+// IGES groups whose members carry names (what OCCT's IGES writer makes of an
+// assembly, and what many CAD systems write) become STEP assemblies, one named
+// part per member: STEP names products, not sub-shapes of one product, so
+// otherwise every member's name is lost and its faces take the group's.
+// XCAFDoc_Editor::Expand moves the members' names and colours onto the new
+// parts. Groups without member names stay one shape (a file of loose faces
+// should not turn into a product per face).
+void expand_named_groups(const Handle(TDocStd_Document) & doc) {
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+    TDF_LabelSequence roots;
+    shapes->GetFreeShapes(roots);
+    for (const TDF_Label& root : roots) {
+        if (XCAFDoc_ShapeTool::IsAssembly(root) || XCAFDoc_ShapeTool::GetShape(root).ShapeType() != TopAbs_COMPOUND)
+            continue;
+        bool named_member = false;
+        for (TDF_ChildIterator ci(root); ci.More() && !named_member; ci.Next())
+            named_member = !label_name(ci.Value()).empty();
+        if (named_member) XCAFDoc_Editor::Expand(doc->Main(), root, /*theRecursively=*/Standard_True);
+    }
+}
+
+// The document written by OCCT's XDE writers in `unit` (the writers scale the
+// document's mm to it); callers hold exchange_mutex and catch Standard_Failure.
+void write_document(const Handle(TDocStd_Document) & doc, const std::string& out_path, CadFormat out_format,
+                    LengthUnit unit) {
     if (out_format == CadFormat::iges) {
         IGESControl_Controller::Init();
-        // The XDE writer takes unit and mode from these statics. BRep mode
-        // (186/514/510 entities) keeps faces and solids; the default "faces"
-        // mode writes trimmed surfaces without topology. Our readers deliver mm.
+        // The XDE writer takes unit and mode from these statics (its
+        // constructor reads them). BRep mode (186/514/510 entities) keeps faces
+        // and solids; the default "faces" mode writes trimmed surfaces without topology.
         Interface_Static::SetIVal("write.iges.brep.mode", 1);
-        Interface_Static::SetCVal("write.iges.unit", "MM");
+        Interface_Static::SetIVal("write.iges.unit", iges_unit_flag(unit));
         IGESCAFControl_Writer writer;
         writer.SetColorMode(Standard_True);
         writer.SetNameMode(Standard_True);
@@ -181,6 +226,11 @@ void write_document(const Handle(TDocStd_Document) & doc, const std::string& out
         writer.ComputeModel();
         if (!writer.Write(out_path.c_str())) throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
     } else {
+        STEPControl_Controller::Init();
+        // write.step.unit enumerates the units in IGES's order (STEPControl_Controller).
+        // Set before the writer exists: its model takes the unit it scales to when
+        // made, the header's unit when written (set after, the geometry stays mm).
+        Interface_Static::SetIVal("write.step.unit", iges_unit_flag(unit));
         STEPCAFControl_Writer writer;
         writer.SetColorMode(Standard_True);
         writer.SetNameMode(Standard_True);
@@ -198,21 +248,25 @@ OcctModel read_for_export(const std::string& in_path, const std::string& target,
     OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
     r.in_format = model.format;
     r.faces = model.faces.Extent();
+    r.in_units = model.units;
     r.read_ms = model.read_ms;
     if (model.document.IsNull())
         throw Error(ErrorCode::occt_failure, "XDE reader gave no document for the " + target + " export");
     return model;
 }
 
-void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r) {
     OcctModel model = read_for_export(in_path, format_name(r.out_format), r);
     DocumentCloser closer{model.document};
+    const LengthUnit unit = target_unit(model.units, options.units);
+    if (model.format == CadFormat::iges && r.out_format == CadFormat::step) expand_named_groups(model.document);
 
     const auto t0 = std::chrono::steady_clock::now();
     {
         std::lock_guard<std::mutex> lock(exchange_mutex());
         try {
-            write_document(model.document, out_path, r.out_format);
+            write_document(model.document, out_path, r.out_format, unit);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure,
                         std::string(format_name(r.out_format)) + " writer: " + failure_text(f));
@@ -225,10 +279,15 @@ void write_cad(const std::string& in_path, const std::string& out_path, ConvertR
         OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
         DocumentCloser written_closer{written.document};
         r.warnings = shortfalls(content_of(model), content_of(written), r.out_format);
+        r.out_units = written.units;
+        if (written.units != length_unit_name(unit))
+            r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +
+                                 length_unit_name(unit) + "'");
     } catch (const Error& e) {
         // The file is written; that OCCT cannot read it back is worth knowing
         // but does not undo the conversion.
         r.warnings.push_back(std::string("the written file could not be read back to check it: ") + e.what());
+        r.out_units = length_unit_name(unit);
     }
     r.verify_ms = ms_since(t_verify);
 }

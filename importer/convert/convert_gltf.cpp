@@ -62,6 +62,7 @@ XCAFPrs_Style paint_material(const Handle(TDocStd_Document) & doc, const TDF_Lab
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
+    r.out_units = length_unit_name(LengthUnit::m);
 
     // Mesh the shapes the document holds (the writer takes the triangulations
     // from them); parts placed twice share their faces, so are meshed once.

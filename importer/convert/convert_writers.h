@@ -13,12 +13,14 @@ namespace nurbsrt::occt {
 
 // Reads `in_path` with its XDE document (colours, names, assembly) for an export
 // to `target` (the output format's name), filling r.in_format, r.faces and
-// r.read_ms; throws occt_failure when the reader gives no document. The caller
+// r.in_units and r.read_ms; throws occt_failure when the reader gives no document. The caller
 // closes the document (DocumentCloser).
 OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r);
 
-// STEP or IGES through OCCT's writers (exact geometry, topology kept).
-void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// STEP or IGES through OCCT's writers (exact geometry, topology kept), in
+// options.units or the source's unit.
+void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r);
 // Binary STL of the whole model, meshed by mesh_for_export.
 void write_stl(const std::string& in_path, const std::string& out_path, ConvertReport& r);
 // Binary glTF 2.0 (.glb) from the XDE document: colours, names and assembly
@@ -30,7 +32,10 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
 // bounding box, angular deflection ImportOptions{}.mesh_angular_deflection.
 // Fills r.mesh_ms, r.triangles (over all face occurrences, instances counted
 // separately) and r.unmeshed_faces (faces left without a triangulation, which
-// mesh outputs cannot contain). Returns the deflection used.
+// mesh outputs cannot contain). Triangles of no area at float precision or
+// repeating another of their face are taken out of the faces' triangulations
+// (the writers read those) and counted in r.degenerate_triangles.
+// Returns the deflection used.
 double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r);
 
 }  // namespace nurbsrt::occt

@@ -35,8 +35,9 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
     StageClock stages(GuardedServer::request_received_at());
-    Upload upload = read_upload(req, {"format"});
-    const ConversionFormat format = parse_conversion_format(upload.options_json);
+    Upload upload = read_upload(req, {"format", "units"});
+    const ConversionRequest request = parse_conversion_request(upload.options_json);
+    const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.
     // A NURBS JSON file is application/json itself: the wrapper only when Accept names that type.
     const std::string file_type = conversion_format_content_type(format);
@@ -62,7 +63,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     try {
         IsolationLimits limits = isolation_limits(ctx);
         limits.should_stop = GuardedServer::client_gone_check();  // a gone client's conversion is killed
-        report = convert_isolated(in.path(), out.path(), limits, &isolated);
+        report = convert_isolated(in.path(), out.path(), limits, &isolated, request.options);
     } catch (const Error& e) {
         ctx.metrics.count_import_failure(error_code_name(e.code()));
         throw;
@@ -80,6 +81,9 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                {"faces", report.faces},
                                {"triangles", report.triangles},
                                {"unmeshed_faces", report.unmeshed_faces},
+                               {"degenerate_triangles", report.degenerate_triangles},
+                               {"input_units", report.in_units},
+                               {"output_units", report.out_units},
                                {"warnings", report.warnings},
                                {"content_type", file_type},
                                {"data_base64", base64_encode(data)}};
