@@ -1,5 +1,5 @@
-// nurbsrt convert IN OUT: STEP/IGES to STEP, IGES, STL, glb or NURBS JSON,
-// the output format from OUT's extension.
+// nurbsrt convert IN OUT: STEP/IGES/BREP to STEP, IGES, BREP, STL, glb, VRML or
+// NURBS JSON, the output format from OUT's extension.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -20,12 +20,14 @@ namespace nurbsrt::cli {
 void add_convert_command(CLI::App& app) {
     auto* cmd =
         app.add_subcommand("convert",
-                           "Convert a STEP or IGES file. The input format is recognised from the content,\n"
-                           "the output format from OUT's extension:\n"
-                           "  .stp/.step  STEP AP214 (exact geometry) with face colours, names, layers and\n"
+                           "Convert a STEP, IGES or BREP file. The input format is recognised from the\n"
+                           "content, the output format from OUT's extension:\n"
+                           "  .stp/.step  STEP AP214 (or --step-schema ap242; exact geometry) with face\n"
+                           "              colours, names, layers and\n"
                            "              the assembly structure (IGES groups of named members become\n"
                            "              assemblies, one part per member)\n"
-                           "  .igs/.iges  IGES 5.3, BRep mode (exact geometry) with face colours, names and\n"
+                           "  .igs/.iges  IGES 5.3, BRep mode (or --iges-mode faces: trimmed surfaces without\n"
+                           "              topology; exact geometry) with face colours, names and\n"
                            "              layers; IGES has no assemblies: instances become a flat list\n"
                            "              (STEP/IGES: written in the source's length unit unless --units\n"
                            "              names another; the written file is read back; what it lost is\n"
@@ -34,6 +36,10 @@ void add_convert_command(CLI::App& app) {
                            "              triangles of no area or repeated are left out, and counted)\n"
                            "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
                            "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
+                           "  .brep       OCCT's own text format: exact geometry and topology, millimetres; no\n"
+                           "              colours, names or assembly (the written file is read back too)\n"
+                           "  .wrl        VRML 2.0, millimetres, with colours and the assembly's placements (mesh\n"
+                           "              as for .stl)\n"
                            "  .json       the NURBS patches (degrees, knots, homogeneous control points, trim\n"
                            "              loops, face attributes); schema: api_schema/nurbs_scene.schema.json\n"
                            "Examples: nurbsrt convert part.step part.igs\n"
@@ -45,18 +51,36 @@ void add_convert_command(CLI::App& app) {
     };
     auto flags = std::make_shared<Flags>();
     auto units = std::make_shared<std::string>();
-    cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
-    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")
+    auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
+    auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
+    cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
+    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .json, .brep or .wrl)")
         ->required()
-        ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
+        ->check(output_file_validator(
+            {".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json", ".brep", ".brp", ".wrl", ".vrml"}));
     cmd->add_option("--units", *units,
                     "STEP/IGES outputs: the length unit to write (the geometry is scaled to it); default: the\n"
                     "source's")
         ->check(CLI::IsMember(length_unit_names()));
+    cmd->add_option("--step-schema", *schema, "STEP outputs: the application protocol, ap214 or ap242")
+        ->check(CLI::IsMember(step_schema_names()))
+        ->capture_default_str();
+    cmd->add_option("--iges-mode", *mode, "IGES outputs: brep (solids and shells) or faces (trimmed surfaces)")
+        ->check(CLI::IsMember(iges_mode_names()))
+        ->capture_default_str();
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([in, out, flags, units] {
+    cmd->callback([cmd, in, out, flags, units, schema, mode] {
+        // An option OUT's format does not take is a usage error, never ignored
+        // (as the API refuses it).
+        const ConversionFormat format = conversion_format_from_extension(*out);
+        if (cmd->count("--step-schema") > 0 && format != ConversionFormat::step)
+            throw CLI::ValidationError("--step-schema", "applies to STEP outputs only");
+        if (cmd->count("--iges-mode") > 0 && format != ConversionFormat::iges)
+            throw CLI::ValidationError("--iges-mode", "applies to IGES outputs only");
+        if (cmd->count("--units") > 0 && !conversion_format_declares_units(format))
+            throw CLI::ValidationError("--units", "applies to STEP and IGES outputs only");
         const auto [quiet, strict] = *flags;
         // Removes the partial file on every way out but the rename below.
         struct PartialFile {
@@ -74,6 +98,8 @@ void add_convert_command(CLI::App& app) {
                                                     std::to_string(::getpid()) + target.extension().string())};
         ConvertOptions options;
         options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
+        options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
+        options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
         const ConvertReport r = convert_file(*in, partial.path.string(), options);
         std::vector<std::string> warnings;
         if (r.unmeshed_faces > 0)

@@ -142,18 +142,29 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args) {
 }
 
 std::vector<std::string> convert_options_to_args(const ConvertOptions& o) {
-    if (o.units == LengthUnit::unknown) return {};
-    return {std::string("--units=") + length_unit_name(o.units)};
+    std::vector<std::string> args = {std::string("--step-schema=") + step_schema_name(o.step_schema),
+                                     std::string("--iges-mode=") + iges_mode_name(o.iges_mode)};
+    if (o.units != LengthUnit::unknown) args.push_back(std::string("--units=") + length_unit_name(o.units));
+    return args;
 }
 
 ConvertOptions convert_options_from_args(const std::vector<std::string>& args) {
     ConvertOptions o;
     for (const std::string& a : args) {
-        const std::string key = a.substr(0, a.find('='));
-        const std::optional<LengthUnit> unit =
-            a.size() > key.size() ? length_unit_from_name(a.substr(key.size() + 1)) : std::nullopt;
-        if (key != "--units" || !unit) throw Error(ErrorCode::invalid_argument, "bad worker option: " + a);
-        o.units = *unit;
+        const size_t eq = a.find('=');
+        const std::string key = a.substr(0, eq), value = eq == std::string::npos ? "" : a.substr(eq + 1);
+        bool ok = false;
+        if (key == "--units") {
+            const std::optional<LengthUnit> u = length_unit_from_name(value);
+            if ((ok = u.has_value())) o.units = *u;
+        } else if (key == "--step-schema") {
+            const std::optional<StepSchema> s = step_schema_from_name(value);
+            if ((ok = s.has_value())) o.step_schema = *s;
+        } else if (key == "--iges-mode") {
+            const std::optional<IgesMode> m = iges_mode_from_name(value);
+            if ((ok = m.has_value())) o.iges_mode = *m;
+        }
+        if (!ok) throw Error(ErrorCode::invalid_argument, "bad worker option: " + a);
     }
     return o;
 }
@@ -272,7 +283,8 @@ void apply_fault_hook() {
 // Files that are neither STEP nor IGES are left to the worker's own, precise error.
 void prescan_input(const std::string& path, const IsolationLimits& limits) {
     const CadFormat format = detect_format(path);
-    if (format != CadFormat::unknown) prescan_cad_file(path, format, limits.prescan);
+    // BREP is OCCT's own format: no pre-scan of its own (the child's limits hold).
+    if (format == CadFormat::step || format == CadFormat::iges) prescan_cad_file(path, format, limits.prescan);
 }
 
 // A line break inside a field of the report would split it.
@@ -307,9 +319,9 @@ ConvertReport parse_convert_report(const std::string& text) {
     int in_format = 0, out_format = 0, output = 0;
     if (!(in >> in_format >> out_format >> output >> r.faces >> r.triangles >> r.unmeshed_faces >>
           r.degenerate_triangles >> r.read_ms >> r.mesh_ms >> r.write_ms >> r.verify_ms) ||
-        in_format < 0 || in_format > static_cast<int>(CadFormat::iges) || out_format < 0 ||
-        out_format > static_cast<int>(CadFormat::iges) || output < 0 ||
-        output > static_cast<int>(ConversionFormat::nurbs_json))
+        in_format < 0 || in_format > static_cast<int>(CadFormat::brep) || out_format < 0 ||
+        out_format > static_cast<int>(CadFormat::brep) || output < 0 ||
+        output > static_cast<int>(ConversionFormat::vrml))
         throw Error(ErrorCode::internal, "conversion worker wrote no valid report");
     r.in_format = static_cast<CadFormat>(in_format);
     r.out_format = static_cast<CadFormat>(out_format);

@@ -56,7 +56,8 @@ Scene import_isolated(const std::string& path, const ImportOptions& options, con
                       IsolationTimings* timings = nullptr);
 
 // Runs convert_file(in_path, out_path, options) in a child process (`nurbsrt
-// convert-worker IN OUT REPORT [--units=NAME]`) under the same limits, with the same errors.
+// convert-worker IN OUT REPORT --step-schema=NAME --iges-mode=NAME [--units=NAME]`)
+// under the same limits, with the same errors.
 ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
                                const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr,
                                const ConvertOptions& options = {});

@@ -327,6 +327,27 @@ TEST(Cli, ConvertToMeshAndJsonOutputs) {
     fs::remove_all(dir);
 }
 
+// BREP and VRML outputs by extension; a BREP file is an input like any other.
+TEST(Cli, ConvertToBrepAndVrmlAndReadBrep) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-brep-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string brep = (dir / "s.brep").string(), wrl = (dir / "s.wrl").string();
+    const CliRun b = run_nurbsrt("convert " + kScrew + " " + brep);
+    ASSERT_EQ(b.status, 0) << b.err;
+    EXPECT_NE(b.err.find("(BREP, mm)"), std::string::npos) << b.err;
+    const CliRun v = run_nurbsrt("convert " + brep + " " + wrl);
+    ASSERT_EQ(v.status, 0) << v.err;
+    EXPECT_NE(v.err.find("(BREP, no unit declared, 10 faces) to " + wrl + " (VRML, mm, "), std::string::npos) << v.err;
+    std::ifstream in(wrl);
+    std::string first;
+    std::getline(in, first);
+    EXPECT_EQ(first, "#VRML V2.0 utf8");
+    const CliRun info = run_nurbsrt("info " + brep);
+    ASSERT_EQ(info.status, 0) << info.err;
+    EXPECT_NE(info.out.find("format:      BREP"), std::string::npos) << info.out;
+    fs::remove_all(dir);
+}
+
 // --units writes STEP/IGES in the unit asked; without it the source's unit is
 // kept (an inch IGES file gives an inch STEP file); the summary says both.
 TEST(Cli, ConvertKeepsOrWritesTheUnitAsked) {
@@ -342,10 +363,14 @@ TEST(Cli, ConvertKeepsOrWritesTheUnitAsked) {
     const CliRun bad = run_nurbsrt("convert --units furlong " + kScrew + " " + stp);
     EXPECT_EQ(bad.status, 2) << bad.err;
     EXPECT_NE(bad.err.find("--units"), std::string::npos) << bad.err;
-    const CliRun mesh = run_nurbsrt("convert --units inch " + kScrew + " " + (dir / "s.stl").string());
-    EXPECT_NE(mesh.status, 0);
-    EXPECT_NE(mesh.err.find("'units'"), std::string::npos) << mesh.err;
-    EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    // Options OUT's format does not take are usage errors, nothing written.
+    for (const char* option : {"--units inch", "--step-schema ap242", "--iges-mode faces"}) {
+        const CliRun mesh =
+            run_nurbsrt(std::string("convert ") + option + " " + kScrew + " " + (dir / "s.stl").string());
+        EXPECT_EQ(mesh.status, 2) << option;
+        EXPECT_NE(mesh.err.find("outputs only"), std::string::npos) << mesh.err;
+        EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    }
     fs::remove_all(dir);
 }
 

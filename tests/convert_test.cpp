@@ -141,17 +141,30 @@ TEST(ConvertNames, ExtensionsNamesAndContentTypes) {
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::glb), "model/gltf-binary");
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::stl), "model/stl");
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::nurbs_json), "application/json");
-    for (ConversionFormat f : {ConversionFormat::step, ConversionFormat::iges, ConversionFormat::stl,
-                               ConversionFormat::glb, ConversionFormat::nurbs_json})
+    EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::vrml), "model/vrml");
+    EXPECT_EQ(nurbsrt::conversion_format_from_extension("b.BREP"), ConversionFormat::brep);
+    EXPECT_EQ(nurbsrt::conversion_format_from_extension("b.wrl"), ConversionFormat::vrml);
+    EXPECT_EQ(nurbsrt::conversion_format_from_name("wrl"), ConversionFormat::vrml);
+    EXPECT_EQ(nurbsrt::conversion_format_names(), "step, iges, stl, glb, json, brep, vrml");
+    // Every format's written extension, short name and alias lead back to it.
+    for (ConversionFormat f :
+         {ConversionFormat::step, ConversionFormat::iges, ConversionFormat::stl, ConversionFormat::glb,
+          ConversionFormat::nurbs_json, ConversionFormat::brep, ConversionFormat::vrml}) {
         EXPECT_EQ(nurbsrt::conversion_format_from_extension(std::string("x") + nurbsrt::conversion_format_extension(f)),
                   f);
+        EXPECT_EQ(nurbsrt::conversion_format_from_name(nurbsrt::conversion_format_short_name(f)), f);
+    }
     EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::stl), nurbsrt::CadFormat::unknown);
     EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::iges), nurbsrt::CadFormat::iges);
+    EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::brep), nurbsrt::CadFormat::brep);
+    EXPECT_EQ(nurbsrt::format_from_extension("a.brp"), nurbsrt::CadFormat::brep);
+    EXPECT_TRUE(nurbsrt::conversion_format_declares_units(ConversionFormat::step));
+    EXPECT_FALSE(nurbsrt::conversion_format_declares_units(ConversionFormat::brep));
 }
 
 TEST(ConvertNames, UnknownExtensionIsUnsupported) {
     try {
-        nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("x", ".obj"));
+        nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("x", ".3mf"));
         FAIL() << "no error";
     } catch (const nurbsrt::Error& e) {
         EXPECT_EQ(e.code(), nurbsrt::ErrorCode::unsupported_format);

@@ -1,6 +1,7 @@
 // STEP/IGES output of convert_file through OCCT's XDE document, so that face
 // colours, names, layers and (STEP only) the assembly structure of the input
-// survive (OCCT User Guide: "Extended Data Exchange (XDE)", STEP/IGES with XDE).
+// survive (OCCT User Guide: "Extended Data Exchange (XDE)", STEP/IGES with
+// XDE); BREP, OCCT's own exact format, holds the shape alone.
 //
 // What was carried is measured, not assumed: the written file is read back
 // with XDE and compared with the input's document (coloured faces and their
@@ -12,6 +13,7 @@
 #include <set>
 #include <vector>
 
+#include <BRepTools.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Writer.hxx>
 #include <IGESControl_Controller.hxx>
@@ -150,7 +152,11 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     // (entities 308/408) are not used by OCCT's IGESCAFControl_Writer, which
     // writes each free shape of the document as one compound with the
     // placements applied (measured: one root named as the top assembly).
-    if (out_format == CadFormat::iges && in.components > 0)
+    if (out_format == CadFormat::brep && in.components > 0)
+        w.push_back("BREP has no product structure: " + std::to_string(in.instances) + " part instance(s) (" +
+                    std::to_string(in.components) + " component(s) in " + std::to_string(in.assemblies) +
+                    " assembly(ies)) written as one compound of placed shapes");
+    else if (out_format == CadFormat::iges && in.components > 0)
         w.push_back("IGES has no assembly structure: " + std::to_string(in.instances) + " part instance(s) (" +
                     std::to_string(in.components) + " component(s) in " + std::to_string(in.assemblies) +
                     " assembly(ies)) written as a flat list of shapes");
@@ -207,39 +213,54 @@ void expand_named_groups(const Handle(TDocStd_Document) & doc) {
     }
 }
 
-// The document written by OCCT's XDE writers in `unit` (the writers scale the
-// document's mm to it); callers hold exchange_mutex and catch Standard_Failure.
-void write_document(const Handle(TDocStd_Document) & doc, const std::string& out_path, CadFormat out_format,
-                    LengthUnit unit) {
-    if (out_format == CadFormat::iges) {
-        IGESControl_Controller::Init();
-        // The XDE writer takes unit and mode from these statics (its
-        // constructor reads them). BRep mode (186/514/510 entities) keeps faces
-        // and solids; the default "faces" mode writes trimmed surfaces without topology.
-        Interface_Static::SetIVal("write.iges.brep.mode", 1);
-        Interface_Static::SetIVal("write.iges.unit", iges_unit_flag(unit));
-        IGESCAFControl_Writer writer;
-        writer.SetColorMode(Standard_True);
-        writer.SetNameMode(Standard_True);
-        writer.SetLayerMode(Standard_True);
-        if (!writer.Transfer(doc)) throw Error(ErrorCode::occt_failure, "IGES writer: transfer failed");
-        writer.ComputeModel();
-        if (!writer.Write(out_path.c_str())) throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
-    } else {
-        STEPControl_Controller::Init();
-        // write.step.unit enumerates the units in IGES's order (STEPControl_Controller).
-        // Set before the writer exists: its model takes the unit it scales to when
-        // made, the header's unit when written (set after, the geometry stays mm).
-        Interface_Static::SetIVal("write.step.unit", iges_unit_flag(unit));
-        STEPCAFControl_Writer writer;
-        writer.SetColorMode(Standard_True);
-        writer.SetNameMode(Standard_True);
-        writer.SetLayerMode(Standard_True);
-        if (!writer.Transfer(doc, STEPControl_AsIs))
-            throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
-        if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
-            throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
-    }
+// The OCCT names of the STEP schemas (write.step.schema, STEPControl_Controller).
+const char* occt_step_schema(StepSchema s) { return s == StepSchema::ap242 ? "AP242DIS" : "AP214IS"; }
+
+void write_iges(const Handle(TDocStd_Document) & doc, const std::string& out_path, LengthUnit unit, IgesMode mode) {
+    IGESControl_Controller::Init();
+    // The XDE writer takes unit and mode from these statics (its constructor
+    // reads them). BRep mode (186/514/510 entities) keeps faces and solids;
+    // "faces" mode writes trimmed surfaces (144) without topology.
+    Interface_Static::SetIVal("write.iges.brep.mode", mode == IgesMode::brep ? 1 : 0);
+    Interface_Static::SetIVal("write.iges.unit", iges_unit_flag(unit));
+    IGESCAFControl_Writer writer;
+    writer.SetColorMode(Standard_True);
+    writer.SetNameMode(Standard_True);
+    writer.SetLayerMode(Standard_True);
+    if (!writer.Transfer(doc)) throw Error(ErrorCode::occt_failure, "IGES writer: transfer failed");
+    writer.ComputeModel();
+    if (!writer.Write(out_path.c_str())) throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
+}
+
+void write_step(const Handle(TDocStd_Document) & doc, const std::string& out_path, LengthUnit unit, StepSchema schema) {
+    STEPControl_Controller::Init();
+    // write.step.unit enumerates the units in IGES's order (STEPControl_Controller).
+    // Unit and schema are set before the writer exists: its model takes the
+    // unit it scales to and the header's schema when made (the unit set after,
+    // the header said INCH over mm numbers).
+    Interface_Static::SetIVal("write.step.unit", iges_unit_flag(unit));
+    Interface_Static::SetCVal("write.step.schema", occt_step_schema(schema));
+    STEPCAFControl_Writer writer;
+    writer.SetColorMode(Standard_True);
+    writer.SetNameMode(Standard_True);
+    writer.SetLayerMode(Standard_True);
+    if (!writer.Transfer(doc, STEPControl_AsIs)) throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
+    if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
+        throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
+}
+
+// The model written in `out_format`: STEP and IGES from its XDE document in
+// `unit` (the writers scale the document's mm to it), BREP as OCCT's own text
+// (the shape alone: no colours, names or unit). Callers hold exchange_mutex and
+// catch Standard_Failure.
+void write_model(const OcctModel& model, const std::string& out_path, CadFormat out_format, LengthUnit unit,
+                 const ConvertOptions& options) {
+    if (out_format == CadFormat::iges)
+        write_iges(model.document, out_path, unit, options.iges_mode);
+    else if (out_format == CadFormat::step)
+        write_step(model.document, out_path, unit, options.step_schema);
+    else if (!BRepTools::Write(model.shape, out_path.c_str()))
+        throw Error(ErrorCode::io, "BREP writer: cannot write '" + out_path + "'");
 }
 
 }  // namespace
@@ -259,14 +280,16 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
                ConvertReport& r) {
     OcctModel model = read_for_export(in_path, format_name(r.out_format), r);
     DocumentCloser closer{model.document};
-    const LengthUnit unit = target_unit(model.units, options.units);
+    // Formats without a declared unit (BREP) are written in OCCT's mm.
+    const bool declares_units = conversion_format_declares_units(r.output);
+    const LengthUnit unit = declares_units ? target_unit(model.units, options.units) : LengthUnit::mm;
     if (model.format == CadFormat::iges && r.out_format == CadFormat::step) expand_named_groups(model.document);
 
     const auto t0 = std::chrono::steady_clock::now();
     {
         std::lock_guard<std::mutex> lock(exchange_mutex());
         try {
-            write_document(model.document, out_path, r.out_format, unit);
+            write_model(model, out_path, r.out_format, unit, options);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure,
                         std::string(format_name(r.out_format)) + " writer: " + failure_text(f));
@@ -279,8 +302,8 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
         OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
         DocumentCloser written_closer{written.document};
         r.warnings = shortfalls(content_of(model), content_of(written), r.out_format);
-        r.out_units = written.units;
-        if (written.units != length_unit_name(unit))
+        r.out_units = declares_units ? written.units : length_unit_name(unit);
+        if (r.out_units != length_unit_name(unit))
             r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +
                                  length_unit_name(unit) + "'");
     } catch (const Error& e) {

@@ -17,8 +17,8 @@ namespace nurbsrt::occt {
 // closes the document (DocumentCloser).
 OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r);
 
-// STEP or IGES through OCCT's writers (exact geometry, topology kept), in
-// options.units or the source's unit.
+// STEP, IGES or BREP through OCCT's writers (exact geometry, topology kept);
+// STEP and IGES in options.units or the source's unit, with options' schema / mode.
 void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
                ConvertReport& r);
 // Binary STL of the whole model, meshed by mesh_for_export.
@@ -26,6 +26,9 @@ void write_stl(const std::string& in_path, const std::string& out_path, ConvertR
 // Binary glTF 2.0 (.glb) from the XDE document: colours, names and assembly
 // instances kept; Y-up, metres (see convert_gltf.cpp).
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// VRML 2.0 (.wrl) from the XDE document: colours and the assembly's placements
+// kept; coordinates in mm (see convert_vrml.cpp).
+void write_vrml(const std::string& in_path, const std::string& out_path, ConvertReport& r);
 
 // Meshes every face of `shape` with BRepMesh for export: linear deflection
 // ImportOptions{}.mesh_relative_deflection times the diagonal of the faces'
@@ -37,5 +40,9 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
 // (the writers read those) and counted in r.degenerate_triangles.
 // Returns the deflection used.
 double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r);
+// The same for the shapes an XDE document holds (the writers that take a
+// document read the triangulations from them); parts placed twice share their
+// faces, so are meshed once.
+double mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r);
 
 }  // namespace nurbsrt::occt

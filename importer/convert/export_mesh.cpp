@@ -1,4 +1,4 @@
-// Meshing for the mesh outputs (STL, glb): see convert_writers.h.
+// Meshing for the mesh outputs (STL, glb, VRML): see convert_writers.h.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,7 +16,11 @@
 #include <TopExp.hxx>
 #include <TopLoc_Location.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <TDF_LabelSequence.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
 
 #include "importer/convert/convert_writers.h"
 #include "importer/internal.h"
@@ -111,6 +115,21 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
         throw Error(ErrorCode::occt_failure,
                     "BRepMesh produced no triangles for any of the " + std::to_string(faces.Extent()) + " faces");
     return params.Deflection;
+}
+
+}  // namespace nurbsrt::occt
+
+namespace nurbsrt::occt {
+
+double mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r) {
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+    TDF_LabelSequence roots;
+    shapes->GetFreeShapes(roots);
+    TopoDS_Compound all;
+    BRep_Builder builder;
+    builder.MakeCompound(all);
+    for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
+    return mesh_for_export(all, r);
 }
 
 }  // namespace nurbsrt::occt

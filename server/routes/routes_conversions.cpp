@@ -1,6 +1,6 @@
 // POST /v1/conversions: one synchronous conversion of a STEP/IGES upload (or
 // of a stored file named by `file_id`, server/store/file_store.h) to
-// STEP, IGES, STL, glb or NURBS JSON, run in a child process
+// STEP, IGES, BREP, STL, glb, VRML or NURBS JSON, run in a child process
 // (importer/isolated.h) under the import time and memory limits.
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -35,7 +35,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
     StageClock stages(GuardedServer::request_received_at());
-    Upload upload = read_upload(req, {"format", "units"});
+    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode"});
     const ConversionRequest request = parse_conversion_request(upload.options_json);
     const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.
@@ -49,7 +49,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
-        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
+        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP, IGES nor BREP (recognised by content)");
     stages.mark("upload");
 
     auto ticket = admit(ctx);

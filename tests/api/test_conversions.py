@@ -299,3 +299,44 @@ def test_mesh_outputs_leave_out_triangles_of_no_area(url):
         assert any(x != 0.0 for x in cross), t
     assert body["degenerate_triangles"] > 0  # 16 on bearing.iges (BRepMesh of OCCT 7.6.3)
     assert body["output_units"] == "mm"
+
+
+def test_brep_and_vrml_outputs_and_a_brep_input(url):
+    r = post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "brep"})
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == "application/octet-stream"
+    assert "converted.brep" in r.headers["Content-Disposition"]
+    assert b"CASCADE Topology V" in r.content[:200]
+    brep = r.content
+    # BREP in: converted, rendered and stored like STEP and IGES.
+    r = requests.post(url + "/v1/conversions", files={"file": ("s.brep", brep), "format": (None, "vrml")},
+                      headers={"Accept": "application/json"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    body = r.json()
+    validate(body, "ConversionResponse")
+    assert (body["input_format"], body["output_format"], body["content_type"]) == ("BREP", "VRML", "model/vrml")
+    assert base64.b64decode(body["data_base64"]).startswith(b"#VRML V2.0 utf8")
+    assert body["faces"] == 10 and body["triangles"] > 0
+    r = post_raw(url, "/v1/renders", brep, params={"width": 48, "height": 48})
+    assert r.status_code == 200 and r.headers["Content-Type"] == "image/png", r.text[:300]
+
+
+def test_step_schema_and_iges_mode(url):
+    r = post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "step", "step_schema": "ap242"})
+    assert r.status_code == 200, r.text[:300]
+    assert b"AP242_MANAGED_MODEL_BASED_3D_ENGINEERING" in r.content[:2000]
+    r = requests.post(url + "/v1/conversions", files={"file": ("s.step", SCREW.read_bytes()),
+                                                      "options": (None, '{"format": "iges", "iges_mode": "faces"}',
+                                                                  "application/json")}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    lines = r.content.decode("ascii").splitlines()
+    de = [ln for ln in lines if len(ln) >= 73 and ln[72] == "D"]
+    types = {int(ln[:8]) for ln in de[::2]}
+    assert 144 in types and 186 not in types, sorted(types)
+    # An option the format does not take, or a value it does not know, is refused naming it.
+    for params, name in (({"format": "iges", "step_schema": "ap242"}, "step_schema"),
+                         ({"format": "step", "iges_mode": "faces"}, "iges_mode"),
+                         ({"format": "step", "step_schema": "ap203"}, "step_schema")):
+        detail = check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(), params=params),
+                               400, "invalid_argument")["detail"]
+        assert f"'{name}'" in detail, detail
