@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,9 +14,45 @@
 #include "cli/commands.h"
 #include "cli/validators.h"
 #include "cli/warnings.h"
+#include "core/error.h"
 #include "importer/importer.h"
 
+#include <nlohmann/json.hpp>
+
 namespace nurbsrt::cli {
+namespace {
+
+// The fidelity report in a few lines (the whole of it: --report FILE).
+void print_fidelity(const std::string& text) {
+    if (text.empty()) return;
+    const nlohmann::json f = nlohmann::json::parse(text);
+    const nlohmann::json& src = f["source"];
+    const nlohmann::json& d = f["relative_differences"];
+    auto num = [](const nlohmann::json& j, const char* k) { return j.contains(k) ? j[k].get<double>() : 0.0; };
+    if (f["output"].contains("geometry")) {
+        const nlohmann::json &a = src["geometry"], &b = f["output"]["geometry"];
+        std::fprintf(stderr,
+                     "nurbsrt: fidelity: solids %d -> %d, shells %d -> %d, faces %d -> %d, edges %d -> %d; relative "
+                     "difference of volume %.2g, area %.2g, box %.2g; valid %s -> %s\n",
+                     a["solids"].get<int>(), b["solids"].get<int>(), a["shells"].get<int>(), b["shells"].get<int>(),
+                     a["faces"].get<int>(), b["faces"].get<int>(), a["edges"].get<int>(), b["edges"].get<int>(),
+                     num(d, "volume"), num(d, "area"), num(d, "box"), a["valid"].get<bool>() ? "yes" : "no",
+                     b["valid"].get<bool>() ? "yes" : "no");
+        const nlohmann::json& at = f["attributes"];
+        std::fprintf(stderr, "nurbsrt: fidelity: coloured faces %d -> %d, names %d -> %d (%d lost)\n",
+                     at["colours"]["source_coloured_faces"].get<int>(),
+                     at["colours"]["output_coloured_faces"].get<int>(), at["names"]["source"].get<int>(),
+                     at["names"]["output"].get<int>(), at["names"]["lost"].get<int>());
+    } else if (f["output"].contains("mesh_in_mm")) {
+        std::fprintf(stderr,
+                     "nurbsrt: fidelity: mesh against the exact faces: relative difference of area %.2g, box %.2g",
+                     num(d, "area"), num(d, "box"));
+        if (d.contains("volume")) std::fprintf(stderr, ", enclosed volume %.2g", num(d, "volume"));
+        std::fputc('\n', stderr);
+    }
+}
+
+}  // namespace
 
 void add_convert_command(CLI::App& app) {
     auto* cmd =
@@ -51,6 +88,7 @@ void add_convert_command(CLI::App& app) {
     };
     auto flags = std::make_shared<Flags>();
     auto units = std::make_shared<std::string>();
+    auto report_path = std::make_shared<std::string>();
     auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
     auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
     cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
@@ -68,10 +106,14 @@ void add_convert_command(CLI::App& app) {
     cmd->add_option("--iges-mode", *mode, "IGES outputs: brep (solids and shells) or faces (trimmed surfaces)")
         ->check(CLI::IsMember(iges_mode_names()))
         ->capture_default_str();
+    cmd->add_option("--report", *report_path,
+                    "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
+                    "also when --strict refuses the conversion")
+        ->check(output_file_validator({".json"}));
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([cmd, in, out, flags, units, schema, mode] {
+    cmd->callback([cmd, in, out, flags, units, schema, mode, report_path] {
         // An option OUT's format does not take is a usage error, never ignored
         // (as the API refuses it).
         const ConversionFormat format = conversion_format_from_extension(*out);
@@ -106,6 +148,15 @@ void add_convert_command(CLI::App& app) {
             warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
                                *out);
         warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+        if (!report_path->empty()) {
+            std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
+            nlohmann::ordered_json j =
+                r.fidelity.empty() ? nlohmann::ordered_json::object() : nlohmann::ordered_json::parse(r.fidelity);
+            j["warnings"] = warnings;
+            report << j.dump(2) << '\n';
+            if (!report) throw Error(ErrorCode::io, "cannot write the report '" + *report_path + "'");
+        }
+        if (!quiet) print_fidelity(r.fidelity);
         report_warnings(warnings, quiet, strict);
         std::filesystem::rename(partial.path, target);
         partial.path.clear();
@@ -120,7 +171,7 @@ void add_convert_command(CLI::App& app) {
         std::fprintf(stderr, "): read %.1f ms", r.read_ms);
         if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);
         std::fprintf(stderr, ", write %.1f ms", r.write_ms);
-        if (r.verify_ms > 0) std::fprintf(stderr, ", read back %.1f ms", r.verify_ms);
+        if (r.verify_ms > 0) std::fprintf(stderr, ", verify %.1f ms", r.verify_ms);
         std::fputc('\n', stderr);
     });
 }

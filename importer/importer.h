@@ -139,6 +139,9 @@ struct ConvertReport {
                                                     // conversion + meshing (JSON); 0 for STEP/IGES
     double verify_ms = 0;                           // STEP/IGES/BREP: reading the written file back and
                                                     // comparing it (see warnings); 0 otherwise
+    // The fidelity report, JSON text (api_schema/openapi.json, FidelityReport):
+    // source and output measured alike and compared; "" for NURBS JSON.
+    std::string fidelity;
     // STEP/IGES/BREP outputs: what the written file, read back, does not carry
     // of the input (colours, names, assembly structure, faces); mesh outputs:
     // what their format cannot carry; one sentence each without line breaks;

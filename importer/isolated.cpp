@@ -330,6 +330,7 @@ ConvertReport parse_convert_report(const std::string& text) {
     std::getline(in, line);  // the rest of the numbers' line
     std::getline(in, r.in_units);
     std::getline(in, r.out_units);
+    std::getline(in, r.fidelity);
     while (std::getline(in, line))
         if (!line.empty()) r.warnings.push_back(line);
     return r;
@@ -390,14 +391,15 @@ int run_convert_worker(const std::string& in_path, const std::string& out_path, 
         const ConvertReport r = convert_file(in_path, out_path, options);
         std::ofstream out(report_path, std::ios::binary | std::ios::trunc);
         out.precision(17);
-        // The numbers on one line, then the units a line each (the source's may
-        // be empty), the order convert_isolated reads them in.
+        // The numbers on one line, then the units and the fidelity report a
+        // line each (any may be empty), the order convert_isolated reads them in.
         out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' '
             << static_cast<int>(r.output) << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' '
             << r.degenerate_triangles << ' ' << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << ' ' << r.verify_ms
             << '\n'
             << one_line(r.in_units) << '\n'
-            << one_line(r.out_units) << '\n';
+            << one_line(r.out_units) << '\n'
+            << one_line(r.fidelity) << '\n';  // compact JSON: one line
         // Then one warning a line.
         for (const std::string& w : r.warnings) out << one_line(w) << '\n';
         if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");

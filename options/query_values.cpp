@@ -13,7 +13,7 @@ namespace {
 // a stored file).
 const std::set<std::string, std::less<>> kIntegerOptions = {"width", "height", "antialias"};
 const std::set<std::string, std::less<>> kNumberOptions = {"edge_width", "fov_deg", "ortho_height", "fit_margin"};
-const std::set<std::string, std::less<>> kBooleanOptions = {"edges", "shadows", "pinned"};
+const std::set<std::string, std::less<>> kBooleanOptions = {"edges", "shadows", "pinned", "strict"};
 
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 

@@ -117,7 +117,7 @@ unsigned aov_bits(const json& v, const std::string& key) {
 }
 
 // The option names, for messages that list them (kept in step with the parsers below).
-constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode";
+constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, strict";
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
@@ -239,6 +239,7 @@ E conversion_enum(const std::string& key, const std::string& value, FromName fro
 ConversionRequest parse_conversion_request(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format, units, schema, mode;
+    bool strict = false;
     for (const auto& [key, v] : o.items()) {
         if (key == "format")
             format = text(v, key);
@@ -248,12 +249,15 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
             schema = text(v, key);
         else if (key == "iges_mode")
             mode = text(v, key);
+        else if (key == "strict")
+            strict = boolean(v, key);
         else
             bad("unknown option " + quoted_name(key) + " (a conversion takes " + kConversionOptions + ")");
     }
     const std::string formats = conversion_format_names();
     if (format.empty()) bad("option 'format' is required (" + formats + ")");
     ConversionRequest r;
+    r.strict = strict;
     r.format = conversion_format_from_name(format);
     if (r.format == ConversionFormat::unknown) bad("option 'format' must be one of " + formats);
     // An option the format does not take is refused, never ignored.

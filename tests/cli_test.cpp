@@ -348,6 +348,29 @@ TEST(Cli, ConvertToBrepAndVrmlAndReadBrep) {
     fs::remove_all(dir);
 }
 
+// The fidelity summary on stderr, the whole report with --report (also when
+// --strict refuses), and --strict failing on a lossy conversion.
+TEST(Cli, ConvertReportsFidelityAndStrictRefusesWhatChanged) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-fidelity-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string report = (dir / "r.json").string(), igs = (dir / "f.igs").string();
+    const CliRun ok = run_nurbsrt("convert --report " + report + " " + kScrew + " " + (dir / "s.stp").string());
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_NE(ok.err.find("fidelity: solids 1 -> 1, shells 1 -> 1, faces 10 -> 10"), std::string::npos) << ok.err;
+    std::ifstream in(report);
+    const nlohmann::json r = nlohmann::json::parse(in);
+    EXPECT_EQ(r["source"]["geometry"]["faces"], 10);
+    EXPECT_TRUE(r["warnings"].empty());
+    const CliRun strict =
+        run_nurbsrt("convert --strict --iges-mode faces --report " + report + " " + kScrew + " " + igs);
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_NE(strict.err.find("the output holds 0 solid(s), the source 1"), std::string::npos) << strict.err;
+    EXPECT_FALSE(fs::exists(igs));
+    std::ifstream in2(report);
+    EXPECT_EQ(nlohmann::json::parse(in2)["output"]["geometry"]["solids"], 0);
+    fs::remove_all(dir);
+}
+
 // --units writes STEP/IGES in the unit asked; without it the source's unit is
 // kept (an inch IGES file gives an inch STEP file); the summary says both.
 TEST(Cli, ConvertKeepsOrWritesTheUnitAsked) {

@@ -450,7 +450,11 @@ TEST(ConvertIsolated, ReportsCrossTheProcessBoundary) {
     EXPECT_EQ(igs.output, ConversionFormat::iges);
     EXPECT_EQ(igs.out_format, nurbsrt::CadFormat::iges);
     EXPECT_GT(igs.verify_ms, 0);  // the read-back check, a stage of its own
-    EXPECT_EQ(stl.verify_ms, 0);
+    EXPECT_GT(stl.verify_ms, 0);  // the mesh measured against the exact faces
+    EXPECT_EQ(js.verify_ms, 0);
+    // The fidelity report crosses whole (one line of compact JSON).
+    EXPECT_EQ(stl.fidelity.substr(0, 11), "{\"source\":{");
+    EXPECT_NE(igs.fidelity.find("\"attributes\""), std::string::npos);
     EXPECT_EQ(igs.in_units, "mm");
     EXPECT_EQ(igs.out_units, "mm");
     EXPECT_EQ(stl.out_units, "mm");

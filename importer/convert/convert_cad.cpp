@@ -213,6 +213,27 @@ void expand_named_groups(const Handle(TDocStd_Document) & doc) {
     }
 }
 
+// The XDE part of the fidelity report: colours, names and the assembly of the
+// source and the output, with the first names lost.
+nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& out) {
+    std::vector<std::string> lost;
+    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(), std::back_inserter(lost));
+    std::erase_if(lost, is_generated_name);
+    const size_t lost_count = lost.size();
+    if (lost.size() > kNamesListed) lost.resize(kNamesListed);
+    auto tree = [](const XdeContent& c) {
+        return nlohmann::ordered_json{
+            {"assemblies", c.assemblies}, {"components", c.components}, {"instances", c.instances}};
+    };
+    return {{"colours",
+             {{"source_coloured_faces", in.coloured_faces},
+              {"output_coloured_faces", out.coloured_faces},
+              {"faces_losing_colour", faces_losing_colour(in, out)}}},
+            {"names",
+             {{"source", in.names.size()}, {"output", out.names.size()}, {"lost", lost_count}, {"lost_first", lost}}},
+            {"assembly", {{"source", tree(in)}, {"output", tree(out)}}}};
+}
+
 // The OCCT names of the STEP schemas (write.step.schema, STEPControl_Controller).
 const char* occt_step_schema(StepSchema s) { return s == StepSchema::ap242 ? "AP242DIS" : "AP214IS"; }
 
@@ -301,11 +322,20 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
     try {
         OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
         DocumentCloser written_closer{written.document};
-        r.warnings = shortfalls(content_of(model), content_of(written), r.out_format);
+        const XdeContent in = content_of(model), out = content_of(written);
+        r.warnings = shortfalls(in, out, r.out_format);
         r.out_units = declares_units ? written.units : length_unit_name(unit);
         if (r.out_units != length_unit_name(unit))
             r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +
                                  length_unit_name(unit) + "'");
+        // Geometry read back in mm, as the source: directly comparable whatever the written unit.
+        const GeometryMeasures gin = measure_geometry(model.shape), gout = measure_geometry(written.shape);
+        nlohmann::ordered_json f = {{"source", source_json(model, gin)}};
+        f["output"] = {
+            {"format", conversion_format_name(r.output)}, {"units", r.out_units}, {"geometry", geometry_json(gout)}};
+        f["relative_differences"] = compare_geometry(gin, gout, r.warnings);
+        f["attributes"] = attributes_json(in, out);
+        r.fidelity = f.dump();
     } catch (const Error& e) {
         // The file is written; that OCCT cannot read it back is worth knowing
         // but does not undo the conversion.

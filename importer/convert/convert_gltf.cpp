@@ -62,7 +62,7 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
     DocumentCloser closer{model.document};
     r.out_units = length_unit_name(LengthUnit::m);
 
-    mesh_document_for_export(model.document, r);
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r);
     TDF_LabelSequence roots;
     XCAFDoc_DocumentTool::ShapeTool(model.document->Main())->GetFreeShapes(roots);
 
@@ -83,6 +83,9 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
         throw Error(ErrorCode::occt_failure, "glTF writer: " + failure_text(f));
     }
     r.write_ms = ms_since(t0);
+    const auto t_verify = std::chrono::steady_clock::now();
+    r.fidelity = mesh_fidelity(model, meshed, r);
+    r.verify_ms = ms_since(t_verify);
 }
 
 }  // namespace nurbsrt::occt

@@ -28,6 +28,9 @@ void write_stl(const std::string& in_path, const std::string& out_path, ConvertR
         throw Error(ErrorCode::occt_failure, "STL writer: " + failure_text(f));
     }
     r.write_ms = ms_since(t0);
+    const auto t_verify = std::chrono::steady_clock::now();
+    r.fidelity = mesh_fidelity(model, model.shape, r);
+    r.verify_ms = ms_since(t_verify);
 }
 
 }  // namespace nurbsrt::occt

@@ -2,7 +2,11 @@
 // output extension). importer/*.cpp only: the mesh helper takes OCCT types.
 #pragma once
 
+#include <array>
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
@@ -43,6 +47,41 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r);
 // The same for the shapes an XDE document holds (the writers that take a
 // document read the triangulations from them); parts placed twice share their
 // faces, so are meshed once.
-double mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r);
+// Returns the meshed compound of the document's free shapes.
+TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r);
+
+// --- the fidelity report (fidelity.cpp) ----------------------------------------
+// A shape as OCCT measures it: distinct (located) sub-shapes, the volume of its
+// solids and the area of its faces (BRepGProp), the box of its faces' exact
+// geometry, and validity (BRepCheck_Analyzer).
+struct GeometryMeasures {
+    int solids = 0, shells = 0, faces = 0, edges = 0;
+    double volume = 0, area = 0;
+    std::array<double, 6> box{};  // min x y z, max x y z
+    bool valid = true;
+};
+GeometryMeasures measure_geometry(const TopoDS_Shape& shape);
+// The triangles of the faces' triangulations (placed, every occurrence): their
+// area, the volume they enclose (divergence theorem) and their box.
+struct MeshMeasures {
+    long long triangles = 0;
+    double area = 0, volume = 0;
+    std::array<double, 6> box{};
+};
+MeshMeasures measure_mesh(const TopoDS_Shape& shape);
+nlohmann::ordered_json geometry_json(const GeometryMeasures& m);
+// Relative differences of the output from the source; adds a warning for each
+// topology count that changed, for a volume, area or box beyond the exact
+// formats' tolerance, and for an invalid output of a valid source.
+nlohmann::ordered_json compare_geometry(const GeometryMeasures& in, const GeometryMeasures& out,
+                                        std::vector<std::string>& warnings);
+// A mesh output against its source: triangles, area, volume, box and their
+// relative differences.
+nlohmann::ordered_json mesh_json(const GeometryMeasures& in, const MeshMeasures& mesh, const ConvertReport& r);
+// The source's part of a report: format, declared units, geometry.
+nlohmann::ordered_json source_json(const OcctModel& model, const GeometryMeasures& m);
+// The whole report of a mesh output: `meshed` is the shape whose faces carry
+// the triangulations written.
+std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, const ConvertReport& r);
 
 }  // namespace nurbsrt::occt

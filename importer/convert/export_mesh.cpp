@@ -121,7 +121,7 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
 
 namespace nurbsrt::occt {
 
-double mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r) {
+TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r) {
     const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
     TDF_LabelSequence roots;
     shapes->GetFreeShapes(roots);
@@ -129,7 +129,8 @@ double mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertRep
     BRep_Builder builder;
     builder.MakeCompound(all);
     for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
-    return mesh_for_export(all, r);
+    mesh_for_export(all, r);
+    return all;
 }
 
 }  // namespace nurbsrt::occt

@@ -35,7 +35,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
     StageClock stages(GuardedServer::request_received_at());
-    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode"});
+    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode", "strict"});
     const ConversionRequest request = parse_conversion_request(upload.options_json);
     const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.
@@ -69,6 +69,12 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         throw;
     }
     add_conversion_stages(report, isolated, stages);
+    if (request.strict && !report.warnings.empty()) {
+        // Nothing of the file is answered: the problem says why.
+        std::string detail = std::to_string(report.warnings.size()) + " warning(s), refused by strict:";
+        for (const std::string& w : report.warnings) detail += " " + w + ";";
+        throw ServiceError(ServiceCode::strict_refused, detail);
+    }
     stages.mark("isolation");
     const std::string data = read_file_bytes(out.path());
     ticket.reset();
@@ -87,6 +93,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                {"warnings", report.warnings},
                                {"content_type", file_type},
                                {"data_base64", base64_encode(data)}};
+        // Every output but NURBS JSON (the imported scene itself) has one.
+        if (!report.fidelity.empty()) body["fidelity"] = nlohmann::json::parse(report.fidelity);
         // The last stage, this answer, ends before its serialization: the text
         // cannot hold the time it takes to write itself.
         stages.mark("response");

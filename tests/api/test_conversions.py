@@ -321,6 +321,32 @@ def test_brep_and_vrml_outputs_and_a_brep_input(url):
     assert r.status_code == 200 and r.headers["Content-Type"] == "image/png", r.text[:300]
 
 
+def test_fidelity_report_and_strict(url):
+    r = requests.post(url + "/v1/conversions", files={"file": ("s.step", SCREW.read_bytes()), "format": (None, "iges")},
+                      headers={"Accept": "application/json"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    body = r.json()
+    validate(body, "ConversionResponse")
+    f = body["fidelity"]
+    assert f["source"]["geometry"]["faces"] == f["output"]["geometry"]["faces"] == 10
+    assert f["source"]["geometry"]["solids"] == f["output"]["geometry"]["solids"] == 1
+    d = f["relative_differences"]
+    assert max(d["volume"], d["area"], d["box"]) < d["tolerance"] == 1e-6, d
+    # A mesh output is measured against the exact faces.
+    r = requests.post(url + "/v1/conversions", files={"file": ("s.step", SCREW.read_bytes()), "format": (None, "stl")},
+                      headers={"Accept": "application/json"}, timeout=TIMEOUT)
+    mesh = r.json()["fidelity"]
+    assert mesh["output"]["mesh_in_mm"]["triangles"] == r.json()["triangles"]
+    assert 0 < mesh["relative_differences"]["area"] < 0.01
+    # strict: nothing but the problem when something changed; the file when nothing did.
+    detail = check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(),
+                                    params={"format": "iges", "iges_mode": "faces", "strict": "true"}),
+                           422, "strict_refused")["detail"]
+    assert "the output holds 0 solid(s), the source 1" in detail, detail
+    r = post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "step", "strict": "true"})
+    assert r.status_code == 200 and r.content.startswith(b"ISO-10303-21;"), r.text[:300]
+
+
 def test_step_schema_and_iges_mode(url):
     r = post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "step", "step_schema": "ap242"})
     assert r.status_code == 200, r.text[:300]
