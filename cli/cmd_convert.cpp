@@ -49,6 +49,13 @@ void print_fidelity(const std::string& text) {
                      num(d, "area"), num(d, "box"));
         if (d.contains("volume")) std::fprintf(stderr, ", enclosed volume %.2g", num(d, "volume"));
         std::fputc('\n', stderr);
+        if (const nlohmann::json& dev = f["output"]["deviation_in_mm"]; dev.is_object())
+            std::fprintf(stderr,
+                         "nurbsrt: fidelity: deviation of %lld vertices and centroids from the trimmed faces: max "
+                         "%.3g mm (%.2g of the diagonal), p99 %.3g mm, mean %.3g mm\n",
+                         dev["points"].get<long long>(), dev["max"].get<double>(),
+                         dev["relative_to_diagonal"]["max"].get<double>(), dev["p99"].get<double>(),
+                         dev["mean"].get<double>());
     }
 }
 

@@ -78,6 +78,15 @@ nlohmann::ordered_json compare_geometry(const GeometryMeasures& in, const Geomet
 // A mesh output against its source: triangles, area, volume, box and their
 // relative differences.
 nlohmann::ordered_json mesh_json(const GeometryMeasures& in, const MeshMeasures& mesh, const ConvertReport& r);
+// The deviation of a face's export mesh from the face (mesh_deviation.cpp): the
+// distance of every vertex from the surface at its (u, v), and of every
+// triangle's centroid from its closest point on the trimmed face (Newton from
+// the triangle's (u, v) centroid; where that point is trimmed away, the face's
+// boundary, counted in `outside_trim`). Empty without a triangulation with (u, v).
+std::vector<double> face_mesh_deviations(const TopoDS_Face& face, long long& outside_trim);
+// Max, p99 and mean of those over every face of `meshed`, in mm and relative to
+// `diagonal`; null when nothing was meshed.
+nlohmann::ordered_json mesh_deviation_json(const TopoDS_Shape& meshed, double diagonal);
 // The source's part of a report: format, declared units, geometry.
 nlohmann::ordered_json source_json(const OcctModel& model, const GeometryMeasures& m);
 // The whole report of a mesh output: `meshed` is the shape whose faces carry

@@ -178,6 +178,7 @@ std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, co
     // Measured in the model's mm, whatever unit the file is written in.
     f["output"] = {{"format", conversion_format_name(r.output)}, {"units", r.out_units}, {"mesh_in_mm", m["mesh"]}};
     f["relative_differences"] = m["relative_differences"];
+    f["output"]["deviation_in_mm"] = mesh_deviation_json(meshed, diagonal(in.box));
     return f.dump();
 }
 

@@ -338,6 +338,8 @@ def test_fidelity_report_and_strict(url):
     mesh = r.json()["fidelity"]
     assert mesh["output"]["mesh_in_mm"]["triangles"] == r.json()["triangles"]
     assert 0 < mesh["relative_differences"]["area"] < 0.01
+    dev = mesh["output"]["deviation_in_mm"]
+    assert dev["points"] > r.json()["triangles"] and 0 < dev["mean"] <= dev["p99"] <= dev["max"], dev
     # strict: nothing but the problem when something changed; the file when nothing did.
     detail = check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(),
                                     params={"format": "iges", "iges_mode": "faces", "strict": "true"}),
