@@ -43,6 +43,10 @@ def test_job_converts_to_brep_and_vrml_and_takes_a_brep_input(url):
     assert by["brep"]["artifact"]["name"].endswith(".brep")
     assert by["vrml"]["artifact"]["name"].endswith(".wrl")
     assert by["vrml"]["artifact"]["content_type"] == "model/vrml"
+    # Each conversion output reports its fidelity, as POST /v1/conversions does.
+    f = by["brep"]["report"]["fidelity"]
+    assert f["source"]["geometry"]["faces"] == f["output"]["geometry"]["faces"] == 10
+    assert by["vrml"]["report"]["fidelity"]["output"]["deviation_in_mm"]["points"] > 0
     brep = download(url, by["brep"])
     assert b"CASCADE Topology V" in brep[:200]
     assert download(url, by["vrml"]).startswith(b"#VRML V2.0 utf8")
