@@ -1,9 +1,10 @@
-// nurbsrt convert IN OUT: STEP/IGES to STEP, IGES, STL, glb or NURBS JSON,
-// the output format from OUT's extension.
+// nurbsrt convert IN OUT: STEP/IGES/BREP to STEP, IGES, BREP, STL, glb, VRML or
+// NURBS JSON, the output format from OUT's extension.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,24 +14,76 @@
 #include "cli/commands.h"
 #include "cli/validators.h"
 #include "cli/warnings.h"
+#include "core/error.h"
 #include "importer/importer.h"
 
+#include <nlohmann/json.hpp>
+
 namespace nurbsrt::cli {
+namespace {
+
+// The fidelity report in a few lines (the whole of it: --report FILE).
+void print_fidelity(const std::string& text) {
+    if (text.empty()) return;
+    const nlohmann::json f = nlohmann::json::parse(text);
+    const nlohmann::json& src = f["source"];
+    const nlohmann::json& d = f["relative_differences"];
+    auto num = [](const nlohmann::json& j, const char* k) { return j.contains(k) ? j[k].get<double>() : 0.0; };
+    if (f["output"].contains("geometry")) {
+        const nlohmann::json &a = src["geometry"], &b = f["output"]["geometry"];
+        std::fprintf(stderr,
+                     "nurbsrt: fidelity: solids %d -> %d, shells %d -> %d, faces %d -> %d, edges %d -> %d; relative "
+                     "difference of volume %.2g, area %.2g, box %.2g; valid %s -> %s\n",
+                     a["solids"].get<int>(), b["solids"].get<int>(), a["shells"].get<int>(), b["shells"].get<int>(),
+                     a["faces"].get<int>(), b["faces"].get<int>(), a["edges"].get<int>(), b["edges"].get<int>(),
+                     num(d, "volume"), num(d, "area"), num(d, "box"), a["valid"].get<bool>() ? "yes" : "no",
+                     b["valid"].get<bool>() ? "yes" : "no");
+        const nlohmann::json& at = f["attributes"];
+        std::fprintf(stderr, "nurbsrt: fidelity: coloured faces %d -> %d, names %d -> %d (%d lost)\n",
+                     at["colours"]["source_coloured_faces"].get<int>(),
+                     at["colours"]["output_coloured_faces"].get<int>(), at["names"]["source"].get<int>(),
+                     at["names"]["output"].get<int>(), at["names"]["lost"].get<int>());
+    } else if (f["output"].contains("mesh_in_mm")) {
+        std::fprintf(stderr,
+                     "nurbsrt: fidelity: mesh against the exact faces: relative difference of area %.2g, box %.2g",
+                     num(d, "area"), num(d, "box"));
+        if (d.contains("volume")) std::fprintf(stderr, ", enclosed volume %.2g", num(d, "volume"));
+        std::fputc('\n', stderr);
+        if (const nlohmann::json& dev = f["output"]["deviation_in_mm"]; dev.is_object())
+            std::fprintf(stderr,
+                         "nurbsrt: fidelity: deviation of %lld vertices and centroids from the trimmed faces: max "
+                         "%.3g mm (%.2g of the diagonal), p99 %.3g mm, mean %.3g mm\n",
+                         dev["points"].get<long long>(), dev["max"].get<double>(),
+                         dev["relative_to_diagonal"]["max"].get<double>(), dev["p99"].get<double>(),
+                         dev["mean"].get<double>());
+    }
+}
+
+}  // namespace
 
 void add_convert_command(CLI::App& app) {
     auto* cmd =
         app.add_subcommand("convert",
-                           "Convert a STEP or IGES file. The input format is recognised from the content,\n"
-                           "the output format from OUT's extension:\n"
-                           "  .stp/.step  STEP AP214 (exact geometry) with face colours, names, layers and\n"
-                           "              the assembly structure\n"
-                           "  .igs/.iges  IGES 5.3, BRep mode (exact geometry) with face colours, names and\n"
+                           "Convert a STEP, IGES or BREP file. The input format is recognised from the\n"
+                           "content, the output format from OUT's extension:\n"
+                           "  .stp/.step  STEP AP214 (or --step-schema ap242; exact geometry) with face\n"
+                           "              colours, names, layers and\n"
+                           "              the assembly structure (IGES groups of named members become\n"
+                           "              assemblies, one part per member)\n"
+                           "  .igs/.iges  IGES 5.3, BRep mode (or --iges-mode faces: trimmed surfaces without\n"
+                           "              topology; exact geometry) with face colours, names and\n"
                            "              layers; IGES has no assemblies: instances become a flat list\n"
-                           "              (STEP/IGES: the written file is read back; what it lost is printed\n"
-                           "              as warnings)\n"
-                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal)\n"
+                           "              (STEP/IGES: written in the source's length unit unless --units\n"
+                           "              names another; the written file is read back; what it lost is\n"
+                           "              printed as warnings)\n"
+                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal;\n"
+                           "              triangles of no area or repeated are left out, and counted)\n"
                            "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
                            "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
+                           "  .brep       OCCT's own text format: exact geometry and topology, millimetres; no\n"
+                           "              colours, names or assembly (the written file is read back too)\n"
+                           "  .wrl        VRML 2.0, millimetres, with colours and the assembly's placements (mesh\n"
+                           "              as for .stl)\n"
                            "  .json       the NURBS patches (degrees, knots, homogeneous control points, trim\n"
                            "              loops, face attributes); schema: api_schema/nurbs_scene.schema.json\n"
                            "Examples: nurbsrt convert part.step part.igs\n"
@@ -41,14 +94,42 @@ void add_convert_command(CLI::App& app) {
         bool quiet = false, strict = false;
     };
     auto flags = std::make_shared<Flags>();
-    cmd->add_option("IN", *in, "input STEP or IGES file")->required()->check(CLI::ExistingFile);
-    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb or .json)")
+    auto units = std::make_shared<std::string>();
+    auto report_path = std::make_shared<std::string>();
+    auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
+    auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
+    cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
+    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .json, .brep or .wrl)")
         ->required()
-        ->check(output_file_validator({".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json"}));
+        ->check(output_file_validator(
+            {".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json", ".brep", ".brp", ".wrl", ".vrml"}));
+    cmd->add_option("--units", *units,
+                    "STEP/IGES outputs: the length unit to write (the geometry is scaled to it); default: the\n"
+                    "source's")
+        ->check(CLI::IsMember(length_unit_names()));
+    cmd->add_option("--step-schema", *schema, "STEP outputs: the application protocol, ap214 or ap242")
+        ->check(CLI::IsMember(step_schema_names()))
+        ->capture_default_str();
+    cmd->add_option("--iges-mode", *mode, "IGES outputs: brep (solids and shells) or faces (trimmed surfaces)")
+        ->check(CLI::IsMember(iges_mode_names()))
+        ->capture_default_str();
+    cmd->add_option("--report", *report_path,
+                    "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
+                    "also when --strict refuses the conversion")
+        ->check(output_file_validator({".json"}));
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([in, out, flags] {
+    cmd->callback([cmd, in, out, flags, units, schema, mode, report_path] {
+        // An option OUT's format does not take is a usage error, never ignored
+        // (as the API refuses it).
+        const ConversionFormat format = conversion_format_from_extension(*out);
+        if (cmd->count("--step-schema") > 0 && format != ConversionFormat::step)
+            throw CLI::ValidationError("--step-schema", "applies to STEP outputs only");
+        if (cmd->count("--iges-mode") > 0 && format != ConversionFormat::iges)
+            throw CLI::ValidationError("--iges-mode", "applies to IGES outputs only");
+        if (cmd->count("--units") > 0 && !conversion_format_declares_units(format))
+            throw CLI::ValidationError("--units", "applies to STEP and IGES outputs only");
         const auto [quiet, strict] = *flags;
         // Removes the partial file on every way out but the rename below.
         struct PartialFile {
@@ -64,23 +145,40 @@ void add_convert_command(CLI::App& app) {
         const std::filesystem::path target(*out);
         PartialFile partial{target.parent_path() / ("." + target.stem().string() + ".partial-" +
                                                     std::to_string(::getpid()) + target.extension().string())};
-        const ConvertReport r = convert_file(*in, partial.path.string());
+        ConvertOptions options;
+        options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
+        options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
+        options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
+        const ConvertReport r = convert_file(*in, partial.path.string(), options);
         std::vector<std::string> warnings;
         if (r.unmeshed_faces > 0)
             warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
                                *out);
         warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+        if (!report_path->empty()) {
+            std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
+            nlohmann::ordered_json j =
+                r.fidelity.empty() ? nlohmann::ordered_json::object() : nlohmann::ordered_json::parse(r.fidelity);
+            j["warnings"] = warnings;
+            report << j.dump(2) << '\n';
+            if (!report) throw Error(ErrorCode::io, "cannot write the report '" + *report_path + "'");
+        }
+        if (!quiet) print_fidelity(r.fidelity);
         report_warnings(warnings, quiet, strict);
         std::filesystem::rename(partial.path, target);
         partial.path.clear();
         if (quiet) return;
-        std::fprintf(stderr, "nurbsrt: converted %s (%s, %d faces) to %s (%s", in->c_str(), format_name(r.in_format),
-                     r.faces, out->c_str(), conversion_format_name(r.output));
+        std::fprintf(stderr, "nurbsrt: converted %s (%s, %s, %d faces) to %s (%s", in->c_str(),
+                     format_name(r.in_format), r.in_units.empty() ? "no unit declared" : r.in_units.c_str(), r.faces,
+                     out->c_str(), conversion_format_name(r.output));
+        if (!r.out_units.empty()) std::fprintf(stderr, ", %s", r.out_units.c_str());
         if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
+        if (r.degenerate_triangles > 0)
+            std::fprintf(stderr, " (%lld of no area or repeated left out)", r.degenerate_triangles);
         std::fprintf(stderr, "): read %.1f ms", r.read_ms);
         if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);
         std::fprintf(stderr, ", write %.1f ms", r.write_ms);
-        if (r.verify_ms > 0) std::fprintf(stderr, ", read back %.1f ms", r.verify_ms);
+        if (r.verify_ms > 0) std::fprintf(stderr, ", verify %.1f ms", r.verify_ms);
         std::fputc('\n', stderr);
     });
 }

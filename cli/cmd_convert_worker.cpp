@@ -1,4 +1,4 @@
-// nurbsrt convert-worker IN OUT REPORT: the child side of convert_isolated
+// nurbsrt convert-worker IN OUT REPORT [--name=value ...]: the child side of convert_isolated
 // (importer/isolated.h). Hidden from --help: run by the program itself.
 #include <CLI/CLI.hpp>
 
@@ -15,8 +15,11 @@ void add_convert_worker_command(CLI::App& app) {
     auto report = std::make_shared<std::string>();
     cmd->add_option("IN", *in)->required();
     cmd->add_option("OUT", *out)->required();
+    cmd->allow_extras();  // the options, --name=value (convert_options_to_args)
     cmd->add_option("REPORT", *report)->required();
-    cmd->callback([in, out, report] { std::exit(run_convert_worker(*in, *out, *report)); });
+    cmd->callback([cmd, in, out, report] {
+        std::exit(run_convert_worker(*in, *out, *report, convert_options_from_args(cmd->remaining())));
+    });
 }
 
 }  // namespace nurbsrt::cli

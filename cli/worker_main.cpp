@@ -1,7 +1,7 @@
 // nurbsrt-worker: the child process of an isolated import or conversion
 // (importer/isolated.h), run by the service as
 //   nurbsrt-worker import-worker IN OUT [name=value ...]
-//   nurbsrt-worker convert-worker IN OUT REPORT
+//   nurbsrt-worker convert-worker IN OUT REPORT [--name=value ...]
 // the same arguments as the hidden subcommands of `nurbsrt` itself.
 //
 // Why a program of its own: a child pays the dynamic linking of everything its
@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
     if (argc < 4) {
         std::fprintf(stderr,
                      "usage: nurbsrt-worker import-worker IN OUT [name=value ...]\n"
-                     "       nurbsrt-worker convert-worker IN OUT REPORT\n");
+                     "       nurbsrt-worker convert-worker IN OUT REPORT [--name=value ...]\n");
         return 2;
     }
     const std::string command = argv[1];
@@ -35,7 +35,10 @@ int main(int argc, char** argv) {
             const std::vector<std::string> rest(argv + 4, argv + argc);
             return nurbsrt::run_import_worker(argv[2], argv[3], nurbsrt::import_options_from_args(rest));
         }
-        if (command == "convert-worker" && argc == 5) return nurbsrt::run_convert_worker(argv[2], argv[3], argv[4]);
+        if (command == "convert-worker" && argc >= 5) {
+            const std::vector<std::string> rest(argv + 5, argv + argc);
+            return nurbsrt::run_convert_worker(argv[2], argv[3], argv[4], nurbsrt::convert_options_from_args(rest));
+        }
     } catch (const nurbsrt::Error& e) {
         std::fprintf(stderr, "nurbsrt-worker: error [%s]: %s\n", nurbsrt::error_code_name(e.code()), e.what());
         return 1;

@@ -1,6 +1,7 @@
-// Format detection by content (STEP/IGES), names, and output extensions.
+// Format detection by content (STEP/IGES/BREP), names, and the output formats' table.
 // No OCCT here: the CLI and the server call these before any import starts.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cstring>
 #include <fstream>
@@ -55,6 +56,84 @@ std::string lower_extension(const std::string& path) {
     return ascii_lower(std::string_view(path).substr(dot + 1));
 }
 
+// Every output format once: its names, the extensions it is recognised by (the
+// first is written), its content type and what it keeps. In ConversionFormat's order.
+struct ConversionFormatInfo {
+    ConversionFormat format;
+    const char* short_name;  // the API's and CLI's name
+    const char* alias;       // a second accepted name, or nullptr
+    const char* name;        // for messages and answers
+    const char* written_extension;
+    std::array<const char*, 3> extensions;  // lower case, without the dot; nullptr pads
+    const char* content_type;
+    CadFormat cad;        // exact B-rep formats: the CadFormat (also readable); unknown for the others
+    bool declares_units;  // writes a declared length unit (the `units` option applies)
+};
+// Content types: IANA's model/step, model/iges, model/stl, model/gltf-binary and
+// model/vrml; OCCT's BREP has no registered type.
+constexpr ConversionFormatInfo kConversionFormats[] = {
+    {ConversionFormat::unknown, "", nullptr, "unknown", "", {}, "application/octet-stream", CadFormat::unknown, false},
+    {ConversionFormat::step,
+     "step",
+     "stp",
+     "STEP",
+     ".step",
+     {"stp", "step", "p21"},
+     "model/step",
+     CadFormat::step,
+     true},
+    {ConversionFormat::iges, "iges", "igs", "IGES", ".igs", {"igs", "iges"}, "model/iges", CadFormat::iges, true},
+    {ConversionFormat::stl, "stl", nullptr, "STL", ".stl", {"stl"}, "model/stl", CadFormat::unknown, false},
+    {ConversionFormat::glb, "glb", nullptr, "GLB", ".glb", {"glb"}, "model/gltf-binary", CadFormat::unknown, false},
+    {ConversionFormat::nurbs_json,
+     "json",
+     nullptr,
+     "NURBS-JSON",
+     ".json",
+     {"json"},
+     "application/json",
+     CadFormat::unknown,
+     false},
+    {ConversionFormat::brep,
+     "brep",
+     "brp",
+     "BREP",
+     ".brep",
+     {"brep", "brp"},
+     "application/octet-stream",
+     CadFormat::brep,
+     false},
+    {ConversionFormat::vrml, "vrml", "wrl", "VRML", ".wrl", {"wrl", "vrml"}, "model/vrml", CadFormat::unknown, false},
+};
+static_assert(std::size(kConversionFormats) == static_cast<size_t>(ConversionFormat::vrml) + 1);
+
+constexpr bool formats_in_order() {
+    for (size_t i = 0; i < std::size(kConversionFormats); ++i)
+        if (static_cast<size_t>(kConversionFormats[i].format) != i) return false;
+    return true;
+}
+static_assert(formats_in_order());
+
+const ConversionFormatInfo& info_of(ConversionFormat f) {
+    const auto i = static_cast<size_t>(f);
+    return kConversionFormats[i < std::size(kConversionFormats) ? i : 0];
+}
+
+// OCCT's own text format (BRepTools::Write): "CASCADE Topology V1, (c)
+// Matra-Datavision" (V1 to V3) first, after DRAW's "DBRep_DrawableShape" when
+// DRAW saved it.
+bool looks_like_brep(std::string_view s) {
+    const size_t first = s.find_first_not_of(" \t\r\n");
+    if (first == std::string_view::npos) return false;
+    std::string_view rest = s.substr(first);
+    constexpr std::string_view kDraw = "DBRep_DrawableShape";
+    if (rest.substr(0, kDraw.size()) == kDraw) {
+        const size_t next = rest.find_first_not_of(" \t\r\n", kDraw.size());
+        rest = next == std::string_view::npos ? std::string_view() : rest.substr(next);
+    }
+    return rest.substr(0, 18) == "CASCADE Topology V";
+}
+
 }  // namespace
 
 CadFormat detect_format_bytes(const char* data, size_t size) {
@@ -70,6 +149,7 @@ CadFormat detect_format_bytes(const char* data, size_t size) {
         if (rest.substr(0, 2) == "/*" && s.find("ISO-10303-21") != std::string_view::npos) return CadFormat::step;
     }
     if (looks_like_iges_record(first_record(s))) return CadFormat::iges;
+    if (looks_like_brep(s)) return CadFormat::brep;
     return CadFormat::unknown;
 }
 
@@ -87,6 +167,8 @@ const char* format_name(CadFormat f) {
             return "STEP";
         case CadFormat::iges:
             return "IGES";
+        case CadFormat::brep:
+            return "BREP";
         case CadFormat::unknown:
             break;
     }
@@ -94,113 +176,35 @@ const char* format_name(CadFormat f) {
 }
 
 CadFormat format_from_extension(const std::string& path) {
-    const std::string ext = lower_extension(path);
-    if (ext == "stp" || ext == "step" || ext == "p21") return CadFormat::step;
-    if (ext == "igs" || ext == "iges") return CadFormat::iges;
-    return CadFormat::unknown;
+    return cad_format_of(conversion_format_from_extension(path));
 }
 
 ConversionFormat conversion_format_from_extension(const std::string& path) {
     const std::string ext = lower_extension(path);
-    switch (format_from_extension(path)) {
-        case CadFormat::step:
-            return ConversionFormat::step;
-        case CadFormat::iges:
-            return ConversionFormat::iges;
-        case CadFormat::unknown:
-            break;
-    }
-    if (ext == "stl") return ConversionFormat::stl;
-    if (ext == "glb") return ConversionFormat::glb;
-    if (ext == "json") return ConversionFormat::nurbs_json;
+    for (const ConversionFormatInfo& f : kConversionFormats)
+        for (const char* e : f.extensions)
+            if (e != nullptr && ext == e) return f.format;
     return ConversionFormat::unknown;
 }
 
 ConversionFormat conversion_format_from_name(const std::string& name) {
-    if (name == "step" || name == "stp") return ConversionFormat::step;
-    if (name == "iges" || name == "igs") return ConversionFormat::iges;
-    if (name == "stl") return ConversionFormat::stl;
-    if (name == "glb") return ConversionFormat::glb;
-    if (name == "json") return ConversionFormat::nurbs_json;
+    for (const ConversionFormatInfo& f : kConversionFormats)
+        if (name == f.short_name || (f.alias != nullptr && name == f.alias)) return f.format;
     return ConversionFormat::unknown;
 }
 
-const char* conversion_format_short_name(ConversionFormat f) {
-    switch (f) {
-        case ConversionFormat::step:
-            return "step";
-        case ConversionFormat::iges:
-            return "iges";
-        case ConversionFormat::stl:
-            return "stl";
-        case ConversionFormat::glb:
-            return "glb";
-        case ConversionFormat::nurbs_json:
-            return "json";
-        case ConversionFormat::unknown:
-            break;
-    }
-    return "";
-}
+const char* conversion_format_short_name(ConversionFormat f) { return info_of(f).short_name; }
+const char* conversion_format_name(ConversionFormat f) { return info_of(f).name; }
+const char* conversion_format_extension(ConversionFormat f) { return info_of(f).written_extension; }
+const char* conversion_format_content_type(ConversionFormat f) { return info_of(f).content_type; }
+CadFormat cad_format_of(ConversionFormat f) { return info_of(f).cad; }
+bool conversion_format_declares_units(ConversionFormat f) { return info_of(f).declares_units; }
 
-const char* conversion_format_name(ConversionFormat f) {
-    switch (f) {
-        case ConversionFormat::step:
-            return "STEP";
-        case ConversionFormat::iges:
-            return "IGES";
-        case ConversionFormat::stl:
-            return "STL";
-        case ConversionFormat::glb:
-            return "GLB";
-        case ConversionFormat::nurbs_json:
-            return "NURBS-JSON";
-        case ConversionFormat::unknown:
-            break;
-    }
-    return "unknown";
-}
-
-const char* conversion_format_extension(ConversionFormat f) {
-    switch (f) {
-        case ConversionFormat::step:
-            return ".step";
-        case ConversionFormat::iges:
-            return ".igs";
-        case ConversionFormat::stl:
-            return ".stl";
-        case ConversionFormat::glb:
-            return ".glb";
-        case ConversionFormat::nurbs_json:
-            return ".json";
-        case ConversionFormat::unknown:
-            break;
-    }
-    return "";
-}
-
-const char* conversion_format_content_type(ConversionFormat f) {
-    switch (f) {
-        case ConversionFormat::step:
-            return "model/step";
-        case ConversionFormat::iges:
-            return "model/iges";
-        case ConversionFormat::stl:
-            return "model/stl";
-        case ConversionFormat::glb:
-            return "model/gltf-binary";
-        case ConversionFormat::nurbs_json:
-            return "application/json";
-        case ConversionFormat::unknown:
-            break;
-    }
-    return "application/octet-stream";
-}
-
-CadFormat cad_format_of(ConversionFormat f) {
-    if (f == ConversionFormat::step) return CadFormat::step;
-    if (f == ConversionFormat::iges) return CadFormat::iges;
-    return CadFormat::unknown;
+std::string conversion_format_names() {
+    std::string s;
+    for (const ConversionFormatInfo& f : kConversionFormats)
+        if (f.format != ConversionFormat::unknown) s += (s.empty() ? "" : ", ") + std::string(f.short_name);
+    return s;
 }
 
 }  // namespace nurbsrt

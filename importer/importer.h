@@ -1,24 +1,26 @@
-// The importer's public interface: STEP/IGES bytes in, a Scene out.
+// The importer's public interface: STEP/IGES/BREP bytes in, a Scene out.
 // This header is OCCT-free on purpose (it is included by cli/ and server/);
 // everything that touches OCCT lives in importer/*.cpp.
 #pragma once
 
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/scene/scene.h"
 
 namespace nurbsrt {
 
-enum class CadFormat { unknown, step, iges };
+enum class CadFormat { unknown, step, iges, brep };
 
 // Recognise the format from the file's content (STEP: "ISO-10303-21;" header;
-// IGES: 80-column records with the S/G/D/P/T section letter in column 73),
-// not from its extension.
+// IGES: 80-column records with the S/G/D/P/T section letter in column 73;
+// BREP: OCCT's text format, "CASCADE Topology V..."), not from its extension.
 CadFormat detect_format(const std::string& path);
 CadFormat detect_format_bytes(const char* data, size_t size);
-const char* format_name(CadFormat f);  // "STEP", "IGES", "unknown"
-// Format implied by a file name's extension (.stp/.step, .igs/.iges), for outputs.
+const char* format_name(CadFormat f);  // "STEP", "IGES", "BREP", "unknown"
+// Format implied by a file name's extension (.stp/.step, .igs/.iges, .brep/.brp), for outputs.
 CadFormat format_from_extension(const std::string& path);
 
 struct ImportOptions {
@@ -49,45 +51,103 @@ struct ImportOptions {
 Scene import_file(const std::string& path, const ImportOptions& options = {});
 
 // What convert_file can write, chosen by the output file's extension. The CAD
-// formats keep the exact geometry; STL and glb are triangle meshes (BRepMesh at
-// ImportOptions' default relative deflection); nurbs_json is the imported Scene's
-// patches as JSON (core/io/scene_json.h, api_schema/nurbs_scene.schema.json).
-enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json };
+// formats (STEP, IGES, BREP) keep the exact geometry; STL, glb and VRML are
+// triangle meshes (BRepMesh at ImportOptions' default relative deflection);
+// nurbs_json is the imported Scene's patches as JSON (core/io/scene_json.h,
+// api_schema/nurbs_scene.schema.json). Names, extensions and content types are
+// one table (importer/format.cpp).
+enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json, brep, vrml };
 
-// .stp/.step/.p21, .igs/.iges, .stl, .glb, .json (case-insensitive); unknown otherwise.
+// .stp/.step/.p21, .igs/.iges, .stl, .glb, .json, .brep/.brp, .wrl/.vrml
+// (case-insensitive); unknown otherwise.
 ConversionFormat conversion_format_from_extension(const std::string& path);
-// By the short names of the API and CLI: step|stp, iges|igs, stl, glb, json; unknown otherwise.
+// By the short names of the API and CLI: step|stp, iges|igs, stl, glb, json,
+// brep|brp, vrml|wrl; unknown otherwise.
 ConversionFormat conversion_format_from_name(const std::string& name);
-// The canonical short name: "step", "iges", "stl", "glb", "json" ("" for unknown).
+// The canonical short names, comma-separated, for messages.
+std::string conversion_format_names();
+// The canonical short name: "step", "iges", "stl", "glb", "json", "brep", "vrml" ("" for unknown).
 const char* conversion_format_short_name(ConversionFormat f);
-// "STEP", "IGES", "STL", "GLB", "NURBS-JSON"
+// "STEP", "IGES", "STL", "GLB", "NURBS-JSON", "BREP", "VRML"
 const char* conversion_format_name(ConversionFormat f);
-// ".step", ".igs", ".stl", ".glb", ".json"
+// ".step", ".igs", ".stl", ".glb", ".json", ".brep", ".wrl"
 const char* conversion_format_extension(ConversionFormat f);
-// "model/step", "model/iges", "model/stl", "model/gltf-binary", "application/json"
+// "model/step", "model/iges", "model/stl", "model/gltf-binary", "application/json",
+// "application/octet-stream" (BREP), "model/vrml"
 const char* conversion_format_content_type(ConversionFormat f);
-// The CadFormat of a STEP/IGES output; CadFormat::unknown for the others.
+// The CadFormat of a STEP/IGES/BREP output; CadFormat::unknown for the others.
 CadFormat cad_format_of(ConversionFormat f);
+// Whether the format declares a length unit (STEP, IGES): the `units` option applies.
+bool conversion_format_declares_units(ConversionFormat f);
+
+// The length units a CAD file can declare: IGES 5.3's list (global parameter
+// 14), which OCCT's STEP writer offers as well. `unknown`: none declared, or
+// for an option, "the source's".
+enum class LengthUnit { unknown, inch, mm, foot, mile, m, km, mil, micron, cm, microinch };
+// "inch", "mm", "foot", "mile", "m", "km", "mil", "micron", "cm", "microinch"; "" for unknown.
+const char* length_unit_name(LengthUnit u);
+// By those names; nullopt for any other text (no aliases: parsed once at the edge).
+std::optional<LengthUnit> length_unit_from_name(std::string_view name);
+// Those names, in that order (the values an option may take).
+std::vector<std::string> length_unit_names();
+// IGES 5.3 global parameter 14 (1 inch, 2 mm, 4 foot, ... 11 microinch) both ways;
+// unknown for 3 (a unit named only by parameter 15) and anything out of range.
+int iges_unit_flag(LengthUnit u);
+LengthUnit length_unit_from_iges_flag(int flag);
+
+// The STEP application protocol written: AP214 (automotive design, what most
+// CAD systems read) or AP242 (its successor; OCCT 7.6 writes the DIS schema).
+enum class StepSchema { ap214, ap242 };
+// IGES 5.3 as solids and shells with their topology (entities 186/514/510), or
+// as trimmed surfaces alone (144), which older readers take.
+enum class IgesMode { brep, faces };
+// "ap214", "ap242"; "brep", "faces"; and back (nullopt for other text); all of them.
+const char* step_schema_name(StepSchema s);
+std::optional<StepSchema> step_schema_from_name(std::string_view name);
+std::vector<std::string> step_schema_names();
+const char* iges_mode_name(IgesMode m);
+std::optional<IgesMode> iges_mode_from_name(std::string_view name);
+std::vector<std::string> iges_mode_names();
+
+// What a conversion may change beyond the output format.
+struct ConvertOptions {
+    // STEP/IGES outputs: the length unit written (geometry scaled to it);
+    // unknown keeps the source's declared unit (mm when it declares none).
+    // The other outputs have their own: STL, VRML, BREP mm, glb metres.
+    LengthUnit units = LengthUnit::unknown;
+    StepSchema step_schema = StepSchema::ap214;  // STEP outputs
+    IgesMode iges_mode = IgesMode::brep;         // IGES outputs
+};
 
 // Writes the geometry of `in_path` to `out_path`, the output format taken from
 // the extension (see ConversionFormat). Throws nurbsrt::Error (unsupported_format
 // for an unknown extension, io, unreadable_file, no_faces, occt_failure).
 struct ConvertReport {
     CadFormat in_format = CadFormat::unknown;
-    CadFormat out_format = CadFormat::unknown;            // STEP/IGES outputs; unknown for mesh and JSON outputs
+    CadFormat out_format = CadFormat::unknown;            // STEP/IGES/BREP outputs; unknown for mesh and JSON outputs
     ConversionFormat output = ConversionFormat::unknown;  // every output, including STEP/IGES
     int faces = 0;
-    long long triangles = 0;                        // STL and glb: triangles written; 0 otherwise
-    int unmeshed_faces = 0;                         // STL and glb: faces BRepMesh left empty (missing)
+    long long triangles = 0;  // STL and glb: triangles written; 0 otherwise
+    int unmeshed_faces = 0;   // STL and glb: faces BRepMesh left empty (missing)
+    // STL and glb: triangles BRepMesh made that were left out: of no area at
+    // the precision the file stores (float), or repeating another of their face.
+    long long degenerate_triangles = 0;
+    // The length unit the source declares ("" none) and the one the output is
+    // written in (STEP/IGES: what the written file declares; STL, VRML, BREP mm; glb m).
+    std::string in_units, out_units;
     double read_ms = 0, mesh_ms = 0, write_ms = 0;  // mesh_ms: BRepMesh (STL, glb) or the import's
                                                     // conversion + meshing (JSON); 0 for STEP/IGES
-    double verify_ms = 0;                           // STEP/IGES: reading the written file back and
+    double verify_ms = 0;                           // STEP/IGES/BREP: reading the written file back and
                                                     // comparing it (see warnings); 0 otherwise
-    // STEP/IGES outputs: what the written file, read back with XDE, does not
-    // carry of the input (colours, names, assembly structure, faces), one
-    // sentence each without line breaks; empty when all of it was kept.
+    // The fidelity report, JSON text (api_schema/openapi.json, FidelityReport):
+    // source and output measured alike and compared; "" for NURBS JSON.
+    std::string fidelity;
+    // STEP/IGES/BREP outputs: what the written file, read back, does not carry
+    // of the input (colours, names, assembly structure, faces); mesh outputs:
+    // what their format cannot carry; one sentence each without line breaks;
+    // empty when all of it was kept.
     std::vector<std::string> warnings;
 };
-ConvertReport convert_file(const std::string& in_path, const std::string& out_path);
+ConvertReport convert_file(const std::string& in_path, const std::string& out_path, const ConvertOptions& options = {});
 
 }  // namespace nurbsrt

@@ -141,6 +141,34 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args) {
     return o;
 }
 
+std::vector<std::string> convert_options_to_args(const ConvertOptions& o) {
+    std::vector<std::string> args = {std::string("--step-schema=") + step_schema_name(o.step_schema),
+                                     std::string("--iges-mode=") + iges_mode_name(o.iges_mode)};
+    if (o.units != LengthUnit::unknown) args.push_back(std::string("--units=") + length_unit_name(o.units));
+    return args;
+}
+
+ConvertOptions convert_options_from_args(const std::vector<std::string>& args) {
+    ConvertOptions o;
+    for (const std::string& a : args) {
+        const size_t eq = a.find('=');
+        const std::string key = a.substr(0, eq), value = eq == std::string::npos ? "" : a.substr(eq + 1);
+        bool ok = false;
+        if (key == "--units") {
+            const std::optional<LengthUnit> u = length_unit_from_name(value);
+            if ((ok = u.has_value())) o.units = *u;
+        } else if (key == "--step-schema") {
+            const std::optional<StepSchema> s = step_schema_from_name(value);
+            if ((ok = s.has_value())) o.step_schema = *s;
+        } else if (key == "--iges-mode") {
+            const std::optional<IgesMode> m = iges_mode_from_name(value);
+            if ((ok = m.has_value())) o.iges_mode = *m;
+        }
+        if (!ok) throw Error(ErrorCode::invalid_argument, "bad worker option: " + a);
+    }
+    return o;
+}
+
 namespace {
 
 std::string scratch_dir_of(const IsolationLimits& limits) {
@@ -255,7 +283,14 @@ void apply_fault_hook() {
 // Files that are neither STEP nor IGES are left to the worker's own, precise error.
 void prescan_input(const std::string& path, const IsolationLimits& limits) {
     const CadFormat format = detect_format(path);
-    if (format != CadFormat::unknown) prescan_cad_file(path, format, limits.prescan);
+    // BREP is OCCT's own format: no pre-scan of its own (the child's limits hold).
+    if (format == CadFormat::step || format == CadFormat::iges) prescan_cad_file(path, format, limits.prescan);
+}
+
+// A line break inside a field of the report would split it.
+std::string one_line(std::string s) {
+    std::replace(s.begin(), s.end(), '\n', ' ');
+    return s;
 }
 
 void write_error_file(const std::string& path, ErrorCode code, const std::string& message) {
@@ -282,17 +317,20 @@ ConvertReport parse_convert_report(const std::string& text) {
     std::istringstream in(text);
     ConvertReport r;
     int in_format = 0, out_format = 0, output = 0;
-    if (!(in >> in_format >> out_format >> output >> r.faces >> r.triangles >> r.unmeshed_faces >> r.read_ms >>
-          r.mesh_ms >> r.write_ms >> r.verify_ms) ||
-        in_format < 0 || in_format > static_cast<int>(CadFormat::iges) || out_format < 0 ||
-        out_format > static_cast<int>(CadFormat::iges) || output < 0 ||
-        output > static_cast<int>(ConversionFormat::nurbs_json))
+    if (!(in >> in_format >> out_format >> output >> r.faces >> r.triangles >> r.unmeshed_faces >>
+          r.degenerate_triangles >> r.read_ms >> r.mesh_ms >> r.write_ms >> r.verify_ms) ||
+        in_format < 0 || in_format > static_cast<int>(CadFormat::brep) || out_format < 0 ||
+        out_format > static_cast<int>(CadFormat::brep) || output < 0 ||
+        output > static_cast<int>(ConversionFormat::vrml))
         throw Error(ErrorCode::internal, "conversion worker wrote no valid report");
     r.in_format = static_cast<CadFormat>(in_format);
     r.out_format = static_cast<CadFormat>(out_format);
     r.output = static_cast<ConversionFormat>(output);
     std::string line;
     std::getline(in, line);  // the rest of the numbers' line
+    std::getline(in, r.in_units);
+    std::getline(in, r.out_units);
+    std::getline(in, r.fidelity);
     while (std::getline(in, line))
         if (!line.empty()) r.warnings.push_back(line);
     return r;
@@ -324,14 +362,16 @@ Scene import_isolated(const std::string& path, const ImportOptions& options, con
 }
 
 ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path, const IsolationLimits& limits,
-                               IsolationTimings* timings) {
+                               IsolationTimings* timings, const ConvertOptions& options) {
     const auto t0 = Clock::now();
     prescan_input(in_path, limits);
     const auto t_child = Clock::now();
     const std::string exe = worker_executable(limits);
     ScratchFiles scratch;  // here: the worker's report (and its error file)
     make_scratch(scratch, scratch_dir_of(limits), "nurbsrt-convert");
-    run_worker({exe, "convert-worker", in_path, out_path, scratch.scene}, limits, scratch.error, "conversion", in_path);
+    std::vector<std::string> args = {exe, "convert-worker", in_path, out_path, scratch.scene};
+    for (std::string& a : convert_options_to_args(options)) args.push_back(std::move(a));
+    run_worker(std::move(args), limits, scratch.error, "conversion", in_path);
     const auto t_read = Clock::now();
     ConvertReport r = parse_convert_report(read_small_file(scratch.scene));
     scratch.remove();  // inside the transfer stage: the stages cover the whole call
@@ -343,22 +383,25 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
     return r;
 }
 
-int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path) {
+int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path,
+                       const ConvertOptions& options) {
     apply_fault_hook();
     const std::string error_path = report_path + ".error";
     try {
-        const ConvertReport r = convert_file(in_path, out_path);
+        const ConvertReport r = convert_file(in_path, out_path, options);
         std::ofstream out(report_path, std::ios::binary | std::ios::trunc);
         out.precision(17);
-        // One line, the order convert_isolated reads it in.
+        // The numbers on one line, then the units and the fidelity report a
+        // line each (any may be empty), the order convert_isolated reads them in.
         out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' '
             << static_cast<int>(r.output) << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' '
-            << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << ' ' << r.verify_ms << '\n';
-        // Then one warning a line (a line break inside one would split it).
-        for (std::string w : r.warnings) {
-            std::replace(w.begin(), w.end(), '\n', ' ');
-            out << w << '\n';
-        }
+            << r.degenerate_triangles << ' ' << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << ' ' << r.verify_ms
+            << '\n'
+            << one_line(r.in_units) << '\n'
+            << one_line(r.out_units) << '\n'
+            << one_line(r.fidelity) << '\n';  // compact JSON: one line
+        // Then one warning a line.
+        for (const std::string& w : r.warnings) out << one_line(w) << '\n';
         if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");
         return 0;
     } catch (const Error& e) {

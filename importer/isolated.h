@@ -55,10 +55,12 @@ struct IsolationTimings {
 Scene import_isolated(const std::string& path, const ImportOptions& options, const IsolationLimits& limits = {},
                       IsolationTimings* timings = nullptr);
 
-// Runs convert_file(in_path, out_path) in a child process (`nurbsrt
-// convert-worker IN OUT REPORT`) under the same limits, with the same errors.
+// Runs convert_file(in_path, out_path, options) in a child process (`nurbsrt
+// convert-worker IN OUT REPORT --step-schema=NAME --iges-mode=NAME [--units=NAME]`)
+// under the same limits, with the same errors.
 ConvertReport convert_isolated(const std::string& in_path, const std::string& out_path,
-                               const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr);
+                               const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr,
+                               const ConvertOptions& options = {});
 
 // The command-line arguments that carry `options` to the worker, and their
 // parser (used by the import-worker subcommand); kept together so they cannot drift.
@@ -69,8 +71,13 @@ ImportOptions import_options_from_args(const std::vector<std::string>& args);
 // the error to OUT + ".error" (code name, newline, message). Returns the exit status.
 int run_import_worker(const std::string& in_path, const std::string& out_path, const ImportOptions& options);
 
-// Entry point of the conversion worker: converts IN to OUT and writes a one-line
+// The same for ConvertOptions and the convert-worker subcommand.
+std::vector<std::string> convert_options_to_args(const ConvertOptions& options);
+ConvertOptions convert_options_from_args(const std::vector<std::string>& args);
+
+// Entry point of the conversion worker: converts IN to OUT and writes the
 // report to REPORT, or the error to REPORT + ".error". Returns the exit status.
-int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path);
+int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path,
+                       const ConvertOptions& options = {});
 
 }  // namespace nurbsrt

@@ -1,10 +1,11 @@
-// Reading STEP/IGES into an OcctModel: one compound of all transferred roots,
+// Reading STEP/IGES/BREP into an OcctModel: one compound of all transferred roots,
 // the face-index map, bodies, and (through XDE) colours and names.
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <mutex>
 
+#include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <IFSelect_ReturnStatus.hxx>
@@ -97,30 +98,7 @@ std::string iges_units(const IGESControl_Reader& reader) {
     const IGESData_GlobalSection& gs = model->GlobalSection();
     const Handle(TCollection_HAsciiString) name = gs.UnitName();
     if (!name.IsNull() && name->Length() > 0) return unit_short_name(name->ToCString());
-    switch (gs.UnitFlag()) {  // IGES 5.3 global parameter 14
-        case 1:
-            return "inch";
-        case 2:
-            return "mm";
-        case 4:
-            return "foot";
-        case 5:
-            return "mile";
-        case 6:
-            return "m";
-        case 7:
-            return "km";
-        case 8:
-            return "mil";
-        case 9:
-            return "micron";
-        case 10:
-            return "cm";
-        case 11:
-            return "microinch";
-        default:
-            return {};
-    }
+    return length_unit_name(length_unit_from_iges_flag(gs.UnitFlag()));  // IGES 5.3 global parameter 14
 }
 
 Color to_color(const Quantity_Color& c) {
@@ -367,6 +345,27 @@ void read_iges(const std::string& path, bool attributes, bool keep_document, Occ
     transfer_model(reader, caf, attributes, keep_document, "IGES", m);
 }
 
+// OCCT's own exact format (BRepTools::Write): one shape, no colours, names or
+// units (its numbers are taken as mm, what OCCT's readers deliver). With
+// attributes, an XDE document holding the shape as one part, so that exports
+// and the assembly tree treat it like any other file.
+void read_brep(const std::string& path, bool attributes, bool keep_document, OcctModel& m) {
+    BRep_Builder builder;
+    if (!BRepTools::Read(m.shape, path.c_str(), builder) || m.shape.IsNull())
+        throw Error(ErrorCode::unreadable_file, "BREP reader: the file holds no readable shape");
+    TopExp::MapShapes(m.shape, TopAbs_FACE, m.faces);
+    assign_bodies(m);
+    if (!attributes) return;
+    Handle(TDocStd_Document) doc;
+    XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+    XCAFDoc_DocumentTool::ShapeTool(doc->Main())->AddShape(m.shape, /*makeAssembly=*/Standard_False);
+    apply_xde_attributes(m, doc);
+    if (keep_document)
+        m.document = doc;
+    else
+        XCAFApp_Application::GetApplication()->Close(doc);
+}
+
 }  // namespace
 
 std::string label_name(const TDF_Label& label) {
@@ -394,21 +393,24 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
     OcctModel m;
     m.format = detect_format(path);
     if (m.format == CadFormat::unknown)
-        throw Error(ErrorCode::unsupported_format,
-                    "'" + path + "' is neither STEP (ISO-10303-21 header) nor IGES (80-column records)");
+        throw Error(ErrorCode::unsupported_format, "'" + path +
+                                                       "' is neither STEP (ISO-10303-21 header), IGES (80-column "
+                                                       "records) nor OCCT's text BREP (CASCADE Topology header)");
     const auto t0 = std::chrono::steady_clock::now();
     {
         std::lock_guard<std::mutex> lock(exchange_mutex());
-        const char* who = m.format == CadFormat::step ? "STEP reader: " : "IGES reader: ";
+        const std::string who = std::string(format_name(m.format)) + " reader: ";
         try {
             if (m.format == CadFormat::step)
                 read_step(path, read_attributes, keep_document, m);
-            else
+            else if (m.format == CadFormat::iges)
                 read_iges(path, read_attributes, keep_document, m);
+            else
+                read_brep(path, read_attributes, keep_document, m);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure, who + failure_text(f));
         } catch (const std::bad_alloc&) {
-            throw Error(ErrorCode::occt_failure, std::string(who) + "out of memory");
+            throw Error(ErrorCode::occt_failure, who + "out of memory");
         }
     }
     m.read_ms = ms_since(t0);

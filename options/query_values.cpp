@@ -14,8 +14,8 @@ namespace {
 const std::set<std::string, std::less<>> kIntegerOptions = {"width", "height", "antialias"};
 const std::set<std::string, std::less<>> kNumberOptions = {"edge_width", "fov_deg", "ortho_height", "fit_margin",
                                                            "ground_height"};
-const std::set<std::string, std::less<>> kBooleanOptions = {"edges",        "shadows",       "pinned",
-                                                            "section_caps", "section_hatch", "ground"};
+const std::set<std::string, std::less<>> kBooleanOptions = {"edges",         "shadows", "pinned", "section_caps",
+                                                            "section_hatch", "ground",  "strict"};
 
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 

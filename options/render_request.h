@@ -150,7 +150,16 @@ void check_camera_without_scene(const RenderRequest& r);
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene);
 
 // Options for the conversions endpoint: {"format": "step" | "stp" | "iges" | "igs" |
-// "stl" | "glb" | "json"}; anything else is Error(invalid_argument).
+// "stl" | "glb" | "json" | "brep" | "vrml", "units": a length_unit_names() name
+// (STEP/IGES only), "step_schema", "iges_mode", "strict": boolean};
+// anything else is Error(invalid_argument).
+struct ConversionRequest {
+    ConversionFormat format = ConversionFormat::unknown;
+    ConvertOptions options;
+    bool strict = false;  // refuse a conversion with warnings (the CLI's --strict)
+};
+ConversionRequest parse_conversion_request(const std::string& options_json);
+// Its format alone.
 ConversionFormat parse_conversion_format(const std::string& options_json);
 
 }  // namespace nurbsrt

@@ -117,6 +117,7 @@ unsigned aov_bits(const json& v, const std::string& key) {
 }
 
 // The option names, for messages that list them (kept in step with the parsers below).
+constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, strict";
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
@@ -312,17 +313,65 @@ RenderRequest parse_render_options(const std::string& options_json) {
     return r;
 }
 
-ConversionFormat parse_conversion_format(const std::string& options_json) {
+namespace {
+
+// `value` as one of an option's enum values by `from_name`, or a usage error
+// listing `names`.
+template <typename E, typename FromName>
+E conversion_enum(const std::string& key, const std::string& value, FromName from_name,
+                  const std::vector<std::string>& names) {
+    if (const std::optional<E> e = from_name(value)) return *e;
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    bad("option '" + key + "' must be one of " + list);
+}
+
+}  // namespace
+
+ConversionRequest parse_conversion_request(const std::string& options_json) {
     const json o = parse_object(options_json);
-    std::string format;
+    std::string format, units, schema, mode;
+    bool strict = false;
     for (const auto& [key, v] : o.items()) {
-        if (key != "format") bad("unknown option " + quoted_name(key) + " (a conversion takes only 'format')");
-        format = text(v, key);
+        if (key == "format")
+            format = text(v, key);
+        else if (key == "units")
+            units = text(v, key);
+        else if (key == "step_schema")
+            schema = text(v, key);
+        else if (key == "iges_mode")
+            mode = text(v, key);
+        else if (key == "strict")
+            strict = boolean(v, key);
+        else
+            bad("unknown option " + quoted_name(key) + " (a conversion takes " + kConversionOptions + ")");
     }
-    if (format.empty()) bad("option 'format' is required (step, iges, stl, glb or json)");
-    const ConversionFormat f = conversion_format_from_name(format);
-    if (f == ConversionFormat::unknown) bad("option 'format' must be step, iges, stl, glb or json");
-    return f;
+    const std::string formats = conversion_format_names();
+    if (format.empty()) bad("option 'format' is required (" + formats + ")");
+    ConversionRequest r;
+    r.strict = strict;
+    r.format = conversion_format_from_name(format);
+    if (r.format == ConversionFormat::unknown) bad("option 'format' must be one of " + formats);
+    // An option the format does not take is refused, never ignored.
+    auto only_for = [&](const std::string& value, const char* key, bool applies, const char* formats_taking_it) {
+        if (!value.empty() && !applies)
+            bad(std::string("option '") + key + "' applies to " + formats_taking_it + " outputs only, not " + format);
+    };
+    only_for(units, "units", conversion_format_declares_units(r.format), "step and iges");
+    only_for(schema, "step_schema", r.format == ConversionFormat::step, "step");
+    only_for(mode, "iges_mode", r.format == ConversionFormat::iges, "iges");
+    if (!units.empty())
+        r.options.units = conversion_enum<LengthUnit>("units", units, length_unit_from_name, length_unit_names());
+    if (!schema.empty())
+        r.options.step_schema =
+            conversion_enum<StepSchema>("step_schema", schema, step_schema_from_name, step_schema_names());
+    if (!mode.empty())
+        r.options.iges_mode = conversion_enum<IgesMode>("iges_mode", mode, iges_mode_from_name, iges_mode_names());
+    return r;
+}
+
+ConversionFormat parse_conversion_format(const std::string& options_json) {
+    return parse_conversion_request(options_json).format;
 }
 
 }  // namespace nurbsrt

@@ -40,7 +40,8 @@ PACKAGES=(
   chromium python3-websocket
 )
 # fonts-dejavu-core: the labels of contact sheets (OpenImageIO draws DejaVu Sans).
-# npm: tests/spectral.sh lints the OpenAPI document with Spectral from the npm
+# npm: tests/spectral.sh lints the OpenAPI document with Spectral, and
+# tests/gltf_validator.sh checks our glb with the Khronos glTF validator, from the npm
 # registry. Only where no npm is on PATH: a Node.js from elsewhere (NodeSource's
 # nodejs package bundles npm) conflicts with Debian's npm package.
 command -v npm >/dev/null 2>&1 || PACKAGES+=(npm)

@@ -327,6 +327,76 @@ TEST(Cli, ConvertToMeshAndJsonOutputs) {
     fs::remove_all(dir);
 }
 
+// BREP and VRML outputs by extension; a BREP file is an input like any other.
+TEST(Cli, ConvertToBrepAndVrmlAndReadBrep) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-brep-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string brep = (dir / "s.brep").string(), wrl = (dir / "s.wrl").string();
+    const CliRun b = run_nurbsrt("convert " + kScrew + " " + brep);
+    ASSERT_EQ(b.status, 0) << b.err;
+    EXPECT_NE(b.err.find("(BREP, mm)"), std::string::npos) << b.err;
+    const CliRun v = run_nurbsrt("convert " + brep + " " + wrl);
+    ASSERT_EQ(v.status, 0) << v.err;
+    EXPECT_NE(v.err.find("(BREP, no unit declared, 10 faces) to " + wrl + " (VRML, mm, "), std::string::npos) << v.err;
+    std::ifstream in(wrl);
+    std::string first;
+    std::getline(in, first);
+    EXPECT_EQ(first, "#VRML V2.0 utf8");
+    const CliRun info = run_nurbsrt("info " + brep);
+    ASSERT_EQ(info.status, 0) << info.err;
+    EXPECT_NE(info.out.find("format:      BREP"), std::string::npos) << info.out;
+    fs::remove_all(dir);
+}
+
+// The fidelity summary on stderr, the whole report with --report (also when
+// --strict refuses), and --strict failing on a lossy conversion.
+TEST(Cli, ConvertReportsFidelityAndStrictRefusesWhatChanged) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-fidelity-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string report = (dir / "r.json").string(), igs = (dir / "f.igs").string();
+    const CliRun ok = run_nurbsrt("convert --report " + report + " " + kScrew + " " + (dir / "s.stp").string());
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_NE(ok.err.find("fidelity: solids 1 -> 1, shells 1 -> 1, faces 10 -> 10"), std::string::npos) << ok.err;
+    std::ifstream in(report);
+    const nlohmann::json r = nlohmann::json::parse(in);
+    EXPECT_EQ(r["source"]["geometry"]["faces"], 10);
+    EXPECT_TRUE(r["warnings"].empty());
+    const CliRun strict =
+        run_nurbsrt("convert --strict --iges-mode faces --report " + report + " " + kScrew + " " + igs);
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_NE(strict.err.find("the output holds 0 solid(s), the source 1"), std::string::npos) << strict.err;
+    EXPECT_FALSE(fs::exists(igs));
+    std::ifstream in2(report);
+    EXPECT_EQ(nlohmann::json::parse(in2)["output"]["geometry"]["solids"], 0);
+    fs::remove_all(dir);
+}
+
+// --units writes STEP/IGES in the unit asked; without it the source's unit is
+// kept (an inch IGES file gives an inch STEP file); the summary says both.
+TEST(Cli, ConvertKeepsOrWritesTheUnitAsked) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-units-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string igs = (dir / "inch.igs").string(), stp = (dir / "inch.stp").string();
+    const CliRun to_inch = run_nurbsrt("convert --units inch " + kScrew + " " + igs);
+    ASSERT_EQ(to_inch.status, 0) << to_inch.err;
+    EXPECT_NE(to_inch.err.find("(STEP, mm, 10 faces) to " + igs + " (IGES, inch)"), std::string::npos) << to_inch.err;
+    const CliRun kept = run_nurbsrt("convert " + igs + " " + stp);
+    ASSERT_EQ(kept.status, 0) << kept.err;
+    EXPECT_NE(kept.err.find("(IGES, inch, 10 faces) to " + stp + " (STEP, inch)"), std::string::npos) << kept.err;
+    const CliRun bad = run_nurbsrt("convert --units furlong " + kScrew + " " + stp);
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    EXPECT_NE(bad.err.find("--units"), std::string::npos) << bad.err;
+    // Options OUT's format does not take are usage errors, nothing written.
+    for (const char* option : {"--units inch", "--step-schema ap242", "--iges-mode faces"}) {
+        const CliRun mesh =
+            run_nurbsrt(std::string("convert ") + option + " " + kScrew + " " + (dir / "s.stl").string());
+        EXPECT_EQ(mesh.status, 2) << option;
+        EXPECT_NE(mesh.err.find("outputs only"), std::string::npos) << mesh.err;
+        EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    }
+    fs::remove_all(dir);
+}
+
 }  // namespace
 
 namespace {

@@ -4,7 +4,9 @@
 //  * Names:    extension/name -> ConversionFormat, content types, file extensions.
 //  * Stl:      the binary STL re-read by OCCT's RWStl has the reported triangle count, its
 //              size is 84 + 50 n bytes, and its node box matches the exact (geometric, not
-//              mesh) box of the model within the mesh deflection.
+//              mesh) box of the model within the mesh deflection; no triangle of its float
+//              corners has no area, none is there twice; the sphere's pole triangles
+//              (BRepMesh gives the pole one node per triangle there) are counted as left out.
 //  * Glb:      RWGltf_CafReader reads the glb back; with the documented conversion undone
 //              (SetSystemLengthUnit(0.001), Zup) its mesh box matches the model's within the
 //              deflection; read without conversion it is the model box mapped to glTF's
@@ -17,6 +19,8 @@
 #include <gtest/gtest.h>
 
 #include <BRepBndLib.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <IMeshTools_Parameters.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <Message_ProgressRange.hxx>
@@ -30,14 +34,17 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <XCAFApp_Application.hxx>
+#include <gp_Vec.hxx>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -134,17 +141,30 @@ TEST(ConvertNames, ExtensionsNamesAndContentTypes) {
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::glb), "model/gltf-binary");
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::stl), "model/stl");
     EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::nurbs_json), "application/json");
-    for (ConversionFormat f : {ConversionFormat::step, ConversionFormat::iges, ConversionFormat::stl,
-                               ConversionFormat::glb, ConversionFormat::nurbs_json})
+    EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::vrml), "model/vrml");
+    EXPECT_EQ(nurbsrt::conversion_format_from_extension("b.BREP"), ConversionFormat::brep);
+    EXPECT_EQ(nurbsrt::conversion_format_from_extension("b.wrl"), ConversionFormat::vrml);
+    EXPECT_EQ(nurbsrt::conversion_format_from_name("wrl"), ConversionFormat::vrml);
+    EXPECT_EQ(nurbsrt::conversion_format_names(), "step, iges, stl, glb, json, brep, vrml");
+    // Every format's written extension, short name and alias lead back to it.
+    for (ConversionFormat f :
+         {ConversionFormat::step, ConversionFormat::iges, ConversionFormat::stl, ConversionFormat::glb,
+          ConversionFormat::nurbs_json, ConversionFormat::brep, ConversionFormat::vrml}) {
         EXPECT_EQ(nurbsrt::conversion_format_from_extension(std::string("x") + nurbsrt::conversion_format_extension(f)),
                   f);
+        EXPECT_EQ(nurbsrt::conversion_format_from_name(nurbsrt::conversion_format_short_name(f)), f);
+    }
     EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::stl), nurbsrt::CadFormat::unknown);
     EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::iges), nurbsrt::CadFormat::iges);
+    EXPECT_EQ(nurbsrt::cad_format_of(ConversionFormat::brep), nurbsrt::CadFormat::brep);
+    EXPECT_EQ(nurbsrt::format_from_extension("a.brp"), nurbsrt::CadFormat::brep);
+    EXPECT_TRUE(nurbsrt::conversion_format_declares_units(ConversionFormat::step));
+    EXPECT_FALSE(nurbsrt::conversion_format_declares_units(ConversionFormat::brep));
 }
 
 TEST(ConvertNames, UnknownExtensionIsUnsupported) {
     try {
-        nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("x", ".obj"));
+        nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("x", ".3mf"));
         FAIL() << "no error";
     } catch (const nurbsrt::Error& e) {
         EXPECT_EQ(e.code(), nurbsrt::ErrorCode::unsupported_format);
@@ -172,16 +192,24 @@ TEST_P(ConvertMesh, StlReadsBackWithTheModelBox) {
 
     const Handle(Poly_Triangulation) t = RWStl::ReadFile(out.c_str(), Message_ProgressRange());
     ASSERT_FALSE(t.IsNull());
-    // RWStl drops degenerate triangles (two equal corners, as at a sphere's poles): count them.
-    int degenerate = 0;
+    // No triangle of no area (its float corners, as written, span none) and
+    // none twice: RWStl, which drops the first kind, reads them all.
+    std::set<std::array<float, 9>> seen;
     for (uint32_t k = 0; k < count; ++k) {
-        float v[9];
-        std::memcpy(v, bytes.data() + 84 + 50 * size_t(k) + 12, sizeof v);  // after the normal
+        std::array<float, 9> v;
+        std::memcpy(v.data(), bytes.data() + 84 + 50 * size_t(k) + 12, sizeof v);  // after the normal
         for (float x : v) ASSERT_TRUE(std::isfinite(x)) << "triangle " << k;
-        auto same = [&](int a, int b) { return std::memcmp(v + 3 * a, v + 3 * b, 12) == 0; };
-        degenerate += same(0, 1) || same(1, 2) || same(0, 2);
+        const gp_Vec ab(v[3] - double(v[0]), v[4] - double(v[1]), v[5] - double(v[2]));
+        const gp_Vec ac(v[6] - double(v[0]), v[7] - double(v[1]), v[8] - double(v[2]));
+        EXPECT_GT(ab.Crossed(ac).Magnitude(), 0.0) << "triangle " << k << " has no area";
+        // The same triangle from any corner.
+        std::array<std::array<float, 3>, 3> corners{{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}}};
+        std::sort(corners.begin(), corners.end());
+        std::array<float, 9> key;
+        for (int c = 0; c < 3; ++c) std::copy(corners[c].begin(), corners[c].end(), key.begin() + 3 * c);
+        EXPECT_TRUE(seen.insert(key).second) << "triangle " << k << " repeats another";
     }
-    EXPECT_EQ(t->NbTriangles(), static_cast<int>(count) - degenerate);
+    EXPECT_EQ(t->NbTriangles(), static_cast<int>(count));
     Bnd_Box b;
     for (int n = 1; n <= t->NbNodes(); ++n) b.Add(t->Node(n));
     const Box3 want = exact_box(in);
@@ -230,6 +258,38 @@ TEST_P(ConvertMesh, GlbReadsBackWithTheModelBoxInGltfAxes) {
 
 INSTANTIATE_TEST_SUITE_P(Fixtures, ConvertMesh, ::testing::ValuesIn(kMeshFixtures),
                          [](const auto& info) { return std::string(info.param); });
+
+// The sphere's poles: BRepMesh, run here as convert_file runs it (deflection
+// relative to the faces' box), gives each pole triangle two corners at the
+// pole. The STL leaves those out (the test above finds none) and the report
+// counts every triangle it left out.
+TEST(ConvertStl, TrianglesOfNoAreaAreLeftOutAndCounted) {
+    const std::string in = nurbsrt::test::sphere();
+    const nurbsrt::ConvertReport r = nurbsrt::convert_file(in, out_path("sphere-degenerate", ".stl"));
+    const nurbsrt::occt::OcctModel m = nurbsrt::occt::read_model(in, false);
+    Bnd_Box box;
+    for (int i = 1; i <= m.faces.Extent(); ++i) BRepBndLib::Add(m.faces(i), box, Standard_False);
+    IMeshTools_Parameters params;
+    params.Deflection = nurbsrt::ImportOptions{}.mesh_relative_deflection * std::sqrt(box.SquareExtent());
+    params.Angle = nurbsrt::ImportOptions{}.mesh_angular_deflection;
+    BRepMesh_IncrementalMesh mesher(m.shape, params);
+    long long all = 0, pole = 0;
+    for (int i = 1; i <= m.faces.Extent(); ++i) {
+        TopLoc_Location loc;
+        const Handle(Poly_Triangulation) t = BRep_Tool::Triangulation(TopoDS::Face(m.faces(i)), loc);
+        ASSERT_FALSE(t.IsNull());
+        all += t->NbTriangles();
+        for (int k = 1; k <= t->NbTriangles(); ++k) {
+            int a, b, c;
+            t->Triangle(k).Get(a, b, c);
+            const gp_Pnt pa = t->Node(a), pb = t->Node(b), pc = t->Node(c);
+            pole += pa.IsEqual(pb, 0.0) || pb.IsEqual(pc, 0.0) || pa.IsEqual(pc, 0.0);
+        }
+    }
+    ASSERT_GT(pole, 0) << "the sphere's mesh has no pole triangles to leave out";
+    EXPECT_GE(r.degenerate_triangles, pole);
+    EXPECT_EQ(r.triangles + r.degenerate_triangles, all);
+}
 
 // The glb's JSON chunk (glTF 2.0 container: 12-byte header, then chunks).
 json glb_json(const std::string& bytes) {
@@ -390,7 +450,24 @@ TEST(ConvertIsolated, ReportsCrossTheProcessBoundary) {
     EXPECT_EQ(igs.output, ConversionFormat::iges);
     EXPECT_EQ(igs.out_format, nurbsrt::CadFormat::iges);
     EXPECT_GT(igs.verify_ms, 0);  // the read-back check, a stage of its own
-    EXPECT_EQ(stl.verify_ms, 0);
+    EXPECT_GT(stl.verify_ms, 0);  // the mesh measured against the exact faces
+    EXPECT_EQ(js.verify_ms, 0);
+    // The fidelity report crosses whole (one line of compact JSON).
+    EXPECT_EQ(stl.fidelity.substr(0, 11), "{\"source\":{");
+    EXPECT_NE(igs.fidelity.find("\"attributes\""), std::string::npos);
+    EXPECT_EQ(igs.in_units, "mm");
+    EXPECT_EQ(igs.out_units, "mm");
+    EXPECT_EQ(stl.out_units, "mm");
+    EXPECT_EQ(glb.out_units, "m");
+    // The options cross too, and the sphere's left-out pole triangles are counted.
+    nurbsrt::ConvertOptions cm;
+    cm.units = nurbsrt::LengthUnit::cm;
+    EXPECT_EQ(nurbsrt::convert_isolated(in, out_path("iso-cm", ".step"), limits, nullptr, cm).out_units, "cm");
+    const std::string sphere = nurbsrt::test::sphere();
+    const nurbsrt::ConvertReport poles = nurbsrt::convert_isolated(sphere, out_path("iso-sphere", ".stl"), limits);
+    EXPECT_GT(poles.degenerate_triangles, 0);
+    EXPECT_EQ(poles.degenerate_triangles,
+              nurbsrt::convert_file(sphere, out_path("iso-sphere-direct", ".stl")).degenerate_triangles);
 }
 
 // The child's stages and the parent's share (IsolationTimings) are the whole

@@ -150,7 +150,7 @@ TEST(ProblemCodes, OneDocumentedNameSpace) {
     size_t count = 0;
     for (int c = 0; c <= static_cast<int>(nurbsrt::ErrorCode::internal); ++c, ++count)
         names.insert(ProblemCode(static_cast<nurbsrt::ErrorCode>(c)).name());
-    for (int c = 0; c <= static_cast<int>(ServiceCode::not_implemented); ++c, ++count)  // the last one
+    for (int c = 0; c <= static_cast<int>(ServiceCode::strict_refused); ++c, ++count)  // the last one
         names.insert(ProblemCode(static_cast<ServiceCode>(c)).name());
     EXPECT_EQ(names.size(), count);
     const nlohmann::json spec = nlohmann::json::parse(openapi_document());
@@ -171,6 +171,7 @@ TEST(ProblemCodes, StatusesAndBodies) {
     EXPECT_EQ(http_status(nurbsrt::ErrorCode::invalid_json), 400);
     EXPECT_EQ(http_status(ServiceCode::malformed_request), 400);
     EXPECT_EQ(http_status(ServiceCode::not_implemented), 501);
+    EXPECT_EQ(http_status(ServiceCode::strict_refused), 422);
     EXPECT_EQ(http_status(nurbsrt::ErrorCode::unreadable_file), 422);
     EXPECT_EQ(http_status(nurbsrt::ErrorCode::internal), 500);
     EXPECT_TRUE(ProblemCode(ServiceCode::not_found) == ServiceCode::not_found);

@@ -48,6 +48,10 @@ TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
     EXPECT_EQ(outs[2].options_json, R"({"format":"iges"})");  // alias normalised
     EXPECT_EQ(artifact_format("1-conversion-2.igs"), "iges");
     EXPECT_EQ(artifact_format("0-render-0.jpg"), "jpeg");
+    EXPECT_EQ(artifact_format("0-conversion-3.wrl"), "vrml");
+    EXPECT_EQ(artifact_format("0-conversion-3.brep"), "brep");
+    EXPECT_TRUE(valid_artifact_name("0-conversion-3.brep"));
+    EXPECT_TRUE(valid_artifact_name("0-conversion-3.wrl"));
 }
 
 TEST(JobSpec, MistakesAreRejected) {

@@ -18,8 +18,10 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 void write_nurbs_json(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
     const Scene scene = import_file(in_path);
-    r.in_format = scene.format == "IGES" ? CadFormat::iges : CadFormat::step;
+    r.in_format = detect_format(in_path);
     r.faces = static_cast<int>(scene.faces.size());
+    r.in_units = scene.units;
+    r.out_units = length_unit_name(LengthUnit::mm);  // the Scene's coordinates
     r.read_ms = scene.timings.read_ms;
     r.mesh_ms = scene.timings.nurbs_convert_ms + scene.timings.mesh_ms;
     const auto t0 = std::chrono::steady_clock::now();
@@ -29,13 +31,17 @@ void write_nurbs_json(const std::string& in_path, const std::string& out_path, C
 
 }  // namespace
 
-ConvertReport convert_file(const std::string& in_path, const std::string& out_path) {
+ConvertReport convert_file(const std::string& in_path, const std::string& out_path, const ConvertOptions& options) {
     ConvertReport r;
     r.output = conversion_format_from_extension(out_path);
     r.out_format = cad_format_of(r.output);
     if (r.output == ConversionFormat::unknown)
         throw Error(ErrorCode::unsupported_format,
-                    "output '" + out_path + "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb or .json)");
+                    "output '" + out_path +
+                        "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb, .json, .brep or .wrl)");
+    if (options.units != LengthUnit::unknown && !conversion_format_declares_units(r.output))
+        throw Error(ErrorCode::invalid_argument, std::string("option 'units' applies to STEP and IGES outputs; ") +
+                                                     conversion_format_name(r.output) + " has a unit of its own");
     const std::filesystem::path out_dir = std::filesystem::path(out_path).parent_path();
     std::error_code ec;
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))
@@ -44,7 +50,11 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
     switch (r.output) {
         case ConversionFormat::step:
         case ConversionFormat::iges:
-            occt::write_cad(in_path, out_path, r);
+        case ConversionFormat::brep:
+            occt::write_cad(in_path, out_path, options, r);
+            break;
+        case ConversionFormat::vrml:
+            occt::write_vrml(in_path, out_path, r);
             break;
         case ConversionFormat::stl:
             occt::write_stl(in_path, out_path, r);

@@ -1,6 +1,7 @@
 // STEP/IGES output of convert_file through OCCT's XDE document, so that face
 // colours, names, layers and (STEP only) the assembly structure of the input
-// survive (OCCT User Guide: "Extended Data Exchange (XDE)", STEP/IGES with XDE).
+// survive (OCCT User Guide: "Extended Data Exchange (XDE)", STEP/IGES with
+// XDE); BREP, OCCT's own exact format, holds the shape alone.
 //
 // What was carried is measured, not assumed: the written file is read back
 // with XDE and compared with the input's document (coloured faces and their
@@ -12,16 +13,20 @@
 #include <set>
 #include <vector>
 
+#include <BRepTools.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Writer.hxx>
 #include <IGESControl_Controller.hxx>
 #include <Interface_Static.hxx>
 #include <STEPCAFControl_Writer.hxx>
+#include <STEPControl_Controller.hxx>
 #include <Standard_Failure.hxx>
 #include <TDF_ChildIterator.hxx>
 #include <TDF_LabelMap.hxx>
 #include <TDF_LabelSequence.hxx>
+#include <TopAbs_ShapeEnum.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_Editor.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XCAFPrs_DocumentExplorer.hxx>
 
@@ -124,6 +129,15 @@ int faces_losing_colour(const XdeContent& in, const XdeContent& out) {
     return lost;
 }
 
+// XCAFDoc_ShapeTool names a label it makes for an unnamed shape after the
+// shape's type (its auto-naming; the IGES reader makes such labels for
+// coloured faces): a name the source never had, which no target must keep.
+bool is_generated_name(const std::string& name) {
+    static const char* const kTypeNames[] = {"COMPOUND", "COMPSOLID", "SOLID",  "SHELL", "FACE",
+                                             "WIRE",     "EDGE",      "VERTEX", "SHAPE"};
+    return std::any_of(std::begin(kTypeNames), std::end(kTypeNames), [&](const char* t) { return name == t; });
+}
+
 std::string listed_names(const std::vector<std::string>& names) {
     std::string s;
     for (size_t i = 0; i < names.size() && i < kNamesListed; ++i) s += (i ? ", '" : "'") + names[i] + "'";
@@ -138,7 +152,11 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     // (entities 308/408) are not used by OCCT's IGESCAFControl_Writer, which
     // writes each free shape of the document as one compound with the
     // placements applied (measured: one root named as the top assembly).
-    if (out_format == CadFormat::iges && in.components > 0)
+    if (out_format == CadFormat::brep && in.components > 0)
+        w.push_back("BREP has no product structure: " + std::to_string(in.instances) + " part instance(s) (" +
+                    std::to_string(in.components) + " component(s) in " + std::to_string(in.assemblies) +
+                    " assembly(ies)) written as one compound of placed shapes");
+    else if (out_format == CadFormat::iges && in.components > 0)
         w.push_back("IGES has no assembly structure: " + std::to_string(in.instances) + " part instance(s) (" +
                     std::to_string(in.components) + " component(s) in " + std::to_string(in.assemblies) +
                     " assembly(ies)) written as a flat list of shapes");
@@ -157,39 +175,113 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     std::vector<std::string> missing;
     std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
                         std::back_inserter(missing));
+    std::erase_if(missing, is_generated_name);
     if (!missing.empty())
         w.push_back(std::to_string(missing.size()) + " of " + std::to_string(in.names.size()) +
                     " name(s) not in the written " + fmt + " file: " + listed_names(missing));
     return w;
 }
 
-// The document written by OCCT's XDE writers; callers hold exchange_mutex and
-// catch Standard_Failure.
-void write_document(const Handle(TDocStd_Document) & doc, const std::string& out_path, CadFormat out_format) {
-    if (out_format == CadFormat::iges) {
-        IGESControl_Controller::Init();
-        // The XDE writer takes unit and mode from these statics. BRep mode
-        // (186/514/510 entities) keeps faces and solids; the default "faces"
-        // mode writes trimmed surfaces without topology. Our readers deliver mm.
-        Interface_Static::SetIVal("write.iges.brep.mode", 1);
-        Interface_Static::SetCVal("write.iges.unit", "MM");
-        IGESCAFControl_Writer writer;
-        writer.SetColorMode(Standard_True);
-        writer.SetNameMode(Standard_True);
-        writer.SetLayerMode(Standard_True);
-        if (!writer.Transfer(doc)) throw Error(ErrorCode::occt_failure, "IGES writer: transfer failed");
-        writer.ComputeModel();
-        if (!writer.Write(out_path.c_str())) throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
-    } else {
-        STEPCAFControl_Writer writer;
-        writer.SetColorMode(Standard_True);
-        writer.SetNameMode(Standard_True);
-        writer.SetLayerMode(Standard_True);
-        if (!writer.Transfer(doc, STEPControl_AsIs))
-            throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
-        if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
-            throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
+// The unit a conversion writes: the one asked for, else the first the source
+// declares (a STEP file can declare several contexts; its shapes take the
+// first), else mm, what OCCT's readers deliver.
+LengthUnit target_unit(const std::string& declared, LengthUnit asked) {
+    if (asked != LengthUnit::unknown) return asked;
+    const LengthUnit first =
+        length_unit_from_name(declared.substr(0, declared.find(','))).value_or(LengthUnit::unknown);
+    return first != LengthUnit::unknown ? first : LengthUnit::mm;
+}
+
+// IGES groups whose members carry names (what OCCT's IGES writer makes of an
+// assembly, and what many CAD systems write) become STEP assemblies, one named
+// part per member: STEP names products, not sub-shapes of one product, so
+// otherwise every member's name is lost and its faces take the group's.
+// XCAFDoc_Editor::Expand moves the members' names and colours onto the new
+// parts. Groups without member names stay one shape (a file of loose faces
+// should not turn into a product per face).
+void expand_named_groups(const Handle(TDocStd_Document) & doc) {
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+    TDF_LabelSequence roots;
+    shapes->GetFreeShapes(roots);
+    for (const TDF_Label& root : roots) {
+        if (XCAFDoc_ShapeTool::IsAssembly(root) || XCAFDoc_ShapeTool::GetShape(root).ShapeType() != TopAbs_COMPOUND)
+            continue;
+        bool named_member = false;
+        for (TDF_ChildIterator ci(root); ci.More() && !named_member; ci.Next())
+            named_member = !label_name(ci.Value()).empty();
+        if (named_member) XCAFDoc_Editor::Expand(doc->Main(), root, /*theRecursively=*/Standard_True);
     }
+}
+
+// The XDE part of the fidelity report: colours, names and the assembly of the
+// source and the output, with the first names lost.
+nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& out) {
+    std::vector<std::string> lost;
+    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(), std::back_inserter(lost));
+    std::erase_if(lost, is_generated_name);
+    const size_t lost_count = lost.size();
+    if (lost.size() > kNamesListed) lost.resize(kNamesListed);
+    auto tree = [](const XdeContent& c) {
+        return nlohmann::ordered_json{
+            {"assemblies", c.assemblies}, {"components", c.components}, {"instances", c.instances}};
+    };
+    return {{"colours",
+             {{"source_coloured_faces", in.coloured_faces},
+              {"output_coloured_faces", out.coloured_faces},
+              {"faces_losing_colour", faces_losing_colour(in, out)}}},
+            {"names",
+             {{"source", in.names.size()}, {"output", out.names.size()}, {"lost", lost_count}, {"lost_first", lost}}},
+            {"assembly", {{"source", tree(in)}, {"output", tree(out)}}}};
+}
+
+// The OCCT names of the STEP schemas (write.step.schema, STEPControl_Controller).
+const char* occt_step_schema(StepSchema s) { return s == StepSchema::ap242 ? "AP242DIS" : "AP214IS"; }
+
+void write_iges(const Handle(TDocStd_Document) & doc, const std::string& out_path, LengthUnit unit, IgesMode mode) {
+    IGESControl_Controller::Init();
+    // The XDE writer takes unit and mode from these statics (its constructor
+    // reads them). BRep mode (186/514/510 entities) keeps faces and solids;
+    // "faces" mode writes trimmed surfaces (144) without topology.
+    Interface_Static::SetIVal("write.iges.brep.mode", mode == IgesMode::brep ? 1 : 0);
+    Interface_Static::SetIVal("write.iges.unit", iges_unit_flag(unit));
+    IGESCAFControl_Writer writer;
+    writer.SetColorMode(Standard_True);
+    writer.SetNameMode(Standard_True);
+    writer.SetLayerMode(Standard_True);
+    if (!writer.Transfer(doc)) throw Error(ErrorCode::occt_failure, "IGES writer: transfer failed");
+    writer.ComputeModel();
+    if (!writer.Write(out_path.c_str())) throw Error(ErrorCode::io, "IGES writer: cannot write '" + out_path + "'");
+}
+
+void write_step(const Handle(TDocStd_Document) & doc, const std::string& out_path, LengthUnit unit, StepSchema schema) {
+    STEPControl_Controller::Init();
+    // write.step.unit enumerates the units in IGES's order (STEPControl_Controller).
+    // Unit and schema are set before the writer exists: its model takes the
+    // unit it scales to and the header's schema when made (the unit set after,
+    // the header said INCH over mm numbers).
+    Interface_Static::SetIVal("write.step.unit", iges_unit_flag(unit));
+    Interface_Static::SetCVal("write.step.schema", occt_step_schema(schema));
+    STEPCAFControl_Writer writer;
+    writer.SetColorMode(Standard_True);
+    writer.SetNameMode(Standard_True);
+    writer.SetLayerMode(Standard_True);
+    if (!writer.Transfer(doc, STEPControl_AsIs)) throw Error(ErrorCode::occt_failure, "STEP writer: transfer failed");
+    if (writer.Write(out_path.c_str()) != IFSelect_RetDone)
+        throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
+}
+
+// The model written in `out_format`: STEP and IGES from its XDE document in
+// `unit` (the writers scale the document's mm to it), BREP as OCCT's own text
+// (the shape alone: no colours, names or unit). Callers hold exchange_mutex and
+// catch Standard_Failure.
+void write_model(const OcctModel& model, const std::string& out_path, CadFormat out_format, LengthUnit unit,
+                 const ConvertOptions& options) {
+    if (out_format == CadFormat::iges)
+        write_iges(model.document, out_path, unit, options.iges_mode);
+    else if (out_format == CadFormat::step)
+        write_step(model.document, out_path, unit, options.step_schema);
+    else if (!BRepTools::Write(model.shape, out_path.c_str()))
+        throw Error(ErrorCode::io, "BREP writer: cannot write '" + out_path + "'");
 }
 
 }  // namespace
@@ -198,21 +290,27 @@ OcctModel read_for_export(const std::string& in_path, const std::string& target,
     OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
     r.in_format = model.format;
     r.faces = model.faces.Extent();
+    r.in_units = model.units;
     r.read_ms = model.read_ms;
     if (model.document.IsNull())
         throw Error(ErrorCode::occt_failure, "XDE reader gave no document for the " + target + " export");
     return model;
 }
 
-void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r) {
     OcctModel model = read_for_export(in_path, format_name(r.out_format), r);
     DocumentCloser closer{model.document};
+    // Formats without a declared unit (BREP) are written in OCCT's mm.
+    const bool declares_units = conversion_format_declares_units(r.output);
+    const LengthUnit unit = declares_units ? target_unit(model.units, options.units) : LengthUnit::mm;
+    if (model.format == CadFormat::iges && r.out_format == CadFormat::step) expand_named_groups(model.document);
 
     const auto t0 = std::chrono::steady_clock::now();
     {
         std::lock_guard<std::mutex> lock(exchange_mutex());
         try {
-            write_document(model.document, out_path, r.out_format);
+            write_model(model, out_path, r.out_format, unit, options);
         } catch (const Standard_Failure& f) {
             throw Error(ErrorCode::occt_failure,
                         std::string(format_name(r.out_format)) + " writer: " + failure_text(f));
@@ -224,11 +322,25 @@ void write_cad(const std::string& in_path, const std::string& out_path, ConvertR
     try {
         OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
         DocumentCloser written_closer{written.document};
-        r.warnings = shortfalls(content_of(model), content_of(written), r.out_format);
+        const XdeContent in = content_of(model), out = content_of(written);
+        r.warnings = shortfalls(in, out, r.out_format);
+        r.out_units = declares_units ? written.units : length_unit_name(unit);
+        if (r.out_units != length_unit_name(unit))
+            r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +
+                                 length_unit_name(unit) + "'");
+        // Geometry read back in mm, as the source: directly comparable whatever the written unit.
+        const GeometryMeasures gin = measure_geometry(model.shape), gout = measure_geometry(written.shape);
+        nlohmann::ordered_json f = {{"source", source_json(model, gin)}};
+        f["output"] = {
+            {"format", conversion_format_name(r.output)}, {"units", r.out_units}, {"geometry", geometry_json(gout)}};
+        f["relative_differences"] = compare_geometry(gin, gout, r.warnings);
+        f["attributes"] = attributes_json(in, out);
+        r.fidelity = f.dump();
     } catch (const Error& e) {
         // The file is written; that OCCT cannot read it back is worth knowing
         // but does not undo the conversion.
         r.warnings.push_back(std::string("the written file could not be read back to check it: ") + e.what());
+        r.out_units = length_unit_name(unit);
     }
     r.verify_ms = ms_since(t_verify);
 }

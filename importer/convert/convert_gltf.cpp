@@ -14,8 +14,6 @@
 #include <Standard_Failure.hxx>
 #include <TColStd_IndexedDataMapOfStringString.hxx>
 #include <TDF_LabelSequence.hxx>
-#include <TopoDS_Compound.hxx>
-#include <BRep_Builder.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XCAFDoc_VisMaterial.hxx>
@@ -62,17 +60,11 @@ XCAFPrs_Style paint_material(const Handle(TDocStd_Document) & doc, const TDF_Lab
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
+    r.out_units = length_unit_name(LengthUnit::m);
 
-    // Mesh the shapes the document holds (the writer takes the triangulations
-    // from them); parts placed twice share their faces, so are meshed once.
-    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(model.document->Main());
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r);
     TDF_LabelSequence roots;
-    shapes->GetFreeShapes(roots);
-    TopoDS_Compound all;
-    BRep_Builder builder;
-    builder.MakeCompound(all);
-    for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
-    mesh_for_export(all, r);
+    XCAFDoc_DocumentTool::ShapeTool(model.document->Main())->GetFreeShapes(roots);
 
     const auto t0 = std::chrono::steady_clock::now();
     try {
@@ -91,6 +83,9 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
         throw Error(ErrorCode::occt_failure, "glTF writer: " + failure_text(f));
     }
     r.write_ms = ms_since(t0);
+    const auto t_verify = std::chrono::steady_clock::now();
+    r.fidelity = mesh_fidelity(model, meshed, r);
+    r.verify_ms = ms_since(t_verify);
 }
 
 }  // namespace nurbsrt::occt

@@ -13,6 +13,8 @@ void write_stl(const std::string& in_path, const std::string& out_path, ConvertR
     const OcctModel model = read_model(in_path, /*read_attributes=*/false);
     r.in_format = model.format;
     r.faces = model.faces.Extent();
+    r.in_units = model.units;
+    r.out_units = length_unit_name(LengthUnit::mm);
     r.read_ms = model.read_ms;
     mesh_for_export(model.shape, r);
 
@@ -26,6 +28,9 @@ void write_stl(const std::string& in_path, const std::string& out_path, ConvertR
         throw Error(ErrorCode::occt_failure, "STL writer: " + failure_text(f));
     }
     r.write_ms = ms_since(t0);
+    const auto t_verify = std::chrono::steady_clock::now();
+    r.fidelity = mesh_fidelity(model, model.shape, r);
+    r.verify_ms = ms_since(t_verify);
 }
 
 }  // namespace nurbsrt::occt

@@ -2,7 +2,11 @@
 // output extension). importer/*.cpp only: the mesh helper takes OCCT types.
 #pragma once
 
+#include <array>
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "importer/importer.h"
 #include "importer/occt_shape.h"
@@ -13,24 +17,80 @@ namespace nurbsrt::occt {
 
 // Reads `in_path` with its XDE document (colours, names, assembly) for an export
 // to `target` (the output format's name), filling r.in_format, r.faces and
-// r.read_ms; throws occt_failure when the reader gives no document. The caller
+// r.in_units and r.read_ms; throws occt_failure when the reader gives no document. The caller
 // closes the document (DocumentCloser).
 OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r);
 
-// STEP or IGES through OCCT's writers (exact geometry, topology kept).
-void write_cad(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// STEP, IGES or BREP through OCCT's writers (exact geometry, topology kept);
+// STEP and IGES in options.units or the source's unit, with options' schema / mode.
+void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r);
 // Binary STL of the whole model, meshed by mesh_for_export.
 void write_stl(const std::string& in_path, const std::string& out_path, ConvertReport& r);
 // Binary glTF 2.0 (.glb) from the XDE document: colours, names and assembly
 // instances kept; Y-up, metres (see convert_gltf.cpp).
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// VRML 2.0 (.wrl) from the XDE document: colours and the assembly's placements
+// kept; coordinates in mm (see convert_vrml.cpp).
+void write_vrml(const std::string& in_path, const std::string& out_path, ConvertReport& r);
 
 // Meshes every face of `shape` with BRepMesh for export: linear deflection
 // ImportOptions{}.mesh_relative_deflection times the diagonal of the faces'
 // bounding box, angular deflection ImportOptions{}.mesh_angular_deflection.
 // Fills r.mesh_ms, r.triangles (over all face occurrences, instances counted
 // separately) and r.unmeshed_faces (faces left without a triangulation, which
-// mesh outputs cannot contain). Returns the deflection used.
+// mesh outputs cannot contain). Triangles of no area at float precision or
+// repeating another of their face are taken out of the faces' triangulations
+// (the writers read those) and counted in r.degenerate_triangles.
+// Returns the deflection used.
 double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r);
+// The same for the shapes an XDE document holds (the writers that take a
+// document read the triangulations from them); parts placed twice share their
+// faces, so are meshed once.
+// Returns the meshed compound of the document's free shapes.
+TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r);
+
+// --- the fidelity report (fidelity.cpp) ----------------------------------------
+// A shape as OCCT measures it: distinct (located) sub-shapes, the volume of its
+// solids and the area of its faces (BRepGProp), the box of its faces' exact
+// geometry, and validity (BRepCheck_Analyzer).
+struct GeometryMeasures {
+    int solids = 0, shells = 0, faces = 0, edges = 0;
+    double volume = 0, area = 0;
+    std::array<double, 6> box{};  // min x y z, max x y z
+    bool valid = true;
+};
+GeometryMeasures measure_geometry(const TopoDS_Shape& shape);
+// The triangles of the faces' triangulations (placed, every occurrence): their
+// area, the volume they enclose (divergence theorem) and their box.
+struct MeshMeasures {
+    long long triangles = 0;
+    double area = 0, volume = 0;
+    std::array<double, 6> box{};
+};
+MeshMeasures measure_mesh(const TopoDS_Shape& shape);
+nlohmann::ordered_json geometry_json(const GeometryMeasures& m);
+// Relative differences of the output from the source; adds a warning for each
+// topology count that changed, for a volume, area or box beyond the exact
+// formats' tolerance, and for an invalid output of a valid source.
+nlohmann::ordered_json compare_geometry(const GeometryMeasures& in, const GeometryMeasures& out,
+                                        std::vector<std::string>& warnings);
+// A mesh output against its source: triangles, area, volume, box and their
+// relative differences.
+nlohmann::ordered_json mesh_json(const GeometryMeasures& in, const MeshMeasures& mesh, const ConvertReport& r);
+// The deviation of a face's export mesh from the face (mesh_deviation.cpp): the
+// distance of every vertex from the surface at its (u, v), and of every
+// triangle's centroid from its closest point on the trimmed face (Newton from
+// the triangle's (u, v) centroid; where that point is trimmed away, the face's
+// boundary, counted in `outside_trim`). Empty without a triangulation with (u, v).
+std::vector<double> face_mesh_deviations(const TopoDS_Face& face, long long& outside_trim);
+// Max, p99 and mean of those over every face of `meshed`, in mm and relative to
+// `diagonal`; null when nothing was meshed.
+nlohmann::ordered_json mesh_deviation_json(const TopoDS_Shape& meshed, double diagonal);
+// The source's part of a report: format, declared units, geometry.
+nlohmann::ordered_json source_json(const OcctModel& model, const GeometryMeasures& m);
+// The whole report of a mesh output: `meshed` is the shape whose faces carry
+// the triangulations written.
+std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, const ConvertReport& r);
 
 }  // namespace nurbsrt::occt

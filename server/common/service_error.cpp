@@ -11,8 +11,9 @@ constexpr EnumName<ServiceCode> kServiceCodeNames[] = {
     {ServiceCode::overloaded, "overloaded"},         {ServiceCode::render_timeout, "render_timeout"},
     {ServiceCode::unauthorized, "unauthorized"},     {ServiceCode::request_timeout, "request_timeout"},
     {ServiceCode::interrupted, "interrupted"},       {ServiceCode::malformed_request, "malformed_request"},
-    {ServiceCode::not_acceptable, "not_acceptable"}, {ServiceCode::not_implemented, "not_implemented"}};
-static_assert(names_every_value(kServiceCodeNames, ServiceCode::not_implemented));
+    {ServiceCode::not_acceptable, "not_acceptable"}, {ServiceCode::not_implemented, "not_implemented"},
+    {ServiceCode::strict_refused, "strict_refused"}};
+static_assert(names_every_value(kServiceCodeNames, ServiceCode::strict_refused));
 
 }  // namespace
 

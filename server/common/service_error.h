@@ -27,7 +27,9 @@ enum class ServiceCode {
     interrupted,         // a job's run was cut short by service restarts too often (server/jobs/job_runner.h)
     malformed_request,  // the request's HTTP framing or header syntax is invalid (RFC 9112; server/http/http_framing.h)
     not_acceptable,     // the Accept header admits none of the answer's media types (RFC 9110 §15.5.7: 406)
-    not_implemented,  // a transfer coding other than chunked (RFC 9112 §6.1: 501); the last code (tests iterate up to it)
+    not_implemented,    // a transfer coding other than chunked (RFC 9112 §6.1: 501)
+    strict_refused,     // `strict` was asked and the conversion has warnings: 422, nothing written; the last code
+                        // (tests iterate up to it)
 };
 
 // Stable machine-readable name ("not_found", ...), used in JSON errors and the job store.

@@ -53,6 +53,8 @@ int service_status(ServiceCode code) {
             return 406;
         case ServiceCode::not_implemented:
             return 501;
+        case ServiceCode::strict_refused:
+            return 422;
         case ServiceCode::render_timeout:
             return 504;
         case ServiceCode::interrupted:
@@ -115,6 +117,8 @@ const char* service_title(ServiceCode code) {
             return "Not acceptable";
         case ServiceCode::not_implemented:
             return "Not implemented";
+        case ServiceCode::strict_refused:
+            return "Refused by strict";
     }
     return "Internal error";
 }

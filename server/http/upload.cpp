@@ -193,8 +193,9 @@ JobUpload read_job_upload(const httplib::Request& req, int max_job_files) {
             if (b.empty()) throw Error(ErrorCode::invalid_argument, "file " + std::to_string(index) + " is empty");
             const CadFormat f = detect_format_bytes(b.data(), b.size());
             if (f == CadFormat::unknown)
-                throw Error(ErrorCode::unsupported_format,
-                            "file " + std::to_string(index) + " is neither STEP nor IGES (recognised by content)");
+                throw Error(
+                    ErrorCode::unsupported_format,
+                    "file " + std::to_string(index) + " is neither STEP, IGES nor BREP (recognised by content)");
             // The filename is only a label for the client (and to refer to the file): bounded, never a path.
             up.inputs.push_back({index, part.filename.substr(0, 255), format_name(f), static_cast<int64_t>(b.size())});
             up.bytes.push_back(&b);

@@ -451,6 +451,8 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
                   {"faces", report.faces},
                   {"warnings", report.warnings},
                   {"timings_ms", nullptr}};
+        // The fidelity report (importer.h), as POST /v1/conversions answers it; none for NURBS JSON.
+        if (!report.fidelity.empty()) result["fidelity"] = nlohmann::json::parse(report.fidelity);
         // The artifact is already in place (partial): no transfer; this result is the answer.
         stages.mark("response");
         result["timings_ms"] = stage_timings_json(stages, kConversionStages);

@@ -115,10 +115,10 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
                 if (key != "file" && key != "type" && key != "format")
                     bad_spec(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
             if (!o.contains("format") || !o["format"].is_string())
-                bad_spec(where + ": a conversion needs 'format' (step, iges, stl, glb or json)");
+                bad_spec(where + ": a conversion needs 'format' (" + conversion_format_names() + ")");
             const ConversionFormat f = conversion_format_from_name(o["format"].get<std::string>());
             if (f == ConversionFormat::unknown)
-                bad_spec(where + ": 'format' must be one of step, iges, stl, glb, json");
+                bad_spec(where + ": 'format' must be one of " + conversion_format_names());
             out.options_json = json{{"format", conversion_format_short_name(f)}}.dump();
             extension = conversion_format_extension(f);
             out.content_type = conversion_format_content_type(f);
@@ -138,15 +138,17 @@ std::string artifact_name(int file, const std::string& type, int output, const s
 
 bool valid_artifact_name(const std::string& name) {
     static const std::regex pattern(
-        R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|step|igs|stl|glb|json)$)");
+        R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|step|igs|stl|glb|json|brep|wrl)$)");
     return name.size() <= 64 && std::regex_match(name, pattern);
 }
 
 std::string artifact_format(const std::string& name) {
+    // Conversions by the formats' table (.igs -> iges, .wrl -> vrml), images by their own.
+    if (const ConversionFormat f = conversion_format_from_extension(name); f != ConversionFormat::unknown)
+        return conversion_format_short_name(f);
     const std::string ext = name.substr(name.rfind('.') + 1);
     if (ext == "jpg") return "jpeg";
     if (ext == "tif") return "tiff";
-    if (ext == "igs") return "iges";
     return ext;
 }
 

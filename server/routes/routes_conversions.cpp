@@ -1,6 +1,6 @@
 // POST /v1/conversions: one synchronous conversion of a STEP/IGES upload (or
 // of a stored file named by `file_id`, server/store/file_store.h) to
-// STEP, IGES, STL, glb or NURBS JSON, run in a child process
+// STEP, IGES, BREP, STL, glb, VRML or NURBS JSON, run in a child process
 // (importer/isolated.h) under the import time and memory limits.
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -35,8 +35,9 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
     StageClock stages(GuardedServer::request_received_at());
-    Upload upload = read_upload(req, {"format"});
-    const ConversionFormat format = parse_conversion_format(upload.options_json);
+    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode", "strict"});
+    const ConversionRequest request = parse_conversion_request(upload.options_json);
+    const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.
     // A NURBS JSON file is application/json itself: the wrapper only when Accept names that type.
     const std::string file_type = conversion_format_content_type(format);
@@ -48,7 +49,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     const std::string& bytes = *upload.bytes;
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     if (detect_format_bytes(bytes.data(), bytes.size()) == CadFormat::unknown)
-        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
+        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP, IGES nor BREP (recognised by content)");
     stages.mark("upload");
 
     auto ticket = admit(ctx);
@@ -62,12 +63,18 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     try {
         IsolationLimits limits = isolation_limits(ctx);
         limits.should_stop = GuardedServer::client_gone_check();  // a gone client's conversion is killed
-        report = convert_isolated(in.path(), out.path(), limits, &isolated);
+        report = convert_isolated(in.path(), out.path(), limits, &isolated, request.options);
     } catch (const Error& e) {
         ctx.metrics.count_import_failure(error_code_name(e.code()));
         throw;
     }
     add_conversion_stages(report, isolated, stages);
+    if (request.strict && !report.warnings.empty()) {
+        // Nothing of the file is answered: the problem says why.
+        std::string detail = std::to_string(report.warnings.size()) + " warning(s), refused by strict:";
+        for (const std::string& w : report.warnings) detail += " " + w + ";";
+        throw ServiceError(ServiceCode::strict_refused, detail);
+    }
     stages.mark("isolation");
     const std::string data = read_file_bytes(out.path());
     ticket.reset();
@@ -80,9 +87,14 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
                                {"faces", report.faces},
                                {"triangles", report.triangles},
                                {"unmeshed_faces", report.unmeshed_faces},
+                               {"degenerate_triangles", report.degenerate_triangles},
+                               {"input_units", report.in_units},
+                               {"output_units", report.out_units},
                                {"warnings", report.warnings},
                                {"content_type", file_type},
                                {"data_base64", base64_encode(data)}};
+        // Every output but NURBS JSON (the imported scene itself) has one.
+        if (!report.fidelity.empty()) body["fidelity"] = nlohmann::json::parse(report.fidelity);
         // The last stage, this answer, ends before its serialization: the text
         // cannot hold the time it takes to write itself.
         stages.mark("response");

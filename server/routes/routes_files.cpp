@@ -149,7 +149,7 @@ void handle_file_upload(ServerContext& ctx, const httplib::Request& req, httplib
     if (bytes.empty()) throw Error(ErrorCode::invalid_argument, empty_upload_detail(upload));
     const CadFormat format = detect_format_bytes(bytes.data(), bytes.size());
     if (format == CadFormat::unknown)
-        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP nor IGES (recognised by content)");
+        throw Error(ErrorCode::unsupported_format, "the upload is neither STEP, IGES nor BREP (recognised by content)");
 
     StoredFile file;
     file.id = sha256_hex(bytes);

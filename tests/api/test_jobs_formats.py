@@ -33,3 +33,26 @@ def test_job_converts_to_stl_glb_and_nurbs_json(url):
         scene = json.loads(download(url, by[(f, "json")]))
         jsonschema.Draft202012Validator(NURBS_SCHEMA).validate(scene)
         assert scene["patches"] == len(scene["faces"]) > 0
+
+
+def test_job_converts_to_brep_and_vrml_and_takes_a_brep_input(url):
+    outputs = [{"file": 0, "type": "conversion", "format": fmt} for fmt in ("brep", "vrml")]
+    job = wait_finished(url, accepted(submit(url, [("screw.step", SCREW.read_bytes())], {"outputs": outputs}))["id"])
+    assert job["state"] == "succeeded", json.dumps(job)[:800]
+    by = {o["format"]: o for o in job["outputs"]}
+    assert by["brep"]["artifact"]["name"].endswith(".brep")
+    assert by["vrml"]["artifact"]["name"].endswith(".wrl")
+    assert by["vrml"]["artifact"]["content_type"] == "model/vrml"
+    # Each conversion output reports its fidelity, as POST /v1/conversions does.
+    f = by["brep"]["report"]["fidelity"]
+    assert f["source"]["geometry"]["faces"] == f["output"]["geometry"]["faces"] == 10
+    assert by["vrml"]["report"]["fidelity"]["output"]["deviation_in_mm"]["points"] > 0
+    brep = download(url, by["brep"])
+    assert b"CASCADE Topology V" in brep[:200]
+    assert download(url, by["vrml"]).startswith(b"#VRML V2.0 utf8")
+    # The BREP artifact as a job's input: recognised by content, converted back to STEP.
+    job = wait_finished(url, accepted(submit(url, [("screw.brep", brep)],
+                                             {"outputs": [{"file": 0, "type": "conversion", "format": "step"}]}))["id"])
+    assert job["state"] == "succeeded", json.dumps(job)[:800]
+    assert job["files"][0]["format"] == "BREP"
+    assert download(url, job["outputs"][0]).startswith(b"ISO-10303-21;")

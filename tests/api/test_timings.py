@@ -115,7 +115,8 @@ def test_conversion_stages_sum_to_total(url):
         check_adds_up(t, CONVERSION_STAGES, f"conversion to {fmt}, JSON")
         check_adds_up(server_timing(j), CONVERSION_STAGES, f"conversion to {fmt}, JSON answer's Server-Timing")
         assert t["isolation"] > 0 and t["read"] > 0 and t["write"] > 0
-        assert (t["mesh"] > 0) == (fmt == "stl") and (t["verify"] > 0) == (fmt == "step"), t
+        # verify: STEP read back and compared; STL measured against the exact faces (fidelity).
+        assert (t["mesh"] > 0) == (fmt == "stl") and t["verify"] > 0, t
         f = requests.post(url + "/v1/conversions", files={"file": ("in.cad", source), "format": (None, fmt)},
                           timeout=TIMEOUT)
         assert f.status_code == 200

@@ -1,0 +1,137 @@
+// The fidelity report of convert_file: what it measures is measured again here,
+// independently, with OCCT's own readers and BRepGProp on the files as written.
+//  * Exact:  STEP -> IGES of a coloured assembly: the report's output volume and
+//            area are those of the IGES file read by IGESControl_Reader (1e-9
+//            relative), the source's those of the STEP file; the differences
+//            are within the exact formats' 1e-6; counts and colours kept.
+//  * Lossy:  IGES in faces mode has no solid or shell: the report counts them
+//            and turns each change into a warning (what --strict refuses).
+//  * Mesh:   the STL's report gives the area of the triangles as written (their
+//            float corners, read with RWStl) within float rounding, and the
+//            difference from the exact area it states is the one measured here.
+#include <gtest/gtest.h>
+
+#include <BRepGProp.hxx>
+#include <GProp_GProps.hxx>
+#include <IGESControl_Reader.hxx>
+#include <Message_ProgressRange.hxx>
+#include <Poly_Triangulation.hxx>
+#include <RWStl.hxx>
+#include <STEPControl_Reader.hxx>
+#include <TopExp_Explorer.hxx>
+
+#include <cmath>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "importer/importer.h"
+#include "tests/support/fixtures.h"
+
+namespace {
+
+using nlohmann::json;
+
+std::string out_path(const std::string& name) { return nurbsrt::test::fixture_dir() + "/fidelity-" + name; }
+
+struct Props {
+    double volume = 0, area = 0;
+};
+
+Props props_of(const TopoDS_Shape& s) {
+    Props p;
+    for (TopExp_Explorer ex(s, TopAbs_SOLID); ex.More(); ex.Next()) {
+        GProp_GProps v;
+        BRepGProp::VolumeProperties(ex.Current(), v);
+        p.volume += std::abs(v.Mass());
+    }
+    GProp_GProps a;
+    BRepGProp::SurfaceProperties(s, a);
+    p.area = a.Mass();
+    return p;
+}
+
+template <class Reader>
+Props props_of_file(const std::string& path) {
+    Reader r;
+    EXPECT_EQ(r.ReadFile(path.c_str()), IFSelect_RetDone) << path;
+    r.TransferRoots();
+    return props_of(r.OneShape());
+}
+
+bool mentions(const std::vector<std::string>& warnings, const std::string& s) {
+    for (const std::string& w : warnings)
+        if (w.find(s) != std::string::npos) return true;
+    return false;
+}
+
+constexpr double kSameMeasure = 1e-9;  // the same shape measured twice by BRepGProp
+
+TEST(ConvertFidelity, ExactOutputsAreMeasuredAsOcctReadsThem) {
+    const std::string in = nurbsrt::test::assembly(), out = out_path("assembly.igs");
+    const nurbsrt::ConvertReport r = nurbsrt::convert_file(in, out);
+    ASSERT_FALSE(r.fidelity.empty());
+    const json f = json::parse(r.fidelity);
+    const json &src = f["source"]["geometry"], &dst = f["output"]["geometry"];
+    const Props a = props_of_file<STEPControl_Reader>(in), b = props_of_file<IGESControl_Reader>(out);
+    ASSERT_GT(a.volume, 0);
+    EXPECT_NEAR(src["volume"].get<double>(), a.volume, kSameMeasure * a.volume);
+    EXPECT_NEAR(src["area"].get<double>(), a.area, kSameMeasure * a.area);
+    EXPECT_NEAR(dst["volume"].get<double>(), b.volume, kSameMeasure * b.volume);
+    EXPECT_NEAR(dst["area"].get<double>(), b.area, kSameMeasure * b.area);
+    EXPECT_NEAR(f["relative_differences"]["volume"].get<double>(), std::abs(a.volume - b.volume) / a.volume, 1e-12);
+    EXPECT_LT(f["relative_differences"]["volume"].get<double>(), 1e-6);
+    EXPECT_LT(f["relative_differences"]["area"].get<double>(), 1e-6);
+    EXPECT_LT(f["relative_differences"]["box"].get<double>(), 1e-6);
+    EXPECT_EQ(src["solids"], 2);
+    EXPECT_EQ(dst["solids"], 2);
+    EXPECT_EQ(src["faces"], dst["faces"]);
+    EXPECT_EQ(src["edges"], dst["edges"]);
+    EXPECT_TRUE(src["valid"].get<bool>());
+    EXPECT_TRUE(dst["valid"].get<bool>());
+    EXPECT_EQ(f["attributes"]["colours"]["faces_losing_colour"], 0);
+    EXPECT_EQ(f["attributes"]["assembly"]["source"]["instances"], 2);
+    EXPECT_EQ(f["source"]["units"], "mm");
+    EXPECT_EQ(f["output"]["units"], "mm");
+}
+
+TEST(ConvertFidelity, WhatChangesIsCountedAndWarned) {
+    nurbsrt::ConvertOptions faces;
+    faces.iges_mode = nurbsrt::IgesMode::faces;
+    const nurbsrt::ConvertReport r =
+        nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("faces.igs"), faces);
+    const json f = json::parse(r.fidelity);
+    EXPECT_EQ(f["source"]["geometry"]["solids"], 1);
+    EXPECT_EQ(f["output"]["geometry"]["solids"], 0);
+    EXPECT_EQ(f["output"]["geometry"]["shells"], 0);
+    EXPECT_TRUE(mentions(r.warnings, "the output holds 0 solid(s), the source 1"));
+    EXPECT_TRUE(mentions(r.warnings, "the output holds 0 shell(s), the source 1"));
+    // The faces' geometry itself is unchanged.
+    EXPECT_LT(f["relative_differences"]["area"].get<double>(), 1e-6);
+}
+
+TEST(ConvertFidelity, MeshAreaIsTheWrittenTrianglesArea) {
+    const std::string in = nurbsrt::test::filleted_box(), out = out_path("filleted.stl");
+    const nurbsrt::ConvertReport r = nurbsrt::convert_file(in, out);
+    const json f = json::parse(r.fidelity);
+    const Handle(Poly_Triangulation) t = RWStl::ReadFile(out.c_str(), Message_ProgressRange());
+    ASSERT_FALSE(t.IsNull());
+    double area = 0;
+    for (int k = 1; k <= t->NbTriangles(); ++k) {
+        int a, b, c;
+        t->Triangle(k).Get(a, b, c);
+        area += gp_Vec(t->Node(a), t->Node(b)).Crossed(gp_Vec(t->Node(a), t->Node(c))).Magnitude() / 2;
+    }
+    const json& mesh = f["output"]["mesh_in_mm"];
+    EXPECT_EQ(mesh["triangles"].get<long long>(), r.triangles);
+    // float32 corners: a relative rounding of about 1e-7 per coordinate.
+    EXPECT_NEAR(mesh["area"].get<double>(), area, 1e-5 * area);
+    const double exact = f["source"]["geometry"]["area"].get<double>();
+    EXPECT_NEAR(f["relative_differences"]["area"].get<double>(), std::abs(exact - area) / exact, 1e-5);
+    // A mesh of chords lies inside the convex fillets: less area, and less than 1 %.
+    EXPECT_LT(area, exact);
+    EXPECT_LT(f["relative_differences"]["area"].get<double>(), 0.01);
+    EXPECT_TRUE(mesh.contains("volume"));
+}
+
+}  // namespace

@@ -1,0 +1,94 @@
+// The mesh deviation of the fidelity report (importer/convert/mesh_deviation.cpp)
+// against an independent reference: OCCT's BRepExtrema_DistShapeShape from the
+// same points (every vertex and triangle centroid of the export mesh) to the
+// trimmed face, which searches the whole face and its boundary. They agree
+// within max(1e-7 of the model's diagonal, Precision::Confusion()) on every
+// point of the fixtures' faces: planes, cylinders, spheres, a torus, fillets
+// and vertex blends, free-form B-spline faces with holes (rational too). (The
+// deviation is what it is: BRepMesh asked for 0.002 of the diagonal gives the
+// sphere 0.0033 at its centroids; the report says so, this test only checks
+// that it is measured right.)
+#include <gtest/gtest.h>
+
+#include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRepExtrema_DistShapeShape.hxx>
+#include <BRep_Tool.hxx>
+#include <Bnd_Box.hxx>
+#include <Poly_Triangulation.hxx>
+#include <Precision.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "importer/convert/convert_writers.h"
+#include "importer/occt_shape.h"
+#include "tests/support/fixtures.h"
+
+namespace {
+
+double reference(const gp_Pnt& p, const TopoDS_Face& face) {
+    BRepExtrema_DistShapeShape d(BRepBuilderAPI_MakeVertex(p).Vertex(), face);
+    EXPECT_TRUE(d.IsDone());
+    return d.Value();
+}
+
+class MeshDeviation : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(MeshDeviation, AgreesWithBRepExtremaOnEveryPoint) {
+    const nurbsrt::occt::OcctModel m = nurbsrt::occt::read_model(nurbsrt::test::fixture_by_name(GetParam()), false);
+    nurbsrt::ConvertReport r;
+    nurbsrt::occt::mesh_for_export(m.shape, r);  // as the mesh outputs mesh it
+    Bnd_Box box;
+    BRepBndLib::Add(m.shape, box, Standard_False);
+    const double diagonal = std::sqrt(box.SquareExtent());
+    const double tolerance = std::max(1e-7 * diagonal, Precision::Confusion());
+    double worst = 0, max_ours = 0;
+    long long points = 0;
+    for (int i = 1; i <= m.faces.Extent(); ++i) {
+        const TopoDS_Face& face = TopoDS::Face(m.faces(i));
+        long long outside = 0;
+        const std::vector<double> ours = nurbsrt::occt::face_mesh_deviations(face, outside);
+        TopLoc_Location loc;
+        const Handle(Poly_Triangulation) t = BRep_Tool::Triangulation(face, loc);
+        ASSERT_FALSE(t.IsNull());
+        // The same points in the same order: vertices, then centroids.
+        ASSERT_EQ(ours.size(), static_cast<size_t>(t->NbNodes() + t->NbTriangles())) << "face " << i;
+        const gp_Trsf placement = loc.Transformation();
+        size_t k = 0;
+        auto check = [&](const gp_Pnt& p) {
+            const double ref = reference(p, face);
+            worst = std::max(worst, std::abs(ours[k] - ref));
+            max_ours = std::max(max_ours, ours[k]);
+            EXPECT_NEAR(ours[k], ref, tolerance) << GetParam() << " face " << i << " point " << k;
+            ++k;
+            ++points;
+        };
+        for (int n = 1; n <= t->NbNodes(); ++n) check(t->Node(n).Transformed(placement));
+        for (int j = 1; j <= t->NbTriangles(); ++j) {
+            int a, b, c;
+            t->Triangle(j).Get(a, b, c);
+            check(gp_Pnt((t->Node(a).Transformed(placement).XYZ() + t->Node(b).Transformed(placement).XYZ() +
+                          t->Node(c).Transformed(placement).XYZ()) /
+                         3));
+        }
+    }
+    std::printf(
+        "%s: %lld points, max deviation %.3g mm (%.2g of the diagonal), largest disagreement with "
+        "BRepExtrema %.2g mm (tolerance %.2g)\n",
+        GetParam(), points, max_ours, max_ours / diagonal, worst, tolerance);
+    EXPECT_GT(max_ours, 0.0);  // a mesh of chords is off every curved face somewhere
+}
+
+INSTANTIATE_TEST_SUITE_P(Fixtures, MeshDeviation,
+                         ::testing::Values("box_with_holes", "sphere", "torus", "filleted_box_blend",
+                                           "freeform_bspline", "freeform_rational"),
+                         [](const auto& info) { return std::string(info.param); });
+
+}  // namespace
