@@ -1,8 +1,9 @@
 // Batch jobs at run time: the job store (server/store/job_store.h), the files under
 // DATA_DIR/jobs/<id>/ (input-<n>.cad and the artifacts), the runner threads
 // that take queued jobs from the store in submission order and run their
-// outputs one by one through the same admission gate as synchronous renders
-// and conversions, restart recovery at start, cancellation, and the retention
+// files in parallel (up to --workers; each file read once for all its
+// outputs) through the same admission gates as synchronous renders and
+// conversions, restart recovery at start, cancellation, and the retention
 // sweep. With a shared store (PostgreSQL) several instances run the same
 // queue: a heartbeat renews the leases of the outputs this one runs and stops
 // a run whose job was canceled elsewhere or whose lease was lost. Free of HTTP
@@ -21,9 +22,22 @@
 #include "server/store/job_store.h"
 #include "server/jobs/webhooks.h"
 
+namespace nurbsrt {
+class PreparedScene;
+}
+
 namespace nurbsrt::server {
 
 struct ServerContext;
+
+// The one read of an input file that served some of a job's outputs: each
+// output's statistics or report names it, and the job's statistics count them.
+struct FileRead {
+    std::string id;  // unique per read
+    int file = 0;
+    int served = 0;  // the read's users in the child: the import and each conversion
+    double read_ms = 0;
+};
 
 class JobService {
 public:
@@ -61,7 +75,21 @@ private:
     void heartbeat_loop();
     void sweep_shared_leftovers();
     void run_claim(JobClaim& claim);
-    void run_output(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<std::atomic<bool>>& cancel);
+    // The claim's outputs of one input file (job_file_run.cpp): one isolated
+    // child reads the file once, writes its conversions and hands back the
+    // scene, which every render of the file then uses.
+    void run_file(const JobClaim& claim, const std::vector<int>& outputs,
+                  const std::shared_ptr<std::atomic<bool>>& cancel);
+    void run_render(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<const PreparedScene>& scene,
+                    const FileRead& read, const std::shared_ptr<std::atomic<bool>>& cancel);
+    // Fails the output with `e` (its message without the service's paths).
+    void output_failed(const JobClaim& claim, const JobOutput& out, const std::exception& e);
+    // Moves a written artifact (under its partial name) into place within the
+    // quota and records the output's success with `result`.
+    void store_artifact(const JobClaim& claim, const JobOutput& out, const std::string& partial,
+                        const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel);
+    std::string partial_path(const JobClaim& claim, const JobOutput& out) const;
+    std::string input_path(const std::string& id, int file) const;
     void end_claim(const JobClaim& claim);
     void remove_files(const std::string& id) const;
     std::string job_dir(const std::string& id) const;
