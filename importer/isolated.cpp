@@ -192,6 +192,7 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
             rlimit rl{limits.memory_limit_bytes, limits.memory_limit_bytes};
             setrlimit(RLIMIT_AS, &rl);
         }
+        if (limits.nice > 0) setpriority(PRIO_PROCESS, 0, limits.nice);
         rlimit no_core{0, 0};  // a crashing import must not litter the data directory with cores
         setrlimit(RLIMIT_CORE, &no_core);
         // A server may block or ignore signals in its own threads; the worker starts clean.

@@ -34,6 +34,10 @@ struct IsolationLimits {
     // the child is killed and the call throws Error(canceled) (a deleted job,
     // a client that went away). Empty: never.
     std::function<bool()> should_stop;
+    // The child's niceness (setpriority; 0: this process's): accepted batch work
+    // runs its children niced so that they yield the cores to interactive
+    // requests, and take them whole when nothing else runs.
+    int nice = 0;
     // The input's text is pre-scanned in this process before any child starts
     // (importer/prescan.h): absurd files are refused with unreadable_file.
     PrescanLimits prescan;

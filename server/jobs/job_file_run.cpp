@@ -97,6 +97,7 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     try {
         IsolationLimits limits = isolation_limits(ctx_);
         limits.should_stop = [cancel] { return cancel->load(); };  // a deleted job's child is killed
+        limits.nice = kJobNice;                                    // as the runner's threads (JobService::run_loop)
         result = process_file_isolated(input, plan, limits);
     } catch (const Error& e) {
         ticket.reset();

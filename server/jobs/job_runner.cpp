@@ -3,7 +3,9 @@
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -248,6 +250,8 @@ void JobService::sweep_loop() {
 }
 
 void JobService::run_loop() {
+    // Linux's nice is per thread and inherited by the threads this one starts.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kJobNice);
     while (true) {
         {
             std::lock_guard<std::mutex> lock(m_);

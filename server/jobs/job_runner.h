@@ -30,6 +30,14 @@ namespace nurbsrt::server {
 
 struct ServerContext;
 
+// The niceness of a job's work: its runner threads (and so the threads they
+// start, a job render's among them) and its children. At 10 the kernel's
+// scheduler weights it about 1:10 against normal work (CFS's
+// sched_prio_to_weight: 110 vs 1024), so a client's render gets the cores at
+// once while a large job runs (bench/fairness.sh), and the job still has them
+// whole when nothing else runs.
+inline constexpr int kJobNice = 10;
+
 // The one read of an input file that served some of a job's outputs: each
 // output's statistics or report names it, and the job's statistics count them.
 struct FileRead {
