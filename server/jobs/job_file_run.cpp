@@ -62,13 +62,61 @@ nlohmann::json conversion_result(const JobOutput& out, const ConvertReport& repo
 
 void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
                           const std::shared_ptr<std::atomic<bool>>& cancel) {
-    const auto t0 = std::chrono::steady_clock::now();
     std::vector<const JobOutput*> renders, conversions;
     for (const int index : indices) {
         const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
         (out.kind == OutputKind::render ? renders : conversions).push_back(&out);
     }
     const int file = job.outputs.at(static_cast<size_t>(indices.front())).file;
+    const std::string input = input_path(job.id, file);
+    // A scene already cached (a stored file rendered before, another job's
+    // file) serves the renders without a read; the child then runs only for
+    // the conversions, and not at all without them.
+    std::string cache_key;
+    std::shared_ptr<const PreparedScene> prepared;
+    if (!renders.empty()) {
+        cache_key = scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{});
+        prepared = ctx_.cache.get(cache_key);
+    }
+    FileRead read;
+    read.file = file;
+    std::shared_ptr<const Scene> scene;
+    const bool cached = prepared != nullptr;
+    const bool want_scene = !renders.empty() && !cached;
+    if (want_scene || !conversions.empty()) {
+        if (!run_file_child(job, input, renders, conversions, want_scene, cancel, read, scene)) return;
+        if (renders.empty()) return;
+    }
+    if (cached) read = FileRead{};  // the child's read served only the conversions
+    if (!prepared) {
+        try {
+            prepared = std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx_.config.render_threads));
+            // Later renders of the same bytes (a client's, another job's) find it cached.
+            ctx_.cache.put(cache_key, prepared);
+        } catch (const std::exception& e) {
+            for (const JobOutput* out : renders) output_failed(job, *out, e);
+            return;
+        }
+    }
+    for (const JobOutput* out : renders) {
+        if (cancel->load()) return;
+        try {
+            run_render(job, *out, prepared, read, cancel);
+        } catch (const Error& e) {
+            if (e.code() == ErrorCode::canceled && (cancel->load() || !store_->running(job.id))) return;
+            output_failed(job, *out, e);
+        } catch (const std::exception& e) {
+            output_failed(job, *out, e);
+        }
+    }
+}
+
+bool JobService::run_file_child(const JobClaim& job, const std::string& input,
+                                const std::vector<const JobOutput*>& renders,
+                                const std::vector<const JobOutput*>& conversions, bool want_scene,
+                                const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
+                                std::shared_ptr<const Scene>& scene) {
+    const auto t0 = std::chrono::steady_clock::now();
     auto fail_all = [&](const std::vector<const JobOutput*>& outs, const std::exception& e) {
         for (const JobOutput* out : outs) output_failed(job, *out, e);
     };
@@ -79,7 +127,7 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     try {
         ticket = admit(ctx_, ctx_.gate, 0, patient);
     } catch (const Error& e) {
-        if (e.code() == ErrorCode::canceled && cancel->load()) return;
+        if (e.code() == ErrorCode::canceled && cancel->load()) return false;
         throw;
     }
     StageClock queued(t0);  // no upload: the input is on disk
@@ -87,11 +135,10 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     // A conversion runs from its child's start; a render from when its scene is
     // there (so a render's span is its frame, as for a cached scene).
     for (const JobOutput* out : conversions)
-        if (!store_->output_running(job.id, out->index, unix_now_ms(), job.lease)) return;  // the job was deleted
+        if (!store_->output_running(job.id, out->index, unix_now_ms(), job.lease)) return false;  // deleted
 
-    const std::string input = input_path(job.id, file);
     FilePlan plan;
-    plan.scene = !renders.empty();
+    plan.scene = want_scene;
     for (const JobOutput* out : conversions) plan.conversions.push_back(partial_path(job, *out));
     FileResult result;
     try {
@@ -103,23 +150,22 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
         ticket.reset();
         std::error_code ec;
         for (const std::string& partial : plan.conversions) std::filesystem::remove(partial, ec);
-        if (e.code() == ErrorCode::canceled && cancel->load()) return;
+        if (e.code() == ErrorCode::canceled && cancel->load()) return false;
         ctx_.metrics.count_import_failure(error_code_name(e.code()));
         // The file could not be read (or its child died): all its outputs fail with that.
-        fail_all(renders, e);
+        if (want_scene) fail_all(renders, e);
         fail_all(conversions, e);
-        return;
+        return false;
     }
     ticket.reset();
-    const FileRead read{new_request_id(), file, result.uses, result.read_ms};
+    read = FileRead{new_request_id(), read.file, result.uses, result.read_ms};
     log_event("job_file_read", nlohmann::json{{"job_id", job.id},
-                                              {"file", file},
+                                              {"file", read.file},
                                               {"read", read.id},
                                               {"reads", result.reads},
                                               {"served", result.uses},
                                               {"read_ms", result.read_ms}}
                                    .dump());
-
     for (size_t i = 0; i < conversions.size(); ++i) {
         const JobOutput& out = *conversions[i];
         const FileResult::Conversion& c = result.conversions.at(i);
@@ -133,39 +179,20 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
             store_artifact(job, out, plan.conversions[i],
                            dump_result(conversion_result(out, *c.report, result, queued, read)), cancel);
         } catch (const Error& e) {
-            if (e.code() == ErrorCode::canceled && cancel->load()) return;
+            if (e.code() == ErrorCode::canceled && cancel->load()) return false;
             output_failed(job, out, e);
         } catch (const std::exception& e) {
             output_failed(job, out, e);
         }
     }
-    if (renders.empty()) return;
+    if (!want_scene) return true;
     if (result.scene_error) {
         ctx_.metrics.count_import_failure(error_code_name(result.scene_error->code()));
         fail_all(renders, *result.scene_error);
-        return;
+        return false;
     }
-    std::shared_ptr<const PreparedScene> prepared;
-    try {
-        auto scene = std::make_shared<const Scene>(std::move(*result.scene));
-        prepared = std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx_.config.render_threads));
-        // Later renders of the same bytes (a client's, another job's) find it cached.
-        ctx_.cache.put(scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{}), prepared);
-    } catch (const std::exception& e) {
-        fail_all(renders, e);
-        return;
-    }
-    for (const JobOutput* out : renders) {
-        if (cancel->load()) return;
-        try {
-            run_render(job, *out, prepared, read, cancel);
-        } catch (const Error& e) {
-            if (e.code() == ErrorCode::canceled && (cancel->load() || !store_->running(job.id))) return;
-            output_failed(job, *out, e);
-        } catch (const std::exception& e) {
-            output_failed(job, *out, e);
-        }
-    }
+    scene = std::make_shared<const Scene>(std::move(*result.scene));
+    return true;
 }
 
 void JobService::run_render(const JobClaim& job, const JobOutput& out,
@@ -197,7 +224,7 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
     const std::string partial = partial_path(job, out);
     write_durably(partial, image.bytes);
     nlohmann::json result = statistics_json(image);
-    result["read"] = file_read_json(read);
+    if (!read.id.empty()) result["read"] = file_read_json(read);  // none: the scene was cached
     store_artifact(job, out, partial, dump_result(result), cancel);
 }
 

@@ -24,7 +24,8 @@
 
 namespace nurbsrt {
 class PreparedScene;
-}
+struct Scene;
+}  // namespace nurbsrt
 
 namespace nurbsrt::server {
 
@@ -41,7 +42,7 @@ inline constexpr int kJobNice = 10;
 // The one read of an input file that served some of a job's outputs: each
 // output's statistics or report names it, and the job's statistics count them.
 struct FileRead {
-    std::string id;  // unique per read
+    std::string id;  // unique per read; empty: no read (the scene came from the cache)
     int file = 0;
     int served = 0;  // the read's users in the child: the import and each conversion
     double read_ms = 0;
@@ -88,6 +89,12 @@ private:
     // scene, which every render of the file then uses.
     void run_file(const JobClaim& claim, const std::vector<int>& outputs,
                   const std::shared_ptr<std::atomic<bool>>& cancel);
+    // The file's child: its conversions stored, and its scene when `want_scene`.
+    // False when the file's work ends there (failed, canceled, the job deleted).
+    bool run_file_child(const JobClaim& claim, const std::string& input, const std::vector<const JobOutput*>& renders,
+                        const std::vector<const JobOutput*>& conversions, bool want_scene,
+                        const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
+                        std::shared_ptr<const Scene>& scene);
     void run_render(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<const PreparedScene>& scene,
                     const FileRead& read, const std::shared_ptr<std::atomic<bool>>& cancel);
     // Fails the output with `e` (its message without the service's paths).

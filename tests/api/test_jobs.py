@@ -272,7 +272,9 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     per_file = [{"type": "render", "options": {"width": 48, "height": 36}},
                 {"type": "conversion", "format": "stl"}, {"type": "conversion", "format": "glb"}]
     spec = {"outputs": [{"file": f, **o} for f in (0, 1, 2) for o in per_file]}
-    files = [("screw.step", SCREW.read_bytes()), ("cut.step", TRUNCATED_STEP), ("bearing.iges", BEARING.read_bytes())]
+    pad = b"\n" * random.randrange(3, 1000)  # bytes no other test sends: their scenes are not cached yet
+    files = [("screw.step", SCREW.read_bytes() + pad), ("cut.step", TRUNCATED_STEP),
+             ("bearing.iges", BEARING.read_bytes() + pad)]
     job = wait_finished(url, accepted(submit(url, files, spec))["id"])
     assert job["state"] == "failed"
     outs = job["outputs"]
@@ -293,6 +295,13 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     assert png_size(download(url, outs[0])) == (48, 36)
     assert download(url, outs[7])[80:84] != b""  # STL: 80-byte header, then the triangle count
     assert download(url, outs[8])[:4] == b"glTF"
+    # The same files again: the renders find their scenes cached (no read for them); the conversions read.
+    again = wait_finished(url, accepted(submit(url, files, spec))["id"])
+    cached = [again["outputs"][k] for k in (0, 6)]
+    assert all(o["state"] == "succeeded" and o["statistics"]["cache"] == "hit" for o in cached)
+    assert all("read" not in o["statistics"] for o in cached)
+    assert [o["report"]["read"]["served"] for o in again["outputs"] if o["state"] == "succeeded" and o["type"] ==
+            "conversion"] == [1 if os.environ.get("NURBSRT_API_JOB_STORE") else 2] * 4
 
 
 # ---- listing --------------------------------------------------------------------------------------------
