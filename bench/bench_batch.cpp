@@ -239,8 +239,12 @@ void run_batch(BenchContext& ctx) {
     std::vector<double> ratios;
     nlohmann::json job_statistics;
     {
-        Service service(dir);
         for (int r = 0; r < runs; ++r) {
+            // A new service each run: its scene cache would serve the next run's renders
+            // without an import, which the CLI loop pays every time.
+            const std::string run_dir = dir + "/run-" + std::to_string(r);
+            fs::create_directories(run_dir);
+            Service service(run_dir);
             StageSums cli_run, job_run_sums;
             nlohmann::json doc;
             double cli_ms = 0, job_ms = 0;
