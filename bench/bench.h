@@ -12,7 +12,7 @@ namespace nurbsrt::bench {
 
 // Sections, in the order they run and are reported.
 inline const std::vector<std::string> kSections = {"table1",     "precision", "occt", "tessellation",
-                                                   "meshtracer", "scaling",   "look"};
+                                                   "meshtracer", "scaling",   "look", "batch"};
 
 struct BenchOptions {
     bool quick = false;             // small images, few runs, small budgets (a smoke run)

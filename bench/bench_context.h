@@ -131,6 +131,8 @@ void run_tessellation(BenchContext& ctx);
 void run_scaling(BenchContext& ctx);
 void run_mesh_tracer(BenchContext& ctx);
 void run_look(BenchContext& ctx);
+// A batch job through the service against one CLI process per output (bench_batch.cpp).
+void run_batch(BenchContext& ctx);
 
 // The machine and build the figures come from.
 nlohmann::json machine_json();

@@ -357,6 +357,28 @@ void look(std::string& o, const json& t) {
     o += "\n";
 }
 
+void batch(std::string& o, const json& t) {
+    o += "## Batch job: one job against one CLI process per output\n\n";
+    o += std::to_string(t["files"].size()) + " files x (render " + std::to_string(n(t["render"], "width")) + "x" +
+         std::to_string(n(t["render"], "height")) + ", STL, glb) = " + std::to_string(n(t, "outputs")) +
+         " outputs: one job through `nurbsrt serve` (default settings; submitted, polled, every artifact "
+         "downloaded) against one `nurbsrt render`/`nurbsrt convert` process per output run one after another, "
+         "interleaved run by run. Stage sums in ms: reads (file parses; the job reads each file once for all its "
+         "outputs), render frames, conversion meshing and writing.\n\n";
+    o += "| run | CLI loop ms | job ms | job / CLI | CLI reads (ms) | job reads (ms) | CLI frames | job frames | "
+         "CLI mesh+write | job mesh+write |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    int k = 0;
+    for (const json& r : t["runs"]) {
+        const json &c = r["cli_loop_stages"], &j = r["job_stages"];
+        o += "| " + std::to_string(++k) + " | " + ms(d(r, "cli_loop_ms")) + " | " + ms(d(r, "job_ms")) + " | **" +
+             num(d(r, "ratio"), 3) + "** | " + std::to_string(n(c, "reads")) + " (" + ms(d(c, "read_ms")) + ") | " +
+             std::to_string(n(j, "reads")) + " (" + ms(d(j, "read_ms")) + ") | " + ms(d(c, "render_ms")) + " | " +
+             ms(d(j, "render_ms")) + " | " + ms(d(c, "write_ms")) + " | " + ms(d(j, "write_ms")) + " |\n";
+    }
+    o += "\nMedian job / CLI loop: **" + num(d(t, "median_ratio"), 3) + "** (" + num(d(t, "min_ratio"), 3) + "-" +
+         num(d(t, "max_ratio"), 3) + ").\n\n";
+}
+
 }  // namespace
 
 std::string bench_markdown(const json& doc) {
@@ -369,6 +391,7 @@ std::string bench_markdown(const json& doc) {
     if (doc.contains("meshtracer")) mesh_tracer(o, doc["meshtracer"]);
     if (doc.contains("scaling")) scaling(o, doc["scaling"]);
     if (doc.contains("look")) look(o, doc["look"]);
+    if (doc.contains("batch")) batch(o, doc["batch"]);
     return o;
 }
 

@@ -58,9 +58,9 @@ nlohmann::json run_bench(const BenchOptions& options) {
     std::vector<std::string> sections = options.only.empty() ? kSections : options.only;
     for (const std::string& s : sections)
         if (std::find(kSections.begin(), kSections.end(), s) == kSections.end())
-            throw Error(
-                ErrorCode::invalid_argument,
-                "unknown section '" + s + "' (table1, precision, occt, tessellation, meshtracer, scaling, look)");
+            throw Error(ErrorCode::invalid_argument,
+                        "unknown section '" + s +
+                            "' (table1, precision, occt, tessellation, meshtracer, scaling, look, batch)");
 
     // Models: --models, else $NURBSRT_MODELS, else ../shared/models from the working
     // directory, else beside the source tree; --quick falls back to OCCT's samples.
@@ -142,6 +142,7 @@ nlohmann::json run_bench(const BenchOptions& options) {
     if (want.count("meshtracer")) run_mesh_tracer(ctx);
     if (want.count("scaling")) run_scaling(ctx);
     if (want.count("look")) run_look(ctx);
+    if (want.count("batch")) run_batch(ctx);
     double load[3] = {0, 0, 0};
     if (getloadavg(load, 3) == 3) ctx.doc["machine"]["load_average_end"] = {load[0], load[1], load[2]};
     ctx.doc["elapsed_s"] = ms_since(ctx.t0) / 1e3;

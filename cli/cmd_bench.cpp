@@ -38,7 +38,8 @@ void add_bench_command(CLI::App& app) {
                            "Benchmarks on this machine: the paper's Table 1 (proposed vs Martin et al. on the same\n"
                            "preliminary map), map precision, OCCT's exact intersector and a BRepMesh tessellation as\n"
                            "peers, scaling with resolution, patches and threads, and the frame-time cost of\n"
-                           "anti-aliasing + feature lines and of shadows (`look`). Progress goes to stderr.\n"
+                           "anti-aliasing + feature lines and of shadows (`look`), and a batch job through the\n"
+                           "service against one CLI process per output (`batch`). Progress goes to stderr.\n"
                            "Examples:\n"
                            "  nurbsrt bench --json docs/bench.json --markdown docs/bench.md\n"
                            "  nurbsrt bench --quick --json out.json\n"
@@ -61,7 +62,7 @@ void add_bench_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--size", o->size, "image width = height (default 512, --quick 128)")->check(in_range(16, 8192));
     cmd->add_option("--only", *only,
-                    "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling,look");
+                    "comma-separated sections: table1,precision,occt,tessellation,meshtracer,scaling,look,batch");
     cmd->add_flag("-q,--quiet", *quiet, "no progress on stderr");
 
     cmd->callback([o, json_path, md_path, only, quiet] {

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
     nurbsrt::cli::add_serve_command(app);
     nurbsrt::cli::add_bench_command(app);
     nurbsrt::cli::add_import_worker_command(app);
+    nurbsrt::cli::add_file_worker_command(app);
     nurbsrt::cli::add_convert_worker_command(app);
 
     // CLI11 answers a mistyped command with "A subcommand is required".

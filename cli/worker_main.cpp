@@ -2,6 +2,7 @@
 // (importer/isolated.h), run by the service as
 //   nurbsrt-worker import-worker IN OUT [name=value ...]
 //   nurbsrt-worker convert-worker IN OUT REPORT [--name=value ...]
+//   nurbsrt-worker file-worker IN SUMMARY SCENE|- [OUT REPORT]... [name=value ...]
 // the same arguments as the hidden subcommands of `nurbsrt` itself.
 //
 // Why a program of its own: a child pays the dynamic linking of everything its
@@ -26,7 +27,8 @@ int main(int argc, char** argv) {
     if (argc < 4) {
         std::fprintf(stderr,
                      "usage: nurbsrt-worker import-worker IN OUT [name=value ...]\n"
-                     "       nurbsrt-worker convert-worker IN OUT REPORT [--name=value ...]\n");
+                     "       nurbsrt-worker convert-worker IN OUT REPORT [--name=value ...]\n"
+                     "       nurbsrt-worker file-worker IN SUMMARY SCENE|- [OUT REPORT]... [name=value ...]\n");
         return 2;
     }
     const std::string command = argv[1];
@@ -35,6 +37,7 @@ int main(int argc, char** argv) {
             const std::vector<std::string> rest(argv + 4, argv + argc);
             return nurbsrt::run_import_worker(argv[2], argv[3], nurbsrt::import_options_from_args(rest));
         }
+        if (command == "file-worker") return nurbsrt::run_file_worker(std::vector<std::string>(argv + 2, argv + argc));
         if (command == "convert-worker" && argc >= 5) {
             const std::vector<std::string> rest(argv + 5, argv + argc);
             return nurbsrt::run_convert_worker(argv[2], argv[3], argv[4], nurbsrt::convert_options_from_args(rest));

@@ -15,14 +15,17 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <thread>
 
 #include "core/error.h"
 #include "core/process/executable_path.h"
 #include "core/io/scene_io.h"
+#include "importer/shared_read.h"
 
 namespace nurbsrt {
 namespace {
@@ -217,6 +220,7 @@ void run_worker(std::vector<std::string> args, const IsolationLimits& limits, co
             rlimit rl{limits.memory_limit_bytes, limits.memory_limit_bytes};
             setrlimit(RLIMIT_AS, &rl);
         }
+        if (limits.nice > 0) setpriority(PRIO_PROCESS, 0, limits.nice);
         rlimit no_core{0, 0};  // a crashing import must not litter the data directory with cores
         setrlimit(RLIMIT_CORE, &no_core);
         // A server may block or ignore signals in its own threads; the worker starts clean.
@@ -383,55 +387,175 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
     return r;
 }
 
-int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path,
-                       const ConvertOptions& options) {
-    apply_fault_hook();
-    const std::string error_path = report_path + ".error";
+namespace {
+
+// The report convert_isolated reads (parse_convert_report): the numbers on one
+// line, then the units and the fidelity report a line each (any may be empty),
+// then one warning a line.
+void write_convert_report(const std::string& report_path, const ConvertReport& r) {
+    std::ofstream out(report_path, std::ios::binary | std::ios::trunc);
+    out.precision(17);
+    out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' ' << static_cast<int>(r.output)
+        << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' ' << r.degenerate_triangles << ' '
+        << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << ' ' << r.verify_ms << '\n'
+        << one_line(r.in_units) << '\n'
+        << one_line(r.out_units) << '\n'
+        << one_line(r.fidelity) << '\n';  // compact JSON: one line
+    for (const std::string& w : r.warnings) out << one_line(w) << '\n';
+    if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");
+}
+
+// Runs `work`; an error it throws is written to `error_path` as the parent
+// reads it (`what`: "import", "conversion", for the out-of-memory message).
+// Returns whether it succeeded.
+bool record_outcome(const std::string& error_path, const char* what, const std::function<void()>& work) {
     try {
-        const ConvertReport r = convert_file(in_path, out_path, options);
-        std::ofstream out(report_path, std::ios::binary | std::ios::trunc);
-        out.precision(17);
-        // The numbers on one line, then the units and the fidelity report a
-        // line each (any may be empty), the order convert_isolated reads them in.
-        out << static_cast<int>(r.in_format) << ' ' << static_cast<int>(r.out_format) << ' '
-            << static_cast<int>(r.output) << ' ' << r.faces << ' ' << r.triangles << ' ' << r.unmeshed_faces << ' '
-            << r.degenerate_triangles << ' ' << r.read_ms << ' ' << r.mesh_ms << ' ' << r.write_ms << ' ' << r.verify_ms
-            << '\n'
-            << one_line(r.in_units) << '\n'
-            << one_line(r.out_units) << '\n'
-            << one_line(r.fidelity) << '\n';  // compact JSON: one line
-        // Then one warning a line.
-        for (const std::string& w : r.warnings) out << one_line(w) << '\n';
-        if (!out) throw Error(ErrorCode::io, "cannot write the conversion report");
-        return 0;
+        work();
+        return true;
     } catch (const Error& e) {
         write_error_file(error_path, e.code(), e.what());
     } catch (const std::bad_alloc&) {
         write_error_file(error_path, ErrorCode::limit_exceeded,
-                         "conversion ran out of memory (memory limit of the conversion process)");
+                         std::string(what) + " ran out of memory (memory limit of the " + what + " process)");
     } catch (const std::exception& e) {
         write_error_file(error_path, ErrorCode::internal, e.what());
     }
-    return 1;
+    return false;
+}
+
+}  // namespace
+
+int run_convert_worker(const std::string& in_path, const std::string& out_path, const std::string& report_path,
+                       const ConvertOptions& options) {
+    apply_fault_hook();
+    return record_outcome(report_path + ".error", "conversion",
+                          [&] { write_convert_report(report_path, convert_file(in_path, out_path, options)); })
+               ? 0
+               : 1;
 }
 
 int run_import_worker(const std::string& in_path, const std::string& out_path, const ImportOptions& options) {
     apply_fault_hook();
-    auto write_error = [&](ErrorCode code, const std::string& message) {
-        write_error_file(out_path + ".error", code, message);
-    };
-    try {
-        const Scene scene = import_file(in_path, options);
-        write_scene_file(scene, out_path);
-        return 0;
-    } catch (const Error& e) {
-        write_error(e.code(), e.what());
-    } catch (const std::bad_alloc&) {
-        write_error(ErrorCode::limit_exceeded, "import ran out of memory (memory limit of the import process)");
-    } catch (const std::exception& e) {
-        write_error(ErrorCode::internal, e.what());
+    return record_outcome(out_path + ".error", "import",
+                          [&] { write_scene_file(import_file(in_path, options), out_path); })
+               ? 0
+               : 1;
+}
+
+namespace {
+
+// One scratch file of a file worker's item, with its ".error" companion
+// (held by pointer: ScratchFiles removes its files when destroyed, so it is never copied).
+std::unique_ptr<ScratchFiles> item_scratch(const std::string& dir, const char* stem) {
+    auto f = std::make_unique<ScratchFiles>();
+    make_scratch(*f, dir, stem);
+    return f;
+}
+
+// The item's error, when the child wrote one.
+std::optional<Error> item_error(const std::string& error_path) {
+    const std::string err = read_small_file(error_path);
+    const size_t nl = err.find('\n');
+    if (nl == std::string::npos) return std::nullopt;
+    return Error(error_code_from_name(err.substr(0, nl)).value_or(ErrorCode::internal), err.substr(nl + 1));
+}
+
+}  // namespace
+
+FileResult process_file_isolated(const std::string& path, const FilePlan& plan, const IsolationLimits& limits) {
+    const auto t0 = Clock::now();
+    prescan_input(path, limits);
+    const auto t_child = Clock::now();
+    const std::string dir = scratch_dir_of(limits);
+    const std::unique_ptr<ScratchFiles> summary = item_scratch(dir, "nurbsrt-file");
+    std::unique_ptr<ScratchFiles> scene;
+    if (plan.scene) scene = item_scratch(dir, "nurbsrt-import");
+    std::vector<std::unique_ptr<ScratchFiles>> reports;
+    for (size_t i = 0; i < plan.conversions.size(); ++i) reports.push_back(item_scratch(dir, "nurbsrt-convert"));
+    std::vector<std::string> args = {worker_executable(limits), "file-worker", path, summary->scene,
+                                     scene ? scene->scene : std::string("-")};
+    for (size_t i = 0; i < plan.conversions.size(); ++i) {
+        args.push_back(plan.conversions[i]);
+        args.push_back(reports[i]->scene);
     }
-    return 1;
+    for (std::string& a : import_options_to_args(plan.options)) args.push_back(std::move(a));
+    run_worker(std::move(args), limits, summary->error, "import", path);
+    const auto t_read = Clock::now();
+
+    FileResult r;
+    if (!(std::istringstream(read_small_file(summary->scene)) >> r.reads >> r.uses >> r.read_ms))
+        throw Error(ErrorCode::internal, "file worker wrote no valid summary");
+    double child_stages_ms = 0;
+    if (scene) {
+        r.scene_error = item_error(scene->error);
+        if (!r.scene_error) {
+            r.scene = read_scene_file(scene->scene);
+            const ImportTimings& c = r.scene->timings;
+            child_stages_ms += c.read_ms + c.nurbs_convert_ms + c.mesh_ms;
+        }
+    }
+    for (const std::unique_ptr<ScratchFiles>& report : reports) {
+        FileResult::Conversion c;
+        c.error = item_error(report->error);
+        if (!c.error) {
+            c.report = parse_convert_report(read_small_file(report->scene));
+            child_stages_ms += c.report->read_ms + c.report->mesh_ms + c.report->write_ms + c.report->verify_ms;
+        }
+        r.conversions.push_back(std::move(c));
+    }
+    r.timings.prescan_ms = ms_between(t0, t_child);
+    r.timings.isolation_ms = isolation_ms(t_child, t_read, child_stages_ms);
+    r.timings.transfer_ms = ms_between(t_read, Clock::now());
+    return r;
+}
+
+int run_file_worker(const std::vector<std::string>& args) {
+    apply_fault_hook();
+    std::vector<std::string> positional, options;
+    for (const std::string& a : args) (a.rfind("--", 0) == 0 ? options : positional).push_back(a);
+    if (positional.size() < 3 || positional.size() % 2 == 0) {
+        std::fprintf(stderr, "file-worker: IN SUMMARY SCENE|- [OUT REPORT]... [options]\n");
+        return 2;
+    }
+    const std::string& in_path = positional[0];
+    const std::string& summary_path = positional[1];
+    const std::string& scene_path = positional[2];
+    // A bad option is the parent's fault: the whole run fails with it.
+    ImportOptions import_options;
+    if (!record_outcome(summary_path + ".error", "import", [&] { import_options = import_options_from_args(options); }))
+        return 1;
+    SharedRead read(in_path);
+    // The scene first: the renders wait for it, the conversions' files for nothing.
+    if (scene_path != "-")
+        record_outcome(scene_path + ".error", "import",
+                       [&] { write_scene_file(import_file(in_path, import_options), scene_path); });
+    // Then the conversions, the mesh outputs last: they mesh the shape at one
+    // set of parameters (importer/convert), so the first makes the mesh the
+    // others find, once the import's meshes are gone.
+    auto is_mesh = [](const std::string& out) {
+        const ConversionFormat f = conversion_format_from_extension(out);
+        return f == ConversionFormat::stl || f == ConversionFormat::glb || f == ConversionFormat::vrml;
+    };
+    bool meshes_forgotten = false;
+    for (const bool meshes : {false, true})
+        for (size_t i = 3; i + 1 < positional.size(); i += 2) {
+            if (is_mesh(positional[i]) != meshes) continue;
+            if (meshes && !meshes_forgotten) {
+                read.forget_meshes();
+                meshes_forgotten = true;
+            }
+            record_outcome(positional[i + 1] + ".error", "conversion",
+                           [&] { write_convert_report(positional[i + 1], convert_file(in_path, positional[i])); });
+        }
+    return record_outcome(summary_path + ".error", "import",
+                          [&] {
+                              std::ofstream out(summary_path, std::ios::binary | std::ios::trunc);
+                              out.precision(17);
+                              out << read.reads() << ' ' << read.uses() << ' ' << read.read_ms() << '\n';
+                              if (!out) throw Error(ErrorCode::io, "cannot write the file worker's summary");
+                          })
+               ? 0
+               : 1;
 }
 
 }  // namespace nurbsrt

@@ -15,9 +15,11 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "importer/importer.h"
 #include "importer/prescan.h"
 
@@ -32,6 +34,10 @@ struct IsolationLimits {
     // the child is killed and the call throws Error(canceled) (a deleted job,
     // a client that went away). Empty: never.
     std::function<bool()> should_stop;
+    // The child's niceness (setpriority; 0: this process's): accepted batch work
+    // runs its children niced so that they yield the cores to interactive
+    // requests, and take them whole when nothing else runs.
+    int nice = 0;
     // The input's text is pre-scanned in this process before any child starts
     // (importer/prescan.h): absurd files are refused with unreadable_file.
     PrescanLimits prescan;
@@ -62,6 +68,37 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
                                const IsolationLimits& limits = {}, IsolationTimings* timings = nullptr,
                                const ConvertOptions& options = {});
 
+// Everything one file's outputs need, made by one child that reads the file
+// once (importer/shared_read.h): the imported scene for its renders, and its
+// conversions written by the child itself (the OCCT document lives there).
+struct FilePlan {
+    bool scene = false;  // import the scene with `options`
+    ImportOptions options;
+    std::vector<std::string> conversions;  // output paths, the format by extension as for convert_file
+};
+
+// What the child made. An error of the scene or of one conversion is that
+// item's alone; a file that cannot be read gives every item the read's error.
+struct FileResult {
+    std::optional<Scene> scene;
+    std::optional<Error> scene_error;
+    struct Conversion {
+        std::optional<ConvertReport> report;
+        std::optional<Error> error;
+    };
+    std::vector<Conversion> conversions;  // in the plan's order
+    int reads = 0;                        // times the child parsed the file (1 for any plan that got to it)
+    int uses = 0;                         // the read's users: the import and each conversion
+    double read_ms = 0;                   // that read's time
+    IsolationTimings timings;             // the whole child (scene and conversions' own stages excluded)
+};
+
+// Runs the plan in one child (`nurbsrt-worker file-worker ...`) under `limits`.
+// Throws what import_isolated throws when the child as a whole fails (the
+// pre-scan refuses the file, a crash, the time limit, a cancel): then every
+// item has failed with that error.
+FileResult process_file_isolated(const std::string& path, const FilePlan& plan, const IsolationLimits& limits = {});
+
 // The command-line arguments that carry `options` to the worker, and their
 // parser (used by the import-worker subcommand); kept together so they cannot drift.
 std::vector<std::string> import_options_to_args(const ImportOptions& options);
@@ -74,6 +111,12 @@ int run_import_worker(const std::string& in_path, const std::string& out_path, c
 // The same for ConvertOptions and the convert-worker subcommand.
 std::vector<std::string> convert_options_to_args(const ConvertOptions& options);
 ConvertOptions convert_options_from_args(const std::vector<std::string>& args);
+
+// Entry point of the file worker: `args` are IN SUMMARY SCENE|- [OUT REPORT]...
+// [name=value import options]; each item's result or error goes to its own
+// file (the scene as run_import_worker writes it, each report as
+// run_convert_worker does), the read count to SUMMARY. Returns the exit status.
+int run_file_worker(const std::vector<std::string>& args);
 
 // Entry point of the conversion worker: converts IN to OUT and writes the
 // report to REPORT, or the error to REPORT + ".error". Returns the exit status.

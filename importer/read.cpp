@@ -4,6 +4,7 @@
 #include <cctype>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 
 #include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
@@ -38,6 +39,7 @@
 #include <XCAFPrs_Style.hxx>
 
 #include "importer/internal.h"
+#include "importer/shared_read.h"
 #include "core/error.h"
 #include "core/ascii.h"
 
@@ -375,8 +377,36 @@ std::string label_name(const TDF_Label& label) {
     return TCollection_AsciiString(attr->Get()).ToCString();
 }
 
+namespace {
+
+// The read a SharedRead keeps (one at a time in a process: the file worker's).
+struct SharedModel {
+    std::mutex m;
+    std::string path;  // empty: no SharedRead lives
+    bool done = false;
+    OcctModel model;
+    std::optional<Error> error;
+    int reads = 0, uses = 0;
+    double read_ms = 0;
+};
+
+SharedModel& shared_model() {
+    static SharedModel s;
+    return s;
+}
+
+OcctModel read_model_from_file(const std::string& path, bool read_attributes, bool keep_document);
+
+}  // namespace
+
 DocumentCloser::~DocumentCloser() {
-    if (!doc.IsNull()) XCAFApp_Application::GetApplication()->Close(doc);
+    if (doc.IsNull()) return;
+    SharedModel& s = shared_model();
+    {
+        std::lock_guard<std::mutex> lock(s.m);
+        if (!s.path.empty() && s.model.document == doc) return;  // the SharedRead closes it
+    }
+    XCAFApp_Application::GetApplication()->Close(doc);
 }
 
 std::mutex& exchange_mutex() {
@@ -385,6 +415,34 @@ std::mutex& exchange_mutex() {
 }
 
 OcctModel read_model(const std::string& path, bool read_attributes, bool keep_document) {
+    SharedModel& s = shared_model();
+    std::unique_lock<std::mutex> lock(s.m);
+    if (s.path.empty() || s.path != path) {
+        lock.unlock();
+        return read_model_from_file(path, read_attributes, keep_document);
+    }
+    ++s.uses;
+    if (!s.done) {
+        // Everything any use may ask for: attributes, and the document the writers need.
+        s.done = true;
+        try {
+            ++s.reads;
+            s.model = read_model_from_file(path, true, true);
+            s.read_ms = s.model.read_ms;
+        } catch (const Error& e) {
+            s.error = e;
+        }
+    }
+    if (s.error) throw *s.error;
+    OcctModel m = s.model;
+    if (!keep_document) m.document.Nullify();
+    if (s.uses > 1) m.read_ms = 0;  // served: this use paid no read
+    return m;
+}
+
+namespace {
+
+OcctModel read_model_from_file(const std::string& path, bool read_attributes, bool keep_document) {
     if (keep_document) read_attributes = true;
     route_occt_messages();
     std::error_code ec;
@@ -420,4 +478,50 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
     return m;
 }
 
+}  // namespace
+
 }  // namespace nurbsrt::occt
+
+namespace nurbsrt {
+
+SharedRead::SharedRead(const std::string& path) {
+    occt::SharedModel& s = occt::shared_model();
+    std::lock_guard<std::mutex> lock(s.m);
+    if (!s.path.empty()) throw Error(ErrorCode::internal, "one shared read at a time");
+    s.path = path;
+}
+
+SharedRead::~SharedRead() {
+    occt::SharedModel& s = occt::shared_model();
+    std::lock_guard<std::mutex> lock(s.m);
+    if (!s.model.document.IsNull()) XCAFApp_Application::GetApplication()->Close(s.model.document);
+    s.model = occt::OcctModel{};
+    s.path.clear();
+    s.done = false;
+    s.error.reset();
+    s.reads = s.uses = 0;
+    s.read_ms = 0;
+}
+
+void SharedRead::forget_meshes() {
+    occt::SharedModel& s = occt::shared_model();
+    std::lock_guard<std::mutex> lock(s.m);
+    if (s.done && !s.error) BRepTools::Clean(s.model.shape);
+}
+
+int SharedRead::reads() const {
+    std::lock_guard<std::mutex> lock(occt::shared_model().m);
+    return occt::shared_model().reads;
+}
+
+int SharedRead::uses() const {
+    std::lock_guard<std::mutex> lock(occt::shared_model().m);
+    return occt::shared_model().uses;
+}
+
+double SharedRead::read_ms() const {
+    std::lock_guard<std::mutex> lock(occt::shared_model().m);
+    return occt::shared_model().read_ms;
+}
+
+}  // namespace nurbsrt

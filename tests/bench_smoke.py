@@ -11,7 +11,7 @@ import subprocess
 import sys
 import tempfile
 
-SECTIONS = ["table1", "precision", "occt", "tessellation", "meshtracer", "scaling", "look"]
+SECTIONS = ["table1", "precision", "occt", "tessellation", "meshtracer", "scaling", "look", "batch"]
 errors = []
 
 
@@ -223,8 +223,20 @@ def main():
     check(sheet["sheet_ms"] < sheet["separate_ms"], "look sheet: one import for four views costs less than four")
     check("Contact sheet" in report, "Markdown report lacks the contact sheet line")
 
+    bt = doc["batch"]
+    check(len(bt["files"]) >= 4 and bt["outputs"] == 3 * len(bt["files"]), "batch: files x (render, STL, glb)")
+    check(len(bt["runs"]) >= 1, "batch: runs")
+    for r in bt["runs"]:
+        for f in ("cli_loop_ms", "job_ms", "ratio"):
+            positive(r, f, "batch")
+        check(r["cli_loop_stages"]["reads"] == bt["outputs"], "batch: the CLI loop reads each output's file")
+        check(r["job_stages"]["reads"] == len(bt["files"]), "batch: the job reads each file once")
+        for side in ("cli_loop_stages", "job_stages"):
+            for f in ("read_ms", "render_ms", "write_ms"):
+                positive(r, f"{side}.{f}", "batch")
+    check(bt["last_job_statistics"]["reads"] == len(bt["files"]), "batch: the job document counts one read a file")
     for heading in ("## Table 1", "## Map precision", "## Exact peer", "## Tessellating peer",
-                    "## Frame vs mesh tracer", "## Scaling", "## Image options"):
+                    "## Frame vs mesh tracer", "## Scaling", "## Image options", "## Batch job"):
         check(heading in report, f"Markdown report lacks '{heading}'")
     for k in keys:
         check(k in report, f"Markdown report lacks scene {k}")

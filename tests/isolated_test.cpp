@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <fstream>
+#include <iterator>
 
 #include "importer/isolated.h"
 #include "core/error.h"
@@ -114,6 +115,66 @@ TEST_P(IsolatedImport, StagesAndIsolationAreTheWholeCall) {
     EXPECT_GE(t.prescan_ms, 0);
     EXPECT_LE(sum, wall);
     EXPECT_GE(sum, 0.98 * wall);
+}
+
+// A file's plan (the service's batch jobs): one child reads the file once for
+// the scene and every conversion, and makes what separate calls make.
+TEST_P(IsolatedImport, FilePlanReadsOnceAndMatchesSeparateCalls) {
+    const std::string dir =
+        (std::filesystem::temp_directory_path() / ("nurbsrt-isolated-plan-" + std::to_string(::getpid()) + "-" +
+                                                   std::to_string(reinterpret_cast<uintptr_t>(GetParam()) % 1000)))
+            .string();
+    std::filesystem::create_directories(dir);
+    nurbsrt::FilePlan plan;
+    plan.scene = true;
+    plan.conversions = {dir + "/a.glb", dir + "/a.stl", dir + "/a.stp"};
+    const nurbsrt::FileResult r = nurbsrt::process_file_isolated(kScrew, plan, limits(120));
+    EXPECT_EQ(r.reads, 1);
+    EXPECT_EQ(r.uses, 4);  // the import and three conversions
+    EXPECT_GT(r.read_ms, 0);
+    ASSERT_TRUE(r.scene) << (r.scene_error ? r.scene_error->what() : "");
+    nurbsrt::Scene alone = nurbsrt::import_isolated(kScrew, {}, limits(120)), shared = *r.scene;
+    alone.timings = shared.timings = {};
+    EXPECT_EQ(nurbsrt::serialize_scene(shared), nurbsrt::serialize_scene(alone));
+    ASSERT_EQ(r.conversions.size(), 3u);
+    double read_ms = 0;
+    for (const auto& c : r.conversions) {
+        ASSERT_TRUE(c.report) << (c.error ? c.error->what() : "");
+        EXPECT_EQ(c.report->faces, 10);
+        read_ms += c.report->read_ms;
+    }
+    EXPECT_EQ(read_ms, 0);  // the import paid the one read
+    // The mesh outputs are byte for byte those of a conversion alone (the STEP
+    // file is not: OCCT's writer orders its styles differently from run to run).
+    for (const char* ext : {".glb", ".stl"}) {
+        nurbsrt::convert_isolated(kScrew, dir + "/b" + ext, limits(120));
+        std::ifstream a(dir + "/a" + ext, std::ios::binary), b(dir + "/b" + ext, std::ios::binary);
+        const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+        EXPECT_FALSE(sa.empty());
+        EXPECT_EQ(sa, sb) << ext;
+    }
+    // A file that cannot be read: every item has the read's error, tried once.
+    const std::string junk = dir + "/junk.stp";
+    std::ofstream(junk) << "ISO-10303-21;\nHEADER;\nthis is not a STEP file\n";
+    plan.conversions = {dir + "/j.stl", dir + "/j.glb"};
+    const nurbsrt::FileResult bad = nurbsrt::process_file_isolated(junk, plan, limits(60));
+    ASSERT_TRUE(bad.scene_error);
+    EXPECT_EQ(bad.reads, 1);
+    for (const auto& c : bad.conversions) {
+        ASSERT_TRUE(c.error);
+        EXPECT_EQ(c.error->code(), bad.scene_error->code());
+        EXPECT_STREQ(c.error->what(), bad.scene_error->what());
+    }
+    std::filesystem::remove_all(dir);
+}
+
+// A crash fails the whole plan with the child's error, as an import's.
+TEST_P(IsolatedImport, FilePlanCrashFailsTheWholeFile) {
+    const FaultHook fault("crash");
+    nurbsrt::FilePlan plan;
+    plan.scene = true;
+    EXPECT_EQ(code_of([&] { nurbsrt::process_file_isolated(kScrew, plan, limits(60)); }),
+              nurbsrt::ErrorCode::import_crashed);
 }
 
 INSTANTIATE_TEST_SUITE_P(Workers, IsolatedImport, ::testing::Values(NURBSRT_WORKER_BINARY, NURBSRT_BINARY),

@@ -62,7 +62,8 @@ ScratchDir::ScratchDir(const std::string& data_dir, const std::string& instance)
     if (!instance.empty()) own_instance_dir(instance);
     // Remove leftovers of an earlier run: only files with the names we generate,
     // so a data dir pointed at a shared place never loses anything else.
-    static const char* ours[] = {"upload-", "render-", "converted-", "nurbsrt-import-", "nurbsrt-convert-"};
+    static const char* ours[] = {"upload-",         "render-",          "converted-",
+                                 "nurbsrt-import-", "nurbsrt-convert-", "nurbsrt-file-"};
     for (const auto& entry : fs::directory_iterator(dir_, ec)) {
         const std::string name = entry.path().filename().string();
         for (const char* prefix : ours)

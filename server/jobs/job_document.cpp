@@ -4,6 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <set>
+#include <string>
+
 #include "server/common/rfc3339.h"
 #include "server/jobs/job_spec.h"
 
@@ -53,6 +56,9 @@ json job_json(const JobRecord& j) {
         files.push_back({{"index", in.index}, {"filename", in.filename}, {"format", in.format}, {"bytes", in.bytes}});
     json outputs = json::array();
     double progress = 0;
+    int succeeded = 0, failed = 0;
+    int64_t artifact_bytes = 0;
+    std::set<std::string> reads;  // the reads of input files that served the outputs so far
     for (const JobOutput& o : j.outputs) {
         json out = {{"index", o.index},
                     {"file", o.file},
@@ -73,7 +79,12 @@ json job_json(const JobRecord& j) {
                                {"bytes", o.artifact_bytes}};
             const json result = parse_or_null(o.result_json);
             if (result.is_object()) out[o.kind == OutputKind::render ? "statistics" : "report"] = result;
+            if (result.is_object() && result.contains("read") && result["read"].contains("id"))
+                reads.insert(result["read"]["id"].dump());
+            ++succeeded;
+            artifact_bytes += o.artifact_bytes;
         }
+        if (o.state == JobState::failed) ++failed;
         progress += o.state == JobState::succeeded || o.state == JobState::failed ? 1.0 : o.progress;
         outputs.push_back(std::move(out));
     }
@@ -87,6 +98,12 @@ json job_json(const JobRecord& j) {
         {"started_at", timestamp(j.started_ms)},
         {"finished_at", timestamp(j.finished_ms)},
         {"timings_ms", {{"queued", span(j.created_ms, j.started_ms)}, {"run", span(j.started_ms, j.finished_ms)}}},
+        {"statistics",
+         {{"outputs", j.outputs.size()},
+          {"succeeded", succeeded},
+          {"failed", failed},
+          {"artifact_bytes", artifact_bytes},
+          {"reads", reads.size()}}},
         {"files", files},
         {"outputs", outputs}};
     if (!j.error_code.empty()) body["error"] = {{"code", j.error_code}, {"message", j.error_message}};

@@ -3,7 +3,9 @@
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -13,7 +15,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <cctype>
+#include <map>
 #include <set>
+#include <thread>
 
 #include "importer/isolated.h"
 #include "core/error.h"
@@ -246,6 +250,8 @@ void JobService::sweep_loop() {
 }
 
 void JobService::run_loop() {
+    // Linux's nice is per thread and inherited by the threads this one starts.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kJobNice);
     while (true) {
         {
             std::lock_guard<std::mutex> lock(m_);
@@ -328,25 +334,50 @@ void JobService::run_claim(JobClaim& claim) {
     } unregister{*this, key};
     log_event("job_started",
               nlohmann::json{{"job_id", claim.id}, {"attempt", claim.attempts}, {"outputs", claim.run}}.dump());
+    // By file, in the order of their first output: each file is read once for
+    // all its outputs, and files run side by side up to the service's workers
+    // (each takes an import slot for its child, so the gate still bounds them).
+    std::vector<std::vector<int>> files;
+    std::map<int, size_t> file_slot;
     for (const int index : claim.run) {
-        const JobOutput& out = claim.outputs.at(static_cast<size_t>(index));
-        if (cancel->load() || !store_->running(claim.id)) break;
-        auto failed = [&](ProblemCode code, const char* what) {
-            store_->output_failed(claim.id, out.index, code.name(),
-                                  without_paths(what, job_dir(claim.id), ctx_.scratch.path()), unix_now_ms(),
-                                  claim.lease);
-        };
-        try {
-            run_output(claim, out, cancel);
-        } catch (const Error& e) {
-            if (e.code() == ErrorCode::canceled && cancel->load()) break;
-            failed(e.code(), e.what());
-        } catch (const ServiceError& e) {  // the render's time limit
-            failed(e.code(), e.what());
-        } catch (const std::exception& e) {
-            store_->output_failed(claim.id, out.index, "internal", e.what(), unix_now_ms(), claim.lease);
-        }
+        const int file = claim.outputs.at(static_cast<size_t>(index)).file;
+        const auto [it, added] = file_slot.try_emplace(file, files.size());
+        if (added) files.emplace_back();
+        files[it->second].push_back(index);
     }
+    // Largest files first (by their bytes, which their parsing follows): the last
+    // file to start is a small one, so the cores idle least at the end.
+    auto bytes_of = [&claim](const std::vector<int>& outs) {
+        const int file = claim.outputs.at(static_cast<size_t>(outs.front())).file;
+        for (const JobInput& in : claim.inputs)
+            if (in.index == file) return in.bytes;
+        return int64_t(0);
+    };
+    std::stable_sort(files.begin(), files.end(),
+                     [&](const std::vector<int>& a, const std::vector<int>& b) { return bytes_of(a) > bytes_of(b); });
+    std::atomic<size_t> next{0};
+    auto take_files = [&] {
+        for (size_t k = next++; k < files.size(); k = next++) {
+            if (cancel->load() || !store_->running(claim.id)) return;
+            try {
+                run_file(claim, files[k], cancel);
+            } catch (const std::exception& e) {
+                // A store that failed mid-file: the claim ends as a store failure does.
+                log_event("job_runner_error", nlohmann::json{{"job_id", claim.id}, {"error", e.what()}}.dump(
+                                                  -1, ' ', false, kReplaceBadUtf8));
+            }
+        }
+    };
+    // One lane more than the import slots: a file's child holds a slot only
+    // while it runs, so while one lane renders the scene its child handed
+    // back, another lane's child already reads the next file. The children
+    // stay within the slots; the renders pass the render gate.
+    const size_t lanes = static_cast<size_t>(std::max(1, ctx_.config.workers)) + 1;
+    const size_t helpers = std::min(files.size(), lanes) - 1;
+    std::vector<std::thread> threads;
+    for (size_t i = 0; i < helpers; ++i) threads.emplace_back(take_files);
+    take_files();
+    for (std::thread& t : threads) t.join();
     end_claim(claim);
 }
 
@@ -382,81 +413,33 @@ void JobService::end_claim(const JobClaim& claim) {
     webhooks_->notify();  // its callback (if any) became due with the finish
 }
 
-void JobService::run_output(const JobClaim& job, const JobOutput& out,
-                            const std::shared_ptr<std::atomic<bool>>& cancel) {
-    // Admission waits as long as it takes (the job is accepted work already),
-    // in its place in the gates' order; a cancel or a stop leaves the queue.
-    // A render is admitted inside render_upload (import slot, then its memory);
-    // a conversion takes an import/conversion slot here.
-    const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
-    std::shared_ptr<AdmissionGate::Ticket> ticket;
-    if (out.kind != OutputKind::render) ticket = admit(ctx_, ctx_.gate, 0, patient);
-    if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease))
-        throw Error(ErrorCode::canceled, "the job was deleted");
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::string dir = job_dir(job.id);
-    const std::string input = dir + "/" + input_name(out.file);
-    const std::string final_path = artifact_path(job.id, out.artifact);
+std::string JobService::input_path(const std::string& id, int file) const {
+    return job_dir(id) + "/" + input_name(file);
+}
+
+std::string JobService::partial_path(const JobClaim& job, const JobOutput& out) const {
     // Written under a temporary name with the same extension (the converter
     // picks the format from it), then renamed: an artifact exists only complete.
     // With leases the name holds the claim's token: a run that lost its lease
     // and the one that took over never write the same temporary file.
-    const std::string partial =
-        dir + "/partial-" + (job.lease.empty() ? std::string() : job.lease.substr(0, 12) + "-") + out.artifact;
-    nlohmann::json result;
-    if (out.kind == OutputKind::render) {
-        const RenderRequest r = parse_render_options(out.options_json);
-        RenderControl control;
-        control.cancel = cancel;
-        control.start = t0;
-        control.patient = true;
-        // The callback may run after this job is gone (a canceled render stops
-        // at its next block of rows): it holds the store, not `this`.
-        auto last = std::make_shared<std::atomic<int>>(0);
-        control.progress = [store = store_, id = job.id, index = out.index, lease = job.lease, last](double f) {
-            const int pct = static_cast<int>(f * 100);
-            if (pct >= last->load() + 5 && pct < 100) {
-                last->store(pct);
-                try {
-                    store->output_progress(id, index, f, lease);
-                } catch (const Error&) {
-                    // Progress is advisory; the output's end state is what counts.
-                }
-            }
-        };
-        const RenderedImage image = render_upload(ctx_, read_file_bytes(input), r, control);
-        write_durably(partial, image.bytes);
-        result = statistics_json(image);
-    } else {
-        ConvertReport report;
-        StageClock stages(t0);
-        IsolationTimings isolated;
-        try {
-            IsolationLimits limits = isolation_limits(ctx_);
-            limits.should_stop = [cancel] { return cancel->load(); };  // a deleted job's child is killed
-            report = convert_isolated(input, partial, limits, &isolated);
-        } catch (const Error& e) {
-            ctx_.metrics.count_import_failure(error_code_name(e.code()));
-            std::error_code ec;
-            fs::remove(partial, ec);
-            throw;
-        }
-        add_conversion_stages(report, isolated, stages);
-        stages.mark("isolation");
-        ticket.reset();
-        std::string out_format = artifact_format(out.artifact);  // STEP, IGES, STL, ... as in POST /v1/conversions
-        for (char& ch : out_format) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
-        result = {{"input_format", format_name(report.in_format)},
-                  {"output_format", out_format},
-                  {"faces", report.faces},
-                  {"warnings", report.warnings},
-                  {"timings_ms", nullptr}};
-        // The fidelity report (importer.h), as POST /v1/conversions answers it; none for NURBS JSON.
-        if (!report.fidelity.empty()) result["fidelity"] = nlohmann::json::parse(report.fidelity);
-        // The artifact is already in place (partial): no transfer; this result is the answer.
-        stages.mark("response");
-        result["timings_ms"] = stage_timings_json(stages, kConversionStages);
+    return job_dir(job.id) + "/partial-" + (job.lease.empty() ? std::string() : job.lease.substr(0, 12) + "-") +
+           out.artifact;
+}
+
+void JobService::output_failed(const JobClaim& job, const JobOutput& out, const std::exception& e) {
+    const auto* error = dynamic_cast<const Error*>(&e);
+    const auto* service_error = dynamic_cast<const ServiceError*>(&e);  // the render's time limit
+    if (!error && !service_error) {
+        store_->output_failed(job.id, out.index, "internal", e.what(), unix_now_ms(), job.lease);
+        return;
     }
+    const ProblemCode code = error ? ProblemCode(error->code()) : ProblemCode(service_error->code());
+    store_->output_failed(job.id, out.index, code.name(), without_paths(e.what(), job_dir(job.id), ctx_.scratch.path()),
+                          unix_now_ms(), job.lease);
+}
+
+void JobService::store_artifact(const JobClaim& job, const JobOutput& out, const std::string& partial,
+                                const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel) {
     std::error_code ec;
     // A run whose lease was lost meanwhile leaves the artifact to the run that took over.
     if (!job.lease.empty() && !store_->renew(job)) {
@@ -471,14 +454,12 @@ void JobService::run_output(const JobClaim& job, const JobOutput& out,
         fs::remove(partial, ec);
         throw;
     }
+    const std::string final_path = artifact_path(job.id, out.artifact);
     fs::rename(partial, final_path, ec);
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
-    sync_dir(dir);
+    sync_dir(job_dir(job.id));
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
-    if (!store_->output_succeeded(job.id, out.index, size,
-                                  result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), unix_now_ms(),
-                                  job.lease) &&
-        !job.lease.empty())
+    if (!store_->output_succeeded(job.id, out.index, size, result_json, unix_now_ms(), job.lease) && !job.lease.empty())
         log_event("job_output_fenced", nlohmann::json{{"job_id", job.id}, {"output", out.index}}.dump());
 }
 

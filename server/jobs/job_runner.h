@@ -1,8 +1,9 @@
 // Batch jobs at run time: the job store (server/store/job_store.h), the files under
 // DATA_DIR/jobs/<id>/ (input-<n>.cad and the artifacts), the runner threads
 // that take queued jobs from the store in submission order and run their
-// outputs one by one through the same admission gate as synchronous renders
-// and conversions, restart recovery at start, cancellation, and the retention
+// files in parallel (up to --workers; each file read once for all its
+// outputs) through the same admission gates as synchronous renders and
+// conversions, restart recovery at start, cancellation, and the retention
 // sweep. With a shared store (PostgreSQL) several instances run the same
 // queue: a heartbeat renews the leases of the outputs this one runs and stops
 // a run whose job was canceled elsewhere or whose lease was lost. Free of HTTP
@@ -21,9 +22,31 @@
 #include "server/store/job_store.h"
 #include "server/jobs/webhooks.h"
 
+namespace nurbsrt {
+class PreparedScene;
+struct Scene;
+}  // namespace nurbsrt
+
 namespace nurbsrt::server {
 
 struct ServerContext;
+
+// The niceness of a job's work: its runner threads (and so the threads they
+// start, a job render's among them) and its children. At 10 the kernel's
+// scheduler weights it about 1:10 against normal work (CFS's
+// sched_prio_to_weight: 110 vs 1024), so a client's render gets the cores at
+// once while a large job runs (bench/fairness.sh), and the job still has them
+// whole when nothing else runs.
+inline constexpr int kJobNice = 10;
+
+// The one read of an input file that served some of a job's outputs: each
+// output's statistics or report names it, and the job's statistics count them.
+struct FileRead {
+    std::string id;  // unique per read; empty: no read (the scene came from the cache)
+    int file = 0;
+    int served = 0;  // the read's users in the child: the import and each conversion
+    double read_ms = 0;
+};
 
 class JobService {
 public:
@@ -61,7 +84,27 @@ private:
     void heartbeat_loop();
     void sweep_shared_leftovers();
     void run_claim(JobClaim& claim);
-    void run_output(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<std::atomic<bool>>& cancel);
+    // The claim's outputs of one input file (job_file_run.cpp): one isolated
+    // child reads the file once, writes its conversions and hands back the
+    // scene, which every render of the file then uses.
+    void run_file(const JobClaim& claim, const std::vector<int>& outputs,
+                  const std::shared_ptr<std::atomic<bool>>& cancel);
+    // The file's child: its conversions stored, and its scene when `want_scene`.
+    // False when the file's work ends there (failed, canceled, the job deleted).
+    bool run_file_child(const JobClaim& claim, const std::string& input, const std::vector<const JobOutput*>& renders,
+                        const std::vector<const JobOutput*>& conversions, bool want_scene,
+                        const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
+                        std::shared_ptr<const Scene>& scene);
+    void run_render(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<const PreparedScene>& scene,
+                    const FileRead& read, const std::shared_ptr<std::atomic<bool>>& cancel);
+    // Fails the output with `e` (its message without the service's paths).
+    void output_failed(const JobClaim& claim, const JobOutput& out, const std::exception& e);
+    // Moves a written artifact (under its partial name) into place within the
+    // quota and records the output's success with `result`.
+    void store_artifact(const JobClaim& claim, const JobOutput& out, const std::string& partial,
+                        const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel);
+    std::string partial_path(const JobClaim& claim, const JobOutput& out) const;
+    std::string input_path(const std::string& id, int file) const;
     void end_claim(const JobClaim& claim);
     void remove_files(const std::string& id) const;
     std::string job_dir(const std::string& id) const;

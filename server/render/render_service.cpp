@@ -164,6 +164,11 @@ std::vector<AovBuffer> aov_buffers(const RenderImage& image, unsigned bits) {
 
 std::shared_ptr<const PreparedScene> imported_scene(ServerContext& ctx, const std::string& bytes,
                                                     const RenderControl& control, bool& cache_hit, StageClock& stages) {
+    if (control.scene) {
+        stages.mark("cache");
+        cache_hit = true;
+        return control.scene;
+    }
     const ImportOptions options;
     SceneCache::Source source = SceneCache::Source::loaded;
     // A hash of every byte, unless the caller knows it: a stage of its own.
@@ -229,7 +234,10 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const FrameCost cost = estimate_frame_cost(*prepared, r.width, r.height * frames,
                                                {options.antialias, options.shadows || options.ground});
     check_frame_cost(ctx.config, cost);
-    const RenderPriority priority = priority_for(cost);
+    // Accepted batch work never goes ahead of interactive requests: a job's
+    // thumbnails are as cheap as a client's, but nobody is waiting on each one.
+    const RenderPriority priority =
+        control.patient ? std::min(priority_for(cost), RenderPriority::normal) : priority_for(cost);
     options.priority = priority;
     AdmissionWait wait = admission_wait(control);
     if (priority == RenderPriority::high) wait.order = AdmissionGate::Order::may_overtake;

@@ -79,6 +79,9 @@ struct RenderControl {
     // file's id): the scene cache's key is made from it, without hashing the
     // bytes again. Empty: hashed here.
     std::string content_sha256;
+    // The scene when the caller holds it already (a job's file, imported once
+    // for all its outputs): no cache lookup and no import; counted as a hit.
+    std::shared_ptr<const PreparedScene> scene;
 };
 
 // The imported and prepared scene of `cad_bytes` (STEP/IGES, checked by

@@ -151,5 +151,13 @@ def test_job_render_statistics_add_up(url):
     for out in job["outputs"][1:]:
         t = out["report"]["timings_ms"]
         check_adds_up(t, CONVERSION_STAGES, f"job conversion to {out['format']}")
-        assert t["isolation"] > 0 and t["read"] > 0 and t["write"] > 0, t
-        assert t["upload"] == 0 and t["queue"] == 0, t  # the input is on disk; the slot was granted before
+        assert t["isolation"] > 0 and t["write"] > 0, t
+        assert t["upload"] == 0, t  # the input is on disk
+        # With the whole file in one run (SQLite), its one read served the render's import first: it is the
+        # read's cost, not this output's. Claimed output by output (PostgreSQL), each conversion reads.
+        read = out["report"]["read"]
+        assert read["read_ms"] > 0, read
+        if os.environ.get("NURBSRT_API_JOB_STORE"):
+            assert t["read"] > 0 and read["served"] == 1, (t, read)
+        else:
+            assert t["read"] == 0 and read["served"] == 3, (t, read)

@@ -1,0 +1,233 @@
+// One input file of a claimed job: everything its outputs need from one read.
+// STEP/IGES parsing is most of an import and of a conversion alike, so the
+// file's child (process_file_isolated, importer/isolated.h) reads it once,
+// writes the file's conversions itself, where the OCCT document lives, and
+// hands back the scene, which is prepared here once for all the file's renders.
+#include <nlohmann/json.hpp>
+
+#include <cctype>
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "importer/isolated.h"
+#include "options/render_request.h"
+#include "renderer/prepared_scene.h"
+#include "server/common/request_log.h"
+#include "server/common/scratch.h"
+#include "server/common/sha256.h"
+#include "server/jobs/job_runner.h"
+#include "server/jobs/job_spec.h"
+#include "server/render/context.h"
+#include "server/render/render_service.h"
+#include "server/render/scene_cache.h"
+#include "server/render/stage_timings.h"
+#include "server/render/work.h"
+#include "server/store/durable_file.h"
+
+namespace nurbsrt::server {
+namespace {
+
+nlohmann::json file_read_json(const FileRead& read) {
+    return {{"id", read.id}, {"file", read.file}, {"served", read.served}, {"read_ms", read.read_ms}};
+}
+
+std::string dump_result(const nlohmann::json& result) {
+    return result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+// A conversion's report as POST /v1/conversions answers it: its own stages
+// (read, mesh, write, verify: read is 0 where another output's use paid it)
+// and the child's share of the file's run.
+nlohmann::json conversion_result(const JobOutput& out, const ConvertReport& report, const FileResult& file,
+                                 StageClock stages, const FileRead& read) {
+    add_conversion_stages(report, file.timings, stages);
+    stages.mark("isolation");
+    std::string out_format = artifact_format(out.artifact);  // STEP, IGES, STL, ... as in POST /v1/conversions
+    for (char& ch : out_format) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    nlohmann::json result = {{"input_format", format_name(report.in_format)},
+                             {"output_format", out_format},
+                             {"faces", report.faces},
+                             {"warnings", report.warnings},
+                             {"read", file_read_json(read)}};
+    // The fidelity report (importer.h), as POST /v1/conversions answers it; none for NURBS JSON.
+    if (!report.fidelity.empty()) result["fidelity"] = nlohmann::json::parse(report.fidelity);
+    // The artifact is already in place (partial): no transfer; this result is the answer.
+    stages.mark("response");
+    result["timings_ms"] = stage_timings_json(stages, kConversionStages);
+    return result;
+}
+
+}  // namespace
+
+void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
+                          const std::shared_ptr<std::atomic<bool>>& cancel) {
+    std::vector<const JobOutput*> renders, conversions;
+    for (const int index : indices) {
+        const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
+        (out.kind == OutputKind::render ? renders : conversions).push_back(&out);
+    }
+    const int file = job.outputs.at(static_cast<size_t>(indices.front())).file;
+    const std::string input = input_path(job.id, file);
+    // A scene already cached (a stored file rendered before, another job's
+    // file) serves the renders without a read; the child then runs only for
+    // the conversions, and not at all without them.
+    std::string cache_key;
+    std::shared_ptr<const PreparedScene> prepared;
+    if (!renders.empty()) {
+        cache_key = scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{});
+        prepared = ctx_.cache.get(cache_key);
+    }
+    FileRead read;
+    read.file = file;
+    std::shared_ptr<const Scene> scene;
+    const bool cached = prepared != nullptr;
+    const bool want_scene = !renders.empty() && !cached;
+    if (want_scene || !conversions.empty()) {
+        if (!run_file_child(job, input, renders, conversions, want_scene, cancel, read, scene)) return;
+        if (renders.empty()) return;
+    }
+    if (cached) read = FileRead{};  // the child's read served only the conversions
+    if (!prepared) {
+        try {
+            prepared = std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx_.config.render_threads));
+            // Later renders of the same bytes (a client's, another job's) find it cached.
+            ctx_.cache.put(cache_key, prepared);
+        } catch (const std::exception& e) {
+            for (const JobOutput* out : renders) output_failed(job, *out, e);
+            return;
+        }
+    }
+    for (const JobOutput* out : renders) {
+        if (cancel->load()) return;
+        try {
+            run_render(job, *out, prepared, read, cancel);
+        } catch (const Error& e) {
+            if (e.code() == ErrorCode::canceled && (cancel->load() || !store_->running(job.id))) return;
+            output_failed(job, *out, e);
+        } catch (const std::exception& e) {
+            output_failed(job, *out, e);
+        }
+    }
+}
+
+bool JobService::run_file_child(const JobClaim& job, const std::string& input,
+                                const std::vector<const JobOutput*>& renders,
+                                const std::vector<const JobOutput*>& conversions, bool want_scene,
+                                const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
+                                std::shared_ptr<const Scene>& scene) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto fail_all = [&](const std::vector<const JobOutput*>& outs, const std::exception& e) {
+        for (const JobOutput* out : outs) output_failed(job, *out, e);
+    };
+    // The child takes an import slot, as a conversion or an uncached render
+    // does; accepted work waits for it as long as it takes, in its place.
+    const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
+    std::shared_ptr<AdmissionGate::Ticket> ticket;
+    try {
+        ticket = admit(ctx_, ctx_.gate, 0, patient);
+    } catch (const Error& e) {
+        if (e.code() == ErrorCode::canceled && cancel->load()) return false;
+        throw;
+    }
+    StageClock queued(t0);  // no upload: the input is on disk
+    queued.mark("queue");
+    // A conversion runs from its child's start; a render from when its scene is
+    // there (so a render's span is its frame, as for a cached scene).
+    for (const JobOutput* out : conversions)
+        if (!store_->output_running(job.id, out->index, unix_now_ms(), job.lease)) return false;  // deleted
+
+    FilePlan plan;
+    plan.scene = want_scene;
+    for (const JobOutput* out : conversions) plan.conversions.push_back(partial_path(job, *out));
+    FileResult result;
+    try {
+        IsolationLimits limits = isolation_limits(ctx_);
+        limits.should_stop = [cancel] { return cancel->load(); };  // a deleted job's child is killed
+        limits.nice = kJobNice;                                    // as the runner's threads (JobService::run_loop)
+        result = process_file_isolated(input, plan, limits);
+    } catch (const Error& e) {
+        ticket.reset();
+        std::error_code ec;
+        for (const std::string& partial : plan.conversions) std::filesystem::remove(partial, ec);
+        if (e.code() == ErrorCode::canceled && cancel->load()) return false;
+        ctx_.metrics.count_import_failure(error_code_name(e.code()));
+        // The file could not be read (or its child died): all its outputs fail with that.
+        if (want_scene) fail_all(renders, e);
+        fail_all(conversions, e);
+        return false;
+    }
+    ticket.reset();
+    read = FileRead{new_request_id(), read.file, result.uses, result.read_ms};
+    log_event("job_file_read", nlohmann::json{{"job_id", job.id},
+                                              {"file", read.file},
+                                              {"read", read.id},
+                                              {"reads", result.reads},
+                                              {"served", result.uses},
+                                              {"read_ms", result.read_ms}}
+                                   .dump());
+    for (size_t i = 0; i < conversions.size(); ++i) {
+        const JobOutput& out = *conversions[i];
+        const FileResult::Conversion& c = result.conversions.at(i);
+        try {
+            if (c.error) {
+                ctx_.metrics.count_import_failure(error_code_name(c.error->code()));
+                std::error_code ec;
+                std::filesystem::remove(plan.conversions[i], ec);
+                throw *c.error;
+            }
+            store_artifact(job, out, plan.conversions[i],
+                           dump_result(conversion_result(out, *c.report, result, queued, read)), cancel);
+        } catch (const Error& e) {
+            if (e.code() == ErrorCode::canceled && cancel->load()) return false;
+            output_failed(job, out, e);
+        } catch (const std::exception& e) {
+            output_failed(job, out, e);
+        }
+    }
+    if (!want_scene) return true;
+    if (result.scene_error) {
+        ctx_.metrics.count_import_failure(error_code_name(result.scene_error->code()));
+        fail_all(renders, *result.scene_error);
+        return false;
+    }
+    scene = std::make_shared<const Scene>(std::move(*result.scene));
+    return true;
+}
+
+void JobService::run_render(const JobClaim& job, const JobOutput& out,
+                            const std::shared_ptr<const PreparedScene>& scene, const FileRead& read,
+                            const std::shared_ptr<std::atomic<bool>>& cancel) {
+    if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease))
+        throw Error(ErrorCode::canceled, "the job was deleted");
+    const RenderRequest r = parse_render_options(out.options_json);
+    RenderControl control;
+    control.cancel = cancel;
+    control.start = std::chrono::steady_clock::now();
+    control.patient = true;
+    control.scene = scene;
+    // The callback may run after this job is gone (a canceled render stops
+    // at its next block of rows): it holds the store, not `this`.
+    auto last = std::make_shared<std::atomic<int>>(0);
+    control.progress = [store = store_, id = job.id, index = out.index, lease = job.lease, last](double f) {
+        const int pct = static_cast<int>(f * 100);
+        if (pct >= last->load() + 5 && pct < 100) {
+            last->store(pct);
+            try {
+                store->output_progress(id, index, f, lease);
+            } catch (const Error&) {
+                // Progress is advisory; the output's end state is what counts.
+            }
+        }
+    };
+    const RenderedImage image = render_upload(ctx_, std::string(), r, control);
+    const std::string partial = partial_path(job, out);
+    write_durably(partial, image.bytes);
+    nlohmann::json result = statistics_json(image);
+    if (!read.id.empty()) result["read"] = file_read_json(read);  // none: the scene was cached
+    store_artifact(job, out, partial, dump_result(result), cancel);
+}
+
+}  // namespace nurbsrt::server
