@@ -65,6 +65,8 @@ struct Args {
     bool no_caps = false, hatch = false;
     std::vector<std::string> hide, only, ghost, part_colors;  // part_colors: "PATTERN=r,g,b"
     std::string views;                                        // "front,top,..." of a contact sheet
+    double explode = 0;
+    std::string explode_level = "top";
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -106,6 +108,8 @@ RenderRequest request_of(const Args& a) {
     r.sections.caps = !a.no_caps;
     r.sections.hatch = a.hatch;
     if (!a.views.empty()) r.views = parse_views(a.views, "--views");
+    r.explode = a.explode;
+    r.explode_level = *parse_explode_level(a.explode_level);
     r.parts.hide = a.hide;
     r.parts.only = a.only;
     r.parts.ghost = a.ghost;
@@ -246,6 +250,13 @@ void add_look_options(CLI::App* cmd, Args& a) {
                     "--width x --height: e.g. front,top,right,iso (at most " +
                         std::to_string(kMaxViews) + ")")
         ->check(shared_check([](const std::string& s) { parse_views(s, "the value"); }, "V1,V2,..."));
+    cmd->add_option("--explode", a.explode,
+                    "exploded view: each top-level part moved away from the assembly's centre by this many times "
+                    "the assembly's size (0 to 10; 0.3 reads well)")
+        ->check(shared_check([](const std::string& s) { checked_explode(std::stod(s), "the value"); }, "F"));
+    cmd->add_option("--explode-level", a.explode_level, "what --explode moves: top (top-level parts) or leaves")
+        ->check(CLI::IsMember({"top", "leaves"}))
+        ->capture_default_str();
     cmd->add_flag("--ground", a.ground,
                   "a ground under the model that takes the key light's exact shadows (turns --shadows on): a grey "
                   "floor over an opaque background, only the shadow over a transparent one");
@@ -363,6 +374,7 @@ void run_render(const Args& a) {
     StageClock stages(t0);
     IsolationTimings isolation;
     const Scene scene = load_models(a.models, a.load, &isolation);
+    Scene scene_for_frames;  // the exploded copy, when --explode
     add_import_stages(scene.timings, stages);
     if (a.load.isolated) {
         stages.add("prescan", isolation.prescan_ms);
@@ -374,9 +386,14 @@ void run_render(const Args& a) {
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-    RenderOptions options = render_options_for(request, scene);
+    if (request.explode > 0) {
+        scene_for_frames = scene;
+        explode_scene(scene_for_frames, request.explode, request.explode_level);
+    }
+    const Scene& shown = request.explode > 0 ? scene_for_frames : scene;
+    RenderOptions options = render_options_for(request, shown);
     Frames frames;
-    for (const CameraSpec& spec : camera_specs_for(request, scene, options.hidden_faces))
+    for (const CameraSpec& spec : camera_specs_for(request, shown, options.hidden_faces))
         frames.cameras.emplace_back(spec);
     options.threads = a.threads;
     say("rendering %zu view(s) of %dx%d with %s", frames.cameras.size(), frames.cameras[0].width(),
@@ -385,7 +402,7 @@ void run_render(const Args& a) {
     if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
     stages.mark("frame_setup");
     // One prepare() for every view (render(scene, ...) would prepare per frame).
-    const PreparedScene prepared = prepare(scene, a.threads);
+    const PreparedScene prepared = prepare(shown, a.threads);
     stages.add("prepare", prepared.prepare_ms());
     for (const Camera& camera : frames.cameras) {
         frames.results.push_back(render(prepared, camera, options));

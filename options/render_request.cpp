@@ -196,6 +196,12 @@ std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& sc
     return specs;
 }
 
+double checked_explode(double factor, const std::string& what) {
+    if (!(factor >= 0 && factor <= kMaxExplode))
+        throw Error(ErrorCode::invalid_argument, what + " must be from 0 (none) to 10 times the assembly's size");
+    return factor;
+}
+
 std::vector<std::string> checked_views(const std::vector<std::string>& names, const std::string& what) {
     if (names.empty() || names.size() > kMaxViews)
         throw Error(ErrorCode::invalid_argument, what + " must name 1 to " + std::to_string(kMaxViews) +

@@ -15,6 +15,7 @@
 #include "renderer/render.h"
 #include "options/image_format.h"
 #include "options/part_selection.h"
+#include "core/scene/explode.h"
 
 namespace nurbsrt {
 
@@ -109,7 +110,15 @@ struct RenderRequest {
     // Named views of a contact sheet (compose_sheet), each width x height; empty:
     // the one `view`.
     std::vector<std::string> views;
+    // An exploded view (core/scene/explode.h): factor in [0, kMaxExplode] of the
+    // assembly's size; 0: none.
+    double explode = 0;
+    ExplodeLevel explode_level = ExplodeLevel::top;
 };
+
+// The explode factor checked: finite, in [0, kMaxExplode]. Throws
+// Error(invalid_argument) naming `what`.
+double checked_explode(double factor, const std::string& what);
 
 // "front,top,right,iso" (the CLI's --views, a query parameter) or a list's
 // names: 1 to kMaxViews known views. Throws Error(invalid_argument) naming `what`.

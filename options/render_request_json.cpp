@@ -122,7 +122,7 @@ constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_d
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
     "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin, sections, section_mode, "
-    "section_caps, section_hatch, parts, ground, ground_height, views";
+    "section_caps, section_hatch, parts, ground, ground_height, views, explode, explode_level";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -289,6 +289,10 @@ RenderRequest parse_render_options(const std::string& options_json) {
             r.sections.hatch = boolean(v, key);
         } else if (key == "parts") {
             r.parts = part_selection(v, key);
+        } else if (key == "explode") {
+            r.explode = checked_explode(number(v, key), "option '" + key + "'");
+        } else if (key == "explode_level") {
+            r.explode_level = *parse_explode_level(one_of(v, key, {"top", "leaves"}));
         } else if (key == "views") {
             if (v.is_string()) {
                 r.views = parse_views(v.get<std::string>(), "option '" + key + "'");

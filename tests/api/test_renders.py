@@ -382,6 +382,27 @@ def test_parts_hidden_isolated_and_recoloured(url):
     assert stats_ghost["parts"]["ghost_behind_ms"] > 0
 
 
+def test_explode_moves_the_parts_apart(url):
+    """An exploded as1: the parts move apart (the view, fitted to them, shows
+    them smaller), the cached scene is not read again but prepared anew; a
+    factor outside [0, 10] is refused."""
+    as1 = MODELS / "step" / "as1-oc-214.stp"
+    if not as1.exists():
+        pytest.skip("../shared/models is absent: the assembly as1 is not there")
+    data = as1.read_bytes()
+    stats_plain, _ = render_png(url, data, antialias=0)
+    r = post_raw(url, "/v1/renders", data, headers={"Accept": "application/json"},
+                 params={"width": 160, "height": 120, "antialias": 0, "explode": 0.3})
+    assert r.status_code == 200, r.text[:300]
+    timing = server_timing(r)
+    assert timing["read"] == 0 and timing["prepare"] > 0, timing
+    assert 0 < r.json()["statistics"]["pixels_hit"] < stats_plain["pixels_hit"]
+    for bad in (-1, 11, "far"):
+        body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"explode": bad}), 400,
+                             "invalid_argument")
+        assert "explode" in body["detail"], body
+
+
 def test_bad_parts_options(url):
     for parts, field in [({"hide": ["gear*"]}, "parts.hide[0] 'gear*' matches no part"),
                          ({"explode": ["a"]}, "explode"), ({"ghost": ["gear*"]}, "parts.ghost[0]"),
