@@ -67,6 +67,7 @@ struct Args {
     std::string views;                                        // "front,top,..." of a contact sheet
     double explode = 0;
     std::string explode_level = "top";
+    std::string layout = "sheet";  // of --views: one sheet, or a file per view
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -108,6 +109,8 @@ RenderRequest request_of(const Args& a) {
     r.sections.caps = !a.no_caps;
     r.sections.hatch = a.hatch;
     if (!a.views.empty()) r.views = parse_views(a.views, "--views");
+    if (a.layout == "separate" && a.views.empty())
+        throw CLI::ValidationError("--layout", "separate writes a file per view of --views, which is not given");
     r.explode = a.explode;
     r.explode_level = *parse_explode_level(a.explode_level);
     r.parts.hide = a.hide;
@@ -250,6 +253,10 @@ void add_look_options(CLI::App* cmd, Args& a) {
                     "--width x --height: e.g. front,top,right,iso (at most " +
                         std::to_string(kMaxViews) + ")")
         ->check(shared_check([](const std::string& s) { parse_views(s, "the value"); }, "V1,V2,..."));
+    cmd->add_option("--layout", a.layout,
+                    "of --views: sheet (one labelled image) or separate (a file per view: OUT-front.png, ...)")
+        ->check(CLI::IsMember({"sheet", "separate"}))
+        ->capture_default_str();
     cmd->add_option("--explode", a.explode,
                     "exploded view: each top-level part moved away from the assembly's centre by this many times "
                     "the assembly's size (0 to 10; 0.3 reads well)")
@@ -327,6 +334,12 @@ private:
     bool live_ = false;
     int next_decile_ = 1;
 };
+
+// OUT's path for one view of --layout separate: part.png -> part-front.png.
+std::string per_view_path(const std::string& path, const std::string& view) {
+    const std::filesystem::path p(path);
+    return (p.parent_path() / (p.stem().string() + "-" + view + p.extension().string())).string();
+}
 
 // The frames of a request: one, or one per view of a contact sheet.
 struct Frames {
@@ -414,6 +427,17 @@ void run_render(const Args& a) {
         say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms", result.stats.pixels_hit,
             result.stats.mean_iterations, result.stats.total_ms);
 
+    if (a.layout == "separate") {  // a file per view, named after it
+        for (size_t v = 0; v < frames.results.size(); ++v) {
+            const std::string out = per_view_path(a.output, request.views[v]);
+            write_image(frames.results[v].image, out);
+            if (!a.aov.empty()) write_image(frames.results[v].image, per_view_path(a.aov, request.views[v]));
+            say("wrote %s", out.c_str());
+        }
+        stages.mark("encode");
+        if (!a.stats.empty()) write_stats(a, request, scene, frames, stages);
+        return;
+    }
     const RenderImage* image = &frames.results[0].image;
     RenderImage sheet;
     if (!request.views.empty()) {

@@ -548,6 +548,21 @@ TEST(CliRender, ViewsMakeAContactSheet) {
     };
     EXPECT_EQ(be32(16), 192u);  // 2 columns
     EXPECT_EQ(be32(20), 144u);  // 2 rows
+    // --layout separate: a file per view, named after it, of the view's own size.
+    const CliRun sep =
+        run_nurbsrt("render " + kScrew + " -q --width 96 --height 72 --views front,iso --layout separate -o " +
+                    (dir / "part.png").string());
+    ASSERT_EQ(sep.status, 0) << sep.err;
+    for (const char* v : {"front", "iso"}) {
+        std::ifstream f(dir / (std::string("part-") + v + ".png"), std::ios::binary);
+        std::string h(24, '\0');
+        f.read(h.data(), 24);
+        EXPECT_EQ(uint8_t(h[19]), 96) << v;  // width, low byte of the big-endian IHDR field
+        EXPECT_EQ(uint8_t(h[23]), 72) << v;
+    }
+    EXPECT_FALSE(fs::exists(dir / "part.png"));
+    const CliRun lonely = run_nurbsrt("render " + kScrew + " --layout separate -o " + (dir / "l.png").string());
+    EXPECT_EQ(lonely.status, 2) << lonely.err;
     const CliRun bad = run_nurbsrt("render " + kScrew + " --views front,side -o " + (dir / "b.png").string());
     EXPECT_EQ(bad.status, 2) << bad.err;
     EXPECT_NE(bad.err.find("--views: the value names an unknown view 'side'"), std::string::npos) << bad.err;
