@@ -132,10 +132,7 @@ nlohmann::json sheet_json(BenchContext& ctx, const BenchScene& sc) {
         const PreparedScene prepared = prepare(scene);
         std::vector<RenderResult> frames;
         for (const char* v : kSheetViews) frames.push_back(frame(scene, prepared, v));
-        std::vector<const RenderImage*> images;
-        for (const RenderResult& f : frames) images.push_back(&f.image);
-        const float empty[4] = {0, 0, 0, 0};
-        compose_sheet(images, {kSheetViews, kSheetViews + 4}, 2, empty);
+        compose_sheet(frames, {kSheetViews, kSheetViews + 4}, options);
         sheet.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     };
     auto run_separate = [&] {

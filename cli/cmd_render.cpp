@@ -116,10 +116,7 @@ RenderRequest request_of(const Args& a) {
     r.parts.hide = a.hide;
     r.parts.only = a.only;
     r.parts.ghost = a.ghost;
-    for (const std::string& pc : a.part_colors) {
-        const size_t eq = pc.rfind('=');  // a name may hold '=', a colour does not
-        r.parts.color.emplace_back(pc.substr(0, eq), parse_rgb(pc.substr(eq + 1), "--part-color"));
-    }
+    for (const std::string& pc : a.part_colors) r.parts.color.push_back(parse_part_color(pc, "--part-color"));
     return r;
 }
 
@@ -283,26 +280,16 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->capture_default_str();
     cmd->add_flag("--no-caps", a.no_caps, "cut closed bodies open (no caps on the section planes)");
     cmd->add_flag("--hatch", a.hatch, "hatching lines over the section caps");
-    const auto pattern_check = [](const char* flag) {
-        return shared_check([flag](const std::string& s) { check_part_pattern(s, "the value"); }, "ID|GLOB");
-    };
+    const CLI::Validator part_pattern =
+        shared_check([](const std::string& s) { check_part_pattern(s, "the value"); }, "ID|GLOB");
     cmd->add_option("--hide", a.hide, "leave out a part: its id (0/3/1, see nurbsrt info) or a name glob (repeatable)")
-        ->check(pattern_check("--hide"));
-    cmd->add_option("--only", a.only, "show only these parts: id or name glob (repeatable)")
-        ->check(pattern_check("--only"));
+        ->check(part_pattern);
+    cmd->add_option("--only", a.only, "show only these parts: id or name glob (repeatable)")->check(part_pattern);
     cmd->add_option("--ghost", a.ghost,
                     "draw a part see-through over what lies behind it: id or name glob (repeatable)")
-        ->check(pattern_check("--ghost"));
+        ->check(part_pattern);
     cmd->add_option("--part-color", a.part_colors, "colour a part: ID_OR_GLOB=r,g,b in [0,1] (repeatable)")
-        ->check(shared_check(
-            [](const std::string& s) {
-                const size_t eq = s.rfind('=');
-                if (eq == std::string::npos || eq == 0)
-                    throw Error(ErrorCode::invalid_argument, "the value must be ID_OR_GLOB=r,g,b");
-                check_part_pattern(s.substr(0, eq), "the value's part");
-                parse_rgb(s.substr(eq + 1), "the value's colour");
-            },
-            "ID|GLOB=R,G,B"));
+        ->check(shared_check([](const std::string& s) { parse_part_color(s, "the value"); }, "ID|GLOB=R,G,B"));
 }
 
 // Progress on stderr: live on a terminal; otherwise a line per 10% once the
@@ -386,8 +373,7 @@ void run_render(const Args& a) {
     // --stats timings: stages marked end to end from t0, so they sum to the total.
     StageClock stages(t0);
     IsolationTimings isolation;
-    const Scene scene = load_models(a.models, a.load, &isolation);
-    Scene scene_for_frames;  // the exploded copy, when --explode
+    Scene scene = load_models(a.models, a.load, &isolation);
     add_import_stages(scene.timings, stages);
     if (a.load.isolated) {
         stages.add("prescan", isolation.prescan_ms);
@@ -399,14 +385,10 @@ void run_render(const Args& a) {
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-    if (request.explode > 0) {
-        scene_for_frames = scene;
-        explode_scene(scene_for_frames, request.explode, request.explode_level);
-    }
-    const Scene& shown = request.explode > 0 ? scene_for_frames : scene;
-    RenderOptions options = render_options_for(request, shown);
+    explode_scene(scene, request.explode, request.explode_level);  // nothing for 0
+    RenderOptions options = render_options_for(request, scene);
     Frames frames;
-    for (const CameraSpec& spec : camera_specs_for(request, shown, options.hidden_faces))
+    for (const CameraSpec& spec : camera_specs_for(request, scene, options.hidden_faces))
         frames.cameras.emplace_back(spec);
     options.threads = a.threads;
     say("rendering %zu view(s) of %dx%d with %s", frames.cameras.size(), frames.cameras[0].width(),
@@ -415,7 +397,7 @@ void run_render(const Args& a) {
     if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
     stages.mark("frame_setup");
     // One prepare() for every view (render(scene, ...) would prepare per frame).
-    const PreparedScene prepared = prepare(shown, a.threads);
+    const PreparedScene prepared = prepare(scene, a.threads);
     stages.add("prepare", prepared.prepare_ms());
     for (const Camera& camera : frames.cameras) {
         frames.results.push_back(render(prepared, camera, options));
@@ -441,11 +423,7 @@ void run_render(const Args& a) {
     const RenderImage* image = &frames.results[0].image;
     RenderImage sheet;
     if (!request.views.empty()) {
-        std::vector<const RenderImage*> images;
-        for (const RenderResult& result : frames.results) images.push_back(&result.image);
-        const float empty[4] = {options.background.r, options.background.g, options.background.b,
-                                options.background_alpha};
-        sheet = compose_sheet(images, request.views, sheet_columns(images.size()), empty);
+        sheet = compose_sheet(frames.results, request.views, options);
         image = &sheet;
     }
     write_image(*image, a.output);

@@ -4,6 +4,7 @@
 #include <fnmatch.h>
 
 #include "core/error.h"
+#include "options/render_request.h"
 
 namespace nurbsrt {
 
@@ -64,6 +65,14 @@ void check_part_pattern(const std::string& pattern, const std::string& what) {
         bad(what + " must be a part id or name glob of 1 to 256 bytes");
     for (unsigned char c : pattern)
         if (c < 0x20 || c == 0x7f) bad(what + " holds a control character");
+}
+
+std::pair<std::string, Color> parse_part_color(const std::string& text, const std::string& what) {
+    const size_t eq = text.rfind('=');
+    if (eq == std::string::npos || eq == 0) bad(what + " must be ID_OR_GLOB=r,g,b");
+    const std::string pattern = text.substr(0, eq);
+    check_part_pattern(pattern, what + "'s part");
+    return {pattern, parse_rgb(text.substr(eq + 1), what + "'s colour")};
 }
 
 void apply_part_selection(const PartSelection& selection, const Scene& scene, RenderOptions& options) {

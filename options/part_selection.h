@@ -31,6 +31,11 @@ struct PartSelection {
 // Throws Error(invalid_argument) naming `what`.
 void check_part_pattern(const std::string& pattern, const std::string& what);
 
+// "PART=r,g,b" (the CLI's --part-color): a pattern as above and a colour in
+// [0, 1] (parse_rgb). The last '=' splits them: a part name may hold one, a
+// colour does not. Throws Error(invalid_argument) naming `what`.
+std::pair<std::string, Color> parse_part_color(const std::string& text, const std::string& what);
+
 // Sets options.hidden_faces, ghost_faces and face_colors for `scene`. Throws
 // Error(invalid_argument) naming the request field (parts.hide[2], ...) for a
 // pattern no part matches, listing a few of the scene's part ids and names.

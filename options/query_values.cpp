@@ -1,5 +1,6 @@
 #include "options/query_values.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -60,6 +61,16 @@ std::optional<long long> decimal_integer(std::string_view s) {
     const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), n);
     if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
     return n;
+}
+
+std::vector<std::string> split_list(std::string_view text, char separator) {
+    std::vector<std::string> items;
+    for (size_t start = 0; start <= text.size();) {
+        const size_t end = std::min(text.find(separator, start), text.size());
+        items.emplace_back(text.substr(start, end - start));
+        start = end + 1;
+    }
+    return items;
 }
 
 std::optional<std::vector<double>> decimal_list(std::string_view text, size_t min_count, size_t max_count) {

@@ -24,6 +24,9 @@ nlohmann::json query_value(const std::string& key, const std::string& text);
 // RFC 8259 §6 number / an optional '-' and decimal digits, the whole text.
 std::optional<double> decimal_number(std::string_view text);
 std::optional<long long> decimal_integer(std::string_view text);
+// The items of a list given as text ("z,face", "front,top", planes "a;b"):
+// split at every `separator`, empty items kept (the parser of the items refuses them).
+std::vector<std::string> split_list(std::string_view text, char separator);
 // "a,b,c": `min_count` to `max_count` decimal numbers separated by commas,
 // nothing else (no spaces, no empty item); nullopt otherwise.
 std::optional<std::vector<double>> decimal_list(std::string_view text, size_t min_count, size_t max_count);

@@ -214,13 +214,7 @@ std::vector<std::string> checked_views(const std::vector<std::string>& names, co
 }
 
 std::vector<std::string> parse_views(const std::string& text, const std::string& what) {
-    std::vector<std::string> names;
-    for (size_t start = 0; start <= text.size() && names.size() <= kMaxViews;) {
-        const size_t comma = std::min(text.find(',', start), text.size());
-        names.push_back(text.substr(start, comma - start));
-        start = comma + 1;
-    }
-    return checked_views(names, what);
+    return checked_views(split_list(text, ','), what);
 }
 
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {

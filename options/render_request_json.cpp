@@ -93,12 +93,7 @@ std::string one_of(const json& v, const std::string& key, const std::set<std::st
 unsigned aov_bits(const json& v, const std::string& key) {
     std::vector<std::string> names;
     if (v.is_string()) {
-        std::string s = v.get<std::string>();
-        for (size_t start = 0; start <= s.size();) {
-            const size_t comma = std::min(s.find(',', start), s.size());
-            names.push_back(s.substr(start, comma - start));
-            start = comma + 1;
-        }
+        names = split_list(v.get<std::string>(), ',');
     } else if (v.is_array()) {
         for (const json& x : v) names.push_back(text(x, key));
     } else {
@@ -171,14 +166,10 @@ std::vector<SectionPlane> section_planes(const json& v, const std::string& key) 
     std::vector<SectionPlane> planes;
     const std::string what = "option '" + key + "'";
     if (v.is_string()) {
-        const std::string s = v.get<std::string>();
-        for (size_t start = 0; start <= s.size();) {
-            const size_t semi = std::min(s.find(';', start), s.size());
-            check_section_count(planes.size() + 1, what);
-            planes.push_back(
-                parse_section_plane(s.substr(start, semi - start), what + " plane " + std::to_string(planes.size())));
-            start = semi + 1;
-        }
+        const std::vector<std::string> texts = split_list(v.get<std::string>(), ';');
+        check_section_count(texts.size(), what);
+        for (size_t k = 0; k < texts.size(); ++k)
+            planes.push_back(parse_section_plane(texts[k], what + " plane " + std::to_string(k)));
         return planes;
     }
     if (!v.is_array()) bad(what + " must be an array of planes {\"point\": [x,y,z], \"normal\": [x,y,z]}");

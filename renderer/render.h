@@ -204,13 +204,12 @@ std::string encode_image(const RenderImage& image, const std::string& format_nam
 // high, opaque `colour`) through the image module. Throws as write_image.
 void draw_label(RenderImage& image, int x, int y, int size, const std::string& text, Color colour);
 
-// A contact sheet: the frames (all of one size) tiled row by row in `columns`
-// columns, every buffer of them (colour and AOVs) in its cell, and each cell's
-// label drawn in its top-left corner. The cells left over in the last row are
-// background: rgba of `empty`, the AOVs' background values.
-RenderImage compose_sheet(const std::vector<const RenderImage*>& frames, const std::vector<std::string>& labels,
-                          int columns, const float empty[4]);
-// The columns of a sheet of n frames: about square (ceil(sqrt(n))).
-int sheet_columns(size_t n);
+// A contact sheet: the frames (all of one size) tiled row by row, about square
+// (ceil(sqrt(n)) columns), every buffer of them (colour and AOVs) in its cell,
+// and each cell's label drawn in its top-left corner. The cells left over in
+// the last row are the frames' background (options.background), the AOVs'
+// background values.
+RenderImage compose_sheet(const std::vector<RenderResult>& frames, const std::vector<std::string>& labels,
+                          const RenderOptions& options);
 
 }  // namespace nurbsrt

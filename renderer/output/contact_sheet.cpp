@@ -32,12 +32,12 @@ void place(const std::vector<T>& from, std::vector<T>& to, int n, int w, int h, 
 
 }  // namespace
 
-int sheet_columns(size_t n) { return std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))))); }
-
-RenderImage compose_sheet(const std::vector<const RenderImage*>& frames, const std::vector<std::string>& labels,
-                          int columns, const float empty[4]) {
-    NURBSRT_CHECK(!frames.empty() && columns > 0 && labels.size() == frames.size());
-    const int w = frames[0]->width, h = frames[0]->height;
+RenderImage compose_sheet(const std::vector<RenderResult>& frames, const std::vector<std::string>& labels,
+                          const RenderOptions& options) {
+    NURBSRT_CHECK(!frames.empty() && labels.size() == frames.size());
+    const int columns = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(frames.size())))));
+    const float empty[4] = {options.background.r, options.background.g, options.background.b, options.background_alpha};
+    const int w = frames[0].image.width, h = frames[0].image.height;
     const int rows = static_cast<int>((frames.size() + columns - 1) / columns);
     RenderImage sheet;
     sheet.width = w * columns;
@@ -51,9 +51,9 @@ RenderImage compose_sheet(const std::vector<const RenderImage*>& frames, const s
     sheet.u.assign(npx, 0.0f);
     sheet.v.assign(npx, 0.0f);
     sheet.iterations.assign(npx, 0);
-    if (!frames[0]->shadow.empty()) sheet.shadow.assign(npx, 0);
+    if (!frames[0].image.shadow.empty()) sheet.shadow.assign(npx, 0);
     for (size_t f = 0; f < frames.size(); ++f) {
-        const RenderImage& im = *frames[f];
+        const RenderImage& im = frames[f].image;
         NURBSRT_CHECK(im.width == w && im.height == h);
         const int col = static_cast<int>(f % columns), row = static_cast<int>(f / columns);
         place(im.rgba, sheet.rgba, 4, w, h, sheet.width, col, row);

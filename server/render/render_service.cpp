@@ -264,11 +264,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     const RenderImage* image = &results[0].image;
     RenderImage sheet;
     if (!r.views.empty()) {
-        std::vector<const RenderImage*> images;
-        for (const RenderResult& res : results) images.push_back(&res.image);
-        const float empty[4] = {options.background.r, options.background.g, options.background.b,
-                                options.background_alpha};
-        sheet = compose_sheet(images, r.views, sheet_columns(images.size()), empty);
+        sheet = compose_sheet(results, r.views, options);
         image = &sheet;
         for (size_t v = 0; v < r.views.size(); ++v) out.views.push_back({r.views[v], cameras[v], results[v].stats});
     }
