@@ -431,6 +431,9 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
             s.read_ms = s.model.read_ms;
         } catch (const Error& e) {
             s.error = e;
+        } catch (const std::exception& e) {
+            // Any failure is every later use's error too, never an empty model.
+            s.error = Error(ErrorCode::internal, e.what());
         }
     }
     if (s.error) throw *s.error;

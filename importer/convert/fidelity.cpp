@@ -42,7 +42,7 @@ double diagonal(const std::array<double, 6>& b) {
     return std::sqrt((b[3] - b[0]) * (b[3] - b[0]) + (b[4] - b[1]) * (b[4] - b[1]) + (b[5] - b[2]) * (b[5] - b[2]));
 }
 
-// |a - b| / |a|, 0 when both are 0.
+// |a - b| / max(|a|, |b|), 0 when they are equal (both 0 included).
 double relative(double a, double b) {
     if (a == b) return 0.0;
     return std::abs(a - b) / std::max(std::abs(a), std::abs(b));

@@ -77,7 +77,12 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     std::string cache_key;
     std::shared_ptr<const PreparedScene> prepared;
     if (!renders.empty()) {
-        cache_key = scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{});
+        try {
+            cache_key = scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{});
+        } catch (const std::exception& e) {  // the stored input cannot be read: every output of it fails
+            for (const int index : indices) output_failed(job, job.outputs.at(static_cast<size_t>(index)), e);
+            return;
+        }
         prepared = ctx_.cache.get(cache_key);
     }
     FileRead read;
@@ -148,12 +153,15 @@ bool JobService::run_file_child(const JobClaim& job, const std::string& input,
         limits.should_stop = [cancel] { return cancel->load(); };  // a deleted job's child is killed
         limits.nice = kJobNice;                                    // as the runner's threads (JobService::run_loop)
         result = process_file_isolated(input, plan, limits);
-    } catch (const Error& e) {
+    } catch (const std::exception& e) {
+        // Any failure of the child's run (not only an Error: reading its scene
+        // may throw bad_alloc) ends every output of the file, never leaves them running.
         ticket.reset();
         std::error_code ec;
         for (const std::string& partial : plan.conversions) std::filesystem::remove(partial, ec);
-        if (e.code() == ErrorCode::canceled && cancel->load()) return false;
-        ctx_.metrics.count_import_failure(error_code_name(e.code()));
+        const auto* error = dynamic_cast<const Error*>(&e);
+        if (error && error->code() == ErrorCode::canceled && cancel->load()) return false;
+        ctx_.metrics.count_import_failure(error ? error_code_name(error->code()) : "internal");
         // The file could not be read (or its child died): all its outputs fail with that.
         if (want_scene) fail_all(renders, e);
         fail_all(conversions, e);
