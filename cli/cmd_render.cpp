@@ -385,10 +385,9 @@ void run_render(const Args& a) {
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
 
-    explode_scene(scene, request.explode, request.explode_level);  // nothing for 0
-    RenderOptions options = render_options_for(request, scene);
+    RenderOptions options = render_options_for(request, scene);  // explode: options.face_offsets
     Frames frames;
-    for (const CameraSpec& spec : camera_specs_for(request, scene, options.hidden_faces))
+    for (const CameraSpec& spec : camera_specs_for(request, scene, options.hidden_faces, options.face_offsets))
         frames.cameras.emplace_back(spec);
     options.threads = a.threads;
     say("rendering %zu view(s) of %dx%d with %s", frames.cameras.size(), frames.cameras[0].width(),

@@ -180,18 +180,20 @@ void check_camera_without_scene(const RenderRequest& r) {
     (void)checked;
 }
 
-CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces) {
-    return fitted_camera(view_request(r), scene, base_spec(r), hidden_faces);
+CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces,
+                           const std::vector<Vec3>& face_offsets) {
+    return fitted_camera(view_request(r), scene, base_spec(r), hidden_faces, face_offsets);
 }
 
 std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& scene,
-                                         const std::vector<uint8_t>& hidden_faces) {
-    if (r.views.empty()) return {camera_spec_for(r, scene, hidden_faces)};
+                                         const std::vector<uint8_t>& hidden_faces,
+                                         const std::vector<Vec3>& face_offsets) {
+    if (r.views.empty()) return {camera_spec_for(r, scene, hidden_faces, face_offsets)};
     std::vector<CameraSpec> specs;
     RenderRequest one = r;
     for (const std::string& v : r.views) {
         one.view = v;
-        specs.push_back(camera_spec_for(one, scene, hidden_faces));
+        specs.push_back(camera_spec_for(one, scene, hidden_faces, face_offsets));
     }
     return specs;
 }
@@ -221,7 +223,10 @@ RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
     RenderOptions options;
     options.method = r.method;
     options.map_precision = r.map_precision;
-    options.newton.eps = default_newton_eps(scene.bbox, r.tolerance);
+    // The exploded parts move in the frame, not in the scene (face_offsets): one
+    // prepared scene serves every factor.
+    options.face_offsets = explode_offsets(scene, r.explode, r.explode_level);
+    options.newton.eps = default_newton_eps(moved_bbox(scene, options.face_offsets), r.tolerance);
     apply_background(r.background.value_or(default_background(r.format.kind)), options);
     apply_look(r.look, r.format.kind, options);
     options.sections = r.sections;

@@ -146,9 +146,12 @@ Projection resolved_projection(const RenderRequest& r);
 // The cameras of a request: one per entry of `views`, else the one of `view`
 // (camera_spec_for each).
 std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& scene,
-                                         const std::vector<uint8_t>& hidden_faces = {});
-// Named views frame the faces shown (render_options_for's hidden_faces left out).
-CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces = {});
+                                         const std::vector<uint8_t>& hidden_faces = {},
+                                         const std::vector<Vec3>& face_offsets = {});
+// Named views frame the faces shown where they are shown (render_options_for's
+// hidden_faces left out, its face_offsets applied).
+CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces = {},
+                           const std::vector<Vec3>& face_offsets = {});
 // Every camera check that needs no scene (up along the view direction, eye at
 // the target, field of view, orthographic height), made by the renderer's own
 // Camera on the view fitted to a unit box: usage errors found before any import,

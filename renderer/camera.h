@@ -173,10 +173,10 @@ struct ViewRequest {
     double fit_margin = kDefaultFitMargin;
 };
 // The camera of `request` over `scene` (the scene's geometry as fit_view uses
-// it), without the faces `hidden_faces` marks (per face, or empty): a view
-// frames what it shows.
+// it), without the faces `hidden_faces` marks and with the faces moved by
+// `face_offsets` (each per face, or empty): a view frames what it shows.
 CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base,
-                         const std::vector<uint8_t>& hidden_faces = {});
+                         const std::vector<uint8_t>& hidden_faces = {}, const std::vector<Vec3>& face_offsets = {});
 // The same over a box (its 8 corners), for checks made before any model exists.
 CameraSpec fitted_camera(const ViewRequest& request, const BBox& box, const CameraSpec& base);
 

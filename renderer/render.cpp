@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "renderer/frame/frame.h"
 #include "renderer/frame/mesh_screen_points.h"
+#include "core/scene/explode.h"
 #include "core/scene/nurbs.h"
 #include "renderer/passes/passes.h"
 #include "renderer/frame/pixel_solver.h"
@@ -100,8 +101,10 @@ RenderResult render_frame(const PreparedScene& prepared, const Camera& camera, c
 
     // 1-2. Preliminary map (Sisojevs & Glazs 2010, eq. 4).
     throw_if_canceled(options);
-    const PreliminaryMap map = render_preliminary_map(
-        prepared, camera, options.map_precision, {0, options.cancel.get()}, {&options.sections, &options.hidden_faces});
+    NURBSRT_CHECK(options.face_offsets.empty() || options.face_offsets.size() == scene.faces.size());
+    const PreliminaryMap map =
+        render_preliminary_map(prepared, camera, options.map_precision, {0, options.cancel.get()},
+                               {&options.sections, &options.hidden_faces, &options.face_offsets});
     throw_if_canceled(options);
     st.preliminary_map_ms = lap();
 
@@ -109,15 +112,26 @@ RenderResult render_frame(const PreparedScene& prepared, const Camera& camera, c
     // Progress units: rows of the per-pixel passes (Newton, rescue, shading, and
     // anti-aliasing when asked for).
     Progress progress(options.progress, (options.antialias > 0 ? 4 : 3) * static_cast<int64_t>(H));
-    const FrameContext ctx{prepared, scene,    camera, map, options,
-                           arena,    progress, W,      H,   static_cast<uint32_t>(scene.faces.size())};
+    const FaceCameras face_cameras(camera, options.face_offsets);
+    const FrameContext ctx{prepared,
+                           scene,
+                           camera,
+                           face_cameras,
+                           map,
+                           options,
+                           arena,
+                           progress,
+                           W,
+                           H,
+                           static_cast<uint32_t>(scene.faces.size()),
+                           moved_bbox(scene, options.face_offsets)};
     FrameBuffers buf(ctx);
     st.setup_ms += lap();
     // The per-face set-up that depends on the camera: proposed's projection of
     // the faces' patches (the rest was done once by prepare()).
     const ProjectedFaces projected = project_faces(ctx);
     Solver solver{ctx, projected, options.newton, {}};
-    if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(scene.bbox);
+    if (!(solver.params.eps > 0)) solver.params.eps = default_newton_eps(ctx.bbox);
     st.tolerance = solver.params.eps;
     // Rescue solves: clamp-and-continue at face borders, backtracking, a few more steps.
     solver.robust = solver.params;
@@ -170,7 +184,7 @@ RenderResult render_frame(const PreparedScene& prepared, const Camera& camera, c
     }
     frame_statistics(ctx, buf, res.image, solver.params.max_iterations, st);
     st.section_planes = static_cast<int>(options.sections.planes.size());
-    st.open_bodies_cut = open_bodies_cut(scene, options.sections);
+    st.open_bodies_cut = open_bodies_cut(scene, options.sections, options.face_offsets);
     st.ground = options.ground;
     st.hidden_faces = static_cast<uint64_t>(std::count(options.hidden_faces.begin(), options.hidden_faces.end(), 1));
     for (const std::optional<Color>& c : options.face_colors) st.recoloured_faces += c.has_value();

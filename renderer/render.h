@@ -62,6 +62,9 @@ struct RenderOptions {
     // the first surface's.
     std::vector<uint8_t> ghost_faces;
     float ghost_opacity = 0.25f;
+    // Per face, or empty: the face drawn translated by this (an exploded view,
+    // explode_offsets in core/scene/explode.h), exactly, without a new prepare().
+    std::vector<Vec3> face_offsets;
     // A ground plane under the model (z = ground_height, model units; unset: the
     // scene's lowest point; Z is up as in the named views) that takes the key
     // light's exact shadows (it turns them on). Over an opaque background it is

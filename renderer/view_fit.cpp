@@ -6,6 +6,7 @@
 
 #include "renderer/camera.h"
 #include "core/error.h"
+#include "core/scene/explode.h"
 
 namespace nurbsrt {
 namespace {
@@ -185,14 +186,17 @@ std::vector<Vec3> corners(const BBox& box) {
 }
 
 // The scene's geometry for fitting: mesh vertices (strided) and their slack.
-// Faces marked in `hidden` (per face, or empty) are left out.
-std::vector<Vec3> fit_points_of(const Scene& scene, const std::vector<uint8_t>& hidden, double& slack) {
+// Faces marked in `hidden` (per face, or empty) are left out; faces with an
+// offset (per face, or empty) are where it moves them.
+std::vector<Vec3> fit_points_of(const Scene& scene, const std::vector<uint8_t>& hidden,
+                                const std::vector<Vec3>& offsets, double& slack) {
     const auto shown = [&](size_t i) { return hidden.empty() || !hidden[i]; };
     size_t n = 0;
     for (size_t i = 0; i < scene.faces.size(); ++i) n += shown(i) ? scene.faces[i].mesh.xyz.size() : 0;
     slack = 0;
-    if (n == 0) return corners(scene.bbox);
-    slack = kMeshSlackOfDiagonal * scene.bbox.diagonal();
+    const BBox box = moved_bbox(scene, offsets);
+    if (n == 0) return corners(box);
+    slack = kMeshSlackOfDiagonal * box.diagonal();
     const size_t stride = std::max<size_t>(1, n / kMaxFitPoints);
     std::vector<Vec3> pts;
     pts.reserve(n / stride + 8);
@@ -200,7 +204,7 @@ std::vector<Vec3> fit_points_of(const Scene& scene, const std::vector<uint8_t>& 
     for (size_t i = 0; i < scene.faces.size(); ++i)
         if (shown(i))
             for (const Vec3& p : scene.faces[i].mesh.xyz)
-                if (k++ % stride == 0) pts.push_back(p);
+                if (k++ % stride == 0) pts.push_back(offsets.empty() ? p : p + offsets[i]);
     return pts;
 }
 
@@ -268,15 +272,15 @@ CameraSpec named_view(const std::string& name, const std::vector<Vec3>& points, 
 
 CameraSpec fit_view(const std::string& name, const Scene& scene, const CameraSpec& base, double margin) {
     double slack = 0;
-    const std::vector<Vec3> pts = fit_points_of(scene, {}, slack);
+    const std::vector<Vec3> pts = fit_points_of(scene, {}, {}, slack);
     if (pts.empty()) throw Error(ErrorCode::invalid_argument, "cannot fit a view to an empty scene");
     return fit_points(find_view(name), pts, base, margin, slack);
 }
 
 CameraSpec fitted_camera(const ViewRequest& request, const Scene& scene, const CameraSpec& base,
-                         const std::vector<uint8_t>& hidden_faces) {
+                         const std::vector<uint8_t>& hidden_faces, const std::vector<Vec3>& face_offsets) {
     double slack = 0;
-    const std::vector<Vec3> pts = fit_points_of(scene, hidden_faces, slack);
+    const std::vector<Vec3> pts = fit_points_of(scene, hidden_faces, face_offsets, slack);
     if (pts.empty() && !request.eye) throw Error(ErrorCode::invalid_argument, "cannot fit a view to an empty scene");
     return fitted(request, pts, slack, base);
 }

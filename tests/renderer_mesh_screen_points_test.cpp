@@ -36,8 +36,19 @@ struct TestFrame {
           prepared(prepare(scene, 1)),
           arena(1),
           progress(options.progress, 1),
-          c{prepared, scene,    cam,         map,          options,
-            arena,    progress, cam.width(), cam.height(), static_cast<uint32_t>(scene.faces.size())} {}
+          face_cameras(cam, options.face_offsets),
+          c{prepared,
+            scene,
+            cam,
+            face_cameras,
+            map,
+            options,
+            arena,
+            progress,
+            cam.width(),
+            cam.height(),
+            static_cast<uint32_t>(scene.faces.size()),
+            scene.bbox} {}
     Scene scene;
     Camera cam;
     PreparedScene prepared;
@@ -45,6 +56,7 @@ struct TestFrame {
     RenderOptions options;
     tbb::task_arena arena;
     Progress progress;
+    FaceCameras face_cameras;
     FrameContext c;
 };
 

@@ -2,6 +2,7 @@
 #include "core/scene/explode.h"
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "core/scene/scene_ops.h"
@@ -48,18 +49,20 @@ std::vector<uint8_t> group_heads(const Scene& s, ExplodeLevel level) {
     return head;
 }
 
-}  // namespace
-
-size_t explode_scene(Scene& scene, double factor, ExplodeLevel level) {
-    if (!(factor > 0) || scene.bbox.empty()) return 0;
-    // Per body: its group (a part heading one, or the body itself without a tree).
-    const std::vector<uint8_t> head = group_heads(scene, level);
+// Per body: its group (a part heading one, or the body itself without a tree),
+// -1 for none.
+std::vector<int64_t> body_groups(const Scene& scene, const std::vector<uint8_t>& head) {
     std::vector<int64_t> group(scene.bodies.size(), -1);
     for (size_t b = 0; b < scene.bodies.size(); ++b) {
         int32_t p = scene.bodies[b].part;
         while (p >= 0 && !head[static_cast<size_t>(p)]) p = scene.parts[static_cast<size_t>(p)].parent;
         group[b] = p >= 0 ? p : (scene.parts.empty() ? static_cast<int64_t>(scene.parts.size() + b) : -1);
     }
+    return group;
+}
+
+// Per group: its offset (zero for a group at the centre or without faces).
+std::vector<Vec3> group_offsets(const Scene& scene, const std::vector<int64_t>& group, double factor, size_t& moved) {
     const size_t ngroups = scene.parts.size() + scene.bodies.size();
     std::vector<BBox> box(ngroups);
     for (const Face& f : scene.faces)
@@ -68,7 +71,7 @@ size_t explode_scene(Scene& scene, double factor, ExplodeLevel level) {
     const Vec3 centre = scene.bbox.center();
     const double size = scene.bbox.diagonal();
     std::vector<Vec3> offset(ngroups, Vec3{0, 0, 0});
-    size_t moved = 0;
+    moved = 0;
     for (size_t g = 0; g < ngroups; ++g) {
         if (box[g].empty()) continue;
         const Vec3 d = box[g].center() - centre;
@@ -77,28 +80,67 @@ size_t explode_scene(Scene& scene, double factor, ExplodeLevel level) {
         offset[g] = (factor * size / length(d)) * d;
         ++moved;
     }
+    return offset;
+}
+
+// The groups of `level`, their offsets and each face's.
+struct Explosion {
+    std::vector<uint8_t> head;       // per part: heads a group
+    std::vector<Vec3> group_offset;  // per group
+    std::vector<Vec3> face_offset;   // per face; empty when nothing moves
+    size_t moved = 0;
+};
+
+Explosion explosion(const Scene& scene, double factor, ExplodeLevel level) {
+    Explosion e;
+    if (!(factor > 0) || scene.bbox.empty()) return e;
+    e.head = group_heads(scene, level);
+    const std::vector<int64_t> group = body_groups(scene, e.head);
+    e.group_offset = group_offsets(scene, group, factor, e.moved);
+    if (e.moved == 0) return e;
+    e.face_offset.reserve(scene.faces.size());
+    for (const Face& f : scene.faces)
+        e.face_offset.push_back(f.body < group.size() && group[f.body] >= 0
+                                    ? e.group_offset[static_cast<size_t>(group[f.body])]
+                                    : Vec3{0, 0, 0});
+    return e;
+}
+
+}  // namespace
+
+std::vector<Vec3> explode_offsets(const Scene& scene, double factor, ExplodeLevel level, size_t* moved) {
+    Explosion e = explosion(scene, factor, level);
+    if (moved) *moved = e.moved;
+    return std::move(e.face_offset);
+}
+
+BBox moved_bbox(const Scene& scene, const std::vector<Vec3>& offsets) {
+    if (offsets.empty()) return scene.bbox;
     BBox all;
-    for (Face& f : scene.faces) {
-        const Vec3 t =
-            f.body < group.size() && group[f.body] >= 0 ? offset[static_cast<size_t>(group[f.body])] : Vec3{0, 0, 0};
-        const Affine move = Affine::translation(t);
-        for (Vec4& p : f.surface.cp) p = move.apply_h(p);
-        for (Vec3& p : f.mesh.xyz) {
-            p = move.apply(p);
-            all.extend(p);
-        }
+    for (size_t i = 0; i < scene.faces.size(); ++i)
+        for (const Vec3& p : scene.faces[i].mesh.xyz) all.extend(p + offsets[i]);
+    return all.empty() ? scene.bbox : all;
+}
+
+size_t explode_scene(Scene& scene, double factor, ExplodeLevel level) {
+    const Explosion e = explosion(scene, factor, level);
+    if (e.face_offset.empty()) return 0;
+    scene.bbox = moved_bbox(scene, e.face_offset);
+    for (size_t i = 0; i < scene.faces.size(); ++i) {
+        const Affine move = Affine::translation(e.face_offset[i]);
+        for (Vec4& p : scene.faces[i].surface.cp) p = move.apply_h(p);
+        for (Vec3& p : scene.faces[i].mesh.xyz) p = move.apply(p);
     }
     // Placements: a part's moves with its group (itself or its nearest head).
     for (size_t k = 0; k < scene.parts.size(); ++k) {
         int32_t p = static_cast<int32_t>(k);
-        while (p >= 0 && !head[static_cast<size_t>(p)]) p = scene.parts[static_cast<size_t>(p)].parent;
+        while (p >= 0 && !e.head[static_cast<size_t>(p)]) p = scene.parts[static_cast<size_t>(p)].parent;
         if (p < 0) continue;
-        const Vec3 t = offset[static_cast<size_t>(p)];
+        const Vec3 t = e.group_offset[static_cast<size_t>(p)];
         scene.parts[k].placement = (Affine::translation(t) * Affine{scene.parts[k].placement}).m;
     }
-    if (!all.empty()) scene.bbox = all;
     summarize_parts(scene);
-    return moved;
+    return e.moved;
 }
 
 }  // namespace nurbsrt

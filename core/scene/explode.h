@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include "core/scene/scene.h"
 
@@ -24,8 +25,19 @@ std::optional<ExplodeLevel> parse_explode_level(std::string_view name);
 // of each other; more is a mistake.
 inline constexpr double kMaxExplode = 10;
 
-// Moves the groups of `level` by factor x the scene's box diagonal; returns how
-// many groups moved (a group at the centre stays). factor 0 changes nothing.
+// Per face (index - 1): how far the groups of `level` move, factor x the
+// scene's box diagonal along centre -> group centre; empty when nothing moves
+// (factor 0, or every group at the centre). `moved`: how many groups move.
+// A renderer draws the faces translated by these without changing the scene
+// (RenderOptions::face_offsets), so one prepared scene serves every factor.
+std::vector<Vec3> explode_offsets(const Scene& scene, double factor, ExplodeLevel level, size_t* moved = nullptr);
+
+// The box of the scene's faces moved by `offsets` (per face, or empty: the
+// scene's own box).
+BBox moved_bbox(const Scene& scene, const std::vector<Vec3>& offsets);
+
+// Moves the geometry itself by explode_offsets: control points, map meshes,
+// placements and the box; returns how many groups moved.
 size_t explode_scene(Scene& scene, double factor, ExplodeLevel level);
 
 }  // namespace nurbsrt

@@ -24,6 +24,7 @@
 
 #include "renderer/camera.h"
 #include "core/process/heap_tuning.h"
+#include "renderer/frame/face_cameras.h"
 #include "renderer/map/preliminary_map.h"
 #include "renderer/solve/prepared_data.h"
 #include "renderer/render.h"
@@ -83,17 +84,23 @@ struct FrameContext {
     const PreparedScene& prepared;
     const Scene& scene;
     const Camera& camera;
+    // Per face, the camera its solves and mesh projections use: `camera` itself
+    // but where RenderOptions::face_offsets moves the face (face_cameras.h).
+    const FaceCameras& face_cameras;
     const PreliminaryMap& map;
     const RenderOptions& options;
     tbb::task_arena& arena;
     Progress& progress;
     int width, height;
     uint32_t nfaces;
+    // The box of the faces where the frame shows them (moved by the offsets).
+    BBox bbox;
     // 2 / height, once: pixel_footprint runs per pixel pair in several passes,
     // where a division per call (the compiler may not turn x / h into a product)
     // costs far more. A power-of-two height keeps every product exact.
     double two_over_height = 2.0 / height;
 
+    const Camera& camera_of(uint32_t id) const { return face_cameras.of(id); }
     bool in_frame(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
     size_t pixels() const { return static_cast<size_t>(width) * height; }
     // The size of one pixel in model units at hit distance t (screen units span

@@ -60,11 +60,12 @@ const MeshScreenPoints::Entry& MeshScreenPoints::projected(uint32_t id) const {
     Entry& e = faces_[id - 1];
     e.once.call(e.m, [&] {
         const FaceMesh& mesh = c_.scene.faces[id - 1].mesh;
+        const Camera& camera = c_.camera_of(id);  // the mesh in place, where the frame shows it
         const size_t n = std::min(mesh.xyz.size(), mesh.uv.size());
         e.pts.resize(n);
         for (size_t m = 0; m < n; ++m) {
-            const Vec4 ph = c_.camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
-            const double depth = c_.camera.depth(ph);
+            const Vec4 ph = camera.project_h(Vec4{mesh.xyz[m].x, mesh.xyz[m].y, mesh.xyz[m].z, 1.0});
+            const double depth = camera.depth(ph);
             if (!(depth > 0)) {
                 e.pts[m] = {Vec2{NAN, NAN}, depth};
                 continue;
@@ -237,13 +238,14 @@ const std::vector<MeshScreenPoints::ScreenBox>& MeshScreenPoints::screen_boxes()
         boxes_.resize(c_.nfaces);
         for (uint32_t id = 1; id <= c_.nfaces; ++id) {
             const BBox& b = c_.prepared.faces()[id - 1].mesh_box;
+            const Camera& camera = c_.camera_of(id);
             ScreenBox& sb = boxes_[id - 1];
             if (b.empty()) continue;
             sb.empty = false;
             for (int k = 0; k < 8; ++k) {
                 const Vec3 P{k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z};
-                const Vec4 ph = c_.camera.project_h(Vec4{P.x, P.y, P.z, 1.0});
-                const double depth = c_.camera.depth(ph);
+                const Vec4 ph = camera.project_h(Vec4{P.x, P.y, P.z, 1.0});
+                const double depth = camera.depth(ph);
                 if (!(depth > 0)) {
                     sb.around = true;
                     sb.near = 0;

@@ -49,9 +49,10 @@ ProjectedFaces project_faces(const FrameContext& ctx) {
         tbb::parallel_for(size_t(0), n, [&](size_t k) {
             const SurfacePatches& model = ctx.prepared.faces()[k].patches;
             if (model.usable())
-                p.patches[k] = project_patches(ctx.camera, model);
+                p.patches[k] = project_patches(ctx.camera_of(static_cast<uint32_t>(k + 1)), model);
             else
-                p.surfaces[k] = project_surface(ctx.camera, ctx.scene.faces[k].surface);
+                p.surfaces[k] =
+                    project_surface(ctx.camera_of(static_cast<uint32_t>(k + 1)), ctx.scene.faces[k].surface);
         });
     });
     return p;
@@ -79,7 +80,7 @@ Outcome Solver::solve(uint32_t id, ScreenPoint sp, double u0, double v0, const N
     // A hidden face (RenderOptions::hidden_faces) has no points, like a trimmed-away part.
     if (!ctx.options.hidden_faces.empty() && ctx.options.hidden_faces[id - 1]) return kTrimmed;
     const PreparedFace& ff = ctx.prepared.faces()[id - 1];
-    const Camera& camera = ctx.camera;
+    const Camera& camera = ctx.camera_of(id);  // the face's own: hit distances are the frame camera's
     const NurbsSurface& surface = iterated_surface(id);
     const SurfacePatches* patches = iterated_patches(id);
     const NewtonResult r = ctx.options.method == NewtonMethod::proposed
@@ -145,7 +146,7 @@ bool Solver::border_gap_hit(uint32_t id, ScreenPoint sp, const NewtonResult& r, 
     if (!ff.trim.inside({r.u, r.v}) && !(ff.trim.boundary_distance({r.u, r.v}, ff.near_uv) <= ff.near_uv)) return false;
     const SurfaceEvaluation eval(ctx.scene.faces[id - 1].surface, &ff.spans, &ff.patches);
     const CartesianDerivs c = eval.cartesian(r.u, r.v);
-    const Ray ray = ctx.camera.ray(sp);
+    const Ray ray = ctx.camera_of(id).ray(sp);  // the face in place, the ray moved
     const Vec3 q = c.P - ray.origin;
     const double t = dot(q, ray.dir);
     const double gap = length(q - t * ray.dir);

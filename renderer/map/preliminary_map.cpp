@@ -139,6 +139,14 @@ void flip_rows(T* block, int rows, size_t width) {
 
 [[noreturn]] void fail(const std::string& what) { throw Error(ErrorCode::internal, "preliminary map: " + what); }
 
+// Map mesh vertex k where the frame shows it: moved with its face by the
+// offsets (MapClip::offsets), if any.
+struct MovedVertices {
+    const MapMesh& mesh;
+    const std::vector<Vec3>* offsets;  // null: none
+    Vec3 operator()(size_t k) const { return offsets ? mesh.xyz[k] + (*offsets)[mesh.face[k] - 1] : mesh.xyz[k]; }
+};
+
 }  // namespace
 
 struct MapRenderer::Impl {
@@ -247,7 +255,7 @@ struct MapRenderer::Impl {
 
     // Selects the program of a frame with or without section planes, and for one
     // with them uploads every vertex's distances (in double, then float).
-    void use_program(const PreparedScene& ps, const MapMesh& mesh, const Sections* sections) {
+    void use_program(const PreparedScene& ps, const MapMesh& mesh, const Sections* sections, const MovedVertices& at) {
         const bool cut = sections && sections->active();
         glBindVertexArray(vao);
         if (!cut) {
@@ -261,7 +269,7 @@ struct MapRenderer::Impl {
         std::vector<float> dist(6 * mesh.xyz.size(), 0.0f);
         for (size_t k = 0; k < mesh.xyz.size(); ++k)
             for (size_t p = 0; p < planes; ++p)
-                dist[6 * k + p] = static_cast<float>(sections->planes[p].distance(mesh.xyz[k]));
+                dist[6 * k + p] = static_cast<float>(sections->planes[p].distance(at(k)));
         glBindBuffer(GL_ARRAY_BUFFER, vbo_dist);
         glBufferData(GL_ARRAY_BUFFER, dist.size() * sizeof(float), dist.data(), GL_STREAM_DRAW);
         glEnableVertexAttribArray(3);
@@ -379,16 +387,13 @@ namespace {
 // margin of the depth span, so no triangle is clipped by the depth range
 // (perspective: the near plane stays in front of the eye). far <= near: nothing
 // to draw (empty scene, or all of it behind a perspective eye).
-void depth_range(const Scene& scene, const Camera& camera, double& znear, double& zfar) {
+void depth_range(const MapMesh& mesh, const MovedVertices& at, const Camera& camera, double& znear, double& zfar) {
     double zmin = HUGE_VAL, zmax = -HUGE_VAL;
-    size_t nv = 0;
-    for (const Face& f : scene.faces) {
-        for (const Vec3& p : f.mesh.xyz) {
-            const double z = dot(camera.forward(), p - camera.spec().eye);
-            zmin = std::min(zmin, z);
-            zmax = std::max(zmax, z);
-        }
-        nv += f.mesh.xyz.size();
+    const size_t nv = mesh.xyz.size();
+    for (size_t k = 0; k < nv; ++k) {
+        const double z = dot(camera.forward(), at(k) - camera.spec().eye);
+        zmin = std::min(zmin, z);
+        zmax = std::max(zmax, z);
     }
     zfar = znear = 0;
     if (nv > 0 && zmax > (camera.perspective() ? 0.0 : -HUGE_VAL)) {
@@ -452,9 +457,10 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         bands.rows > 0 ? size_t(bands.rows) : kMapBandPixels / size_t(W), 1, size_t(std::min(H, max_size))));
     impl_->ensure_fbo(W, band_rows);
 
-    double znear = 0, zfar = 0;
-    depth_range(ps.scene(), camera, znear, zfar);
     const MapMesh& mesh = ps.map_mesh();
+    const MovedVertices at{mesh, left_out.offsets && !left_out.offsets->empty() ? left_out.offsets : nullptr};
+    double znear = 0, zfar = 0;
+    depth_range(mesh, at, camera, znear, zfar);
     bool draw = zfar > znear && !mesh.indices.empty();
     GLsizei drawn = static_cast<GLsizei>(mesh.indices.size());
 
@@ -467,7 +473,7 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         // (Camera::clip), rounded to float only at the end (see the header).
         std::vector<float> clip(4 * mesh.xyz.size());
         for (size_t k = 0; k < mesh.xyz.size(); ++k) {
-            const Vec4 c = camera.clip(mesh.xyz[k], znear, zfar);
+            const Vec4 c = camera.clip(at(k), znear, zfar);
             clip[4 * k] = float(c.x);
             clip[4 * k + 1] = float(c.y);
             clip[4 * k + 2] = float(c.z);
@@ -477,7 +483,7 @@ PreliminaryMap MapRenderer::render(const PreparedScene& ps, const Camera& camera
         if (left_out.hidden_faces && !left_out.hidden_faces->empty())
             drawn = impl_->upload_shown(ps, *left_out.hidden_faces);
         draw = drawn > 0;
-        impl_->use_program(ps, mesh, sections);
+        impl_->use_program(ps, mesh, sections, at);
         glBindBuffer(GL_ARRAY_BUFFER, impl_->vbo_clip);
         glBufferData(GL_ARRAY_BUFFER, clip.size() * sizeof(float), clip.data(), GL_STREAM_DRAW);
     }

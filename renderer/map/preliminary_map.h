@@ -78,6 +78,8 @@ inline constexpr size_t kMapBandPixels = size_t(1) << 22;
 struct MapClip {
     const Sections* sections = nullptr;
     const std::vector<uint8_t>* hidden_faces = nullptr;
+    // Per face, or null/empty: the face drawn translated (RenderOptions::face_offsets).
+    const std::vector<Vec3>* offsets = nullptr;
 };
 
 struct MapBands {

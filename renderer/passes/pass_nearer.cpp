@@ -90,7 +90,7 @@ struct Update {
 NearerSheet::NearerSheet(const FrameContext& c, const Solver& solver, const MeshScreenPoints& screen_points,
                          const FrameBuffers& b)
     : c_(c), solver_(solver), hits_(b.hits), depth_(b.depth), rescued_(b.rescued), screen_points_(screen_points) {
-    const double diag = std::max(c.scene.bbox.diagonal(), 1e-300);
+    const double diag = std::max(c.bbox.diagonal(), 1e-300);
     spike_ = kSpikeRelative * diag;
     nearer_ = kNearerRelative * diag;
 }

@@ -41,7 +41,7 @@ double power(double x) {
 Shader::Shader(const FrameContext& c, const KeyLightShadows* shadows)
     : scene_(c.scene),
       options_(c.options),
-      ground_z_(c.options.ground_height.value_or(c.scene.bbox.lo.z)),
+      ground_z_(c.options.ground_height.value_or(c.bbox.lo.z)),
       face_colors_(c.options.face_colors),
       caps_(c.scene, c.options, c.map),
       rig_(light_rig(c.camera)),

@@ -85,13 +85,15 @@ Color SectionCaps::colour(const CapHit& cap, const Ray& ray) const {
     return {c.r * shade, c.g * shade, c.b * shade};
 }
 
-uint64_t open_bodies_cut(const Scene& scene, const Sections& sections) {
+uint64_t open_bodies_cut(const Scene& scene, const Sections& sections, const std::vector<Vec3>& offsets) {
     if (!sections.active()) return 0;
     // Per body: 1 has a kept vertex, 2 a removed one.
     std::vector<uint8_t> sides(scene.bodies.size(), 0);
-    for (const Face& f : scene.faces) {
+    for (size_t i = 0; i < scene.faces.size(); ++i) {
+        const Face& f = scene.faces[i];
         if (f.body >= scene.bodies.size() || scene.bodies[f.body].closed) continue;
-        for (const Vec3& p : f.mesh.xyz) sides[f.body] |= sections.removes(p) ? 2 : 1;
+        const Vec3 t = offsets.empty() ? Vec3{0, 0, 0} : offsets[i];
+        for (const Vec3& p : f.mesh.xyz) sides[f.body] |= sections.removes(p + t) ? 2 : 1;
     }
     uint64_t n = 0;
     for (uint8_t s : sides) n += s == 3;

@@ -50,6 +50,6 @@ private:
 
 // Open bodies that a section plane cuts (their map meshes have kept and
 // removed vertices): cut without caps, counted in the statistics.
-uint64_t open_bodies_cut(const Scene& scene, const Sections& sections);
+uint64_t open_bodies_cut(const Scene& scene, const Sections& sections, const std::vector<Vec3>& offsets = {});
 
 }  // namespace nurbsrt

@@ -78,12 +78,12 @@ bool on_box_border(const UvBox& b, const PixelHit& h) {
 
 }  // namespace
 
-CameraSpec KeyLightShadows::light_view(const Scene& scene, Vec3 key, int size) {
+CameraSpec KeyLightShadows::light_view(const BBox& box, Vec3 key, int size) {
     Vec3 centre{0, 0, 0};
     double radius = 1;
-    if (!scene.bbox.empty()) {
-        centre = 0.5 * (scene.bbox.lo + scene.bbox.hi);
-        radius = std::max(0.5 * length(scene.bbox.hi - scene.bbox.lo), 1e-300);
+    if (!box.empty()) {
+        centre = 0.5 * (box.lo + box.hi);
+        radius = std::max(0.5 * length(box.hi - box.lo), 1e-300);
     }
     CameraSpec s;
     s.projection = Projection::orthographic;
@@ -102,11 +102,13 @@ int light_map_size(int width, int height) { return std::clamp(std::max(width, he
 KeyLightShadows::KeyLightShadows(const FrameContext& view, const Solver& view_solver, Vec3 key)
     : key_(key),
       size_(light_map_size(view.width, view.height)),
-      camera_(light_view(view.scene, key, size_)),
+      camera_(light_view(view.bbox, key, size_)),
+      face_cameras_(camera_, view.options.face_offsets),
       map_(render_preliminary_map(view.prepared, camera_, MapPrecision::float32, {0, view.options.cancel.get()},
-                                  {&view.options.sections, &view.options.hidden_faces})),
+                                  {&view.options.sections, &view.options.hidden_faces, &view.options.face_offsets})),
       progress_(no_progress_, 1),
-      ctx_{view.prepared, view.scene, camera_, map_, view.options, view.arena, progress_, size_, size_, view.nfaces},
+      ctx_{view.prepared, view.scene, camera_, face_cameras_, map_,        view.options,
+           view.arena,    progress_,  size_,   size_,         view.nfaces, view.bbox},
       projected_(project_faces(ctx_)),
       solver_{ctx_, projected_, light_ray_params(view_solver.robust), light_ray_params(view_solver.robust)},
       screen_points_(ctx_),

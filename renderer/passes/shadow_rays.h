@@ -49,7 +49,7 @@ public:
     int map_size() const { return size_; }
 
 private:
-    static CameraSpec light_view(const Scene& scene, Vec3 key, int size);
+    static CameraSpec light_view(const BBox& box, Vec3 key, int size);
     // Whether the map's pixel (ci, cj) shows face `face` at (u, v) itself (see the .cpp).
     bool own_face_first(int ci, int cj, uint32_t face, double u, double v) const;
     // Model units per unit of (u, v) on face id at hit h: the surface's faster
@@ -58,6 +58,7 @@ private:
     Vec3 key_;
     int size_;
     Camera camera_;
+    FaceCameras face_cameras_;  // the light's camera per moved face (face_cameras.h)
     PreliminaryMap map_;
     std::function<void(double)> no_progress_;
     Progress progress_;

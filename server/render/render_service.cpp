@@ -12,7 +12,6 @@
 #include "importer/importer.h"
 #include "importer/isolated.h"
 #include "core/error.h"
-#include "core/scene/explode.h"
 #include "renderer/frame_cost.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
@@ -220,22 +219,16 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     // (its parts, options and checks) or of a job's input file.
     stages.mark("upload");
     std::shared_ptr<const PreparedScene> prepared = imported_scene(ctx, bytes, control, out.cache_hit, stages);
-    if (r.explode > 0) {
-        // An exploded copy of the cached scene, prepared for this request alone
-        // (the parts move, so the camera-independent data moves with them).
-        auto moved = std::make_shared<Scene>(prepared->scene());
-        explode_scene(*moved, r.explode, r.explode_level);
-        prepared = std::make_shared<const PreparedScene>(
-            prepare(std::shared_ptr<const Scene>(std::move(moved)), ctx.config.render_threads));
-        stages.mark("prepare");
-    }
     const Scene& scene = prepared->scene();
     if (scene.faces.size() > ctx.config.max_faces)
         throw Error(ErrorCode::limit_exceeded, "the model has " + std::to_string(scene.faces.size()) +
                                                    " faces; the limit is " + std::to_string(ctx.config.max_faces));
+    // Hidden, ghosted, recoloured and exploded parts and sections are options of
+    // the frame: the cached prepared scene serves them all as it is.
     RenderOptions options = render_options_for(r, scene);
     std::vector<Camera> cameras;
-    for (const CameraSpec& spec : camera_specs_for(r, scene, options.hidden_faces)) cameras.emplace_back(spec);
+    for (const CameraSpec& spec : camera_specs_for(r, scene, options.hidden_faces, options.face_offsets))
+        cameras.emplace_back(spec);
     options.threads = ctx.config.render_threads;
     options.progress = control.progress;
     // A contact sheet's frames are estimated as one frame of all their pixels

@@ -384,8 +384,8 @@ def test_parts_hidden_isolated_and_recoloured(url):
 
 def test_explode_moves_the_parts_apart(url):
     """An exploded as1: the parts move apart (the view, fitted to them, shows
-    them smaller), the cached scene is not read again but prepared anew; a
-    factor outside [0, 10] is refused."""
+    them smaller), and the cached scene serves every factor and level without
+    an import or a prepare; a factor outside [0, 10] is refused."""
     as1 = MODELS / "step" / "as1-oc-214.stp"
     if not as1.exists():
         pytest.skip("../shared/models is absent: the assembly as1 is not there")
@@ -395,8 +395,13 @@ def test_explode_moves_the_parts_apart(url):
                  params={"width": 160, "height": 120, "antialias": 0, "explode": 0.3})
     assert r.status_code == 200, r.text[:300]
     timing = server_timing(r)
-    assert timing["read"] == 0 and timing["prepare"] > 0, timing
+    assert timing.get("import", 0) == 0 and timing["read"] == 0 and timing["prepare"] == 0, timing
     assert 0 < r.json()["statistics"]["pixels_hit"] < stats_plain["pixels_hit"]
+    r2 = post_raw(url, "/v1/renders", data, headers={"Accept": "application/json"},
+                  params={"width": 160, "height": 120, "antialias": 0, "explode": 1.5, "explode_level": "leaves"})
+    assert r2.status_code == 200, r2.text[:300]
+    assert server_timing(r2)["prepare"] == 0, server_timing(r2)
+    assert 0 < r2.json()["statistics"]["pixels_hit"] < r.json()["statistics"]["pixels_hit"]
     for bad in (-1, 11, "far"):
         body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"explode": bad}), 400,
                              "invalid_argument")
