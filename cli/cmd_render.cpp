@@ -63,8 +63,8 @@ struct Args {
     std::vector<std::string> sections;  // "px,py,pz,nx,ny,nz" each
     std::string section_mode = "union";
     bool no_caps = false, hatch = false;
-    std::vector<std::string> hide, only, ghost, part_colors;  // part_colors: "PATTERN=r,g,b"
-    std::string views;                                        // "front,top,..." of a contact sheet
+    std::vector<std::string> hide, only, ghost, part_colors, part_moves;  // "PATTERN=r,g,b", "PATTERN=dx,dy,dz"
+    std::string views;                                                    // "front,top,..." of a contact sheet
     double explode = 0;
     std::string explode_level = "top";
     std::string layout = "sheet";  // of --views: one sheet, or a file per view
@@ -117,6 +117,7 @@ RenderRequest request_of(const Args& a) {
     r.parts.only = a.only;
     r.parts.ghost = a.ghost;
     for (const std::string& pc : a.part_colors) r.parts.color.push_back(parse_part_color(pc, "--part-color"));
+    for (const std::string& pm : a.part_moves) r.parts.move.push_back(parse_part_move(pm, "--part-move"));
     return r;
 }
 
@@ -290,6 +291,9 @@ void add_look_options(CLI::App* cmd, Args& a) {
         ->check(part_pattern);
     cmd->add_option("--part-color", a.part_colors, "colour a part: ID_OR_GLOB=r,g,b in [0,1] (repeatable)")
         ->check(shared_check([](const std::string& s) { parse_part_color(s, "the value"); }, "ID|GLOB=R,G,B"));
+    cmd->add_option("--part-move", a.part_moves,
+                    "move a part by dx,dy,dz model units: ID_OR_GLOB=dx,dy,dz (repeatable; adds to --explode)")
+        ->check(shared_check([](const std::string& s) { parse_part_move(s, "the value"); }, "ID|GLOB=DX,DY,DZ"));
 }
 
 // Progress on stderr: live on a terminal; otherwise a line per 10% once the

@@ -3,6 +3,9 @@
 
 #include <fnmatch.h>
 
+#include <optional>
+#include <utility>
+
 #include "core/error.h"
 #include "options/render_request.h"
 
@@ -67,12 +70,28 @@ void check_part_pattern(const std::string& pattern, const std::string& what) {
         if (c < 0x20 || c == 0x7f) bad(what + " holds a control character");
 }
 
-std::pair<std::string, Color> parse_part_color(const std::string& text, const std::string& what) {
+namespace {
+
+// "PATTERN=value": the last '=' splits them (a part name may hold one, a value does not).
+std::pair<std::string, std::string> split_part_value(const std::string& text, const std::string& what,
+                                                     const char* form) {
     const size_t eq = text.rfind('=');
-    if (eq == std::string::npos || eq == 0) bad(what + " must be ID_OR_GLOB=r,g,b");
-    const std::string pattern = text.substr(0, eq);
+    if (eq == std::string::npos || eq == 0) bad(what + " must be " + form);
+    std::string pattern = text.substr(0, eq);
     check_part_pattern(pattern, what + "'s part");
-    return {pattern, parse_rgb(text.substr(eq + 1), what + "'s colour")};
+    return {std::move(pattern), text.substr(eq + 1)};
+}
+
+}  // namespace
+
+std::pair<std::string, Color> parse_part_color(const std::string& text, const std::string& what) {
+    auto [pattern, value] = split_part_value(text, what, "ID_OR_GLOB=r,g,b");
+    return {std::move(pattern), parse_rgb(value, what + "'s colour")};
+}
+
+std::pair<std::string, Vec3> parse_part_move(const std::string& text, const std::string& what) {
+    auto [pattern, value] = split_part_value(text, what, "ID_OR_GLOB=dx,dy,dz");
+    return {std::move(pattern), parse_point(value, what + "'s translation")};
 }
 
 void apply_part_selection(const PartSelection& selection, const Scene& scene, RenderOptions& options) {
@@ -104,13 +123,24 @@ void apply_part_selection(const PartSelection& selection, const Scene& scene, Re
             for (size_t i = 0; i < n; ++i) options.ghost_faces[i] |= f[i];
         }
     }
-    if (selection.color.empty()) return;
-    options.face_colors.assign(n, std::nullopt);
-    for (const auto& [pattern, colour] : selection.color) {
-        const std::vector<uint8_t> f = selected_faces(scene, pattern, "parts.color");
-        for (size_t i = 0; i < n; ++i)
-            if (f[i]) options.face_colors[i] = colour;
+    if (!selection.color.empty()) {
+        options.face_colors.assign(n, std::nullopt);
+        for (const auto& [pattern, colour] : selection.color) {
+            const std::vector<uint8_t> f = selected_faces(scene, pattern, "parts.color");
+            for (size_t i = 0; i < n; ++i)
+                if (f[i]) options.face_colors[i] = colour;
+        }
     }
+    if (selection.move.empty()) return;
+    std::vector<std::optional<Vec3>> moved(n);
+    for (const auto& [pattern, t] : selection.move) {
+        const std::vector<uint8_t> f = selected_faces(scene, pattern, "parts.move");
+        for (size_t i = 0; i < n; ++i)
+            if (f[i]) moved[i] = t;
+    }
+    if (options.face_offsets.empty()) options.face_offsets.assign(n, Vec3{0, 0, 0});
+    for (size_t i = 0; i < n; ++i)
+        if (moved[i]) options.face_offsets[i] += *moved[i];
 }
 
 }  // namespace nurbsrt

@@ -223,14 +223,14 @@ RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {
     RenderOptions options;
     options.method = r.method;
     options.map_precision = r.map_precision;
-    // The exploded parts move in the frame, not in the scene (face_offsets): one
-    // prepared scene serves every factor.
-    options.face_offsets = explode_offsets(scene, r.explode, r.explode_level);
-    options.newton.eps = default_newton_eps(moved_bbox(scene, options.face_offsets), r.tolerance);
     apply_background(r.background.value_or(default_background(r.format.kind)), options);
     apply_look(r.look, r.format.kind, options);
     options.sections = r.sections;
+    // Exploded and moved parts move in the frame, not in the scene
+    // (face_offsets): one prepared scene serves every factor and move.
+    options.face_offsets = explode_offsets(scene, r.explode, r.explode_level);
     apply_part_selection(r.parts, scene, options);
+    options.newton.eps = default_newton_eps(moved_bbox(scene, options.face_offsets), r.tolerance);
     return options;
 }
 

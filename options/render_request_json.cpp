@@ -189,11 +189,12 @@ std::vector<SectionPlane> section_planes(const json& v, const std::string& key) 
 }
 
 // "parts": {"hide": [pattern, ...], "only": [...], "color": {pattern: "r,g,b" or
-// [r, g, b]}}; as a query parameter, that object as JSON text.
+// [r, g, b]}, "move": {pattern: [dx, dy, dz] or "dx,dy,dz"}}; as a query
+// parameter, that object as JSON text.
 PartSelection part_selection(const json& given, const std::string& key) {
     const json v =
         given.is_string() ? parse_json_or_throw(given.get<std::string>(), kRequestJsonLimits, "option 'parts'") : given;
-    if (!v.is_object()) bad("option '" + key + "' must be an object with hide, only, ghost and color");
+    if (!v.is_object()) bad("option '" + key + "' must be an object with hide, only, ghost, color and move");
     PartSelection sel;
     for (const auto& [k, list] : v.items()) {
         const std::string where = key + "." + k;
@@ -218,8 +219,17 @@ PartSelection part_selection(const json& given, const std::string& key) {
                 sel.color.emplace_back(pattern, c.is_string() ? parse_rgb(c.get<std::string>(), what)
                                                               : parse_rgb(background_text(c, where, 3), what));
             }
+        } else if (k == "move") {
+            if (!list.is_object()) bad("option '" + where + "' must be an object {part id or name glob: [dx, dy, dz]}");
+            if (list.size() > kMaxPartPatterns)
+                bad("option '" + where + "' holds more than " + std::to_string(kMaxPartPatterns) + " patterns");
+            for (const auto& [pattern, t] : list.items()) {
+                check_part_pattern(pattern, "option '" + where + "' key");
+                sel.move.emplace_back(pattern, vec3(t, where + "." + pattern.substr(0, 64)));
+            }
         } else {
-            bad("unknown option " + quoted_name(k) + " in '" + key + "' (parts options: hide, only, ghost, color)");
+            bad("unknown option " + quoted_name(k) + " in '" + key +
+                "' (parts options: hide, only, ghost, color, move)");
         }
     }
     return sel;

@@ -188,6 +188,7 @@ RenderResult render_frame(const PreparedScene& prepared, const Camera& camera, c
     st.ground = options.ground;
     st.hidden_faces = static_cast<uint64_t>(std::count(options.hidden_faces.begin(), options.hidden_faces.end(), 1));
     for (const std::optional<Color>& c : options.face_colors) st.recoloured_faces += c.has_value();
+    for (const Vec3& t : options.face_offsets) st.moved_faces += t.x != 0 || t.y != 0 || t.z != 0;
     st.map_triangles = prepared.map_mesh().triangles();
     throw_if_canceled(options);
     progress.finish();

@@ -159,6 +159,8 @@ struct RenderStats {
     uint64_t cap_pixels = 0, open_bodies_cut = 0;
     // Parts (RenderOptions::hidden_faces, face_colors): faces left out, faces recoloured.
     uint64_t hidden_faces = 0, recoloured_faces = 0;
+    // Faces drawn moved (RenderOptions::face_offsets: explode, parts.move).
+    uint64_t moved_faces = 0;
     // Ghosts (RenderOptions::ghost_faces): the faces, the pixels whose first
     // surface is one, and the frame behind them (its own total, part of total_ms).
     uint64_t ghost_faces = 0, ghost_pixels = 0;

@@ -69,11 +69,9 @@ nlohmann::json render_stats_json(const RenderStats& s, const nlohmann::json& tim
                     {"ground", s.ground},    {"ground_shadowed_pixels", s.ground_shadowed_pixels}};
     j["sections"] = {
         {"planes", s.section_planes}, {"cap_pixels", s.cap_pixels}, {"open_bodies_cut", s.open_bodies_cut}};
-    j["parts"] = {{"hidden_faces", s.hidden_faces},
-                  {"recoloured_faces", s.recoloured_faces},
-                  {"ghost_faces", s.ghost_faces},
-                  {"ghost_pixels", s.ghost_pixels},
-                  {"ghost_behind_ms", s.ghost_behind_ms}};
+    j["parts"] = {{"hidden_faces", s.hidden_faces}, {"recoloured_faces", s.recoloured_faces},
+                  {"moved_faces", s.moved_faces},   {"ghost_faces", s.ghost_faces},
+                  {"ghost_pixels", s.ghost_pixels}, {"ghost_behind_ms", s.ghost_behind_ms}};
     j["timings_ms"] = timings;
     return j;
 }

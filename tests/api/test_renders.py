@@ -365,8 +365,8 @@ def test_parts_hidden_isolated_and_recoloured(url):
         pytest.skip("../shared/models is absent: the assembly as1 is not there")
     data = as1.read_bytes()
     stats_all, _ = render_png(url, data, antialias=0)
-    assert stats_all["parts"] == {"hidden_faces": 0, "recoloured_faces": 0, "ghost_faces": 0, "ghost_pixels": 0,
-                                  "ghost_behind_ms": 0}
+    assert stats_all["parts"] == {"hidden_faces": 0, "recoloured_faces": 0, "moved_faces": 0, "ghost_faces": 0,
+                                  "ghost_pixels": 0, "ghost_behind_ms": 0}
     r = post_raw(url, "/v1/renders", data, headers={"Accept": "application/json"}, params={
         "width": 160, "height": 120, "antialias": 0,
         "parts": json.dumps({"hide": ["l-bracket-assembly_*"], "color": {"rod_1": "0,0,1"}})})
@@ -402,6 +402,16 @@ def test_explode_moves_the_parts_apart(url):
     assert r2.status_code == 200, r2.text[:300]
     assert server_timing(r2)["prepare"] == 0, server_timing(r2)
     assert 0 < r2.json()["statistics"]["pixels_hit"] < r.json()["statistics"]["pixels_hit"]
+    # An explicit move of one part, in the frame too: no prepare, its faces counted.
+    r3 = post_raw(url, "/v1/renders", data, headers={"Accept": "application/json"},
+                  params={"width": 160, "height": 120, "antialias": 0,
+                          "parts": json.dumps({"move": {"rod_1": [0, 0, 200]}})})
+    assert r3.status_code == 200, r3.text[:300]
+    assert server_timing(r3)["prepare"] == 0, server_timing(r3)
+    assert r3.json()["statistics"]["parts"]["moved_faces"] > 0, r3.json()["statistics"]["parts"]
+    body = check_problem(post_raw(url, "/v1/renders", data, params={"parts": json.dumps({"move": {"rod_1": [0, 0]}})}),
+                         400, "invalid_argument")
+    assert "parts.move" in body["detail"], body
     for bad in (-1, 11, "far"):
         body = check_problem(post_raw(url, "/v1/renders", SCREW.read_bytes(), params={"explode": bad}), 400,
                              "invalid_argument")
