@@ -109,7 +109,8 @@ RenderRequest request_of(const Args& a) {
     r.sections.caps = !a.no_caps;
     r.sections.hatch = a.hatch;
     if (!a.views.empty()) r.views = parse_views(a.views, "--views");
-    if (a.layout == "separate" && a.views.empty())
+    r.layout = *parse_view_layout(a.layout);
+    if (r.layout == ViewLayout::separate && a.views.empty())
         throw CLI::ValidationError("--layout", "separate writes a file per view of --views, which is not given");
     r.explode = a.explode;
     r.explode_level = *parse_explode_level(a.explode_level);
@@ -412,7 +413,7 @@ void run_render(const Args& a) {
         say("rendered: %zu pixels hit, %.2f Newton iterations per primary solve, %.0f ms", result.stats.pixels_hit,
             result.stats.mean_iterations, result.stats.total_ms);
 
-    if (a.layout == "separate") {  // a file per view, named after it
+    if (request.layout == ViewLayout::separate) {  // a file per view, named after it
         for (size_t v = 0; v < frames.results.size(); ++v) {
             const std::string out = per_view_path(a.output, request.views[v]);
             write_image(frames.results[v].image, out);

@@ -198,6 +198,14 @@ std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& sc
     return specs;
 }
 
+const char* view_layout_name(ViewLayout l) { return l == ViewLayout::separate ? "separate" : "sheet"; }
+
+std::optional<ViewLayout> parse_view_layout(std::string_view name) {
+    for (ViewLayout l : {ViewLayout::sheet, ViewLayout::separate})
+        if (name == view_layout_name(l)) return l;
+    return std::nullopt;
+}
+
 double checked_explode(double factor, const std::string& what) {
     if (!(factor >= 0 && factor <= kMaxExplode))
         throw Error(ErrorCode::invalid_argument, what + " must be from 0 (none) to 10 times the assembly's size");

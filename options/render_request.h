@@ -7,7 +7,9 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdint>
 #include <optional>
+#include <string_view>
 #include <string>
 
 #include "importer/importer.h"
@@ -87,6 +89,13 @@ void check_section_count(size_t planes, const std::string& what);
 // the most a sheet can show legibly.
 inline constexpr size_t kMaxViews = 16;
 
+// How a request's views are delivered: one labelled contact sheet, or an image
+// per view (the CLI: a file each; the API: a ZIP, or in JSON a list; a job: one ZIP
+// artifact).
+enum class ViewLayout : uint8_t { sheet, separate };
+const char* view_layout_name(ViewLayout l);  // "sheet", "separate"
+std::optional<ViewLayout> parse_view_layout(std::string_view name);
+
 struct RenderRequest {
     int width = kDefaultWidth, height = kDefaultHeight;
     std::string view = "iso";
@@ -110,6 +119,7 @@ struct RenderRequest {
     // Named views of a contact sheet (compose_sheet), each width x height; empty:
     // the one `view`.
     std::vector<std::string> views;
+    ViewLayout layout = ViewLayout::sheet;  // separate: only with views
     // An exploded view (core/scene/explode.h): factor in [0, kMaxExplode] of the
     // assembly's size; 0: none.
     double explode = 0;

@@ -117,7 +117,7 @@ constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_d
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
     "aovs, camera, view, eye, target, up, projection, fov_deg, ortho_height, fit_margin, sections, section_mode, "
-    "section_caps, section_hatch, parts, ground, ground_height, views, explode, explode_level";
+    "section_caps, section_hatch, parts, ground, ground_height, views, layout, explode, explode_level";
 
 // Sets the camera field `key`; false when no camera field has that name.
 bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
@@ -303,6 +303,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
                 for (const json& x : v) names.push_back(text(x, key));
                 r.views = checked_views(names, "option '" + key + "'");
             }
+        } else if (key == "layout") {
+            r.layout = *parse_view_layout(one_of(v, key, {"sheet", "separate"}));
         } else if (key == "camera") {
             if (!v.is_object()) bad("option 'camera' must be an object");
             for (const auto& [ck, cv] : v.items())
@@ -313,6 +315,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
             bad("unknown option " + quoted_name(key) + " (render options: " + kRenderOptions + ")");
         }
     }
+    if (r.layout == ViewLayout::separate && r.views.empty())
+        bad("option 'layout' separate makes an image per view of 'views', which is not given");
     complete_size(width, height, r.width, r.height);
     check_camera_without_scene(r);
     return r;

@@ -33,13 +33,14 @@ PACKAGES=(
   libfontconfig-dev
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev fonts-dejavu-core
   libsqlite3-dev sqlite3 libembree-dev
-  libpq-dev postgresql
+  libpq-dev postgresql libzip-dev
   iproute2
   clang libclang-rt-14-dev clang-format
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
   chromium python3-websocket
 )
 # fonts-dejavu-core: the labels of contact sheets (OpenImageIO draws DejaVu Sans).
+# libzip-dev: ZIP answers of requests that make several files (a render's separate views).
 # npm: tests/spectral.sh lints the OpenAPI document with Spectral, and
 # tests/gltf_validator.sh checks our glb with the Khronos glTF validator, from the npm
 # registry. Only where no npm is on PATH: a Node.js from elsewhere (NodeSource's

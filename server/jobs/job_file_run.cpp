@@ -232,7 +232,7 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
     };
     const RenderedImage image = render_upload(ctx_, std::string(), r, control);
     const std::string partial = partial_path(job, out);
-    write_durably(partial, image.bytes);
+    write_durably(partial, r.layout == ViewLayout::separate ? views_zip(image, r.format) : image.bytes);
     nlohmann::json result = statistics_json(image);
     if (!read.id.empty()) result["read"] = file_read_json(read);  // none: the scene was cached
     store_artifact(job, out, partial, dump_result(result), cancel);

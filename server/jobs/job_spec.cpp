@@ -9,6 +9,7 @@
 #include "core/json_limits.h"
 #include "options/render_request.h"
 #include "server/render/render_limits.h"
+#include "server/http/zip_archive.h"
 #include "server/jobs/callback_url.h"
 
 namespace nurbsrt::server {
@@ -110,6 +111,10 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             }
             extension = r.format.extension;
             out.content_type = r.format.content_type;
+            if (r.layout == ViewLayout::separate) {  // the views' images in one ZIP (views_zip)
+                extension = ".zip";
+                out.content_type = kZipMediaType;
+            }
         } else {
             for (const auto& [key, v] : o.items())
                 if (key != "file" && key != "type" && key != "format")
@@ -138,7 +143,7 @@ std::string artifact_name(int file, const std::string& type, int output, const s
 
 bool valid_artifact_name(const std::string& name) {
     static const std::regex pattern(
-        R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|step|igs|stl|glb|json|brep|wrl)$)");
+        R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|zip|step|igs|stl|glb|json|brep|wrl)$)");
     return name.size() <= 64 && std::regex_match(name, pattern);
 }
 

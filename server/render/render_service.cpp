@@ -15,6 +15,7 @@
 #include "renderer/frame_cost.h"
 #include "renderer/render.h"
 #include "renderer/stats_json.h"
+#include "server/http/zip_archive.h"
 #include "server/render/stage_timings.h"
 #include "server/render/work.h"
 #include "server/common/service_error.h"
@@ -254,16 +255,19 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         add_frame_stages(results.back().stats, stages);
         stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
     }
-    const RenderImage* image = &results[0].image;
-    RenderImage sheet;
-    if (!r.views.empty()) {
-        sheet = compose_sheet(results, r.views, options);
-        image = &sheet;
-        for (size_t v = 0; v < r.views.size(); ++v) out.views.push_back({r.views[v], cameras[v], results[v].stats});
+    for (size_t v = 0; v < r.views.size(); ++v) out.views.push_back({r.views[v], cameras[v], results[v].stats, {}, {}});
+    if (r.layout == ViewLayout::separate) {  // an image per view
+        for (size_t v = 0; v < out.views.size(); ++v) {
+            out.views[v].bytes = encode_image(results[v].image, r.format.name);
+            out.views[v].aovs = aov_buffers(results[v].image, r.aovs);
+        }
+    } else {
+        RenderImage sheet;
+        if (!r.views.empty()) sheet = compose_sheet(results, r.views, options);
+        const RenderImage& image = r.views.empty() ? results[0].image : sheet;
+        out.bytes = encode_image(image, r.format.name);
+        out.aovs = aov_buffers(image, r.aovs);
     }
-
-    out.bytes = encode_image(*image, r.format.name);
-    out.aovs = aov_buffers(*image, r.aovs);
     ticket.reset();
     stages.mark("encode");
 
@@ -277,6 +281,12 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     for (const StageClock::Stage& s : stages.stages()) ctx.metrics.observe_stage(s.name, s.ms / 1000.0);
     ctx.metrics.observe_stage("total", stages.total_ms() / 1000.0);
     return out;
+}
+
+std::string views_zip(const RenderedImage& image, const OutputFormat& format) {
+    std::vector<ZipEntry> entries;
+    for (const RenderedImage::View& v : image.views) entries.push_back({v.name + format.extension, v.bytes});
+    return zip_archive(entries);
 }
 
 nlohmann::json statistics_json(const RenderedImage& image) {

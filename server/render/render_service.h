@@ -32,7 +32,7 @@ struct AovBuffer {
 };
 
 struct RenderedImage {
-    std::string bytes;            // the encoded image (r.format)
+    std::string bytes;            // the encoded image (r.format); empty for layout separate
     std::vector<AovBuffer> aovs;  // those of r.aovs, in kAllAovs order
     // What the Statistics object of the answer and of a job's result says,
     // serialised once, at the edge (statistics_json).
@@ -43,6 +43,9 @@ struct RenderedImage {
         std::string name;
         Camera camera;
         RenderStats stats;
+        // Layout separate (RenderRequest::layout): the view's own image and AOVs.
+        std::string bytes;
+        std::vector<AovBuffer> aovs;
     };
     std::vector<View> views;
     MapPrecision map_precision = MapPrecision::float32;
@@ -55,6 +58,10 @@ struct RenderedImage {
     // keeps the stages summing to the total.
     StageClock timings;
 };
+
+// Layout separate: a ZIP of the views' images, "<view>.<extension>" each (the
+// API's answer without JSON, a job's artifact).
+std::string views_zip(const RenderedImage& image, const OutputFormat& format);
 
 // The Statistics object of `image` (the renderer's statistics with the camera,
 // the estimate, the cache, the warnings), with timings_ms as `image.timings`

@@ -10,6 +10,7 @@
 #include "importer/importer.h"
 #include "core/error.h"
 #include "server/common/base64.h"
+#include "server/http/zip_archive.h"
 #include "server/render/context.h"
 #include "server/http/etag.h"
 #include "server/http/http_server.h"
@@ -34,14 +35,17 @@ nlohmann::json aovs_json(const std::vector<AovBuffer>& aovs) {
 
 // The answer's media type (RFC 9110 §12.5.1): the image in the format the
 // options name, or, when they name none, in the one Accept prefers (PNG for
-// */*); or JSON. True for JSON; else `r.format` is the image's.
+// */*); a ZIP of the views' images for layout separate; or JSON. True for JSON;
+// else `r.format` is the image's.
 bool choose_answer(const httplib::Request& req, RenderRequest& r) {
     // The API's image formats, PNG first: the default.
     static const std::vector<OutputFormat> kImageFormats = {
         output_format(ImageFormat::png), output_format(ImageFormat::jpeg), output_format(ImageFormat::tiff),
         output_format(ImageFormat::exr)};
     std::vector<std::string> offers;
-    if (r.format_given)
+    if (r.layout == ViewLayout::separate)  // the views' images (r.format) in a ZIP
+        offers.push_back(kZipMediaType);
+    else if (r.format_given)
         offers.push_back(r.format.content_type);
     else
         for (const OutputFormat& f : kImageFormats) offers.push_back(f.content_type);
@@ -97,8 +101,12 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
                        server_timing(stages, kRenderStages, {{"cache", rendered.cache_hit ? "hit" : "miss"}}));
     };
     set_warnings_header(res, rendered.warnings);
+    const bool separate = r.layout == ViewLayout::separate;
     if (!json_answer) {
-        res.set_content(rendered.bytes, r.format.content_type.c_str());
+        if (separate)
+            res.set_content(views_zip(rendered, r.format), kZipMediaType);
+        else
+            res.set_content(rendered.bytes, r.format.content_type.c_str());
         stages.mark("response");
         set_timing_header();
         return;
@@ -108,9 +116,18 @@ void handle_render(ServerContext& ctx, const httplib::Request& req, httplib::Res
                            {"content_type", r.format.content_type},
                            {"width", r.width},
                            {"height", r.height},
-                           {"image_base64", base64_encode(rendered.bytes)},
                            {"warnings", rendered.warnings}};
-    if (!rendered.aovs.empty()) body["aovs"] = aovs_json(rendered.aovs);
+    if (separate) {  // an image per view, in the order of `views`
+        body["images"] = nlohmann::json::array();
+        for (const RenderedImage::View& v : rendered.views) {
+            nlohmann::json one = {{"view", v.name}, {"image_base64", base64_encode(v.bytes)}};
+            if (!v.aovs.empty()) one["aovs"] = aovs_json(v.aovs);
+            body["images"].push_back(std::move(one));
+        }
+    } else {
+        body["image_base64"] = base64_encode(rendered.bytes);
+        if (!rendered.aovs.empty()) body["aovs"] = aovs_json(rendered.aovs);
+    }
     // The last stage, this answer, ends before its serialization: the text
     // cannot hold the time it takes to write itself.
     stages.mark("response");

@@ -249,6 +249,22 @@ def test_job_with_several_files_and_outputs(url, tmp_path):
     assert 'nurbsrt_jobs_finished_total{result="succeeded"} 0' not in m
 
 
+def test_render_output_with_separate_views_is_a_zip(url):
+    """A job's render with views and layout separate: one ZIP artifact of an image per view."""
+    import io
+    import zipfile
+    job = accepted(submit(url, [("screw.step", SCREW.read_bytes())], {"outputs": [
+        {"file": 0, "type": "render",
+         "options": {"width": 96, "height": 72, "views": ["front", "iso"], "layout": "separate"}}]}))
+    job = wait_finished(url, job["id"])
+    assert job["state"] == "succeeded", json.dumps(job)[:800]
+    out = job["outputs"][0]
+    assert out["artifact"]["content_type"] == "application/zip" and out["artifact"]["name"].endswith(".zip")
+    archive = zipfile.ZipFile(io.BytesIO(download(url, out)))
+    assert archive.namelist() == ["front.png", "iso.png"]
+    assert all(png_size(archive.read(n)) == (96, 72) for n in archive.namelist())
+
+
 def test_unreadable_cad_is_a_failed_output(url):
     spec = {"outputs": [{"file": 0, "type": "conversion", "format": "iges"},
                         {"file": 1, "type": "render", "options": {"width": 32, "height": 32}}]}

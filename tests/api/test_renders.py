@@ -450,6 +450,44 @@ def test_views_make_a_labelled_contact_sheet(url):
     assert server_timing(r)["read"] >= 0 and sum(1 for v in views) == 4
 
 
+def test_views_separate_answer_a_zip_of_images(url):
+    """layout separate: a ZIP of one image per view, named after it, each the
+    size of one view and the same image as a request for that view alone; in
+    JSON a list of images; Accept of an image type alone is 406; one import."""
+    import io
+    import zipfile
+    from test_jobs import png_size
+    step = SCREW.read_bytes()
+    params = {"width": 160, "height": 120, "views": "front,top,iso", "layout": "separate", "antialias": 0}
+    r = post_raw(url, "/v1/renders", step, params=params)
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == "application/zip"
+    archive = zipfile.ZipFile(io.BytesIO(r.content))
+    assert archive.testzip() is None
+    assert archive.namelist() == ["front.png", "top.png", "iso.png"]
+    for name in archive.namelist():
+        png = archive.read(name)
+        assert png_size(png) == (160, 120), name
+    alone = post_raw(url, "/v1/renders", step, params={"width": 160, "height": 120, "view": "top", "antialias": 0})
+    assert alone.status_code == 200 and alone.content == archive.read("top.png")
+    # The same request again gives the same bytes (fixed entry times).
+    assert post_raw(url, "/v1/renders", step, params=params).content == r.content
+    j = post_raw(url, "/v1/renders", step, params={**params, "format": "jpeg", "aovs": "face"},
+                 headers={"Accept": "application/json"})
+    assert j.status_code == 200, j.text[:300]
+    body = j.json()
+    validate(body, "RenderResponse")
+    assert "image_base64" not in body and [i["view"] for i in body["images"]] == ["front", "top", "iso"]
+    assert all(base64.b64decode(i["image_base64"])[:3] == b"\xff\xd8\xff" for i in body["images"])
+    assert all(len(base64.b64decode(i["aovs"]["face"]["data"])) == 4 * 160 * 120 for i in body["images"])
+    check_problem(post_raw(url, "/v1/renders", step, params=params, headers={"Accept": "image/png"}), 406)
+    body = check_problem(post_raw(url, "/v1/renders", step, params={"layout": "separate"}), 400, "invalid_argument")
+    assert "layout" in body["detail"], body
+    body = check_problem(post_raw(url, "/v1/renders", step, params={**params, "layout": "grid"}), 400,
+                         "invalid_argument")
+    assert "layout" in body["detail"], body
+
+
 @pytest.mark.parametrize("params,field", [
     ({"views": ""}, "views"), ({"views": "front,side"}, "side"), ({"views": ",".join(["iso"] * 17)}, "1 to 16"),
 ])
