@@ -108,7 +108,6 @@ RenderRequest request_of(const Args& a) {
     r.sections.mode = *parse_section_mode(a.section_mode);
     r.sections.caps = !a.no_caps;
     r.sections.hatch = a.hatch;
-    if (!a.views.empty()) r.views = parse_views(a.views, "--views");
     r.layout = *parse_view_layout(a.layout);
     if (r.layout == ViewLayout::separate && a.views.empty())
         throw CLI::ValidationError("--layout", "separate writes a file per view of --views, which is not given");
@@ -119,6 +118,8 @@ RenderRequest request_of(const Args& a) {
     r.parts.ghost = a.ghost;
     for (const std::string& pc : a.part_colors) r.parts.color.push_back(parse_part_color(pc, "--part-color"));
     for (const std::string& pm : a.part_moves) r.parts.move.push_back(parse_part_move(pm, "--part-move"));
+    if (!a.views.empty())  // over the request's camera (its projection, field of view, margin)
+        for (const std::string& name : parse_views(a.views, "--views")) r.views.push_back(named_request_view(r, name));
     return r;
 }
 
@@ -345,7 +346,7 @@ void write_stats(const Args& a, const RenderRequest& r, const Scene& scene, cons
     if (!r.views.empty()) {  // a sheet: the first view above, every view here
         j["views"] = nlohmann::json::array();
         for (size_t v = 0; v < r.views.size(); ++v)
-            j["views"].push_back(view_stats_json(r.views[v], frames.cameras[v], frames.results[v].stats));
+            j["views"].push_back(view_stats_json(r.views[v].name, frames.cameras[v], frames.results[v].stats));
     }
     j["map_precision"] = map_precision_option(r.map_precision);
     j["warnings"] = scene.warnings;
@@ -415,9 +416,9 @@ void run_render(const Args& a) {
 
     if (request.layout == ViewLayout::separate) {  // a file per view, named after it
         for (size_t v = 0; v < frames.results.size(); ++v) {
-            const std::string out = per_view_path(a.output, request.views[v]);
+            const std::string out = per_view_path(a.output, request.views[v].name);
             write_image(frames.results[v].image, out);
-            if (!a.aov.empty()) write_image(frames.results[v].image, per_view_path(a.aov, request.views[v]));
+            if (!a.aov.empty()) write_image(frames.results[v].image, per_view_path(a.aov, request.views[v].name));
             say("wrote %s", out.c_str());
         }
         stages.mark("encode");
@@ -427,7 +428,7 @@ void run_render(const Args& a) {
     const RenderImage* image = &frames.results[0].image;
     RenderImage sheet;
     if (!request.views.empty()) {
-        sheet = compose_sheet(frames.results, request.views, options);
+        sheet = compose_sheet(frames.results, view_names(request), options);
         image = &sheet;
     }
     write_image(*image, a.output);

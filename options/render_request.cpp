@@ -143,7 +143,7 @@ void complete_size(std::optional<int> width, std::optional<int> height, int& out
     out_height = height ? *height : width ? keep_aspect(*width, kDefaultWidth, kDefaultHeight) : kDefaultHeight;
 }
 
-Projection resolved_projection(const RenderRequest& r) {
+Projection resolved_projection(const RequestCamera& r) {
     if (r.projection) return *r.projection;
     if (r.ortho_height) return Projection::orthographic;
     if (r.fov_deg || r.eye) return Projection::perspective;
@@ -152,22 +152,22 @@ Projection resolved_projection(const RenderRequest& r) {
 
 namespace {
 
-CameraSpec base_spec(const RenderRequest& r) {
+CameraSpec base_spec(const RenderRequest& r, const RequestCamera& c) {
     CameraSpec base;
     base.width = r.width;
     base.height = r.height;
-    base.projection = resolved_projection(r);
-    if (r.fov_deg) base.fov_deg = *r.fov_deg;
+    base.projection = resolved_projection(c);
+    if (c.fov_deg) base.fov_deg = *c.fov_deg;
     return base;
 }
 
-ViewRequest view_request(const RenderRequest& r) {
-    return {.view = r.view,
-            .eye = r.eye,
-            .target = r.target,
-            .up = r.up,
-            .ortho_height = r.ortho_height,
-            .fit_margin = r.fit_margin};
+ViewRequest view_request(const RequestCamera& c) {
+    return {.view = c.view,
+            .eye = c.eye,
+            .target = c.target,
+            .up = c.up,
+            .ortho_height = c.ortho_height,
+            .fit_margin = c.fit_margin};
 }
 
 }  // namespace
@@ -176,13 +176,17 @@ void check_camera_without_scene(const RenderRequest& r) {
     BBox unit;
     unit.extend(Vec3{-1, -1, -1});
     unit.extend(Vec3{1, 1, 1});
-    const Camera checked(fitted_camera(view_request(r), unit, base_spec(r)));
+    const Camera checked(fitted_camera(view_request(r), unit, base_spec(r, r)));
+    for (const RequestView& v : r.views) {
+        const Camera checked_view(fitted_camera(view_request(v.camera), unit, base_spec(r, v.camera)));
+        (void)checked_view;
+    }
     (void)checked;
 }
 
 CameraSpec camera_spec_for(const RenderRequest& r, const Scene& scene, const std::vector<uint8_t>& hidden_faces,
                            const std::vector<Vec3>& face_offsets) {
-    return fitted_camera(view_request(r), scene, base_spec(r), hidden_faces, face_offsets);
+    return fitted_camera(view_request(r), scene, base_spec(r, r), hidden_faces, face_offsets);
 }
 
 std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& scene,
@@ -190,11 +194,9 @@ std::vector<CameraSpec> camera_specs_for(const RenderRequest& r, const Scene& sc
                                          const std::vector<Vec3>& face_offsets) {
     if (r.views.empty()) return {camera_spec_for(r, scene, hidden_faces, face_offsets)};
     std::vector<CameraSpec> specs;
-    RenderRequest one = r;
-    for (const std::string& v : r.views) {
-        one.view = v;
-        specs.push_back(camera_spec_for(one, scene, hidden_faces, face_offsets));
-    }
+    for (const RequestView& v : r.views)
+        specs.push_back(
+            fitted_camera(view_request(v.camera), scene, base_spec(r, v.camera), hidden_faces, face_offsets));
     return specs;
 }
 
@@ -225,6 +227,42 @@ std::vector<std::string> checked_views(const std::vector<std::string>& names, co
 
 std::vector<std::string> parse_views(const std::string& text, const std::string& what) {
     return checked_views(split_list(text, ','), what);
+}
+
+RequestView named_request_view(const RequestCamera& base, const std::string& name) {
+    RequestView v{name, base};
+    v.camera.view = name;
+    v.camera.eye = v.camera.target = v.camera.up = std::nullopt;
+    return v;
+}
+
+std::string checked_view_name(const std::string& name, const std::string& what) {
+    // Names a file (part-NAME.png) and a ZIP entry: no path separators, dots or spaces.
+    constexpr size_t kMaxViewName = 32;
+    bool ok = !name.empty() && name.size() <= kMaxViewName;
+    for (const char c : name)
+        ok = ok && ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-');
+    if (!ok) throw Error(ErrorCode::invalid_argument, what + " must be 1 to 32 of A-Z a-z 0-9 _ -");
+    return name;
+}
+
+std::vector<std::string> view_names(const RenderRequest& r) {
+    std::vector<std::string> names;
+    for (const RequestView& v : r.views) names.push_back(v.name);
+    return names;
+}
+
+void check_separate_views(const RenderRequest& r, const std::string& what) {
+    if (r.layout != ViewLayout::separate) return;
+    if (r.views.empty())
+        throw Error(ErrorCode::invalid_argument,
+                    what + " separate makes an image per view of 'views', which is not given");
+    const std::vector<std::string> names = view_names(r);
+    for (size_t i = 0; i < names.size(); ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (names[i] == names[j])
+                throw Error(ErrorCode::invalid_argument, what + " separate names a file per view, and two views are '" +
+                                                             names[i] + "' (give each camera view a distinct name)");
 }
 
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene) {

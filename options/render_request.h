@@ -96,14 +96,26 @@ enum class ViewLayout : uint8_t { sheet, separate };
 const char* view_layout_name(ViewLayout l);  // "sheet", "separate"
 std::optional<ViewLayout> parse_view_layout(std::string_view name);
 
-struct RenderRequest {
-    int width = kDefaultWidth, height = kDefaultHeight;
+// The camera fields of a request, and of each of its views.
+struct RequestCamera {
     std::string view = "iso";
     // Unset: resolved_projection() below decides.
     std::optional<Projection> projection;
     std::optional<double> fov_deg, ortho_height;
     std::optional<Vec3> eye, target, up;
     double fit_margin = kDefaultFitMargin;  // of the frame, each side (named views, and an eye alone)
+};
+
+// One view of a request's `views`: its label (the sheet's, the file's and the
+// ZIP entry's name) and its camera, the request's with what the view gives
+// replaced (a named view: its own placement; a camera: its fields).
+struct RequestView {
+    std::string name;
+    RequestCamera camera;
+};
+
+struct RenderRequest : RequestCamera {
+    int width = kDefaultWidth, height = kDefaultHeight;
     NewtonMethod method = NewtonMethod::proposed;
     MapPrecision map_precision = MapPrecision::float32;
     // Newton's stop tolerance (Sisojevs & Glazs 2010, eq. (12)) as a fraction of the
@@ -116,9 +128,9 @@ struct RenderRequest {
     ImageLook look;
     Sections sections;    // planes (checked, unit normals), mode, caps, hatching
     PartSelection parts;  // hidden, isolated and recoloured parts (options/part_selection.h)
-    // Named views of a contact sheet (compose_sheet), each width x height; empty:
-    // the one `view`.
-    std::vector<std::string> views;
+    // The views of a contact sheet (compose_sheet) or of layout separate, each
+    // width x height; empty: the request's own camera.
+    std::vector<RequestView> views;
     ViewLayout layout = ViewLayout::sheet;  // separate: only with views
     // An exploded view (core/scene/explode.h): factor in [0, kMaxExplode] of the
     // assembly's size; 0: none.
@@ -134,6 +146,17 @@ double checked_explode(double factor, const std::string& what);
 // names: 1 to kMaxViews known views. Throws Error(invalid_argument) naming `what`.
 std::vector<std::string> checked_views(const std::vector<std::string>& names, const std::string& what);
 std::vector<std::string> parse_views(const std::string& text, const std::string& what);
+// The view of `views` that a named view makes: `base` (the request's camera)
+// placed as that view (its eye, target and up dropped).
+RequestView named_request_view(const RequestCamera& base, const std::string& name);
+// A view's label: 1 to 32 of [A-Za-z0-9_-] (a file and ZIP entry name part).
+// Throws Error(invalid_argument) naming `what`.
+std::string checked_view_name(const std::string& name, const std::string& what);
+// The labels of r.views, in order.
+std::vector<std::string> view_names(const RenderRequest& r);
+// Layout separate names a file per view: the labels must differ. Throws
+// Error(invalid_argument) naming `what`.
+void check_separate_views(const RenderRequest& r, const std::string& what);
 
 // Throws Error(invalid_argument) naming the offending option (unknown keys too).
 RenderRequest parse_render_options(const std::string& options_json);
@@ -150,7 +173,7 @@ Vec3 parse_point(const std::string& text, const std::string& what);
 // orthographic height is given, perspective where a field of view or an eye is
 // (a camera placed by hand); else orthographic: named views are the drawing's
 // views (iso a true isometric), as CAD shows them.
-Projection resolved_projection(const RenderRequest& r);
+Projection resolved_projection(const RequestCamera& r);
 
 // The camera for a scene: the named view fitted to it, then explicit values.
 // The cameras of a request: one per entry of `views`, else the one of `view`

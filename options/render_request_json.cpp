@@ -120,35 +120,37 @@ constexpr const char* kRenderOptions =
     "section_caps, section_hatch, parts, ground, ground_height, views, layout, explode, explode_level";
 
 // Sets the camera field `key`; false when no camera field has that name.
-bool camera_field(RenderRequest& r, const std::string& key, const json& v) {
+// Messages name the field as `name` (the key, or views[2].eye).
+bool camera_field(RequestCamera& r, const std::string& key, const json& v, const std::string& name) {
     if (key == "eye")
-        r.eye = vec3(v, key);
+        r.eye = vec3(v, name);
     else if (key == "target")
-        r.target = vec3(v, key);
+        r.target = vec3(v, name);
     else if (key == "up")
-        r.up = vec3(v, key);
+        r.up = vec3(v, name);
     else if (key == "projection")
-        r.projection = one_of(v, key, {"perspective", "orthographic"}) == "orthographic" ? Projection::orthographic
-                                                                                         : Projection::perspective;
+        r.projection = one_of(v, name, {"perspective", "orthographic"}) == "orthographic" ? Projection::orthographic
+                                                                                          : Projection::perspective;
     else if (key == "fov_deg") {
-        const double f = number(v, key);
-        if (!(f > 0 && f < 180)) bad("option 'fov_deg' must be in (0, 180)");
+        const double f = number(v, name);
+        if (!(f > 0 && f < 180)) bad("option '" + name + "' must be in (0, 180)");
         r.fov_deg = f;
     } else if (key == "ortho_height") {
-        const double h = number(v, key);
-        if (!(h > 0)) bad("option 'ortho_height' must be positive");
+        const double h = number(v, name);
+        if (!(h > 0)) bad("option '" + name + "' must be positive");
         r.ortho_height = h;
     } else if (key == "fit_margin") {
-        const double m = number(v, key);
-        if (!(m >= 0 && m <= kMaxFitMargin)) bad("option 'fit_margin' must be in [0, 0.45]");
+        const double m = number(v, name);
+        if (!(m >= 0 && m <= kMaxFitMargin)) bad("option '" + name + "' must be in [0, 0.45]");
         r.fit_margin = m;
     } else if (key == "view") {
-        r.view = one_of(v, key, {"iso", "front", "back", "left", "right", "top", "bottom"});
+        r.view = one_of(v, name, {"iso", "front", "back", "left", "right", "top", "bottom"});
     } else {
         return false;
     }
     return true;
 }
+bool camera_field(RequestCamera& r, const std::string& key, const json& v) { return camera_field(r, key, v, key); }
 
 // The name as the client sent it, bounded (a message must not echo megabytes).
 // (Appended piecewise: "'" + std::string + "'" trips GCC 12's -Wrestrict false
@@ -158,6 +160,41 @@ std::string quoted_name(const std::string& key) {
     q.append(key, 0, 64);
     q += '\'';
     return q;
+}
+
+// One element of `views` (index k): a named view, or an object with a camera
+// of its own (camera fields, and an optional `name`) over the request's.
+RequestView request_view(const RequestCamera& base, const json& e, size_t k) {
+    const std::string where = "views[" + std::to_string(k) + "]";
+    if (e.is_string())
+        return named_request_view(base, checked_views({e.get<std::string>()}, "option '" + where + "'")[0]);
+    if (!e.is_object()) bad("option '" + where + "' must be a view name or an object with a camera");
+    RequestView v{"", base};
+    // A view or an eye places this camera anew: the request's placement does not carry over.
+    if (e.contains("view") || e.contains("eye")) v.camera.eye = v.camera.target = v.camera.up = std::nullopt;
+    for (const auto& [key, value] : e.items()) {
+        if (key == "name")
+            v.name = checked_view_name(text(value, where + ".name"), "option '" + where + ".name'");
+        else if (!camera_field(v.camera, key, value, where + "." + key))
+            bad("unknown option " + quoted_name(key) + " in '" + where + "' (name, " + kCameraOptions + ")");
+    }
+    if (v.name.empty())
+        v.name = e.contains("view") && !e.contains("eye") ? v.camera.view : "view" + std::to_string(k + 1);
+    return v;
+}
+
+// `views`: "front,top" (a query parameter), or an array of names and cameras.
+std::vector<RequestView> request_views(const RequestCamera& base, const json& v) {
+    std::vector<RequestView> views;
+    if (v.is_string()) {
+        for (const std::string& name : parse_views(v.get<std::string>(), "option 'views'"))
+            views.push_back(named_request_view(base, name));
+        return views;
+    }
+    if (!v.is_array() || v.empty() || v.size() > kMaxViews)
+        bad("option 'views' must be an array of 1 to " + std::to_string(kMaxViews) + " view names or cameras");
+    for (size_t k = 0; k < v.size(); ++k) views.push_back(request_view(base, v[k], k));
+    return views;
 }
 
 // "sections": [{"point": [x, y, z], "normal": [x, y, z]}, ...] or, as a
@@ -247,6 +284,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
     const json o = parse_object(options_json);
     RenderRequest r;
     std::optional<int> width, height;
+    const json* views = nullptr;
     for (const auto& [key, v] : o.items()) {
         if (v.is_null()) continue;  // null: the option's default, as if it were absent
         if (key == "width" || key == "height") {
@@ -295,14 +333,7 @@ RenderRequest parse_render_options(const std::string& options_json) {
         } else if (key == "explode_level") {
             r.explode_level = *parse_explode_level(one_of(v, key, {"top", "leaves"}));
         } else if (key == "views") {
-            if (v.is_string()) {
-                r.views = parse_views(v.get<std::string>(), "option '" + key + "'");
-            } else {
-                if (!v.is_array()) bad("option 'views' must be an array of view names");
-                std::vector<std::string> names;
-                for (const json& x : v) names.push_back(text(x, key));
-                r.views = checked_views(names, "option '" + key + "'");
-            }
+            views = &v;  // over the request's camera, known once every field is read
         } else if (key == "layout") {
             r.layout = *parse_view_layout(one_of(v, key, {"sheet", "separate"}));
         } else if (key == "camera") {
@@ -315,8 +346,8 @@ RenderRequest parse_render_options(const std::string& options_json) {
             bad("unknown option " + quoted_name(key) + " (render options: " + kRenderOptions + ")");
         }
     }
-    if (r.layout == ViewLayout::separate && r.views.empty())
-        bad("option 'layout' separate makes an image per view of 'views', which is not given");
+    if (views) r.views = request_views(r, *views);
+    check_separate_views(r, "option 'layout'");
     complete_size(width, height, r.width, r.height);
     check_camera_without_scene(r);
     return r;

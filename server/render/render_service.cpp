@@ -255,7 +255,8 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         add_frame_stages(results.back().stats, stages);
         stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
     }
-    for (size_t v = 0; v < r.views.size(); ++v) out.views.push_back({r.views[v], cameras[v], results[v].stats, {}, {}});
+    for (size_t v = 0; v < r.views.size(); ++v)
+        out.views.push_back({r.views[v].name, cameras[v], results[v].stats, {}, {}});
     if (r.layout == ViewLayout::separate) {  // an image per view
         for (size_t v = 0; v < out.views.size(); ++v) {
             out.views[v].bytes = encode_image(results[v].image, r.format.name);
@@ -263,7 +264,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
         }
     } else {
         RenderImage sheet;
-        if (!r.views.empty()) sheet = compose_sheet(results, r.views, options);
+        if (!r.views.empty()) sheet = compose_sheet(results, view_names(r), options);
         const RenderImage& image = r.views.empty() ? results[0].image : sheet;
         out.bytes = encode_image(image, r.format.name);
         out.aovs = aov_buffers(image, r.aovs);

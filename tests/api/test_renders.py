@@ -450,6 +450,36 @@ def test_views_make_a_labelled_contact_sheet(url):
     assert server_timing(r)["read"] >= 0 and sum(1 for v in views) == 4
 
 
+def test_views_of_cameras(url):
+    """views may mix named views and cameras of their own: each camera view
+    renders as a request with that camera alone; labels name the ZIP's entries;
+    a bad camera field is refused naming views[k]."""
+    import io
+    import zipfile
+    step = SCREW.read_bytes()
+    cam = {"eye": [60, -80, 50], "target": [0, 0, 0], "fov_deg": 35}
+    options = {"width": 128, "height": 96, "antialias": 0, "layout": "separate",
+               "views": ["front", dict(cam, name="closeup"), {"view": "top", "projection": "perspective"}]}
+    r = requests.post(url + "/v1/renders", files={"file": ("screw.step", step), "options": (None, json.dumps(options))},
+                      timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    archive = zipfile.ZipFile(io.BytesIO(r.content))
+    assert archive.namelist() == ["front.png", "closeup.png", "top.png"]
+    alone = requests.post(url + "/v1/renders", files={"file": ("screw.step", step), "options": (None, json.dumps(
+        {"width": 128, "height": 96, "antialias": 0, "camera": cam}))}, timeout=TIMEOUT)
+    assert alone.status_code == 200 and alone.content == archive.read("closeup.png")
+    j = requests.post(url + "/v1/renders", headers={"Accept": "application/json"}, files={
+        "file": ("screw.step", step), "options": (None, json.dumps(dict(options, layout="sheet")))}, timeout=TIMEOUT)
+    assert j.status_code == 200, j.text[:300]
+    views = j.json()["statistics"]["views"]
+    assert [v["view"] for v in views] == ["front", "closeup", "top"]
+    assert [v["camera"]["projection"] for v in views] == ["orthographic", "perspective", "perspective"]
+    bad = dict(options, views=["front", {"eye": [1, 2]}])
+    body = check_problem(requests.post(url + "/v1/renders", files={
+        "file": ("screw.step", step), "options": (None, json.dumps(bad))}, timeout=TIMEOUT), 400, "invalid_argument")
+    assert "views[1].eye" in body["detail"], body
+
+
 def test_views_separate_answer_a_zip_of_images(url):
     """layout separate: a ZIP of one image per view, named after it, each the
     size of one view and the same image as a request for that view alone; in
