@@ -10,6 +10,7 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include <unistd.h>
 
@@ -375,6 +376,8 @@ void run_render(const Args& a) {
     };
     locate_image_module();                  // a missing module fails now, not after the import
     const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
+    // Overlaps the import too: the first map's OpenGL context, shaders and llvmpipe code.
+    std::jthread map_warm_up([w = request.width, h = request.height] { warm_up_preliminary_maps(1, w, h); });
     say("importing %zu model(s)", a.models.size());
     // --stats timings: stages marked end to end from t0, so they sum to the total.
     StageClock stages(t0);
@@ -400,10 +403,11 @@ void run_render(const Args& a) {
         frames.cameras[0].height(), a.method.c_str());
     auto progress = std::make_shared<ProgressPrinter>(t0);
     if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
-    stages.mark("frame_setup");
     // One prepare() for every view (render(scene, ...) would prepare per frame).
     const PreparedScene prepared = prepare(scene, a.threads);
     stages.add("prepare", prepared.prepare_ms());
+    map_warm_up.join();  // what is left of it (none for a file that takes longer to read)
+    stages.mark("frame_setup");
     for (const Camera& camera : frames.cameras) {
         frames.results.push_back(render(prepared, camera, options));
         add_frame_stages(frames.results.back().stats, stages);

@@ -190,6 +190,17 @@ struct RenderResult {
 // One frame of a prepared scene (prepared_scene.h): what a caller that renders
 // many views of one scene pays per view. Several frames of one PreparedScene may
 // run at once, on any threads.
+// Readies `count` pooled preliminary-map renderers (map/preliminary_map.h) for frames of about width x height: each
+// context is created, its shaders compiled, and a small scene drawn through
+// the real pipeline, so that llvmpipe generates its code now rather than in the
+// first frame (a few hundred ms a context, most of a small file's first map).
+// Called on a thread of its own while a file is read (the CLI) or at start-up
+// (the service); the renderers then wait in the pool. Safe from any thread;
+// failures are left for the real frame to report.
+void warm_up_preliminary_maps(int count, int width, int height);
+// MapRenderers idle in the pool now (for tests and statistics).
+size_t idle_map_renderers();
+
 RenderResult render(const PreparedScene& scene, const Camera& camera, const RenderOptions& options);
 // One frame of a Scene: prepare(scene, options.threads), then the frame above.
 // The same images; stats.prepare_ms says what preparing cost.

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cctype>
+#include <algorithm>
 #include <chrono>
 #include <cerrno>
 #include <cstdio>
@@ -328,6 +329,11 @@ int run_server(const ServerConfig& given) {
     // writer now, not in the first request.
     locate_image_module();
     const ImageWriterPreload image_writer;
+    // The first renders' preliminary maps find their OpenGL contexts ready: one
+    // per core (renders beyond that share the cores anyway), made while the
+    // service opens its stores and starts listening.
+    const int warm_maps = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, config.max_renders);
+    std::jthread map_warm_up([warm_maps] { warm_up_preliminary_maps(warm_maps, kDefaultWidth, kDefaultHeight); });
 
     ApiKeys keys;
     if (!config.api_keys_file.empty()) keys.add_file(config.api_keys_file);

@@ -2,6 +2,7 @@
 // the exact parameters of the pixel-ray hit up to the mesh's interpolation error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <thread>
@@ -10,6 +11,7 @@
 #include "renderer/solve/newton.h"
 #include "renderer/map/preliminary_map.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/render.h"
 #include "renderer_test_surfaces.h"
 
 using namespace nurbsrt;
@@ -202,4 +204,22 @@ TEST(RendererPreliminaryMap, CancelStopsBetweenBands) {
     } catch (const Error& e) {
         EXPECT_EQ(e.code(), ErrorCode::canceled);
     }
+}
+
+// Warm-up readies pooled renderers: after warming two, at least two wait in the
+// pool, and frames drawn one at a time take them from there (the pool does not
+// grow, so no context is created in a frame).
+TEST(RendererPreliminaryMap, WarmUpReadiesPooledRenderers) {
+    warm_up_preliminary_maps(2, 64, 48);
+    const size_t idle = idle_map_renderers();
+    EXPECT_GE(idle, 2u);
+    const AnalyticPatch p = plane_patch();
+    Scene scene;
+    scene.faces.push_back(make_face(p, 1, 5));
+    CameraSpec spec = p.view;
+    spec.width = 64;
+    spec.height = 48;
+    const PreliminaryMap map = render_preliminary_map(scene, Camera(spec));
+    EXPECT_GT(std::count(map.face.begin(), map.face.end(), 1u), 100);
+    EXPECT_EQ(idle_map_renderers(), idle);
 }

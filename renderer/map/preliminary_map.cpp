@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -528,6 +529,10 @@ namespace {
 // static destructor would race with Mesa's own teardown at exit.
 class MapRendererPool {
 public:
+    size_t idle() {
+        std::lock_guard<std::mutex> lock(m_);
+        return idle_.size();
+    }
     std::unique_ptr<MapRenderer> acquire() {
         {
             std::lock_guard<std::mutex> lock(m_);
@@ -554,6 +559,29 @@ MapRendererPool& map_renderer_pool() {
     return *pool;
 }
 
+// The scene warm_up_preliminary_maps draws: one flat bilinear face, the unit
+// square in z = 0, meshed as two triangles. Prepared once.
+const PreparedScene& warm_up_scene() {
+    static const PreparedScene* prepared = [] {
+        auto scene = std::make_shared<Scene>();
+        Face f;
+        f.index = 1;
+        f.surface.degree_u = f.surface.degree_v = 1;
+        f.surface.num_u = f.surface.num_v = 2;
+        f.surface.knots_u = f.surface.knots_v = {0, 0, 1, 1};
+        f.surface.cp = {{0, 0, 0, 1}, {0, 1, 0, 1}, {1, 0, 0, 1}, {1, 1, 0, 1}};
+        f.u_max = f.v_max = 1;
+        f.mesh.uv = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        f.mesh.xyz = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+        f.mesh.triangles = {0, 1, 2, 0, 2, 3};
+        scene->faces.push_back(std::move(f));
+        scene->bodies.push_back({});
+        for (const Vec3& p : scene->faces[0].mesh.xyz) scene->bbox.extend(p);
+        return new PreparedScene(prepare(std::shared_ptr<const Scene>(std::move(scene)), 1));
+    }();
+    return *prepared;
+}
+
 }  // namespace
 
 PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& camera, MapPrecision precision,
@@ -569,6 +597,30 @@ PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& 
     } give_back{pool, renderer};
     return renderer->render(scene, camera, precision, bands, clip);
 }
+
+void warm_up_preliminary_maps(int count, int width, int height) {
+    try {
+        const PreparedScene& scene = warm_up_scene();
+        CameraSpec spec;
+        spec.eye = {0.5, 0.5, 3};
+        spec.target = {0.5, 0.5, 0};
+        spec.width = std::max(width, 1);
+        spec.height = std::max(height, 1);
+        const Camera camera(spec);
+        MapRendererPool& pool = map_renderer_pool();
+        // All held at once, so that each is a renderer of its own, not the first one again.
+        std::vector<std::unique_ptr<MapRenderer>> held;
+        for (int k = 0; k < count; ++k) {
+            held.push_back(pool.acquire());
+            held.back()->render(scene, camera, MapPrecision::float32);
+        }
+        for (std::unique_ptr<MapRenderer>& r : held) pool.release(std::move(r));
+    } catch (const std::exception&) {
+        // No OpenGL here: the first frame says so, with its own error.
+    }
+}
+
+size_t idle_map_renderers() { return map_renderer_pool().idle(); }
 
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera, MapPrecision precision) {
     return render_preliminary_map(prepare(scene), camera, precision);

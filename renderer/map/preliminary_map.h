@@ -116,6 +116,8 @@ PreliminaryMap render_preliminary_map(const PreparedScene& scene, const Camera& 
 PreliminaryMap render_preliminary_map(const Scene& scene, const Camera& camera,
                                       MapPrecision precision = MapPrecision::float32);
 
+// warm_up_preliminary_maps, idle_map_renderers: declared in render.h (the public API).
+
 // eq. (4): u0 = (u_max - u_min) g / 255 + u_min with g = round(255 (u - u_min) / (u_max - u_min)).
 float quantize_rgb8(float u, double lo, double hi);
 
