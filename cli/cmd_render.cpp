@@ -69,6 +69,8 @@ struct Args {
     double explode = 0;
     std::string explode_level = "top";
     std::string layout = "sheet";  // of --views: one sheet, or a file per view
+    std::string out_dir;           // several files rendered one by one into it (instead of -o)
+    std::string format = "png";    // of the images written into out_dir
     LoadOptions load;
     bool quiet = false;
     bool strict = false;
@@ -93,7 +95,8 @@ RenderRequest request_of(const Args& a) {
     r.method = *parse_newton_method(a.method);
     r.map_precision = *parse_map_precision(a.map_precision);
     r.tolerance = a.tolerance;
-    r.format = output_format(image_format_of_extension(std::filesystem::path(a.output).extension().string()));
+    r.format = output_format(
+        image_format_of_extension(a.out_dir.empty() ? std::filesystem::path(a.output).extension().string() : a.format));
     if (!a.background.empty()) r.background = parse_background(a.background, "--background");
     r.look.antialias = a.antialias;
     r.look.edges = a.edges;
@@ -141,11 +144,19 @@ void add_output_options(CLI::App* cmd, Args& a) {
     // Checked in the callback, after CLI11 has reported unknown options: with a
     // CLI11 check here, `--widht 100` would be reported as a missing file "100".
     cmd->add_option("MODEL", a.models, "STEP/IGES file(s), NURBS JSON, or a JSON scene file")->required();
-    cmd->add_option("-o,--output", a.output, "image to write: .png, .jpg, .tif or .exr")
-        ->required()
-        ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
-    cmd->add_option("--aov", a.aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
-        ->check(output_file_validator({".exr"}));
+    CLI::Option* output = cmd->add_option("-o,--output", a.output, "image to write: .png, .jpg, .tif or .exr")
+                              ->check(output_file_validator({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}));
+    CLI::Option* aov = cmd->add_option("--aov", a.aov, "also write the AOV EXR (R,G,B,A,Z,face,...)")
+                           ->check(output_file_validator({".exr"}));
+    cmd->add_option("--out-dir", a.out_dir,
+                    "render each MODEL on its own into this directory, as STEM.png (--format), in one process: "
+                    "one OpenGL set-up and image module for all; a file that fails is reported and the rest go on")
+        ->excludes(output)
+        ->excludes(aov)
+        ->check(CLI::ExistingDirectory);
+    cmd->add_option("--format", a.format, "image format of --out-dir: png, jpg, tif or exr")
+        ->check(CLI::IsMember({"png", "jpg", "jpeg", "tif", "tiff", "exr"}))
+        ->capture_default_str();
     cmd->add_option("--stats", a.stats, "write statistics and stage timings as JSON ('-' for stdout)")
         ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
 }
@@ -341,7 +352,34 @@ struct Frames {
     std::vector<RenderResult> results;
 };
 
-void write_stats(const Args& a, const RenderRequest& r, const Scene& scene, const Frames& frames, StageClock& stages) {
+// Progress lines on stderr, stamped with the time since the command began.
+class Say {
+public:
+    Say(bool quiet, clock_type::time_point t0) : quiet_(quiet), t0_(t0) {}
+    template <class... Xs>
+    void operator()(const char* fmt, Xs... xs) const {
+        if (quiet_) return;
+        std::fprintf(stderr, "nurbsrt: [%8.1f ms] ", ms_since(t0_));
+        if constexpr (sizeof...(Xs) == 0)
+            std::fputs(fmt, stderr);
+        else
+            std::fprintf(stderr, fmt, xs...);
+        std::fputc('\n', stderr);
+    }
+    clock_type::time_point t0() const { return t0_; }
+
+private:
+    bool quiet_;
+    clock_type::time_point t0_;
+};
+
+// Where one scene's render goes: the image (a sheet, or a file per view), the
+// AOV EXR (or none).
+struct Outputs {
+    std::string image, aov;
+};
+
+nlohmann::json stats_of(const RenderRequest& r, const Scene& scene, const Frames& frames, StageClock& stages) {
     nlohmann::json j = render_stats_json(frames.results[0].stats, nlohmann::json::object());
     j["camera"] = camera_json(frames.cameras[0]);
     if (!r.views.empty()) {  // a sheet: the first view above, every view here
@@ -353,36 +391,24 @@ void write_stats(const Args& a, const RenderRequest& r, const Scene& scene, cons
     j["warnings"] = scene.warnings;
     stages.mark("statistics");
     j["timings_ms"] = server::stage_timings_json(stages, kCliRenderStages);
-    if (a.stats == "-") {
+    return j;
+}
+
+void write_json(const std::string& path, const nlohmann::json& j) {
+    if (path == "-") {
         std::cout << j.dump(2) << "\n";
         return;
     }
-    std::ofstream out(a.stats);
+    std::ofstream out(path);
     out << j.dump(2) << "\n";
-    if (!out) throw Error(ErrorCode::io, "cannot write " + a.stats);
+    if (!out) throw Error(ErrorCode::io, "cannot write " + path);
 }
 
-void run_render(const Args& a) {
-    for (const std::string& m : a.models)
-        if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
-    const RenderRequest request = request_of(a);
-    check_camera_before_import(a, request);
-    const auto t0 = clock_type::now();
-    auto say = [&](const char* fmt, auto... xs) {
-        if (a.quiet) return;
-        std::fprintf(stderr, "nurbsrt: [%8.1f ms] ", ms_since(t0));
-        std::fprintf(stderr, fmt, xs...);
-        std::fputc('\n', stderr);
-    };
-    locate_image_module();                  // a missing module fails now, not after the import
-    const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
-    // Overlaps the import too: the first map's OpenGL context, shaders and llvmpipe code.
-    std::jthread map_warm_up([w = request.width, h = request.height] { warm_up_preliminary_maps(1, w, h); });
-    say("importing %zu model(s)", a.models.size());
-    // --stats timings: stages marked end to end from t0, so they sum to the total.
-    StageClock stages(t0);
+// Reads `models` as one scene, with their stages on `stages`.
+Scene load_scene(const Args& a, const std::vector<std::string>& models, StageClock& stages, const Say& say) {
+    say("importing %zu model(s)", models.size());
     IsolationTimings isolation;
-    Scene scene = load_models(a.models, a.load, &isolation);
+    Scene scene = load_models(models, a.load, &isolation);
     add_import_stages(scene.timings, stages);
     if (a.load.isolated) {
         stages.add("prescan", isolation.prescan_ms);
@@ -393,7 +419,13 @@ void run_render(const Args& a) {
     report_warnings(scene.warnings, a.quiet, a.strict);
     say("imported %zu faces (read %.0f ms, nurbs_convert %.0f ms, mesh %.0f ms)", scene.faces.size(),
         scene.timings.read_ms, scene.timings.nurbs_convert_ms, scene.timings.mesh_ms);
+    return scene;
+}
 
+// Renders `scene` as `request` asks and writes `out`; the frames for the
+// statistics. `map_warm_up` (if still running) is waited for before the first frame.
+Frames render_and_write(const Args& a, const RenderRequest& request, const Scene& scene, const Outputs& out,
+                        StageClock& stages, std::jthread& map_warm_up, const Say& say) {
     RenderOptions options = render_options_for(request, scene);  // explode: options.face_offsets
     Frames frames;
     for (const CameraSpec& spec : camera_specs_for(request, scene, options.hidden_faces, options.face_offsets))
@@ -401,12 +433,12 @@ void run_render(const Args& a) {
     options.threads = a.threads;
     say("rendering %zu view(s) of %dx%d with %s", frames.cameras.size(), frames.cameras[0].width(),
         frames.cameras[0].height(), a.method.c_str());
-    auto progress = std::make_shared<ProgressPrinter>(t0);
+    auto progress = std::make_shared<ProgressPrinter>(say.t0());
     if (!a.quiet) options.progress = [progress](double f) { (*progress)(f); };
     // One prepare() for every view (render(scene, ...) would prepare per frame).
     const PreparedScene prepared = prepare(scene, a.threads);
     stages.add("prepare", prepared.prepare_ms());
-    map_warm_up.join();  // what is left of it (none for a file that takes longer to read)
+    if (map_warm_up.joinable()) map_warm_up.join();  // what is left of it (none for a file that takes longer to read)
     stages.mark("frame_setup");
     for (const Camera& camera : frames.cameras) {
         frames.results.push_back(render(prepared, camera, options));
@@ -420,14 +452,13 @@ void run_render(const Args& a) {
 
     if (request.layout == ViewLayout::separate) {  // a file per view, named after it
         for (size_t v = 0; v < frames.results.size(); ++v) {
-            const std::string out = per_view_path(a.output, request.views[v].name);
-            write_image(frames.results[v].image, out);
-            if (!a.aov.empty()) write_image(frames.results[v].image, per_view_path(a.aov, request.views[v].name));
-            say("wrote %s", out.c_str());
+            const std::string path = per_view_path(out.image, request.views[v].name);
+            write_image(frames.results[v].image, path);
+            if (!out.aov.empty()) write_image(frames.results[v].image, per_view_path(out.aov, request.views[v].name));
+            say("wrote %s", path.c_str());
         }
         stages.mark("encode");
-        if (!a.stats.empty()) write_stats(a, request, scene, frames, stages);
-        return;
+        return frames;
     }
     const RenderImage* image = &frames.results[0].image;
     RenderImage sheet;
@@ -435,11 +466,81 @@ void run_render(const Args& a) {
         sheet = compose_sheet(frames.results, view_names(request), options);
         image = &sheet;
     }
-    write_image(*image, a.output);
-    if (!a.aov.empty()) write_image(*image, a.aov);
+    write_image(*image, out.image);
+    if (!out.aov.empty()) write_image(*image, out.aov);
     stages.mark("encode");
-    say("wrote %s%s%s", a.output.c_str(), a.aov.empty() ? "" : " and ", a.aov.c_str());
-    if (!a.stats.empty()) write_stats(a, request, scene, frames, stages);
+    say("wrote %s%s%s", out.image.c_str(), out.aov.empty() ? "" : " and ", out.aov.c_str());
+    return frames;
+}
+
+// --out-dir: DIR/STEM.EXT of every model; two models of one stem would
+// overwrite each other, so that is a usage error before any work.
+std::vector<std::string> out_dir_paths(const Args& a, const RenderRequest& request) {
+    std::vector<std::string> paths;
+    for (const std::string& m : a.models) {
+        const std::string stem = std::filesystem::path(m).stem().string();
+        const std::string path = (std::filesystem::path(a.out_dir) / (stem + request.format.extension)).string();
+        for (size_t k = 0; k < paths.size(); ++k)
+            if (paths[k] == path)
+                throw CLI::ValidationError("--out-dir", a.models[k] + " and " + m + " would both write " + path);
+        paths.push_back(path);
+    }
+    return paths;
+}
+
+// Each model on its own, one after the other, in this process: the OpenGL
+// contexts, the image module and the libraries are set up once for all. A
+// model that fails is reported with its error and the rest go on; the command
+// then fails naming how many did.
+void render_each(const Args& a, const RenderRequest& request, std::jthread& map_warm_up, const Say& say) {
+    const std::vector<std::string> paths = out_dir_paths(a, request);
+    nlohmann::json files = nlohmann::json::array();
+    size_t failed = 0;
+    for (size_t k = 0; k < a.models.size(); ++k) {
+        StageClock stages(clock_type::now());
+        nlohmann::json entry = {{"file", a.models[k]}, {"output", paths[k]}};
+        try {
+            const Scene scene = load_scene(a, {a.models[k]}, stages, say);
+            const Frames frames = render_and_write(a, request, scene, {paths[k], ""}, stages, map_warm_up, say);
+            entry["statistics"] = stats_of(request, scene, frames, stages);
+        } catch (const WarningsRefused& e) {
+            ++failed;
+            std::fprintf(stderr, "nurbsrt: %s: error [strict]: %s\n", a.models[k].c_str(), e.what());
+            entry["error"] = {{"code", "strict"}, {"detail", e.what()}};
+        } catch (const Error& e) {
+            ++failed;
+            std::fprintf(stderr, "nurbsrt: %s: error [%s]: %s\n", a.models[k].c_str(), error_code_name(e.code()),
+                         e.what());
+            entry["error"] = {{"code", error_code_name(e.code())}, {"detail", e.what()}};
+        }
+        files.push_back(std::move(entry));
+    }
+    if (!a.stats.empty()) write_json(a.stats, {{"files", files}});
+    say("rendered %zu of %zu files into %s", a.models.size() - failed, a.models.size(), a.out_dir.c_str());
+    if (failed)
+        throw Error(ErrorCode::invalid_argument, std::to_string(failed) + " of " + std::to_string(a.models.size()) +
+                                                     " files failed (each reported above); the others were written");
+}
+
+void run_render(const Args& a) {
+    for (const std::string& m : a.models)
+        if (const std::string why = CLI::ExistingFile(m); !why.empty()) throw CLI::ValidationError("MODEL", why);
+    if (a.output.empty() && a.out_dir.empty())
+        throw CLI::ValidationError("--output",
+                                   "give the image to write (-o) or a directory for each model's (--out-dir)");
+    const RenderRequest request = request_of(a);
+    check_camera_before_import(a, request);
+    const Say say(a.quiet, clock_type::now());
+    locate_image_module();                  // a missing module fails now, not after the import
+    const ImageWriterPreload image_writer;  // overlaps the import: OpenImageIO's libraries take ~0.3 s to load
+    // Overlaps the import too: the first map's OpenGL context, shaders and llvmpipe code.
+    std::jthread map_warm_up([w = request.width, h = request.height] { warm_up_preliminary_maps(1, w, h); });
+    if (!a.out_dir.empty()) return render_each(a, request, map_warm_up, say);
+    // --stats timings: stages marked end to end from the start, so they sum to the total.
+    StageClock stages(say.t0());
+    const Scene scene = load_scene(a, a.models, stages, say);
+    const Frames frames = render_and_write(a, request, scene, {a.output, a.aov}, stages, map_warm_up, say);
+    if (!a.stats.empty()) write_json(a.stats, stats_of(request, scene, frames, stages));
 }
 
 }  // namespace

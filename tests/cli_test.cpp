@@ -730,3 +730,38 @@ TEST(CliRender, AntialiasDefaultsAndEdgesInStats) {
     }
     fs::remove_all(dir);
 }
+
+// --out-dir renders each model on its own in one process, STEM.FORMAT each; a
+// model that fails is reported by name and the rest are written (exit 1, the
+// statistics listing each file's result); two models of one stem, or -o with
+// --out-dir, are usage errors before any work.
+TEST(CliRender, OutDirRendersEachModel) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-outdir-" + std::to_string(::getpid()));
+    fs::create_directories(dir / "in");
+    const fs::path broken = dir / "in" / "broken.step";
+    std::ofstream(broken) << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
+    const std::string bearing = "/usr/share/opencascade/data/iges/bearing.iges";
+    const CliRun r =
+        run_nurbsrt("render " + kScrew + " " + broken.string() + " " + bearing + " --out-dir " + dir.string() +
+                    " --format jpg -q --width 64 --height 48 --stats " + (dir / "s.json").string());
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find(broken.string() + ": error ["), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("1 of 3 files failed"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "screw.jpg"));
+    EXPECT_TRUE(fs::exists(dir / "bearing.jpg"));
+    EXPECT_FALSE(fs::exists(dir / "broken.jpg"));
+    std::ifstream in(dir / "s.json");
+    const nlohmann::json st = nlohmann::json::parse(in);
+    ASSERT_EQ(st["files"].size(), 3u);
+    EXPECT_GT(st["files"][0]["statistics"]["pixels_hit"].get<uint64_t>(), 0u);
+    EXPECT_TRUE(st["files"][1].contains("error"));
+    EXPECT_GT(st["files"][2]["statistics"]["pixels_hit"].get<uint64_t>(), 0u);
+    fs::copy_file(kScrew, dir / "in" / "screw.step");
+    const CliRun twice =
+        run_nurbsrt("render " + kScrew + " " + (dir / "in" / "screw.step").string() + " --out-dir " + dir.string());
+    EXPECT_EQ(twice.status, 2) << twice.err;
+    EXPECT_NE(twice.err.find("would both write"), std::string::npos) << twice.err;
+    const CliRun both = run_nurbsrt("render " + kScrew + " -o x.png --out-dir " + dir.string());
+    EXPECT_EQ(both.status, 2) << both.err;
+    fs::remove_all(dir);
+}
