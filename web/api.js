@@ -41,8 +41,9 @@ async function problemOf(res) {
 // connection just as the browser reuses it, and Chromium does not resend a
 // POST whose body is a file (RFC 9112, 9.3.1: a client may retry requests it
 // knows to be idempotent). A job is never sent twice.
-export async function call(path, { method = 'GET', body, signal, accept = 'application/json', retry = method === 'GET' } = {}) {
+export async function call(path, { method = 'GET', body, signal, accept = 'application/json', retry = method === 'GET', contentType } = {}) {
   const headers = { Accept: accept };
+  if (contentType) headers['Content-Type'] = contentType;
   const key = apiKey();
   if (key) headers.Authorization = `Bearer ${key}`;
   const send = () => fetch(path, { method, body, headers, signal, cache: 'no-store' });
@@ -65,9 +66,23 @@ export function uploadForm(file, options) {
   return form;
 }
 
-// POST /v1/renders answered as JSON (RenderResponse).
-export async function render(file, options, signal) {
-  const res = await call('/v1/renders', { method: 'POST', body: uploadForm(file, options), signal, retry: true });
+// POST /v1/files: the file stored once (StoredFile: id, filename, ...); every
+// frame after names it by id instead of sending it again.
+export async function storeFile(file, signal) {
+  const res = await call('/v1/files', { method: 'POST', body: uploadForm(file, null), signal });
+  return res.json();
+}
+
+// GET /v1/files/{id}: a stored file's description (a link that reopens it).
+export async function storedFile(id, signal) {
+  return (await call(`/v1/files/${encodeURIComponent(id)}`, { signal })).json();
+}
+
+// POST /v1/renders of a stored file, answered as JSON (RenderResponse).
+export async function render(fileId, options, signal) {
+  const res = await call('/v1/renders', {
+    method: 'POST', body: JSON.stringify({ file_id: fileId, ...options }), contentType: 'application/json', signal, retry: true,
+  });
   return res.json();
 }
 

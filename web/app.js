@@ -4,7 +4,7 @@
 // times, the method comparison, jobs and conversions. Only the public REST API
 // is used (api.js).
 
-import { apiKey, setApiKey, render, base64Bytes } from './api.js';
+import { apiKey, setApiKey, render, storeFile, storedFile, base64Bytes } from './api.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
 import { bindInteraction } from './interaction.js';
@@ -18,7 +18,8 @@ const PREVIEW_DIVISOR = 4;
 // The service's range of edge_width, px (api_schema/openapi.json).
 const EDGE_WIDTH_MIN = 0.25, EDGE_WIDTH_MAX = 16;
 const canvas = $('view');
-const state = { file: null, camera: null, view: 'iso', frame: null, dirty: false };
+// file: the File picked (for conversions); fileId: its stored copy, which every frame names.
+const state = { file: null, fileId: null, fileName: '', camera: null, view: 'iso', frame: null, dirty: false };
 
 // ---- messages ---------------------------------------------------------------
 function report(error) {
@@ -102,7 +103,7 @@ function backgroundRgba() {
 
 // ---- frames -------------------------------------------------------------------
 async function send(job, signal) {
-  const doc = await render(job.file, requestOptions(job), signal);
+  const doc = await render(job.fileId, requestOptions(job), signal);
   const bitmap = await createImageBitmap(new Blob([base64Bytes(doc.image_base64)], { type: doc.content_type }));
   return { width: doc.width, height: doc.height, bitmap, aov: doc.aovs ? decodeAovs(doc.aovs) : null, stats: doc.statistics };
 }
@@ -173,7 +174,7 @@ function busy(on, job) {
     return;
   }
   const t0 = performance.now();
-  const what = job.first ? 'Uploading, importing and rendering' : 'Rendering';
+  const what = job.first ? 'Importing and rendering' : 'Rendering';
   const tick = () => { $('busy-text').textContent = `${what}… ${((performance.now() - t0) / 1000).toFixed(1)} s`; };
   tick();
   box.hidden = false;
@@ -189,25 +190,85 @@ const scheduler = new RenderScheduler({
 // with it only when the view shows them; the shaded view fetches them on the
 // first hover, so that a release shows the image without waiting for them.
 function renderFinal(extra = {}) {
-  if (!state.file) return;
-  const job = { file: state.file, final: true, aovs: $('look').value !== 'shaded', ...extra };
+  if (!state.fileId) return;
+  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded', ...extra };
   if (state.camera && !job.view) job.camera = state.camera.toOption();
   else job.view = job.view || state.view || 'iso';
   scheduler.submit(job);
 }
 
 // ---- inputs -------------------------------------------------------------------
-function loadFile(file) {
-  if (!file) return;
-  state.file = file;
-  state.camera = null;
-  state.frame = null;
-  state.view = 'iso';
-  $('file-name').textContent = `${file.name} (${(file.size / 1024).toFixed(0)} KiB)`;
-  $('compare').disabled = false;
+// Nothing of the last model stays on screen: image, stage times, read-out,
+// legend, status (a failed load must not leave them under the new name).
+function clearFrame() {
   scheduler.cancelAll();
-  pressView('iso');
-  renderFinal({ view: 'iso', first: true });
+  state.frame = null;
+  state.camera = null;
+  canvas.width = canvas.width;  // resets the bitmap to transparent
+  canvas.dataset.final = '0';
+  canvas.dataset.cleared = String(Number(canvas.dataset.cleared || 0) + 1);
+  $('stages').replaceChildren();
+  $('stage-list').replaceChildren();
+  $('hover').textContent = '';
+  $('legend').hidden = true;
+  setStatus('');
+}
+
+// The page's address names the stored file and the view, so a link reopens them.
+function remember() {
+  const params = new URLSearchParams();
+  if (state.fileId) params.set('file', state.fileId);
+  if (state.fileId && state.view) params.set('view', state.view);
+  const text = params.toString();
+  history.replaceState(null, '', text ? `#${text}` : location.pathname);
+}
+
+// A stored file on screen: its first frame, at `view`.
+function openStored(fileId, name, fileName, view = 'iso') {
+  state.fileId = fileId;
+  state.fileName = fileName;
+  state.view = view;
+  $('file-name').textContent = name;
+  $('compare').disabled = false;
+  pressView(view);
+  remember();
+  renderFinal({ view, first: true });
+}
+
+async function loadFile(file) {
+  if (!file) return;
+  clearFrame();
+  state.file = file;
+  state.fileId = null;
+  $('compare').disabled = true;
+  const label = `${file.name} (${(file.size / 1024).toFixed(0)} KiB)`;
+  $('file-name').textContent = `${label}: uploading…`;
+  remember();
+  try {
+    const stored = await storeFile(file);
+    if (state.file !== file) return;  // another file was picked meanwhile
+    openStored(stored.id, label, file.name);
+  } catch (error) {
+    if (state.file !== file) return;
+    state.file = null;
+    $('file-name').textContent = `${label}: not loaded`;
+    setStatus('The file could not be loaded.');
+    report(error);
+  }
+}
+
+// A link with #file=ID&view=V reopens that stored file without uploading it.
+async function openFromAddress() {
+  const params = new URLSearchParams(location.hash.slice(1));
+  const id = params.get('file');
+  if (!id) return;
+  const view = ['iso', 'front', 'back', 'left', 'right', 'top', 'bottom'].includes(params.get('view')) ? params.get('view') : 'iso';
+  try {
+    const stored = await storedFile(id);
+    openStored(stored.id, `${stored.filename} (${(stored.bytes / 1024).toFixed(0)} KiB, stored)`, stored.filename, view);
+  } catch (error) {
+    report(error);
+  }
 }
 
 function pressView(name) {
@@ -232,6 +293,7 @@ for (const b of document.querySelectorAll('button.view')) {
     state.view = b.dataset.view;
     state.camera = null;
     pressView(state.view);
+    remember();
     renderFinal({ view: state.view });
   });
 }
@@ -253,12 +315,13 @@ $('look').addEventListener('change', () => {
 
 bindInteraction(canvas, {
   move(change) {
-    if (!state.camera || !state.file) return;
+    if (!state.camera || !state.fileId) return;
     change(state.camera);
     state.view = null;
     state.dirty = true;
     pressView(null);
-    scheduler.submit({ file: state.file, final: false, camera: state.camera.toOption() });
+    remember();
+    scheduler.submit({ fileId: state.fileId, final: false, camera: state.camera.toOption() });
   },
   settle() {
     if (!state.dirty) return;
@@ -300,7 +363,7 @@ for (const method of COMPARED_METHODS) {
   $('compare-grid').append(column);
 }
 $('compare').addEventListener('click', async () => {
-  if (!state.file || !state.camera) return;
+  if (!state.fileId || !state.camera) return;
   const button = $('compare');
   button.disabled = true;
   button.textContent = 'Comparing…';
@@ -308,7 +371,7 @@ $('compare').addEventListener('click', async () => {
   try {
     for (const method of COMPARED_METHODS) {
       const job = { final: true, camera: state.camera.toOption(), override: { method } };
-      results[method] = (await render(state.file, requestOptions(job))).statistics;
+      results[method] = (await render(state.fileId, requestOptions(job))).statistics;
     }
     const { maxCount, maxK } = histogramBounds(results.proposed.newton.iteration_histogram, results.martin.newton.iteration_histogram);
     for (const [method, s] of Object.entries(results)) {
@@ -348,7 +411,8 @@ bindJobs({
 });
 bindConversions({
   form: $('convert-form'), file: $('convert-file'), format: $('convert-format'), result: $('convert-result'),
-  currentFile: () => state.file, report,
+  currentFile: () => (state.fileId ? { id: state.fileId, name: state.fileName } : null), report,
 });
 
+openFromAddress();
 document.body.dataset.ready = '1';

@@ -94,14 +94,18 @@ export function bindJobs({ form, files, list, renderOptions, report }) {
 export function bindConversions({ form, file, format, result, currentFile, report }) {
   form.addEventListener('submit', async (e) => {
     e.preventDefault();
-    const input = file.files[0] || currentFile();
+    // A file chosen here is uploaded; else the one on screen is named by its stored id.
+    const picked = file.files[0], stored = picked ? null : currentFile();
+    const input = picked || stored;
     if (!input) {
       report(new Error('Choose a file to convert (or load one to render first).'));
       return;
     }
     result.textContent = `Converting ${input.name}…`;
     try {
-      const res = await call('/v1/conversions', { method: 'POST', body: uploadForm(input, { format: format.value }), retry: true });
+      const request = picked ? { body: uploadForm(picked, { format: format.value }) }
+        : { body: JSON.stringify({ file_id: stored.id, format: format.value }), contentType: 'application/json' };
+      const res = await call('/v1/conversions', { method: 'POST', ...request, retry: true });
       const doc = await res.json();
       const name = dispositionName(res, input.name.replace(/\.[^.]*$/, '') + '.' + format.value);
       const blob = new Blob([base64Bytes(doc.data_base64)], { type: doc.content_type });

@@ -167,7 +167,8 @@ def step_upload(page, step_file):
     assert (px["width"], px["height"]) == (800, 600), px
     assert px["differ"] > 0.02 * px["width"] * px["height"], f"the image is (nearly) all background: {px}"
     stages = page.ev("[...document.querySelectorAll('#stages > div')].map(d => d.dataset.stage)")
-    assert "newton" in stages and "read" in stages, f"stage bar: {stages}"
+    # The import ran when the file was stored (POST /v1/files): its first frame finds the scene cached.
+    assert "newton" in stages and "preliminary_map" in stages, f"stage bar: {stages}"
     return px
 
 
@@ -457,10 +458,83 @@ def step_problem_shown(page, tmp):
     bad = pathlib.Path(tmp, "not-a-cad-file.step")
     bad.write_text("hello, this is not STEP\n")
     page.scroll_to("file")
+    page.ev("document.getElementById('messages').replaceChildren()")
     page.set_files("file", [bad])
     text = page.b.wait_for("document.getElementById('messages').textContent", 30, "an error message")
     log(f"problem shown: {text}")
     assert "unsupported_format" in text and "HTTP 415" in text, text
+
+
+def step_upload_once(page):
+    """The file went up once (POST /v1/files); every frame since named it by id: no
+    render request carried the file."""
+    sent = [e["params"]["request"] for e in page.b.events if e["method"] == "Network.requestWillBeSent"]
+    uploads = [r for r in sent if r["method"] == "POST" and r["url"].endswith("/v1/files")]
+    renders = [r for r in sent if r["url"].endswith(RENDERS)]
+    multipart = [r for r in renders if "multipart" in r["headers"].get("Content-Type", "")]
+    log(f"upload once: {len(uploads)} upload(s) for {len(renders)} render requests, {len(multipart)} of them multipart")
+    assert len(uploads) == 1 and len(renders) >= 10 and not multipart, (len(uploads), len(renders), len(multipart))
+
+
+def step_failed_load(page, tmp):
+    """A truncated STEP after a good file: the error shows, and nothing of the
+    last model stays on screen (image, stage times, read-out)."""
+    bad = pathlib.Path(tmp, "truncated.step")
+    bad.write_bytes(pathlib.Path("/usr/share/opencascade/data/step/screw.step").read_bytes()[:30000])
+    frames = page.frames()
+    cleared = int(page.ev("Number(document.getElementById('view').dataset.cleared || 0)"))
+    page.scroll_to("file")
+    page.ev("document.getElementById('messages').replaceChildren()")
+    page.set_files("file", [bad])
+    text = page.b.wait_for("document.getElementById('messages').textContent", 60, "an error message")
+    state = page.ev("""(() => {
+      const c = document.getElementById('view');
+      const px = c.width && c.height ? c.getContext('2d').getImageData(0, 0, c.width, c.height).data : [];
+      return {cleared: Number(c.dataset.cleared || 0), final: c.dataset.final, painted: px.some((v) => v !== 0),
+              stages: document.getElementById('stage-list').children.length,
+              hover: document.getElementById('hover').textContent, name: document.getElementById('file-name').textContent};
+    })()""")
+    log(f"failed load: {text!r}; {state}")
+    assert state["cleared"] > cleared and state["final"] != "1" and not state["painted"], state
+    assert state["stages"] == 0 and state["hover"] == "" and "truncated.step" in state["name"], state
+    assert page.frames() == frames, "a frame was shown for the failed file"
+
+
+def step_link_reopens(page):
+    """The address holds the stored file and the view: opening it in a new page
+    shows that file in that view without an upload."""
+    page.ev("document.querySelector('button.view[data-view=\"top\"]').click()")
+    page.b.wait_for("location.hash.includes('view=top')", 10, "the view in the address")
+    link = page.ev("location.href")
+    uploads = lambda: sum(1 for e in page.b.events if e["method"] == "Network.requestWillBeSent"
+                          and e["params"]["request"]["method"] == "POST"
+                          and e["params"]["request"]["url"].endswith("/v1/files"))
+    before = uploads()
+    page.b.call("Page.navigate", url="about:blank")
+    page.b.pump(0.3)
+    page.b.call("Page.navigate", url=link)
+    page.b.wait_for("document.body && document.body.dataset.ready === '1'", 30, "the page's modules")
+    page.wait_final_after(0)
+    pressed = page.ev("document.querySelector('button.view[aria-pressed=\"true\"]')?.dataset.view")
+    name = page.ev("document.getElementById('file-name').textContent")
+    log(f"link {link.split('#')[1][:24]}...: reopened {name!r} in view {pressed}, {uploads() - before} uploads")
+    assert pressed == "top" and "screw" in name and uploads() == before, (pressed, name)
+
+
+def step_narrow(page):
+    """At a phone's width (390 px) nothing is wider than the viewport."""
+    page.b.call("Emulation.setDeviceMetricsOverride", width=390, height=844, deviceScaleFactor=1, mobile=True)
+    page.b.pump(0.5)
+    m = page.ev("""(() => ({doc: document.documentElement.scrollWidth, view: window.innerWidth,
+      wide: [...document.querySelectorAll('body *')].filter((e) => e.getBoundingClientRect().right > window.innerWidth + 0.5)
+             .slice(0, 8).map((e) => e.id || e.className || e.tagName)}))()""")
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "narrow-390.png")
+    log(f"390 px layout: document {m['doc']} px wide in a {m['view']} px viewport; wider elements {m['wide']}")
+    page.b.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
+    page.b.pump(0.3)
+    assert m["doc"] <= m["view"], m
 
 
 def step_csp_enforced(page):
@@ -510,6 +584,9 @@ def main():
             browser.screenshot(SCREENSHOT)
             log(f"screenshot saved to {SCREENSHOT}")
             page.set_select("look", "shaded")
+        current = "upload once"; step_upload_once(page)
+        current = "link"; step_link_reopens(page)
+        current = "narrow"; step_narrow(page)
         current = "job"; step_job(page, [step_file, other_file], downloads)
         current = "conversion"; step_conversion(page)
         current = "accessibility"; step_accessibility(page)
@@ -520,6 +597,7 @@ def main():
             current = "300-face part"; step_big_part_latency(page, big_part)
         else:
             log("SKIPPED the latency on a ~300-face part: ../shared/models/step/box_sides.STEP is absent")
+        current = "failed load"; step_failed_load(page, tmp)
         current = "problem+json"; step_problem_shown(page, tmp)
         current = "CSP"; step_csp_enforced(page)  # last: the refusal is logged as an error
         log("all steps passed")
