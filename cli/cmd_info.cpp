@@ -11,6 +11,7 @@
 #include <map>
 
 #include "cli/commands.h"
+#include "core/io/assembly_tree_json.h"
 #include "importer/importer.h"
 #include "importer/isolated.h"
 #include "cli/validators.h"
@@ -21,24 +22,6 @@ namespace {
 using nlohmann::json;
 
 json vec_json(Vec3 v) { return json::array({v.x, v.y, v.z}); }
-
-// The assembly tree, depth first: a node names its parent by id.
-json parts_json(const Scene& scene) {
-    json parts = json::array();
-    for (const Part& p : scene.parts) {
-        const json color = p.has_color ? json::array({p.color.r, p.color.g, p.color.b}) : json(nullptr);
-        const json bbox =
-            p.bbox.empty() ? json(nullptr) : json{{"min", vec_json(p.bbox.lo)}, {"max", vec_json(p.bbox.hi)}};
-        parts.push_back({{"id", p.id},
-                         {"name", p.name},
-                         {"parent", p.parent < 0 ? json(nullptr) : json(scene.parts[static_cast<size_t>(p.parent)].id)},
-                         {"color", color},
-                         {"placement", p.placement},
-                         {"faces", p.faces},
-                         {"bbox", bbox}});
-    }
-    return parts;
-}
 
 // "  0/1/2  name  N faces  colour r,g,b  at (x, y, z)", indented by depth.
 void print_parts(const json& parts) {
@@ -128,7 +111,7 @@ json scene_summary(const Scene& scene, bool per_face, double total_ms) {
           {"mesh", scene.timings.mesh_ms},
           {"total", total_ms}}},
         {"warnings", scene.warnings},
-        {"parts", parts_json(scene)},
+        {"parts", assembly_tree_json(scene)},
     };
     if (per_face) {
         json faces = json::array();

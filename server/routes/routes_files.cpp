@@ -13,6 +13,7 @@
 
 #include "importer/importer.h"
 #include "core/error.h"
+#include "core/io/assembly_tree_json.h"
 #include "core/json_limits.h"
 #include "server/render/context.h"
 #include "server/http/etag.h"
@@ -39,7 +40,8 @@ std::string file_url(const std::string& id) { return "/v1/files/" + id; }
 
 // What the import found: faces, bodies, units, bounding box (mm), the
 // colours with how many faces each has (a face's own colour, else its
-// body's; linear RGB in [0,1] as imported), and the import's warnings.
+// body's; linear RGB in [0,1] as imported), the import's warnings, and the
+// assembly tree (the part ids and names renders' `parts` take).
 json import_summary(const Scene& scene) {
     std::map<std::tuple<float, float, float>, int> colors;
     for (const Face& f : scene.faces) {
@@ -56,8 +58,13 @@ json import_summary(const Scene& scene) {
     if (!scene.bbox.empty())
         bbox = {{"min", {scene.bbox.lo.x, scene.bbox.lo.y, scene.bbox.lo.z}},
                 {"max", {scene.bbox.hi.x, scene.bbox.hi.y, scene.bbox.hi.z}}};
-    return {{"faces", scene.faces.size()}, {"bodies", scene.bodies.size()}, {"units", scene.units}, {"bbox", bbox},
-            {"colors", color_list},        {"warnings", scene.warnings}};
+    return {{"faces", scene.faces.size()},
+            {"bodies", scene.bodies.size()},
+            {"units", scene.units},
+            {"bbox", bbox},
+            {"colors", color_list},
+            {"warnings", scene.warnings},
+            {"parts", assembly_tree_json(scene)}};
 }
 
 json file_json(const ServerContext& ctx, const StoredFile& f) {

@@ -329,3 +329,22 @@ def test_iges_is_sniffed_too(url):
     data = fresh(url, BEARING.read_bytes())
     f = stored(post_raw(url, "/v1/files", data, params={"filename": "bearing.step"}))
     assert f["format"] == "IGES" and f["summary"]["faces"] > 0
+
+
+def test_summary_lists_the_assembly_tree(url):
+    """A stored assembly's summary carries its tree: the ids and names renders' `parts` take."""
+    from conftest import MODELS
+    import pytest
+    as1 = MODELS / "step" / "as1-oc-214.stp"
+    if not as1.exists():
+        pytest.skip("../shared/models is absent: the assembly as1 is not there")
+    body = stored(upload(url, fresh(url, as1.read_bytes()), "as1.stp"), 201)
+    parts = body["summary"]["parts"]
+    names = {p["name"] for p in parts}
+    assert parts[0]["parent"] is None and "rod_1" in names and len(parts) > 10, parts[:3]
+    child = next(p for p in parts if p["name"] == "rod_1")
+    r = requests.post(
+        url + "/v1/renders", json={"file_id": body["id"], "width": 64, "height": 48, "parts": {"only": [child["id"]]}},
+        headers={"Accept": "application/json"}, timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    assert r.json()["statistics"]["parts"]["hidden_faces"] == body["summary"]["faces"] - child["faces"]
