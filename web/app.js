@@ -4,7 +4,8 @@
 // times, the method comparison, jobs and conversions. Only the public REST API
 // is used (api.js).
 
-import { apiKey, setApiKey, render, storeFile, storedFile, base64Bytes } from './api.js';
+import { apiKey, setApiKey, render, storeFile, storedFile, base64Bytes, saveBlob } from './api.js';
+import { CadControls } from './cad.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
 import { bindInteraction } from './interaction.js';
@@ -88,7 +89,7 @@ function requestOptions(job) {
   const { width, height } = fullSize();
   const d = job.final ? 1 : PREVIEW_DIVISOR;
   const image = job.final ? imageOptions() : previewLook(imageOptions());
-  const o = { ...image, ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
+  const o = { ...image, ...cad.options(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
   else o.view = job.view;
   if (job.aovs) o.aovs = aovsFor($('look').value);
@@ -104,8 +105,14 @@ function backgroundRgba() {
 // ---- frames -------------------------------------------------------------------
 async function send(job, signal) {
   const doc = await render(job.fileId, requestOptions(job), signal);
-  const bitmap = await createImageBitmap(new Blob([base64Bytes(doc.image_base64)], { type: doc.content_type }));
-  return { width: doc.width, height: doc.height, bitmap, aov: doc.aovs ? decodeAovs(doc.aovs) : null, stats: doc.statistics };
+  const blob = new Blob([base64Bytes(doc.image_base64)], { type: doc.content_type });
+  const bitmap = await createImageBitmap(blob);
+  return { width: doc.width, height: doc.height, blob, bitmap, aov: doc.aovs ? decodeAovs(doc.aovs) : null, stats: doc.statistics };
+}
+
+// The import's warnings beside the image (a face left empty, a healed loop).
+function showWarnings(list) {
+  $('warnings').replaceChildren(...(list || []).map((w) => Object.assign(document.createElement('li'), { textContent: w })));
 }
 
 function draw() {
@@ -142,6 +149,8 @@ function show(frame, job) {
   if (job.final) {
     state.frame = frame;
     draw();
+    showWarnings(frame.stats.warnings);
+    $('save-png').disabled = false;
     showStages($('stages'), $('stage-list'), frame.stats);
     canvas.dataset.final = '1';
     const s = frame.stats;
@@ -181,6 +190,21 @@ function busy(on, job) {
   busyTimer = setInterval(tick, 100);
 }
 
+// The CAD-view controls: a slider moving sends previews, its release the full frame.
+const cad = new CadControls($, {
+  preview: () => {
+    if (!state.fileId) return;
+    const job = { fileId: state.fileId, final: false };
+    if (!state.view && state.camera) job.camera = state.camera.toOption();
+    else job.view = state.view || 'iso';
+    scheduler.submit(job);
+  },
+  final: () => renderFinal(),
+});
+$('save-png').addEventListener('click', () => {
+  if (state.frame) saveBlob(state.frame.blob, `${(state.fileName || 'render').replace(/\.[^.]*$/, '')}.png`);
+});
+
 const scheduler = new RenderScheduler({
   send, show, busy,
   fail: (error) => { report(error); setStatus('The render failed.'); },
@@ -192,7 +216,9 @@ const scheduler = new RenderScheduler({
 function renderFinal(extra = {}) {
   if (!state.fileId) return;
   const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded', ...extra };
-  if (state.camera && !job.view) job.camera = state.camera.toOption();
+  // A named view still chosen is fitted again (explode, hidden parts change what
+  // it frames); after an orbit, the camera the user left.
+  if (!job.view && !state.view && state.camera) job.camera = state.camera.toOption();
   else job.view = job.view || state.view || 'iso';
   scheduler.submit(job);
 }
@@ -211,6 +237,9 @@ function clearFrame() {
   $('stage-list').replaceChildren();
   $('hover').textContent = '';
   $('legend').hidden = true;
+  showWarnings([]);
+  $('save-png').disabled = true;
+  cad.setModel(null);
   setStatus('');
 }
 
@@ -224,9 +253,10 @@ function remember() {
 }
 
 // A stored file on screen: its first frame, at `view`.
-function openStored(fileId, name, fileName, view = 'iso') {
+function openStored(fileId, name, fileName, summary, view = 'iso') {
   state.fileId = fileId;
   state.fileName = fileName;
+  cad.setModel(summary);
   state.view = view;
   $('file-name').textContent = name;
   $('compare').disabled = false;
@@ -247,7 +277,7 @@ async function loadFile(file) {
   try {
     const stored = await storeFile(file);
     if (state.file !== file) return;  // another file was picked meanwhile
-    openStored(stored.id, label, file.name);
+    openStored(stored.id, label, file.name, stored.summary);
   } catch (error) {
     if (state.file !== file) return;
     state.file = null;
@@ -265,7 +295,7 @@ async function openFromAddress() {
   const view = ['iso', 'front', 'back', 'left', 'right', 'top', 'bottom'].includes(params.get('view')) ? params.get('view') : 'iso';
   try {
     const stored = await storedFile(id);
-    openStored(stored.id, `${stored.filename} (${(stored.bytes / 1024).toFixed(0)} KiB, stored)`, stored.filename, view);
+    openStored(stored.id, `${stored.filename} (${(stored.bytes / 1024).toFixed(0)} KiB, stored)`, stored.filename, stored.summary, view);
   } catch (error) {
     report(error);
   }

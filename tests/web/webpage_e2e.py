@@ -521,6 +521,69 @@ def step_link_reopens(page):
     assert pressed == "top" and "screw" in name and uploads() == before, (pressed, name)
 
 
+def final_exchange(page, action, what):
+    """Runs `action` (JS), waits for the full-size frame; (options sent, statistics answered) of it."""
+    since, before = time.monotonic(), page.frames()
+    page.ev(action)
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    exchanges = render_exchanges(page, since)
+    assert exchanges, f"no render for {what}"
+    return exchanges[-1]
+
+
+def step_cad_views(page, assembly):
+    """An assembly: the parts panel lists its tree; hide, isolate and ghost a part; a section across Z
+    with caps, dragged along (previews while dragging, the exact frame on release); explode. Each
+    final frame's statistics say what the service did, and no request prepared the scene again."""
+    before = page.frames()
+    page.scroll_to("file")
+    page.set_files("file", [assembly])
+    page.wait_final_after(before)
+    parts = page.ev("[...document.querySelectorAll('#parts select')].map((s) => s.dataset.part)")
+    log(f"CAD views: parts panel {parts}")
+    assert len(parts) >= 3 and not page.ev("document.getElementById('parts-box').hidden"), parts
+    leaf = parts[-1]
+    set_part = lambda state: (f"(() => {{ const s = document.querySelector('#parts select[data-part=\"{leaf}\"]');"
+                              f" s.value = '{state}'; s.dispatchEvent(new Event('change')); }})()")
+    results = {}
+    for state, field in (("hide", "hidden_faces"), ("only", "hidden_faces"), ("ghost", "ghost_faces")):
+        options, stats = final_exchange(page, set_part(state), state)
+        results[state] = stats["parts"][field]
+        assert stats["parts"][field] > 0 and stats["timings_ms"].get("prepare", 0) == 0, (state, stats["parts"])
+        assert options is None or leaf in options["parts"][state], options
+    page.ev(set_part("shown"))
+    page.wait_final_after(page.frames() - 1)
+    _, stats = final_exchange(page, "(() => { const s = document.getElementById('section-axis'); s.value = '2';"
+                                    " s.dispatchEvent(new Event('change')); })()", "a section")
+    caps0 = stats["sections"]["cap_pixels"]
+    assert stats["sections"]["planes"] == 1 and caps0 > 0, stats["sections"]
+    since = time.monotonic()
+    before = page.frames()
+    for t in (0.45, 0.4, 0.35, 0.3):  # dragging the position slider: previews
+        page.ev(f"(() => {{ const r = document.getElementById('section-at'); r.value = '{t}';"
+                f" r.dispatchEvent(new Event('input')); }})()")
+        page.b.pump(0.15)
+    page.ev("document.getElementById('section-at').dispatchEvent(new Event('change'))")
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    drag_frames = render_exchanges(page, since)
+    previews = [st for o, st in drag_frames if st["width"] < 800]
+    log(f"section drag: {len(previews)} previews, then the full frame; caps {caps0} -> "
+        f"{drag_frames[-1][1]['sections']['cap_pixels']} pixels")
+    assert previews and drag_frames[-1][1]["width"] == 800 and drag_frames[-1][1]["sections"]["cap_pixels"] > 0
+    page.ev("(() => { const s = document.getElementById('section-axis'); s.value = '';"
+            " s.dispatchEvent(new Event('change')); })()")
+    page.wait_final_after(page.frames() - 1)
+    _, stats = final_exchange(page, "(() => { const r = document.getElementById('explode'); r.value = '0.5';"
+                                    " r.dispatchEvent(new Event('change')); })()", "explode")
+    log(f"explode 0.5: {stats['parts']['moved_faces']} faces moved, prepare {stats['timings_ms'].get('prepare', 0)} ms")
+    assert stats["parts"]["moved_faces"] > 0 and stats["timings_ms"].get("prepare", 0) == 0, stats["parts"]
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "cad-explode.png")
+
+
 def step_narrow(page):
     """At a phone's width (390 px) nothing is wider than the viewport."""
     page.b.call("Emulation.setDeviceMetricsOverride", width=390, height=844, deviceScaleFactor=1, mobile=True)
@@ -554,6 +617,7 @@ def step_csp_enforced(page):
 def main():
     step_file, other_file = map(pathlib.Path, sys.argv[1:3])
     big_part = pathlib.Path(sys.argv[3]) if len(sys.argv) > 3 and pathlib.Path(sys.argv[3]).is_file() else None
+    assembly = pathlib.Path(sys.argv[4]) if len(sys.argv) > 4 and pathlib.Path(sys.argv[4]).is_file() else None
     chromium = find_chromium()
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="nurbsrt-web-test-")
@@ -597,6 +661,10 @@ def main():
             current = "300-face part"; step_big_part_latency(page, big_part)
         else:
             log("SKIPPED the latency on a ~300-face part: ../shared/models/step/box_sides.STEP is absent")
+        if assembly:
+            current = "CAD views"; step_cad_views(page, assembly)
+        else:
+            log("SKIPPED the CAD views: no generated assembly given")
         current = "failed load"; step_failed_load(page, tmp)
         current = "problem+json"; step_problem_shown(page, tmp)
         current = "CSP"; step_csp_enforced(page)  # last: the refusal is logged as an error
