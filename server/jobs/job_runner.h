@@ -24,7 +24,6 @@
 
 namespace nurbsrt {
 class PreparedScene;
-struct Scene;
 }  // namespace nurbsrt
 
 namespace nurbsrt::server {
@@ -89,12 +88,15 @@ private:
     // scene, which every render of the file then uses.
     void run_file(const JobClaim& claim, const std::vector<int>& outputs,
                   const std::shared_ptr<std::atomic<bool>>& cancel);
-    // The file's child: its conversions stored, and its scene when `want_scene`.
-    // False when the file's work ends there (failed, canceled, the job deleted).
-    bool run_file_child(const JobClaim& claim, const std::string& input, const std::vector<const JobOutput*>& renders,
-                        const std::vector<const JobOutput*>& conversions, bool want_scene,
-                        const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
-                        std::shared_ptr<const Scene>& scene);
+    // The file's child: its conversions stored (or failed), and its scene
+    // prepared when `want_scene`. Throws when the file's work ends there: the
+    // import's error (its conversions failed with it, its renders are the
+    // caller's), or Error(canceled) when the job was canceled or deleted.
+    std::shared_ptr<const PreparedScene> run_file_child(const JobClaim& claim, const std::string& input,
+                                                        const std::vector<const JobOutput*>& conversions,
+                                                        bool want_scene,
+                                                        const std::shared_ptr<std::atomic<bool>>& cancel,
+                                                        FileRead& read);
     void run_render(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<const PreparedScene>& scene,
                     const FileRead& read, const std::shared_ptr<std::atomic<bool>>& cancel);
     // Fails the output with `e` (its message without the service's paths).

@@ -19,7 +19,8 @@ import zlib
 import pytest
 import requests
 
-from conftest import SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, sqlite_only, validate
+from conftest import (SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, post_raw, sqlite_only,
+                      validate)
 
 # Inputs: a large-ish IGES and a small STEP from ../shared/models, else OCCT's own data files.
 if MODELS.is_dir():
@@ -292,6 +293,8 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
         assert stats["reads"] == 2
         assert len({r["id"] for r in reads[:3]}) == 1 and len({r["id"] for r in reads[3:]}) == 1
         assert all(r["served"] == 3 and r["read_ms"] > 0 for r in reads)
+    # The job's own read made the renders' scenes: not from the cache.
+    assert [outs[k]["statistics"]["cache"] for k in (0, 6)] == ["miss", "miss"]
     assert png_size(download(url, outs[0])) == (48, 36)
     assert download(url, outs[7])[80:84] != b""  # STL: 80-byte header, then the triangle count
     assert download(url, outs[8])[:4] == b"glTF"
@@ -302,6 +305,24 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     assert all("read" not in o["statistics"] for o in cached)
     assert [o["report"]["read"]["served"] for o in again["outputs"] if o["state"] == "succeeded" and o["type"] ==
             "conversion"] == [1 if os.environ.get("NURBSRT_API_JOB_STORE") else 2] * 4
+
+
+def test_a_job_and_a_client_rendering_one_new_file_import_it_once(url):
+    """A job's file and a client's render of the same new bytes at the same time: the scene cache's single
+    flight imports it once for both, whoever comes first; the other finds it cached or waits for it."""
+    import concurrent.futures
+    data = BEARING.read_bytes() + b"\n" * random.randrange(1000, 5000)  # bytes no other test sends
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 40, "height": 30}}]}
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        client = pool.submit(post_raw, url, "/v1/renders", data, {"width": 40, "height": 30},
+                             {"Accept": "application/json"})
+        job = accepted(submit(url, [("bearing.iges", data)], spec))
+        render = client.result()
+    job = wait_finished(url, job["id"])
+    assert render.status_code == 200 and job["state"] == "succeeded", (render.text[:300], json.dumps(job)[:600])
+    caches = sorted([render.json()["statistics"]["cache"], job["outputs"][0]["statistics"]["cache"]])
+    assert caches == ["hit", "miss"], caches
+    assert job["statistics"]["reads"] == (1 if job["outputs"][0]["statistics"]["cache"] == "miss" else 0)
 
 
 # ---- listing --------------------------------------------------------------------------------------------
