@@ -186,7 +186,7 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
                 throw *result.scene_error;
             }
             prepared = std::make_shared<const PreparedScene>(
-                prepare(std::make_shared<const Scene>(std::move(*result.scene)), ctx_.config.render_threads));
+                prepare(std::make_shared<const Scene>(std::move(*result.scene)), kJobRenderThreads));
         } catch (const std::exception&) {
             scene_failure = std::current_exception();
         }
@@ -234,6 +234,12 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
     control.start = std::chrono::steady_clock::now();
     control.patient = true;
     control.scene = scene;
+    // One thread: the frame's arena then has no slot for oneTBB's workers, which
+    // are the process's, shared by every arena and not niced; the whole frame
+    // runs in the render's own thread, niced as this runner's (kJobNice), and
+    // the workers stay free for the clients' frames. The job's files still
+    // fill the cores: its lanes render and read side by side.
+    control.threads = kJobRenderThreads;
     // The callback may run after this job is gone (a canceled render stops
     // at its next block of rows): it holds the store, not `this`.
     auto last = std::make_shared<std::atomic<int>>(0);

@@ -37,6 +37,10 @@ struct ServerContext;
 // once while a large job runs (bench/fairness.sh), and the job still has them
 // whole when nothing else runs.
 inline constexpr int kJobNice = 10;
+// The threads of a job's frame and of its scene's preparation: 1, so that all
+// of that work runs in the job's own niced threads, never in oneTBB's shared
+// workers (job_file_run.cpp, run_render).
+inline constexpr int kJobRenderThreads = 1;
 
 // The one read of an input file that served some of a job's outputs: each
 // output's statistics or report names it, and the job's statistics count them.
