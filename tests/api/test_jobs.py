@@ -287,12 +287,10 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     stats = job["statistics"]
     assert stats["outputs"] == 9 and stats["succeeded"] == 6 and stats["failed"] == 3
     assert stats["artifact_bytes"] == sum(o["artifact"]["bytes"] for o in outs if o["state"] == "succeeded")
-    if os.environ.get("NURBSRT_API_JOB_STORE"):
-        assert stats["reads"] == 6  # claimed output by output: a read each
-    else:
-        assert stats["reads"] == 2
-        assert len({r["id"] for r in reads[:3]}) == 1 and len({r["id"] for r in reads[3:]}) == 1
-        assert all(r["served"] == 3 and r["read_ms"] > 0 for r in reads)
+    # With either store (PostgreSQL claims a file's outputs together).
+    assert stats["reads"] == 2
+    assert len({r["id"] for r in reads[:3]}) == 1 and len({r["id"] for r in reads[3:]}) == 1
+    assert all(r["served"] == 3 and r["read_ms"] > 0 for r in reads)
     # The job's own read made the renders' scenes: not from the cache.
     assert [outs[k]["statistics"]["cache"] for k in (0, 6)] == ["miss", "miss"]
     assert png_size(download(url, outs[0])) == (48, 36)
@@ -304,7 +302,7 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     assert all(o["state"] == "succeeded" and o["statistics"]["cache"] == "hit" for o in cached)
     assert all("read" not in o["statistics"] for o in cached)
     assert [o["report"]["read"]["served"] for o in again["outputs"] if o["state"] == "succeeded" and o["type"] ==
-            "conversion"] == [1 if os.environ.get("NURBSRT_API_JOB_STORE") else 2] * 4
+            "conversion"] == [2] * 4
 
 
 def test_a_job_and_a_client_rendering_one_new_file_import_it_once(url):
@@ -495,9 +493,9 @@ def test_delete_running_job(own_server):
     validate(body, "Job")
     assert body["state"] == "canceled" and body["error"]["code"] == "canceled"
     # The render is cut. Its file's conversion was written with the file's one read before the render began
-    # where the runner has the whole file (SQLite); claimed output by output (PostgreSQL), it had not run yet.
+    # (the runner claims a file's outputs together, with either store).
     assert body["outputs"][0]["state"] == "canceled"
-    assert body["outputs"][1]["state"] == ("canceled" if os.environ.get("NURBSRT_API_JOB_STORE") else "succeeded")
+    assert body["outputs"][1]["state"] == "succeeded"
     wait_gone(s.url, job["id"])
     check_problem(requests.get(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT), 404)
     deadline = time.monotonic() + 10
