@@ -157,7 +157,8 @@ try:
         job_files = [occt / n for n in ("step/screw.step", "iges/bearing.iges", "iges/hammer.iges", "step/linkrods.step")] * 2
     spec = {"outputs": [o for k in range(len(job_files)) for o in (
         {"file": k, "type": "render", "options": {"width": 400, "height": 300}},
-        {"file": k, "type": "conversion", "format": "stl"}, {"file": k, "type": "conversion", "format": "glb"})]}
+        {"file": k, "type": "conversion", "format": "stl"}, {"file": k, "type": "conversion", "format": "glb"})],
+        "force": True}  # the same job four times: each made anew, not served from the last one's artifacts
     job_small, job_times, job_idle = [], [], []
     for _ in range(4):
         # The same client alone just before: on a shared machine the load of other

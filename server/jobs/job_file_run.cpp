@@ -33,6 +33,17 @@ nlohmann::json file_read_json(const FileRead& read) {
     return {{"id", read.id}, {"file", read.file}, {"served", read.served}, {"read_ms", read.read_ms}};
 }
 
+// The result of an artifact an earlier job made, for this output that reuses
+// it: the same statistics or report (how it was made), without that job's
+// read (none served this job) and saying it was reused.
+nlohmann::json reused_result(const std::string& made) {
+    nlohmann::json result = nlohmann::json::parse(made, nullptr, false);
+    if (!result.is_object()) result = nlohmann::json::object();
+    result.erase("read");
+    result["reused"] = true;
+    return result;
+}
+
 std::string dump_result(const nlohmann::json& result) {
     return result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
@@ -61,13 +72,21 @@ nlohmann::json conversion_result(const ConvertReport& report, const FileResult& 
 
 void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
                           const std::shared_ptr<std::atomic<bool>>& cancel) {
+    const int file = job.outputs.at(static_cast<size_t>(indices.front())).file;
+    const std::string input = input_path(job.id, file);
+    // The file's digest: the key of its scene in the cache and of its artifacts for reuse.
+    std::string content_sha256;
+    try {
+        content_sha256 = sha256_hex(read_file_bytes(input));
+    } catch (const std::exception& e) {  // the stored input cannot be read: every output of it fails
+        for (const int index : indices) output_failed(job, job.outputs.at(static_cast<size_t>(index)), e);
+        return;
+    }
     std::vector<const JobOutput*> renders, conversions;
-    for (const int index : indices) {
+    for (const int index : reuse_artifacts(job, indices, content_sha256, cancel)) {
         const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
         (out.kind == OutputKind::render ? renders : conversions).push_back(&out);
     }
-    const int file = job.outputs.at(static_cast<size_t>(indices.front())).file;
-    const std::string input = input_path(job.id, file);
     // Ends quietly when the job was canceled or deleted, else fails `outs` with `e`.
     auto ended = [&](const std::vector<const JobOutput*>& outs, const std::exception& e) {
         const auto* error = dynamic_cast<const Error*>(&e);
@@ -79,13 +98,7 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     bool child_ran = false;
     std::shared_ptr<const PreparedScene> prepared;
     if (!renders.empty()) {
-        std::string key;
-        try {
-            key = scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{});
-        } catch (const std::exception& e) {  // the stored input cannot be read: every output of it fails
-            for (const int index : indices) output_failed(job, job.outputs.at(static_cast<size_t>(index)), e);
-            return;
-        }
+        const std::string key = scene_cache_key(content_sha256, ImportOptions{});
         // The cache's single flight: a scene already cached (a stored file
         // rendered before, another job's file) or being imported by another
         // user of the same bytes serves the renders without a read of this
@@ -96,7 +109,7 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
                 key,
                 [&] {
                     child_ran = true;
-                    return run_file_child(job, input, conversions, true, cancel, read);
+                    return run_file_child(job, input, conversions, true, cancel, read, content_sha256);
                 },
                 source);
             ctx_.metrics.count_cache(source != SceneCache::Source::loaded);
@@ -109,7 +122,7 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     if (!child_ran && !conversions.empty()) {
         FileRead conversions_read = read;
         try {
-            run_file_child(job, input, conversions, false, cancel, conversions_read);
+            run_file_child(job, input, conversions, false, cancel, conversions_read, content_sha256);
         } catch (const std::exception& e) {
             ended({}, e);  // its conversions are ended; nothing else is left to it
             return;
@@ -119,7 +132,7 @@ void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
     for (const JobOutput* out : renders) {
         if (cancel->load()) return;
         try {
-            run_render(job, *out, prepared, read, cancel);
+            run_render(job, *out, prepared, read, cancel, content_sha256);
         } catch (const std::exception& e) {
             ended({out}, e);
         }
@@ -130,7 +143,7 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
                                                                 const std::vector<const JobOutput*>& conversions,
                                                                 bool want_scene,
                                                                 const std::shared_ptr<std::atomic<bool>>& cancel,
-                                                                FileRead& read) {
+                                                                FileRead& read, const std::string& content_sha256) {
     const auto t0 = std::chrono::steady_clock::now();
     auto fail_all = [&](const std::exception& e) {
         for (const JobOutput* out : conversions) output_failed(job, *out, e);
@@ -211,7 +224,7 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
                 throw *c.error;
             }
             store_artifact(job, out, plan.conversions[i],
-                           dump_result(conversion_result(*c.report, result, queued, read)), cancel);
+                           dump_result(conversion_result(*c.report, result, queued, read)), cancel, content_sha256);
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) throw;
             output_failed(job, out, e);
@@ -225,7 +238,7 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
 
 void JobService::run_render(const JobClaim& job, const JobOutput& out,
                             const std::shared_ptr<const PreparedScene>& scene, const FileRead& read,
-                            const std::shared_ptr<std::atomic<bool>>& cancel) {
+                            const std::shared_ptr<std::atomic<bool>>& cancel, const std::string& content_sha256) {
     if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease))
         throw Error(ErrorCode::canceled, "the job was deleted");
     const RenderRequest r = parse_render_options(out.options_json);
@@ -263,7 +276,37 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
     // cannot tell, and would say hit.
     result["cache"] = read.id.empty() ? "hit" : "miss";
     if (!read.id.empty()) result["read"] = file_read_json(read);  // none: the scene was cached
-    store_artifact(job, out, partial, dump_result(result), cancel);
+    store_artifact(job, out, partial, dump_result(result), cancel, content_sha256);
+}
+
+std::vector<int> JobService::reuse_artifacts(const JobClaim& job, const std::vector<int>& indices,
+                                             const std::string& content_sha256,
+                                             const std::shared_ptr<std::atomic<bool>>& cancel) {
+    if (forced(job.id)) return indices;
+    std::vector<int> rest;
+    for (const int index : indices) {
+        const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
+        const std::string partial = partial_path(job, out);
+        const std::optional<std::string> made = reuse_.recall(ArtifactReuse::key(content_sha256, out), partial);
+        if (!made) {
+            rest.push_back(index);
+            continue;
+        }
+        try {
+            if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease)) {  // deleted
+                std::error_code ec;
+                std::filesystem::remove(partial, ec);
+                return {};
+            }
+            store_artifact(job, out, partial, dump_result(reused_result(*made)), cancel);
+        } catch (const Error& e) {
+            if (e.code() == ErrorCode::canceled && cancel->load()) return {};
+            output_failed(job, out, e);
+        } catch (const std::exception& e) {
+            output_failed(job, out, e);
+        }
+    }
+    return rest;
 }
 
 }  // namespace nurbsrt::server

@@ -296,8 +296,9 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     assert png_size(download(url, outs[0])) == (48, 36)
     assert download(url, outs[7])[80:84] != b""  # STL: 80-byte header, then the triangle count
     assert download(url, outs[8])[:4] == b"glTF"
-    # The same files again: the renders find their scenes cached (no read for them); the conversions read.
-    again = wait_finished(url, accepted(submit(url, files, spec))["id"])
+    # The same files again, made anew (force: no artifact reuse): the renders find their scenes cached (no read
+    # for them); the conversions read.
+    again = wait_finished(url, accepted(submit(url, files, {**spec, "force": True}))["id"])
     cached = [again["outputs"][k] for k in (0, 6)]
     assert all(o["state"] == "succeeded" and o["statistics"]["cache"] == "hit" for o in cached)
     assert all("read" not in o["statistics"] for o in cached)
@@ -321,6 +322,46 @@ def test_a_job_and_a_client_rendering_one_new_file_import_it_once(url):
     caches = sorted([render.json()["statistics"]["cache"], job["outputs"][0]["statistics"]["cache"]])
     assert caches == ["hit", "miss"], caches
     assert job["statistics"]["reads"] == (1 if job["outputs"][0]["statistics"]["cache"] == "miss" else 0)
+
+
+def test_an_output_made_before_is_reused_unless_forced(url):
+    """An output whose file bytes, type and options match an artifact an earlier job made is served from that
+    artifact (no read, no render or conversion; `reused: true`); other options, or `force: true`, make it anew.
+    The reused artifact outlives the job that made it."""
+    data = SCREW.read_bytes() + b"\n" * random.randrange(5000, 9000)  # bytes no other test sends
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 40, "height": 30}},
+                        {"file": 0, "type": "conversion", "format": "stl"}]}
+    first = wait_finished(url, accepted(submit(url, [("screw.step", data)], spec))["id"])
+    assert first["state"] == "succeeded", json.dumps(first)[:600]
+    assert first["statistics"]["reused"] == 0 and first["statistics"]["reads"] == 1
+    assert not any((o.get("statistics") or o["report"]).get("reused") for o in first["outputs"])
+
+    again = wait_finished(url, accepted(submit(url, [("again.step", data)], spec))["id"])
+    assert again["state"] == "succeeded", json.dumps(again)[:600]
+    assert again["statistics"]["reused"] == 2 and again["statistics"]["reads"] == 0
+    render, stl = again["outputs"]
+    assert render["statistics"]["reused"] is True and stl["report"]["reused"] is True
+    assert "read" not in render["statistics"] and "read" not in stl["report"]
+    assert stl["report"]["output_format"] == "STL"  # the report of the run that made it
+    for a, b in zip(first["outputs"], again["outputs"]):
+        assert download(url, a) == download(url, b)
+        assert a["artifact"]["bytes"] == b["artifact"]["bytes"]
+
+    # Other options of the same file: made anew; force: made anew although the same were made before.
+    other = {"outputs": [{"file": 0, "type": "render", "options": {"width": 41, "height": 30}}]}
+    changed = wait_finished(url, accepted(submit(url, [("screw.step", data)], other))["id"])
+    assert changed["statistics"]["reused"] == 0 and "reused" not in changed["outputs"][0]["statistics"]
+    forced = wait_finished(url, accepted(submit(url, [("screw.step", data)], {**spec, "force": True}))["id"])
+    assert forced["state"] == "succeeded" and forced["statistics"]["reused"] == 0
+    assert forced["statistics"]["reads"] == 1
+
+    # The job that made them deleted: the artifact is still served to a new job, and the last one keeps its own.
+    assert requests.delete(f"{url}/v1/jobs/{first['id']}", timeout=TIMEOUT).status_code in (200, 204)
+    third = wait_finished(url, accepted(submit(url, [("third.step", data)], spec))["id"])
+    assert third["statistics"]["reused"] == 2
+    assert png_size(download(url, third["outputs"][0])) == (40, 30)
+    assert download(url, again["outputs"][1]) == download(url, third["outputs"][1])
+    check_problem(submit(url, [("screw.step", data)], {**spec, "force": "yes"}), 400)
 
 
 # ---- listing --------------------------------------------------------------------------------------------
@@ -599,8 +640,9 @@ def test_random_sigkills_fail_no_job(own_server, tmp_path):
     rng = random.Random(46)  # the kill moments vary the same way in every run
     data = tmp_path / "data"
     args = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
+    # force: 24 jobs of one file and one spec, each made anew (else all but the first reuse its artifacts).
     spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 640, "height": 480, "edges": True}},
-                        {"file": 0, "type": "conversion", "format": "stl"}] * 3}
+                        {"file": 0, "type": "conversion", "format": "stl"}] * 3, "force": True}
     s = own_server(args=args, data_dir=data)
     ids = [accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))["id"] for _ in range(24)]
 
