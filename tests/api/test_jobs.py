@@ -518,6 +518,30 @@ def test_job_limits_and_queue_bound(own_server):
     requests.delete(f"{s.url}/v1/jobs/{running['id']}", timeout=TIMEOUT)
 
 
+# ---- results as they come ---------------------------------------------------------------------------------
+
+def test_an_artifact_downloads_as_soon_as_its_output_is_done(own_server):
+    """While a job still runs (a slow render), its finished output is listed with its URL and downloads, and the
+    job's statistics count the outputs done and their bytes so far."""
+    s = own_server(args=["--workers", "1", "--job-runners", "1", "--render-threads", "1"])
+    spec = {"outputs": [{"file": 0, "type": "conversion", "format": "stl"},
+                        {"file": 0, "type": "render", "options": SLOW_RENDER}], "force": True}
+    job = accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))
+    job = wait_for(s.url, job["id"], lambda j: j["outputs"][0]["state"] == "succeeded",
+                   what="the conversion done")
+    assert job["state"] == "running" and job["outputs"][1]["state"] in ("queued", "running"), json.dumps(job)[:600]
+    stl = job["outputs"][0]
+    data = download(s.url, stl)
+    assert len(data) == 84 + 50 * struct.unpack("<I", data[80:84])[0]  # a whole binary STL
+    stats = job["statistics"]
+    assert (stats["outputs"], stats["succeeded"], stats["failed"]) == (2, 1, 0)
+    assert stats["artifact_bytes"] == stl["artifact"]["bytes"] == len(data)
+    assert 0.5 <= job["progress"] < 1
+    # The render's artifact is not there yet: 404 naming its state.
+    check_problem(requests.get(f"{s.url}/v1/jobs/{job['id']}/artifacts/0-render-1.png", timeout=TIMEOUT), 404)
+    assert requests.delete(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT).status_code == 202
+
+
 # ---- DELETE of a running job -------------------------------------------------------------------------------
 
 def test_delete_running_job(own_server):
