@@ -18,7 +18,8 @@
 # heavy renders' wall time alone and mixed (growth %), the queue waits, the
 # service's peak RSS (VmHWM) against its budget, and estimate vs measured.
 # Environment: HEAVY_SIZE (1600x1200), HEAVY_DEGREE (9), HEAVY_POLES (200),
-# BUDGET_MB (4096), THINK_MS (250), SMALL_MODEL (OCCT's screw.step).
+# BUDGET_MB (4096), THINK_MS (250), SMALL_MODEL (OCCT's screw.step), ONLY=job (the job phase
+# alone, a few minutes shorter: for measuring that case again and again).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${1:-build}
@@ -36,6 +37,7 @@ poles = int(os.environ.get("HEAVY_POLES", "200"))
 budget_mb = int(os.environ.get("BUDGET_MB", "4096"))
 think = float(os.environ.get("THINK_MS", "250")) / 1000
 small_model = pathlib.Path(os.environ.get("SMALL_MODEL", "/usr/share/opencascade/data/step/screw.step"))
+only_job = os.environ.get("ONLY") == "job"
 
 tmp = pathlib.Path(tempfile.mkdtemp(prefix="nurbsrt-fairness-"))
 heavy_path = tmp / "heavy.step"
@@ -90,13 +92,7 @@ def heavy_pair():
     for t in ts: t.join()
     return res
 
-try:
-    # Warm the cache (import + prepare once) and the GL contexts.
-    for data in (small, heavy):
-        dt, st, code, msg = render(data, 64, 48)
-        assert code == 200, (code, msg)
-    base_rss = vm("VmRSS")
-
+def idle_and_heavy_phases():
     idle = []
     c0 = cpu()
     for _ in range(20):
@@ -122,7 +118,33 @@ try:
         mixed += pair
         mixed_small += got
     peak_heavy = vm("VmHWM")
+    return idle, alone, mixed, mixed_small, cpu_heavy, cpu_small, peak_heavy
 
+def burst_phase():
+    # Concurrency phase: 16 clients at once, small and heavy frames of three sizes.
+    sizes = [(320, 240), (1024, 768), (1600, 1200)]
+    burst = [None] * 16
+    def one(i):
+        burst[i] = render(heavy if i % 2 else small, *sizes[i % 3])
+    ts = [threading.Thread(target=one, args=(i,)) for i in range(16)]
+    t_burst = time.monotonic()
+    for t in ts: t.start()
+    for t in ts: t.join()
+    t_burst = time.monotonic() - t_burst
+    peak = vm("VmHWM")
+    return burst, t_burst, peak
+
+try:
+    # Warm the cache (import + prepare once) and the GL contexts.
+    for data in (small, heavy):
+        dt, st, code, msg = render(data, 64, 48)
+        assert code == 200, (code, msg)
+    base_rss = vm("VmRSS")
+
+    idle, alone, mixed, mixed_small, cpu_heavy, cpu_small = [], [], [], [], [], 0.0
+    peak_heavy = 0.0
+    if not only_job:
+        idle, alone, mixed, mixed_small, cpu_heavy, cpu_small, peak_heavy = idle_and_heavy_phases()
     # A large job running: the small client renders while it runs (4 times: a job takes seconds).
     models = pathlib.Path.cwd() / ".." / "shared" / "models"  # the script runs from the repository root
     names = ["step/trj8_b1-ec-214.stp", "step/linkrods.step", "iges/bearing.iges", "iges/hammer.iges",
@@ -135,7 +157,8 @@ try:
         job_files = [occt / n for n in ("step/screw.step", "iges/bearing.iges", "iges/hammer.iges", "step/linkrods.step")] * 2
     spec = {"outputs": [o for k in range(len(job_files)) for o in (
         {"file": k, "type": "render", "options": {"width": 400, "height": 300}},
-        {"file": k, "type": "conversion", "format": "stl"}, {"file": k, "type": "conversion", "format": "glb"})]}
+        {"file": k, "type": "conversion", "format": "stl"}, {"file": k, "type": "conversion", "format": "glb"})],
+        "force": True}  # the same job four times: each made anew, not served from the last one's artifacts
     job_small, job_times, job_idle = [], [], []
     for _ in range(4):
         # The same client alone just before: on a shared machine the load of other
@@ -160,29 +183,20 @@ try:
         assert job["state"] == "succeeded", json.dumps(job)[:400]
         job_small += got
 
-    # Concurrency phase: 16 clients at once, small and heavy frames of three sizes.
-    sizes = [(320, 240), (1024, 768), (1600, 1200)]
-    burst = [None] * 16
-    def one(i):
-        burst[i] = render(heavy if i % 2 else small, *sizes[i % 3])
-    ts = [threading.Thread(target=one, args=(i,)) for i in range(16)]
-    t_burst = time.monotonic()
-    for t in ts: t.start()
-    for t in ts: t.join()
-    t_burst = time.monotonic() - t_burst
-    peak = vm("VmHWM")
-
+    burst, t_burst, peak = [], 0.0, vm("VmHWM")
+    if not only_job:
+        burst, t_burst, peak = burst_phase()
     ok = lambda xs: [x for x in xs if x[2] == 200]
     lat = lambda xs: [x[0] for x in ok(xs)]
     q = lambda xs: [x[1]["timings_ms"].get("queue", 0) / 1000 for x in ok(xs)]
-    est = alone[0][1]["estimate"]
     print(f"machine: {os.cpu_count()} cores; budget {budget_mb} MiB; heavy degree {degree}, {poles}x{poles} poles, "
           f"{W}x{H}; small {small_model.name} 320x240, think {think*1000:.0f} ms")
-    print(f"small renders idle : n={len(ok(idle))} p50={pct(lat(idle),50)*1000:.0f} ms p99={pct(lat(idle),99)*1000:.0f} ms")
-    refused = [x for x in mixed_small if x[2] != 200]
-    print(f"small renders mixed: n={len(ok(mixed_small))} p50={pct(lat(mixed_small),50)*1000:.0f} ms "
-          f"p99={pct(lat(mixed_small),99)*1000:.0f} ms max={max(lat(mixed_small) or [0])*1000:.0f} ms "
-          f"queue p99={pct(q(mixed_small),99)*1000:.0f} ms refused={len(refused)} {[x[2] for x in refused][:5]}")
+    if not only_job:
+        print(f"small renders idle : n={len(ok(idle))} p50={pct(lat(idle),50)*1000:.0f} ms p99={pct(lat(idle),99)*1000:.0f} ms")
+        refused = [x for x in mixed_small if x[2] != 200]
+        print(f"small renders mixed: n={len(ok(mixed_small))} p50={pct(lat(mixed_small),50)*1000:.0f} ms "
+              f"p99={pct(lat(mixed_small),99)*1000:.0f} ms max={max(lat(mixed_small) or [0])*1000:.0f} ms "
+              f"queue p99={pct(q(mixed_small),99)*1000:.0f} ms refused={len(refused)} {[x[2] for x in refused][:5]}")
     print(f"small renders job  : n={len(ok(job_small))} p50={pct(lat(job_small),50)*1000:.0f} ms "
           f"p99={pct(lat(job_small),99)*1000:.0f} ms = {pct(lat(job_small),99)/pct(lat(job_idle),99):.2f}x the p99 "
           f"of the same client alone between the jobs (n={len(ok(job_idle))} p50={pct(lat(job_idle),50)*1000:.0f} ms "
@@ -197,25 +211,27 @@ try:
         print(f"  slowest with the job: {x[0]*1000:.0f} ms, stages over 2 ms: "
               + ", ".join(f"{k} {v:.0f}" for k, v in x[1]["timings_ms"].items() if v > 2 and k != "total")
               + f"; cache {x[1]['cache']}")
-    ha, hm = [x[0] for x in alone], [x[0] for x in mixed]
-    print("heavy renders alone: " + ", ".join(f"{t:.1f}" for t in ha) + " s; mixed: " +
-          ", ".join(f"{t:.1f}" for t in hm) + f" s; growth of the mean {100*(statistics.mean(hm)/statistics.mean(ha)-1):+.1f} %")
-    # The small client's own CPU is work the heavy renders must share the cores with:
-    # no scheduler can give it for free. What it costs them at best, as a growth:
-    share = len(mixed_small) / 2 * cpu_small / statistics.mean(cpu_heavy)
-    print(f"small client's CPU: {cpu_small*1000:.0f} ms per render, {len(mixed_small)/2:.0f} renders per mixed phase "
-          f"= {100*share:.1f} % of the heavy pair's {statistics.mean(cpu_heavy):.1f} CPU-s: the growth a perfect "
-          f"scheduler would show")
-    print(f"heavy estimate: {est['memory_mb']:.0f} MiB, {est['core_seconds']:.1f} core-s, priority {est['priority']}; "
-          f"measured {alone[0][1]['timings_ms']['total']/1000:.1f} s wall of 2 at once")
-    se = ok(idle)[0][1]["estimate"]
-    print(f"small estimate: {se['memory_mb']:.0f} MiB, {se['core_seconds']:.3f} core-s, priority {se['priority']}")
-    codes = sorted(x[2] for x in burst)
-    print(f"concurrency phase: 16 renders at once in {t_burst:.1f} s, statuses {codes}, "
-          f"max queue {max((x[1]['timings_ms'].get('queue', 0) for x in ok(burst)), default=0)/1000:.1f} s")
-    print(f"service RSS: base {base_rss:.0f} MiB, peak {peak_heavy:.0f} MiB after the heavy phases, "
-          f"{peak:.0f} MiB after the concurrency phase; budget {budget_mb} MiB "
-          f"({'under' if peak <= budget_mb else 'OVER'})")
+    if not only_job:
+        est = alone[0][1]["estimate"]
+        ha, hm = [x[0] for x in alone], [x[0] for x in mixed]
+        print("heavy renders alone: " + ", ".join(f"{t:.1f}" for t in ha) + " s; mixed: " +
+              ", ".join(f"{t:.1f}" for t in hm) + f" s; growth of the mean {100*(statistics.mean(hm)/statistics.mean(ha)-1):+.1f} %")
+        # The small client's own CPU is work the heavy renders must share the cores with:
+        # no scheduler can give it for free. What it costs them at best, as a growth:
+        share = len(mixed_small) / 2 * cpu_small / statistics.mean(cpu_heavy)
+        print(f"small client's CPU: {cpu_small*1000:.0f} ms per render, {len(mixed_small)/2:.0f} renders per mixed phase "
+              f"= {100*share:.1f} % of the heavy pair's {statistics.mean(cpu_heavy):.1f} CPU-s: the growth a perfect "
+              f"scheduler would show")
+        print(f"heavy estimate: {est['memory_mb']:.0f} MiB, {est['core_seconds']:.1f} core-s, priority {est['priority']}; "
+              f"measured {alone[0][1]['timings_ms']['total']/1000:.1f} s wall of 2 at once")
+        se = ok(idle)[0][1]["estimate"]
+        print(f"small estimate: {se['memory_mb']:.0f} MiB, {se['core_seconds']:.3f} core-s, priority {se['priority']}")
+        codes = sorted(x[2] for x in burst)
+        print(f"concurrency phase: 16 renders at once in {t_burst:.1f} s, statuses {codes}, "
+              f"max queue {max((x[1]['timings_ms'].get('queue', 0) for x in ok(burst)), default=0)/1000:.1f} s")
+        print(f"service RSS: base {base_rss:.0f} MiB, peak {peak_heavy:.0f} MiB after the heavy phases, "
+              f"{peak:.0f} MiB after the concurrency phase; budget {budget_mb} MiB "
+              f"({'under' if peak <= budget_mb else 'OVER'})")
 finally:
     proc.send_signal(signal.SIGTERM)
     try:

@@ -14,8 +14,9 @@ import requests
 
 ADMIN = os.environ["NURBSRT_TEST_PG_ADMIN"]
 SCREW = pathlib.Path("/usr/share/opencascade/data/step/screw.step").read_bytes()
+# force: the same file and spec every time, each job made anew (no artifact reuse).
 SPEC = {"outputs": [{"file": 0, "type": "render", "options": {"width": 320, "height": 240}},
-                    {"file": 0, "type": "conversion", "format": "iges"}]}
+                    {"file": 0, "type": "conversion", "format": "iges"}], "force": True}
 
 
 def start(n, store, tmp):

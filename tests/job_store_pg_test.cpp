@@ -23,17 +23,19 @@ std::string url() {
     return u ? u : "";
 }
 
-JobRecord make_job(const std::string& id, int outputs) {
+// A job of `files` inputs whose outputs take the files in turn (output i of file i % files).
+JobRecord make_job(const std::string& id, int outputs, int files = 1) {
     JobRecord j;
     j.id = id;
     j.created_ms = 1000;
-    j.inputs.push_back({0, "part.step", "STEP", 10});
+    for (int f = 0; f < files; ++f) j.inputs.push_back({f, "part.step", "STEP", 10});
     for (int i = 0; i < outputs; ++i) {
         JobOutput o;
         o.index = i;
+        o.file = i % files;
         o.kind = OutputKind::conversion;
         o.options_json = R"({"format":"iges"})";
-        o.artifact = "0-conversion-" + std::to_string(i) + ".igs";
+        o.artifact = std::to_string(o.file) + "-conversion-" + std::to_string(i) + ".igs";
         o.content_type = "model/iges";
         j.outputs.push_back(o);
     }
@@ -52,25 +54,31 @@ protected:
 };
 
 TEST_F(PgJobStoreTest, ClaimsSkipEachOtherAndTheLastFinishes) {
-    JobRecord j = make_job(std::string(32, 'a'), 2);
+    // Two files of two outputs each: a claim takes one file's outputs (one read of it serves them).
+    JobRecord j = make_job(std::string(32, 'a'), 4, 2);
     a_->create(j);
     auto ca = a_->claim_next(2000), cb = b_->claim_next(2000);
     ASSERT_TRUE(ca && cb);
-    EXPECT_EQ(ca->run, std::vector<int>{0});
-    EXPECT_EQ(cb->run, std::vector<int>{1});
+    EXPECT_EQ(ca->run, (std::vector<int>{0, 2}));
+    EXPECT_EQ(cb->run, (std::vector<int>{1, 3}));
     EXPECT_NE(ca->lease, cb->lease);
     EXPECT_FALSE(a_->claim_next(2000));  // nothing left
     EXPECT_EQ(a_->get(j.id)->state, JobState::running);
-    ASSERT_TRUE(a_->output_running(j.id, 0, 2100, ca->lease));
+    for (const int k : {0, 2}) ASSERT_TRUE(a_->output_running(j.id, k, 2100, ca->lease));
     EXPECT_FALSE(a_->output_succeeded(j.id, 0, 5, "", 2200, cb->lease));  // not its lease
     ASSERT_TRUE(a_->output_succeeded(j.id, 0, 5, "", 2200, ca->lease));
-    EXPECT_EQ(a_->finish(j.id, 2300), std::optional<JobState>(JobState::running));  // output 1 still runs on b
-    ASSERT_TRUE(b_->output_running(j.id, 1, 2400, cb->lease));
+    EXPECT_TRUE(a_->renew(*ca));  // output 2 still holds the claim's lease
+    ASSERT_TRUE(a_->output_succeeded(j.id, 2, 5, "", 2250, ca->lease));
+    EXPECT_FALSE(a_->renew(*ca));                                                   // nothing of it left open
+    EXPECT_EQ(a_->finish(j.id, 2300), std::optional<JobState>(JobState::running));  // file 1 still runs on b
+    for (const int k : {1, 3}) ASSERT_TRUE(b_->output_running(j.id, k, 2400, cb->lease));
+    ASSERT_TRUE(b_->output_succeeded(j.id, 3, 5, "", 2450, cb->lease));
     ASSERT_TRUE(b_->output_failed(j.id, 1, "unreadable_file", "bad", 2500, cb->lease));
     EXPECT_EQ(b_->finish(j.id, 2600), std::optional<JobState>(JobState::failed));
     const auto done = a_->get(j.id);
     EXPECT_EQ(done->error_code, "unreadable_file");
     EXPECT_EQ(done->outputs[0].state, JobState::succeeded);
+    EXPECT_EQ(done->outputs[2].state, JobState::succeeded);
 }
 
 TEST_F(PgJobStoreTest, ExpiredLeaseIsTakenOverAndTheStaleRunIsFenced) {

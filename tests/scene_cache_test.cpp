@@ -135,6 +135,46 @@ TEST(SceneCache, FailedLoadReachesEveryWaiterAndIsNotCached) {
     EXPECT_EQ(loads.load(), before + 1);
 }
 
+TEST(SceneCache, AWaiterLoadsItselfWhenTheLoaderGaveUp) {
+    // The first caller's load ends canceled (its client left); the caller that
+    // waited for it must not inherit that: it loads the scene itself.
+    SceneCache cache(size_t(64) << 20);
+    std::atomic<bool> first_started{false};
+    std::atomic<int> loads{0};
+    SceneCache::Source first_source{}, second_source{};
+    bool first_canceled = false;
+    std::thread first([&] {
+        try {
+            cache.get_or_load(
+                "k",
+                [&]() -> std::shared_ptr<const PreparedScene> {
+                    ++loads;
+                    first_started = true;
+                    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+                    throw Error(ErrorCode::canceled, "the client left");
+                },
+                first_source);
+        } catch (const Error& e) {
+            first_canceled = e.code() == ErrorCode::canceled;
+        }
+    });
+    while (!first_started) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const auto got = cache.get_or_load(
+        "k",
+        [&] {
+            ++loads;
+            return scene_with_faces(2);
+        },
+        second_source);
+    first.join();
+    EXPECT_TRUE(first_canceled);
+    ASSERT_NE(got, nullptr);
+    EXPECT_EQ(got->scene().faces.size(), 2u);
+    EXPECT_EQ(second_source, SceneCache::Source::loaded);
+    EXPECT_EQ(loads.load(), 2);
+    EXPECT_EQ(cache.get("k"), got);
+}
+
 TEST(SceneCache, CountsThePreparedDataInItsBytes) {
     const std::shared_ptr<const PreparedScene> p = scene_with_faces(4);
     EXPECT_GT(p->memory_bytes(), 4 * sizeof(PreparedFace));  // the trim grids are counted

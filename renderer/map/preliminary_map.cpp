@@ -4,8 +4,14 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -527,6 +533,12 @@ namespace {
 // Idle MapRenderers (see the thread rules in the header). Deliberately never
 // destroyed: contexts outlive every render, and destroying OSMesa contexts from a
 // static destructor would race with Mesa's own teardown at exit.
+// Pooled by the niceness of the thread that made the renderer: llvmpipe starts
+// a context's rasterizer threads with it, and they keep the niceness of that
+// thread (Linux's nice is per thread, inherited at creation). A context made
+// by a niced batch render would draw an interactive frame's map at the batch's
+// niceness, and the other way round; so a thread takes a renderer of its own
+// niceness, or makes one.
 class MapRendererPool {
 public:
     size_t idle() {
@@ -534,24 +546,41 @@ public:
         return idle_.size();
     }
     std::unique_ptr<MapRenderer> acquire() {
+        const int nice = current_nice();
         {
             std::lock_guard<std::mutex> lock(m_);
-            if (!idle_.empty()) {
-                std::unique_ptr<MapRenderer> r = std::move(idle_.back());
-                idle_.pop_back();
+            for (size_t i = idle_.size(); i-- > 0;) {
+                if (idle_[i].nice != nice) continue;
+                std::unique_ptr<MapRenderer> r = std::move(idle_[i].renderer);
+                idle_.erase(idle_.begin() + static_cast<std::ptrdiff_t>(i));
                 return r;
             }
         }
-        return std::make_unique<MapRenderer>();
+        auto r = std::make_unique<MapRenderer>();
+        std::lock_guard<std::mutex> lock(m_);
+        made_by_[r.get()] = nice;
+        return r;
     }
     void release(std::unique_ptr<MapRenderer> r) {
         std::lock_guard<std::mutex> lock(m_);
-        idle_.push_back(std::move(r));
+        const int nice = made_by_[r.get()];
+        idle_.push_back({nice, std::move(r)});
     }
 
 private:
+    static int current_nice() {
+        errno = 0;
+        const int n = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
+        return errno == 0 ? n : 0;
+    }
+    struct Idle {
+        int nice = 0;
+        std::unique_ptr<MapRenderer> renderer;
+    };
     std::mutex m_;
-    std::vector<std::unique_ptr<MapRenderer>> idle_;
+    std::vector<Idle> idle_;  // most recently released last
+    // The niceness each renderer was made at; renderers are never destroyed (nor is the pool).
+    std::map<const MapRenderer*, int> made_by_;
 };
 
 MapRendererPool& map_renderer_pool() {

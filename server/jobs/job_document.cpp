@@ -56,7 +56,7 @@ json job_json(const JobRecord& j) {
         files.push_back({{"index", in.index}, {"filename", in.filename}, {"format", in.format}, {"bytes", in.bytes}});
     json outputs = json::array();
     double progress = 0;
-    int succeeded = 0, failed = 0;
+    int succeeded = 0, failed = 0, reused = 0;
     int64_t artifact_bytes = 0;
     std::set<std::string> reads;  // the reads of input files that served the outputs so far
     for (const JobOutput& o : j.outputs) {
@@ -81,6 +81,7 @@ json job_json(const JobRecord& j) {
             if (result.is_object()) out[o.kind == OutputKind::render ? "statistics" : "report"] = result;
             if (result.is_object() && result.contains("read") && result["read"].contains("id"))
                 reads.insert(result["read"]["id"].dump());
+            if (result.is_object() && result.value("reused", false)) ++reused;
             ++succeeded;
             artifact_bytes += o.artifact_bytes;
         }
@@ -103,7 +104,8 @@ json job_json(const JobRecord& j) {
           {"succeeded", succeeded},
           {"failed", failed},
           {"artifact_bytes", artifact_bytes},
-          {"reads", reads.size()}}},
+          {"reads", reads.size()},
+          {"reused", reused}}},
         {"files", files},
         {"outputs", outputs}};
     if (!j.error_code.empty()) body["error"] = {{"code", j.error_code}, {"message", j.error_message}};

@@ -5,7 +5,6 @@
 // hands back the scene, which is prepared here once for all the file's renders.
 #include <nlohmann/json.hpp>
 
-#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <string>
@@ -34,6 +33,17 @@ nlohmann::json file_read_json(const FileRead& read) {
     return {{"id", read.id}, {"file", read.file}, {"served", read.served}, {"read_ms", read.read_ms}};
 }
 
+// The result of an artifact an earlier job made, for this output that reuses
+// it: the same statistics or report (how it was made), without that job's
+// read (none served this job) and saying it was reused.
+nlohmann::json reused_result(const std::string& made) {
+    nlohmann::json result = nlohmann::json::parse(made, nullptr, false);
+    if (!result.is_object()) result = nlohmann::json::object();
+    result.erase("read");
+    result["reused"] = true;
+    return result;
+}
+
 std::string dump_result(const nlohmann::json& result) {
     return result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
@@ -41,14 +51,12 @@ std::string dump_result(const nlohmann::json& result) {
 // A conversion's report as POST /v1/conversions answers it: its own stages
 // (read, mesh, write, verify: read is 0 where another output's use paid it)
 // and the child's share of the file's run.
-nlohmann::json conversion_result(const JobOutput& out, const ConvertReport& report, const FileResult& file,
-                                 StageClock stages, const FileRead& read) {
+nlohmann::json conversion_result(const ConvertReport& report, const FileResult& file, StageClock stages,
+                                 const FileRead& read) {
     add_conversion_stages(report, file.timings, stages);
     stages.mark("isolation");
-    std::string out_format = artifact_format(out.artifact);  // STEP, IGES, STL, ... as in POST /v1/conversions
-    for (char& ch : out_format) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
     nlohmann::json result = {{"input_format", format_name(report.in_format)},
-                             {"output_format", out_format},
+                             {"output_format", conversion_format_name(report.output)},
                              {"faces", report.faces},
                              {"warnings", report.warnings},
                              {"read", file_read_json(read)}};
@@ -64,77 +72,92 @@ nlohmann::json conversion_result(const JobOutput& out, const ConvertReport& repo
 
 void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
                           const std::shared_ptr<std::atomic<bool>>& cancel) {
+    const int file = job.outputs.at(static_cast<size_t>(indices.front())).file;
+    const std::string input = input_path(job.id, file);
+    // The file's digest: the key of its scene in the cache and of its artifacts for reuse.
+    std::string content_sha256;
+    try {
+        content_sha256 = sha256_hex(read_file_bytes(input));
+    } catch (const std::exception& e) {  // the stored input cannot be read: every output of it fails
+        for (const int index : indices) output_failed(job, job.outputs.at(static_cast<size_t>(index)), e);
+        return;
+    }
     std::vector<const JobOutput*> renders, conversions;
-    for (const int index : indices) {
+    for (const int index : reuse_artifacts(job, indices, content_sha256, cancel)) {
         const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
         (out.kind == OutputKind::render ? renders : conversions).push_back(&out);
     }
-    const int file = job.outputs.at(static_cast<size_t>(indices.front())).file;
-    const std::string input = input_path(job.id, file);
-    // A scene already cached (a stored file rendered before, another job's
-    // file) serves the renders without a read; the child then runs only for
-    // the conversions, and not at all without them.
-    std::string cache_key;
+    // Ends quietly when the job was canceled or deleted, else fails `outs` with `e`.
+    auto ended = [&](const std::vector<const JobOutput*>& outs, const std::exception& e) {
+        const auto* error = dynamic_cast<const Error*>(&e);
+        if (error && error->code() == ErrorCode::canceled && (cancel->load() || !store_->running(job.id))) return;
+        for (const JobOutput* out : outs) output_failed(job, *out, e);
+    };
+    FileRead read;  // the read that served the renders; none when their scene came from the cache
+    read.file = file;
+    bool child_ran = false;
     std::shared_ptr<const PreparedScene> prepared;
     if (!renders.empty()) {
+        const std::string key = scene_cache_key(content_sha256, ImportOptions{});
+        // The cache's single flight: a scene already cached (a stored file
+        // rendered before, another job's file) or being imported by another
+        // user of the same bytes serves the renders without a read of this
+        // file's own; else this file's child reads it, with its conversions.
+        SceneCache::Source source = SceneCache::Source::loaded;
         try {
-            cache_key = scene_cache_key(sha256_hex(read_file_bytes(input)), ImportOptions{});
-        } catch (const std::exception& e) {  // the stored input cannot be read: every output of it fails
-            for (const int index : indices) output_failed(job, job.outputs.at(static_cast<size_t>(index)), e);
-            return;
-        }
-        prepared = ctx_.cache.get(cache_key);
-    }
-    FileRead read;
-    read.file = file;
-    std::shared_ptr<const Scene> scene;
-    const bool cached = prepared != nullptr;
-    const bool want_scene = !renders.empty() && !cached;
-    if (want_scene || !conversions.empty()) {
-        if (!run_file_child(job, input, renders, conversions, want_scene, cancel, read, scene)) return;
-        if (renders.empty()) return;
-    }
-    if (cached) read = FileRead{};  // the child's read served only the conversions
-    if (!prepared) {
-        try {
-            prepared = std::make_shared<const PreparedScene>(prepare(std::move(scene), ctx_.config.render_threads));
-            // Later renders of the same bytes (a client's, another job's) find it cached.
-            ctx_.cache.put(cache_key, prepared);
+            prepared = ctx_.cache.get_or_load(
+                key,
+                [&] {
+                    child_ran = true;
+                    return run_file_child(job, input, conversions, true, cancel, read, content_sha256);
+                },
+                source);
+            ctx_.metrics.count_cache(source != SceneCache::Source::loaded);
         } catch (const std::exception& e) {
-            for (const JobOutput* out : renders) output_failed(job, *out, e);
+            ended(renders, e);  // the child's own failure already ended its conversions
+            if (child_ran) return;
+        }
+        if (source != SceneCache::Source::loaded) read.id.clear();  // no read of this file served them
+    }
+    if (!child_ran && !conversions.empty()) {
+        FileRead conversions_read = read;
+        try {
+            run_file_child(job, input, conversions, false, cancel, conversions_read, content_sha256);
+        } catch (const std::exception& e) {
+            ended({}, e);  // its conversions are ended; nothing else is left to it
             return;
         }
     }
+    if (!prepared) return;
     for (const JobOutput* out : renders) {
         if (cancel->load()) return;
         try {
-            run_render(job, *out, prepared, read, cancel);
-        } catch (const Error& e) {
-            if (e.code() == ErrorCode::canceled && (cancel->load() || !store_->running(job.id))) return;
-            output_failed(job, *out, e);
+            run_render(job, *out, prepared, read, cancel, content_sha256);
         } catch (const std::exception& e) {
-            output_failed(job, *out, e);
+            ended({out}, e);
         }
     }
 }
 
-bool JobService::run_file_child(const JobClaim& job, const std::string& input,
-                                const std::vector<const JobOutput*>& renders,
-                                const std::vector<const JobOutput*>& conversions, bool want_scene,
-                                const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
-                                std::shared_ptr<const Scene>& scene) {
+std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& job, const std::string& input,
+                                                                const std::vector<const JobOutput*>& conversions,
+                                                                bool want_scene,
+                                                                const std::shared_ptr<std::atomic<bool>>& cancel,
+                                                                FileRead& read, const std::string& content_sha256) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto fail_all = [&](const std::vector<const JobOutput*>& outs, const std::exception& e) {
-        for (const JobOutput* out : outs) output_failed(job, *out, e);
+    auto fail_all = [&](const std::exception& e) {
+        for (const JobOutput* out : conversions) output_failed(job, *out, e);
     };
     // The child takes an import slot, as a conversion or an uncached render
-    // does; accepted work waits for it as long as it takes, in its place.
+    // does, and keeps it while the scene is prepared (as imported_scene does);
+    // accepted work waits for it as long as it takes, in its place.
     const AdmissionWait patient{true, [&cancel] { return cancel->load(); }};
     std::shared_ptr<AdmissionGate::Ticket> ticket;
     try {
         ticket = admit(ctx_, ctx_.gate, 0, patient);
-    } catch (const Error& e) {
-        if (e.code() == ErrorCode::canceled && cancel->load()) return false;
+    } catch (const std::exception& e) {
+        const auto* error = dynamic_cast<const Error*>(&e);
+        if (!error || error->code() != ErrorCode::canceled || !cancel->load()) fail_all(e);
         throw;
     }
     StageClock queued(t0);  // no upload: the input is on disk
@@ -142,7 +165,8 @@ bool JobService::run_file_child(const JobClaim& job, const std::string& input,
     // A conversion runs from its child's start; a render from when its scene is
     // there (so a render's span is its frame, as for a cached scene).
     for (const JobOutput* out : conversions)
-        if (!store_->output_running(job.id, out->index, unix_now_ms(), job.lease)) return false;  // deleted
+        if (!store_->output_running(job.id, out->index, unix_now_ms(), job.lease))
+            throw Error(ErrorCode::canceled, "the job was deleted");
 
     FilePlan plan;
     plan.scene = want_scene;
@@ -155,17 +179,30 @@ bool JobService::run_file_child(const JobClaim& job, const std::string& input,
         result = process_file_isolated(input, plan, limits);
     } catch (const std::exception& e) {
         // Any failure of the child's run (not only an Error: reading its scene
-        // may throw bad_alloc) ends every output of the file, never leaves them running.
+        // may throw bad_alloc) ends every output of the file, never leaves them
+        // running: the conversions here, the renders by the caller.
         ticket.reset();
         std::error_code ec;
         for (const std::string& partial : plan.conversions) std::filesystem::remove(partial, ec);
         const auto* error = dynamic_cast<const Error*>(&e);
-        if (error && error->code() == ErrorCode::canceled && cancel->load()) return false;
+        if (error && error->code() == ErrorCode::canceled && cancel->load()) throw;
         ctx_.metrics.count_import_failure(error ? error_code_name(error->code()) : "internal");
-        // The file could not be read (or its child died): all its outputs fail with that.
-        if (want_scene) fail_all(renders, e);
-        fail_all(conversions, e);
-        return false;
+        fail_all(e);
+        throw;
+    }
+    std::shared_ptr<const PreparedScene> prepared;
+    std::exception_ptr scene_failure;
+    if (want_scene) {
+        try {
+            if (result.scene_error) {
+                ctx_.metrics.count_import_failure(error_code_name(result.scene_error->code()));
+                throw *result.scene_error;
+            }
+            prepared = std::make_shared<const PreparedScene>(
+                prepare(std::make_shared<const Scene>(std::move(*result.scene)), kJobRenderThreads));
+        } catch (const std::exception&) {
+            scene_failure = std::current_exception();
+        }
     }
     ticket.reset();
     read = FileRead{new_request_id(), read.file, result.uses, result.read_ms};
@@ -187,27 +224,21 @@ bool JobService::run_file_child(const JobClaim& job, const std::string& input,
                 throw *c.error;
             }
             store_artifact(job, out, plan.conversions[i],
-                           dump_result(conversion_result(out, *c.report, result, queued, read)), cancel);
+                           dump_result(conversion_result(*c.report, result, queued, read)), cancel, content_sha256);
         } catch (const Error& e) {
-            if (e.code() == ErrorCode::canceled && cancel->load()) return false;
+            if (e.code() == ErrorCode::canceled && cancel->load()) throw;
             output_failed(job, out, e);
         } catch (const std::exception& e) {
             output_failed(job, out, e);
         }
     }
-    if (!want_scene) return true;
-    if (result.scene_error) {
-        ctx_.metrics.count_import_failure(error_code_name(result.scene_error->code()));
-        fail_all(renders, *result.scene_error);
-        return false;
-    }
-    scene = std::make_shared<const Scene>(std::move(*result.scene));
-    return true;
+    if (scene_failure) std::rethrow_exception(scene_failure);
+    return prepared;
 }
 
 void JobService::run_render(const JobClaim& job, const JobOutput& out,
                             const std::shared_ptr<const PreparedScene>& scene, const FileRead& read,
-                            const std::shared_ptr<std::atomic<bool>>& cancel) {
+                            const std::shared_ptr<std::atomic<bool>>& cancel, const std::string& content_sha256) {
     if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease))
         throw Error(ErrorCode::canceled, "the job was deleted");
     const RenderRequest r = parse_render_options(out.options_json);
@@ -216,6 +247,12 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
     control.start = std::chrono::steady_clock::now();
     control.patient = true;
     control.scene = scene;
+    // One thread: the frame's arena then has no slot for oneTBB's workers, which
+    // are the process's, shared by every arena and not niced; the whole frame
+    // runs in the render's own thread, niced as this runner's (kJobNice), and
+    // the workers stay free for the clients' frames. The job's files still
+    // fill the cores: its lanes render and read side by side.
+    control.threads = kJobRenderThreads;
     // The callback may run after this job is gone (a canceled render stops
     // at its next block of rows): it holds the store, not `this`.
     auto last = std::make_shared<std::atomic<int>>(0);
@@ -234,8 +271,42 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
     const std::string partial = partial_path(job, out);
     write_durably(partial, r.layout == ViewLayout::separate ? views_zip(image, r.format) : image.bytes);
     nlohmann::json result = statistics_json(image);
+    // The scene came from the cache (or another user's import of the same
+    // bytes) unless this file's own read made it: RenderControl::scene alone
+    // cannot tell, and would say hit.
+    result["cache"] = read.id.empty() ? "hit" : "miss";
     if (!read.id.empty()) result["read"] = file_read_json(read);  // none: the scene was cached
-    store_artifact(job, out, partial, dump_result(result), cancel);
+    store_artifact(job, out, partial, dump_result(result), cancel, content_sha256);
+}
+
+std::vector<int> JobService::reuse_artifacts(const JobClaim& job, const std::vector<int>& indices,
+                                             const std::string& content_sha256,
+                                             const std::shared_ptr<std::atomic<bool>>& cancel) {
+    if (forced(job.id)) return indices;
+    std::vector<int> rest;
+    for (const int index : indices) {
+        const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
+        const std::string partial = partial_path(job, out);
+        const std::optional<std::string> made = reuse_.recall(ArtifactReuse::key(content_sha256, out), partial);
+        if (!made) {
+            rest.push_back(index);
+            continue;
+        }
+        try {
+            if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease)) {  // deleted
+                std::error_code ec;
+                std::filesystem::remove(partial, ec);
+                return {};
+            }
+            store_artifact(job, out, partial, dump_result(reused_result(*made)), cancel);
+        } catch (const Error& e) {
+            if (e.code() == ErrorCode::canceled && cancel->load()) return {};
+            output_failed(job, out, e);
+        } catch (const std::exception& e) {
+            output_failed(job, out, e);
+        }
+    }
+    return rest;
 }
 
 }  // namespace nurbsrt::server

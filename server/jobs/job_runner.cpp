@@ -44,6 +44,8 @@ namespace {
 constexpr auto kReplaceBadUtf8 = nlohmann::json::error_handler_t::replace;
 
 std::string input_name(int index) { return "input-" + std::to_string(index) + ".cad"; }
+// Beside a job's inputs when its spec asked `force` (no artifact reuse).
+constexpr const char* kForceMarker = "force";
 
 // An error message for the client: the service's own paths (the job and
 // scratch directories) are cut out: job files keep their public names
@@ -55,7 +57,10 @@ std::string without_paths(const std::string& message, const std::string& dir, co
 }  // namespace
 
 JobService::JobService(ServerContext& ctx)
-    : ctx_(ctx), jobs_dir_(ctx.config.data_dir + "/jobs"), instance_(ctx.config.instance_id) {
+    : ctx_(ctx),
+      jobs_dir_(ctx.config.data_dir + "/jobs"),
+      instance_(ctx.config.instance_id),
+      reuse_(ctx.config.data_dir + "/reuse") {
     std::error_code ec;
     fs::create_directories(jobs_dir_, ec);
     if (ec || ::chmod(jobs_dir_.c_str(), 0700) != 0)
@@ -144,7 +149,7 @@ void JobService::stop() {
     webhooks_->stop();
 }
 
-void JobService::submit(JobRecord& job, const std::vector<const std::string*>& input_bytes) {
+void JobService::submit(JobRecord& job, const std::vector<const std::string*>& input_bytes, bool force) {
     // One submission at a time, so the queue bound holds exactly.
     std::lock_guard<std::mutex> submit_lock(submit_m_);
     if (store_->count_by_state()[JobState::queued] >= ctx_.config.max_queued_jobs)
@@ -157,6 +162,7 @@ void JobService::submit(JobRecord& job, const std::vector<const std::string*>& i
         fs::create_directory(dir);
         for (size_t i = 0; i < input_bytes.size(); ++i)
             write_durably(dir + "/" + input_name(static_cast<int>(i)), *input_bytes[i]);
+        if (force) write_durably(dir + "/" + kForceMarker, "");
         sync_dir(dir);
         sync_dir(jobs_dir_);
         store_->create(job);
@@ -199,6 +205,9 @@ int JobService::sweep() {
     // Stored files expire with the same retention, counted from their upload (pinned ones never).
     if (const int files = ctx_.files.expire(unix_now_ms() - retention_ms))
         log_event("files_expired", nlohmann::json{{"removed", files}}.dump());
+    // Artifacts kept for reuse likewise, counted from when they were made.
+    if (const int artifacts = reuse_.expire(unix_now_ms() - retention_ms))
+        log_event("reusable_artifacts_expired", nlohmann::json{{"removed", artifacts}}.dump());
     if (store_->shared()) sweep_shared_leftovers();
     return removed;
 }
@@ -413,6 +422,11 @@ void JobService::end_claim(const JobClaim& claim) {
     webhooks_->notify();  // its callback (if any) became due with the finish
 }
 
+bool JobService::forced(const std::string& id) const {
+    std::error_code ec;
+    return fs::exists(job_dir(id) + "/" + kForceMarker, ec);
+}
+
 std::string JobService::input_path(const std::string& id, int file) const {
     return job_dir(id) + "/" + input_name(file);
 }
@@ -439,7 +453,8 @@ void JobService::output_failed(const JobClaim& job, const JobOutput& out, const 
 }
 
 void JobService::store_artifact(const JobClaim& job, const JobOutput& out, const std::string& partial,
-                                const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel) {
+                                const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel,
+                                const std::string& content_sha256) {
     std::error_code ec;
     // A run whose lease was lost meanwhile leaves the artifact to the run that took over.
     if (!job.lease.empty() && !store_->renew(job)) {
@@ -459,8 +474,12 @@ void JobService::store_artifact(const JobClaim& job, const JobOutput& out, const
     if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
     sync_dir(job_dir(job.id));
     const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
-    if (!store_->output_succeeded(job.id, out.index, size, result_json, unix_now_ms(), job.lease) && !job.lease.empty())
-        log_event("job_output_fenced", nlohmann::json{{"job_id", job.id}, {"output", out.index}}.dump());
+    if (!store_->output_succeeded(job.id, out.index, size, result_json, unix_now_ms(), job.lease)) {
+        if (!job.lease.empty())
+            log_event("job_output_fenced", nlohmann::json{{"job_id", job.id}, {"output", out.index}}.dump());
+        return;
+    }
+    if (!content_sha256.empty()) reuse_.remember(ArtifactReuse::key(content_sha256, out), final_path, result_json);
 }
 
 }  // namespace nurbsrt::server

@@ -19,12 +19,12 @@
 #include <thread>
 #include <vector>
 
-#include "server/store/job_store.h"
+#include "server/jobs/artifact_reuse.h"
 #include "server/jobs/webhooks.h"
+#include "server/store/job_store.h"
 
 namespace nurbsrt {
 class PreparedScene;
-struct Scene;
 }  // namespace nurbsrt
 
 namespace nurbsrt::server {
@@ -38,6 +38,10 @@ struct ServerContext;
 // once while a large job runs (bench/fairness.sh), and the job still has them
 // whole when nothing else runs.
 inline constexpr int kJobNice = 10;
+// The threads of a job's frame and of its scene's preparation: 1, so that all
+// of that work runs in the job's own niced threads, never in oneTBB's shared
+// workers (job_file_run.cpp, run_render).
+inline constexpr int kJobRenderThreads = 1;
 
 // The one read of an input file that served some of a job's outputs: each
 // output's statistics or report names it, and the job's statistics count them.
@@ -66,9 +70,11 @@ public:
     // the queue without counting the run; a conversion child finishes first.
     void stop();
 
-    // Stores the inputs and queues the job (id and created time are set here).
+    // Stores the inputs and queues the job (id and created time are set here);
+    // `force`: its outputs are made anew, never served from an earlier job's
+    // artifact (kept as a file beside the inputs, so every instance sees it).
     // Throws Error(overloaded) when max_queued_jobs are already waiting.
-    void submit(JobRecord& job, const std::vector<const std::string*>& input_bytes);
+    void submit(JobRecord& job, const std::vector<const std::string*>& input_bytes, bool force = false);
     // DELETE: see JobStore::delete_job; a running job's render is canceled.
     JobStore::DeleteOutcome remove(const std::string& id);
     JobStore& store() { return *store_; }
@@ -89,22 +95,35 @@ private:
     // scene, which every render of the file then uses.
     void run_file(const JobClaim& claim, const std::vector<int>& outputs,
                   const std::shared_ptr<std::atomic<bool>>& cancel);
-    // The file's child: its conversions stored, and its scene when `want_scene`.
-    // False when the file's work ends there (failed, canceled, the job deleted).
-    bool run_file_child(const JobClaim& claim, const std::string& input, const std::vector<const JobOutput*>& renders,
-                        const std::vector<const JobOutput*>& conversions, bool want_scene,
-                        const std::shared_ptr<std::atomic<bool>>& cancel, FileRead& read,
-                        std::shared_ptr<const Scene>& scene);
+    // Serves the outputs an earlier job made already (artifact_reuse.h) and
+    // returns the rest. `content_sha256`: the file's.
+    std::vector<int> reuse_artifacts(const JobClaim& claim, const std::vector<int>& outputs,
+                                     const std::string& content_sha256,
+                                     const std::shared_ptr<std::atomic<bool>>& cancel);
+    // The file's child: its conversions stored (or failed), and its scene
+    // prepared when `want_scene`. Throws when the file's work ends there: the
+    // import's error (its conversions failed with it, its renders are the
+    // caller's), or Error(canceled) when the job was canceled or deleted.
+    std::shared_ptr<const PreparedScene> run_file_child(const JobClaim& claim, const std::string& input,
+                                                        const std::vector<const JobOutput*>& conversions,
+                                                        bool want_scene,
+                                                        const std::shared_ptr<std::atomic<bool>>& cancel,
+                                                        FileRead& read, const std::string& content_sha256);
     void run_render(const JobClaim& claim, const JobOutput& out, const std::shared_ptr<const PreparedScene>& scene,
-                    const FileRead& read, const std::shared_ptr<std::atomic<bool>>& cancel);
+                    const FileRead& read, const std::shared_ptr<std::atomic<bool>>& cancel,
+                    const std::string& content_sha256);
     // Fails the output with `e` (its message without the service's paths).
     void output_failed(const JobClaim& claim, const JobOutput& out, const std::exception& e);
     // Moves a written artifact (under its partial name) into place within the
-    // quota and records the output's success with `result`.
+    // quota and records the output's success with `result`; an artifact made
+    // here (`content_sha256` of its input given) is kept for reuse.
     void store_artifact(const JobClaim& claim, const JobOutput& out, const std::string& partial,
-                        const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel);
+                        const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel,
+                        const std::string& content_sha256 = {});
     std::string partial_path(const JobClaim& claim, const JobOutput& out) const;
     std::string input_path(const std::string& id, int file) const;
+    // Whether the job's spec asked `force` (no artifact reuse).
+    bool forced(const std::string& id) const;
     void end_claim(const JobClaim& claim);
     void remove_files(const std::string& id) const;
     std::string job_dir(const std::string& id) const;
@@ -127,7 +146,8 @@ private:
     uint64_t next_active_ = 0;
     std::vector<std::thread> runners_;
     std::thread sweeper_, heartbeat_;
-    std::unique_ptr<WebhookSender> webhooks_;  // callbacks of finished jobs (of any instance, with a shared store)
+    std::unique_ptr<WebhookSender> webhooks_;
+    ArtifactReuse reuse_;  // DATA_DIR/reuse  // callbacks of finished jobs (of any instance, with a shared store)
 };
 
 }  // namespace nurbsrt::server

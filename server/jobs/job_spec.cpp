@@ -50,8 +50,13 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
     const json j = parse_json_or_throw(job_json, kRequestJsonLimits, "the 'job' part");
     if (!j.is_object()) bad_spec("the 'job' part must be a JSON object");
     for (const auto& [key, v] : j.items())
-        if (key != "outputs" && key != "callback_url") bad_spec("unknown job field '" + key.substr(0, 64) + "'");
+        if (key != "outputs" && key != "callback_url" && key != "force")
+            bad_spec("unknown job field '" + key.substr(0, 64) + "'");
     JobSpec spec;
+    if (j.contains("force")) {
+        if (!j["force"].is_boolean()) bad_spec("'force' must be true or false");
+        spec.force = j["force"].get<bool>();
+    }
     if (j.contains("callback_url")) {
         if (!j["callback_url"].is_string()) bad_spec("'callback_url' must be a string (an http or https URL)");
         spec.callback_url = j["callback_url"].get<std::string>();

@@ -16,11 +16,13 @@ namespace nurbsrt::server {
 struct JobSpec {
     std::vector<JobOutput> outputs;
     std::string callback_url;  // empty: no webhook
+    // Make every output anew, even where an earlier job made the same artifact (artifact_reuse.h).
+    bool force = false;
 };
 
 // Parses `job_json` ({"outputs": [{"file": 0 | "name.igs", "type": "render",
 // "options": {...}} | {"file": ..., "type": "conversion", "format": "step"}],
-// "callback_url": "https://..."}) for these inputs. Throws
+// "callback_url": "https://...", "force": false}) for these inputs. Throws
 // Error(invalid_argument) naming the problem, Error(limit_exceeded) beyond
 // max_job_outputs or the image size limits. The outputs come back numbered,
 // with their artifact names and content types.

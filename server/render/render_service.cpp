@@ -230,7 +230,7 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     std::vector<Camera> cameras;
     for (const CameraSpec& spec : camera_specs_for(r, scene, options.hidden_faces, options.face_offsets))
         cameras.emplace_back(spec);
-    options.threads = ctx.config.render_threads;
+    options.threads = control.threads > 0 ? control.threads : ctx.config.render_threads;
     options.progress = control.progress;
     // A contact sheet's frames are estimated as one frame of all their pixels
     // (their buffers are alive together until the sheet is composed).

@@ -89,6 +89,8 @@ struct RenderControl {
     // The scene when the caller holds it already (a job's file, imported once
     // for all its outputs): no cache lookup and no import; counted as a hit.
     std::shared_ptr<const PreparedScene> scene;
+    // The frame's threads (RenderOptions::threads); 0: the service's --render-threads.
+    int threads = 0;
 };
 
 // The imported and prepared scene of `cad_bytes` (STEP/IGES, checked by

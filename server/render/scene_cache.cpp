@@ -66,7 +66,7 @@ void SceneCache::put(const std::string& key, std::shared_ptr<const PreparedScene
 std::shared_ptr<const PreparedScene> SceneCache::get_or_load(
     const std::string& key, const std::function<std::shared_ptr<const PreparedScene>()>& load, Source& source) {
     std::promise<std::shared_ptr<const PreparedScene>> promise;
-    {
+    for (bool loading = false; !loading;) {
         std::unique_lock<std::mutex> lock(m_);
         if (const auto it = index_.find(key); it != index_.end()) {
             lru_.splice(lru_.begin(), lru_, it->second);
@@ -77,18 +77,29 @@ std::shared_ptr<const PreparedScene> SceneCache::get_or_load(
             std::shared_future<std::shared_ptr<const PreparedScene>> pending = it->second;
             lock.unlock();
             source = Source::shared;
-            return pending.get();  // rethrows the loader's error
+            try {
+                return pending.get();  // rethrows the loader's error
+            } catch (const Error& e) {
+                // The loader's own caller gave up (a client gone, a job deleted),
+                // which says nothing of the file: look again, and load it if need be.
+                if (e.code() != ErrorCode::canceled) throw;
+                continue;
+            }
         }
         loading_.emplace(key, promise.get_future().share());
+        loading = true;
     }
     source = Source::loaded;
     std::shared_ptr<const PreparedScene> scene;
     try {
         scene = load();
     } catch (...) {
+        {
+            // Gone before the waiters wake: one that looks again (canceled) loads it anew.
+            std::lock_guard<std::mutex> lock(m_);
+            loading_.erase(key);
+        }
         promise.set_exception(std::current_exception());
-        std::lock_guard<std::mutex> lock(m_);
-        loading_.erase(key);
         throw;
     }
     put(key, scene);  // before the waiters wake, so a later caller finds it cached

@@ -47,7 +47,8 @@ public:
     // The cached scene, or else `load()` run once for all concurrent callers of
     // the same key ("single flight": N simultaneous first renders of one file
     // import it once); the result is put in the cache. When `load` throws, every
-    // caller waiting for it gets the same exception and nothing is cached.
+    // caller waiting for it gets the same exception and nothing is cached, except
+    // Error(canceled) (the loading caller gave up): a waiter then looks again.
     std::shared_ptr<const PreparedScene> get_or_load(const std::string& key,
                                                      const std::function<std::shared_ptr<const PreparedScene>()>& load,
                                                      Source& source);

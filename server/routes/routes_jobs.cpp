@@ -71,7 +71,7 @@ void handle_job_submit(ServerContext& ctx, const httplib::Request& req, httplib:
         send_problem_with_status(res, 507, e.code(), e.what());
         return;
     }
-    jobs_of(ctx).submit(job, up.bytes);
+    jobs_of(ctx).submit(job, up.bytes, spec.force);
     res.set_header("Location", job_url(job.id));
     res.set_header("Retry-After", std::to_string(kJobPollAfterS));
     send_json(res, job_json(job), 202);

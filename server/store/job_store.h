@@ -102,7 +102,8 @@ struct JobRecord {
 // Work handed to one runner: the job as it was claimed, the outputs this
 // runner is to run (in order), and the lease that fences its updates. SQLite:
 // every queued output of the job, no lease (one process owns the file).
-// PostgreSQL: one output under a lease token that expires unless renewed.
+// PostgreSQL: the claimable outputs of one input file under one lease token
+// that expires unless renewed.
 struct JobClaim : JobRecord {
     std::vector<int> run;
     std::string lease;

@@ -1,5 +1,7 @@
 // The PostgreSQL job store: one queue shared by many service instances.
-// Outputs are claimed one at a time with SELECT ... FOR UPDATE SKIP LOCKED
+// Outputs are claimed a file at a time (every claimable output of one input
+// file, so that one run reads the file once for all of them) with SELECT ...
+// FOR UPDATE SKIP LOCKED
 // (PostgreSQL manual, "The Locking Clause": rows locked by another claimer
 // are skipped, not waited for) under a lease: a random token and an expiry in
 // the database's clock, renewed by the runner's heartbeat. An output whose
@@ -41,7 +43,12 @@ private:
     std::optional<JobState> finish_locked(const std::string& id, int64_t now_ms);
     // Fails an output whose lease expired `max_attempts` times (in a transaction).
     void fail_interrupted(const std::string& id, int output, int max_attempts, int64_t now_ms);
-    std::optional<JobClaim> claim_output(const std::string& id, int output, int attempts, int64_t now_ms);
+    // Outputs of one job (of one file) under one new lease, as one claim.
+    struct Claimable {
+        int index = 0;
+        int attempts = 0;  // runs started so far
+    };
+    std::optional<JobClaim> claim_outputs(const std::string& id, const std::vector<Claimable>& outputs, int64_t now_ms);
     void lock_outputs(const std::string& id);
 
     std::unique_ptr<PgConn> conn_;

@@ -68,15 +68,22 @@ void PgJobStore::fail_interrupted(const std::string& id, int output, int max_att
     log_event("job_output_interrupted", "{\"job_id\":\"" + id + "\",\"output\":" + str(output) + "}");
 }
 
-std::optional<JobClaim> PgJobStore::claim_output(const std::string& id, int output, int attempts, int64_t now_ms) {
+std::optional<JobClaim> PgJobStore::claim_outputs(const std::string& id, const std::vector<Claimable>& outputs,
+                                                  int64_t now_ms) {
     JobClaim claim;
     claim.lease = new_request_id();  // 128 random bits
-    conn_->exec(
-        "UPDATE job_outputs SET attempts = $3, lease_token = $4, lease_owner = $5, "
-        "lease_expires_ms = " NURBSRT_PG_NOW
-        " + $6, state = 'queued', progress = 0, started_ms = 0 "
-        "WHERE job_id = $1 AND idx = $2",
-        {id, str(output), str(attempts), claim.lease, instance_, str(lease_ms_)});
+    int attempts = 0;
+    std::vector<int> run;
+    for (const Claimable& o : outputs) {
+        conn_->exec(
+            "UPDATE job_outputs SET attempts = $3, lease_token = $4, lease_owner = $5, "
+            "lease_expires_ms = " NURBSRT_PG_NOW
+            " + $6, state = 'queued', progress = 0, started_ms = 0 "
+            "WHERE job_id = $1 AND idx = $2",
+            {id, str(o.index), str(o.attempts + 1), claim.lease, instance_, str(lease_ms_)});
+        attempts = std::max(attempts, o.attempts + 1);
+        run.push_back(o.index);
+    }
     conn_->exec(
         "UPDATE jobs SET state = 'running', attempts = GREATEST(attempts, $2), "
         "started_ms = CASE WHEN started_ms = 0 THEN $3 ELSE started_ms END WHERE id = $1",
@@ -84,7 +91,7 @@ std::optional<JobClaim> PgJobStore::claim_output(const std::string& id, int outp
     auto job = read(id);
     if (!job) return std::nullopt;
     static_cast<JobRecord&>(claim) = std::move(*job);
-    claim.run = {output};
+    claim.run = std::move(run);
     return claim;
 }
 
@@ -102,26 +109,40 @@ std::optional<JobClaim> PgJobStore::claim_next(int64_t now_ms, int max_attempts)
             t.commit();
             continue;
         }
-        // The oldest job's first output that is queued, or whose lease expired.
-        const PgResult r = conn_->exec(
-            "SELECT o.job_id, o.idx, o.attempts, o.lease_token <> '' FROM job_outputs o JOIN jobs j ON j.id = o.job_id "
+        // The oldest job's first output that is queued, or whose lease expired ...
+        const PgResult first = conn_->exec(
+            "SELECT o.job_id, o.file FROM job_outputs o JOIN jobs j ON j.id = o.job_id "
             "WHERE j.state IN ('queued', 'running') AND o.state IN ('queued', 'running') "
             "AND o.lease_expires_ms < " NURBSRT_PG_NOW " ORDER BY j.seq, o.idx LIMIT 1 FOR UPDATE OF o SKIP LOCKED");
-        if (r.rows() == 0) return std::nullopt;
-        const std::string id = r.text(0, 0);
-        const int output = static_cast<int>(r.i64(0, 1)), attempts = static_cast<int>(r.i64(0, 2));
-        const bool lease_expired = r.text(0, 3) == "t";
-        if (lease_expired) {
-            log_event("job_lease_expired",
-                      "{\"job_id\":\"" + id + "\",\"output\":" + str(output) + ",\"attempts\":" + str(attempts) + "}");
-            if (attempts >= max_attempts) {
-                fail_interrupted(id, output, max_attempts, now_ms);
-                finish_locked(id, now_ms);
-                t.commit();
-                continue;
+        if (first.rows() == 0) return std::nullopt;
+        const std::string id = first.text(0, 0);
+        // ... with every other such output of its file: one claim reads the file once for all of them.
+        const PgResult r = conn_->exec(
+            "SELECT idx, attempts, lease_token <> '' FROM job_outputs WHERE job_id = $1 AND file = $2 "
+            "AND state IN ('queued', 'running') AND lease_expires_ms < " NURBSRT_PG_NOW
+            " ORDER BY idx FOR UPDATE SKIP LOCKED",
+            {id, first.text(0, 1)});
+        std::vector<Claimable> take;
+        bool interrupted = false;
+        for (int i = 0; i < r.rows(); ++i) {
+            const Claimable o{static_cast<int>(r.i64(i, 0)), static_cast<int>(r.i64(i, 1))};
+            if (r.text(i, 2) == "t") {  // its lease expired: a run of it was cut short
+                log_event("job_lease_expired", "{\"job_id\":\"" + id + "\",\"output\":" + str(o.index) +
+                                                   ",\"attempts\":" + str(o.attempts) + "}");
+                if (o.attempts >= max_attempts) {
+                    fail_interrupted(id, o.index, max_attempts, now_ms);
+                    interrupted = true;
+                    continue;
+                }
             }
+            take.push_back(o);
         }
-        auto claim = claim_output(id, output, attempts + 1, now_ms);
+        if (take.empty()) {
+            if (interrupted) finish_locked(id, now_ms);
+            t.commit();
+            continue;
+        }
+        auto claim = claim_outputs(id, take, now_ms);
         t.commit();
         return claim;
     }
@@ -131,12 +152,13 @@ std::optional<JobClaim> PgJobStore::claim_next(int64_t now_ms, int max_attempts)
 bool PgJobStore::renew(const JobClaim& claim) {
     if (claim.run.empty()) return false;
     std::lock_guard<std::mutex> lock(m_);
+    // Every output of the claim still open: they share its lease.
     return conn_
                ->exec("UPDATE job_outputs o SET lease_expires_ms = " NURBSRT_PG_NOW
-                      " + $4 FROM jobs j "
-                      "WHERE o.job_id = $1 AND o.idx = $2 AND o.lease_token = $3 AND j.id = o.job_id "
+                      " + $3 FROM jobs j "
+                      "WHERE o.job_id = $1 AND o.lease_token = $2 AND j.id = o.job_id "
                       "AND j.state = 'running' AND o.state IN ('queued', 'running')",
-                      {claim.id, str(claim.run.front()), claim.lease, str(lease_ms_)})
+                      {claim.id, claim.lease, str(lease_ms_)})
                .affected() > 0;
 }
 

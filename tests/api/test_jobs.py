@@ -19,7 +19,8 @@ import zlib
 import pytest
 import requests
 
-from conftest import SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, sqlite_only, validate
+from conftest import (SLOW_RENDER, BEARING, MODELS, SCREW, TIMEOUT, check_problem, healthy, post_raw, sqlite_only,
+                      validate)
 
 # Inputs: a large-ish IGES and a small STEP from ../shared/models, else OCCT's own data files.
 if MODELS.is_dir():
@@ -302,22 +303,81 @@ def test_each_file_is_read_once_for_all_its_outputs(url):
     stats = job["statistics"]
     assert stats["outputs"] == 9 and stats["succeeded"] == 6 and stats["failed"] == 3
     assert stats["artifact_bytes"] == sum(o["artifact"]["bytes"] for o in outs if o["state"] == "succeeded")
-    if os.environ.get("NURBSRT_API_JOB_STORE"):
-        assert stats["reads"] == 6  # claimed output by output: a read each
-    else:
-        assert stats["reads"] == 2
-        assert len({r["id"] for r in reads[:3]}) == 1 and len({r["id"] for r in reads[3:]}) == 1
-        assert all(r["served"] == 3 and r["read_ms"] > 0 for r in reads)
+    # With either store (PostgreSQL claims a file's outputs together).
+    assert stats["reads"] == 2
+    assert len({r["id"] for r in reads[:3]}) == 1 and len({r["id"] for r in reads[3:]}) == 1
+    assert all(r["served"] == 3 and r["read_ms"] > 0 for r in reads)
+    # The job's own read made the renders' scenes: not from the cache.
+    assert [outs[k]["statistics"]["cache"] for k in (0, 6)] == ["miss", "miss"]
     assert png_size(download(url, outs[0])) == (48, 36)
     assert download(url, outs[7])[80:84] != b""  # STL: 80-byte header, then the triangle count
     assert download(url, outs[8])[:4] == b"glTF"
-    # The same files again: the renders find their scenes cached (no read for them); the conversions read.
-    again = wait_finished(url, accepted(submit(url, files, spec))["id"])
+    # The same files again, made anew (force: no artifact reuse): the renders find their scenes cached (no read
+    # for them); the conversions read.
+    again = wait_finished(url, accepted(submit(url, files, {**spec, "force": True}))["id"])
     cached = [again["outputs"][k] for k in (0, 6)]
     assert all(o["state"] == "succeeded" and o["statistics"]["cache"] == "hit" for o in cached)
     assert all("read" not in o["statistics"] for o in cached)
     assert [o["report"]["read"]["served"] for o in again["outputs"] if o["state"] == "succeeded" and o["type"] ==
-            "conversion"] == [1 if os.environ.get("NURBSRT_API_JOB_STORE") else 2] * 4
+            "conversion"] == [2] * 4
+
+
+def test_a_job_and_a_client_rendering_one_new_file_import_it_once(url):
+    """A job's file and a client's render of the same new bytes at the same time: the scene cache's single
+    flight imports it once for both, whoever comes first; the other finds it cached or waits for it."""
+    import concurrent.futures
+    data = BEARING.read_bytes() + b"\n" * random.randrange(1000, 5000)  # bytes no other test sends
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 40, "height": 30}}]}
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        client = pool.submit(post_raw, url, "/v1/renders", data, {"width": 40, "height": 30},
+                             {"Accept": "application/json"})
+        job = accepted(submit(url, [("bearing.iges", data)], spec))
+        render = client.result()
+    job = wait_finished(url, job["id"])
+    assert render.status_code == 200 and job["state"] == "succeeded", (render.text[:300], json.dumps(job)[:600])
+    caches = sorted([render.json()["statistics"]["cache"], job["outputs"][0]["statistics"]["cache"]])
+    assert caches == ["hit", "miss"], caches
+    assert job["statistics"]["reads"] == (1 if job["outputs"][0]["statistics"]["cache"] == "miss" else 0)
+
+
+def test_an_output_made_before_is_reused_unless_forced(url):
+    """An output whose file bytes, type and options match an artifact an earlier job made is served from that
+    artifact (no read, no render or conversion; `reused: true`); other options, or `force: true`, make it anew.
+    The reused artifact outlives the job that made it."""
+    data = SCREW.read_bytes() + b"\n" * random.randrange(5000, 9000)  # bytes no other test sends
+    spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 40, "height": 30}},
+                        {"file": 0, "type": "conversion", "format": "stl"}]}
+    first = wait_finished(url, accepted(submit(url, [("screw.step", data)], spec))["id"])
+    assert first["state"] == "succeeded", json.dumps(first)[:600]
+    assert first["statistics"]["reused"] == 0 and first["statistics"]["reads"] == 1
+    assert not any((o.get("statistics") or o["report"]).get("reused") for o in first["outputs"])
+
+    again = wait_finished(url, accepted(submit(url, [("again.step", data)], spec))["id"])
+    assert again["state"] == "succeeded", json.dumps(again)[:600]
+    assert again["statistics"]["reused"] == 2 and again["statistics"]["reads"] == 0
+    render, stl = again["outputs"]
+    assert render["statistics"]["reused"] is True and stl["report"]["reused"] is True
+    assert "read" not in render["statistics"] and "read" not in stl["report"]
+    assert stl["report"]["output_format"] == "STL"  # the report of the run that made it
+    for a, b in zip(first["outputs"], again["outputs"]):
+        assert download(url, a) == download(url, b)
+        assert a["artifact"]["bytes"] == b["artifact"]["bytes"]
+
+    # Other options of the same file: made anew; force: made anew although the same were made before.
+    other = {"outputs": [{"file": 0, "type": "render", "options": {"width": 41, "height": 30}}]}
+    changed = wait_finished(url, accepted(submit(url, [("screw.step", data)], other))["id"])
+    assert changed["statistics"]["reused"] == 0 and "reused" not in changed["outputs"][0]["statistics"]
+    forced = wait_finished(url, accepted(submit(url, [("screw.step", data)], {**spec, "force": True}))["id"])
+    assert forced["state"] == "succeeded" and forced["statistics"]["reused"] == 0
+    assert forced["statistics"]["reads"] == 1
+
+    # The job that made them deleted: the artifact is still served to a new job, and the last one keeps its own.
+    assert requests.delete(f"{url}/v1/jobs/{first['id']}", timeout=TIMEOUT).status_code in (200, 204)
+    third = wait_finished(url, accepted(submit(url, [("third.step", data)], spec))["id"])
+    assert third["statistics"]["reused"] == 2
+    assert png_size(download(url, third["outputs"][0])) == (40, 30)
+    assert download(url, again["outputs"][1]) == download(url, third["outputs"][1])
+    check_problem(submit(url, [("screw.step", data)], {**spec, "force": "yes"}), 400)
 
 
 # ---- listing --------------------------------------------------------------------------------------------
@@ -474,6 +534,30 @@ def test_job_limits_and_queue_bound(own_server):
     requests.delete(f"{s.url}/v1/jobs/{running['id']}", timeout=TIMEOUT)
 
 
+# ---- results as they come ---------------------------------------------------------------------------------
+
+def test_an_artifact_downloads_as_soon_as_its_output_is_done(own_server):
+    """While a job still runs (a slow render), its finished output is listed with its URL and downloads, and the
+    job's statistics count the outputs done and their bytes so far."""
+    s = own_server(args=["--workers", "1", "--job-runners", "1", "--render-threads", "1"])
+    spec = {"outputs": [{"file": 0, "type": "conversion", "format": "stl"},
+                        {"file": 0, "type": "render", "options": SLOW_RENDER}], "force": True}
+    job = accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))
+    job = wait_for(s.url, job["id"], lambda j: j["outputs"][0]["state"] == "succeeded",
+                   what="the conversion done")
+    assert job["state"] == "running" and job["outputs"][1]["state"] in ("queued", "running"), json.dumps(job)[:600]
+    stl = job["outputs"][0]
+    data = download(s.url, stl)
+    assert len(data) == 84 + 50 * struct.unpack("<I", data[80:84])[0]  # a whole binary STL
+    stats = job["statistics"]
+    assert (stats["outputs"], stats["succeeded"], stats["failed"]) == (2, 1, 0)
+    assert stats["artifact_bytes"] == stl["artifact"]["bytes"] == len(data)
+    assert 0.5 <= job["progress"] < 1
+    # The render's artifact is not there yet: 404 naming its state.
+    check_problem(requests.get(f"{s.url}/v1/jobs/{job['id']}/artifacts/0-render-1.png", timeout=TIMEOUT), 404)
+    assert requests.delete(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT).status_code == 202
+
+
 # ---- DELETE of a running job -------------------------------------------------------------------------------
 
 def test_delete_running_job(own_server):
@@ -490,9 +574,9 @@ def test_delete_running_job(own_server):
     validate(body, "Job")
     assert body["state"] == "canceled" and body["error"]["code"] == "canceled"
     # The render is cut. Its file's conversion was written with the file's one read before the render began
-    # where the runner has the whole file (SQLite); claimed output by output (PostgreSQL), it had not run yet.
+    # (the runner claims a file's outputs together, with either store).
     assert body["outputs"][0]["state"] == "canceled"
-    assert body["outputs"][1]["state"] == ("canceled" if os.environ.get("NURBSRT_API_JOB_STORE") else "succeeded")
+    assert body["outputs"][1]["state"] == "succeeded"
     wait_gone(s.url, job["id"])
     check_problem(requests.get(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT), 404)
     deadline = time.monotonic() + 10
@@ -596,8 +680,9 @@ def test_random_sigkills_fail_no_job(own_server, tmp_path):
     rng = random.Random(46)  # the kill moments vary the same way in every run
     data = tmp_path / "data"
     args = ["--workers", "1", "--job-runners", "1", "--render-threads", "1"]
+    # force: 24 jobs of one file and one spec, each made anew (else all but the first reuse its artifacts).
     spec = {"outputs": [{"file": 0, "type": "render", "options": {"width": 640, "height": 480, "edges": True}},
-                        {"file": 0, "type": "conversion", "format": "stl"}] * 3}
+                        {"file": 0, "type": "conversion", "format": "stl"}] * 3, "force": True}
     s = own_server(args=args, data_dir=data)
     ids = [accepted(submit(s.url, [("s.step", SCREW.read_bytes())], spec))["id"] for _ in range(24)]
 

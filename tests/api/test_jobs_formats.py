@@ -5,7 +5,7 @@ import json
 
 import jsonschema
 
-from conftest import BEARING, MODELS, REPO, SCREW
+from conftest import BEARING, MODELS, REPO, SCREW, post_raw
 from test_conversions import parse_glb, parse_stl
 from test_jobs import accepted, download, submit, wait_finished
 
@@ -35,11 +35,23 @@ def test_job_converts_to_stl_glb_and_nurbs_json(url):
         assert scene["patches"] == len(scene["faces"]) > 0
 
 
-def test_job_converts_to_brep_and_vrml_and_takes_a_brep_input(url):
-    outputs = [{"file": 0, "type": "conversion", "format": fmt} for fmt in ("brep", "vrml")]
+# Each format's name in a report, as POST /v1/conversions answers it (test_conversions.py checks those).
+FORMAT_NAMES = {"step": "STEP", "iges": "IGES", "stl": "STL", "glb": "GLB", "json": "NURBS-JSON", "brep": "BREP",
+                "vrml": "VRML"}
+
+
+def test_job_converts_to_every_format_named_as_posted_ones_and_takes_a_brep_input(url):
+    outputs = [{"file": 0, "type": "conversion", "format": fmt} for fmt in FORMAT_NAMES]
     job = wait_finished(url, accepted(submit(url, [("screw.step", SCREW.read_bytes())], {"outputs": outputs}))["id"])
     assert job["state"] == "succeeded", json.dumps(job)[:800]
     by = {o["format"]: o for o in job["outputs"]}
+    assert {f: by[f]["report"]["output_format"] for f in FORMAT_NAMES} == FORMAT_NAMES
+    assert {by[f]["report"]["input_format"] for f in FORMAT_NAMES} == {"STEP"}
+    # The same name as the synchronous conversion of the same file answers.
+    sync = post_raw(url, "/v1/conversions", SCREW.read_bytes(), params={"format": "json"},
+                    headers={"Accept": "application/json"})
+    assert sync.status_code == 200, sync.text[:300]
+    assert sync.json()["output_format"] == by["json"]["report"]["output_format"]
     assert by["brep"]["artifact"]["name"].endswith(".brep")
     assert by["vrml"]["artifact"]["name"].endswith(".wrl")
     assert by["vrml"]["artifact"]["content_type"] == "model/vrml"

@@ -5,7 +5,10 @@ A job is canceled through another instance than the one running it; then 30 jobs
 is SIGKILLed while it runs outputs, and: every job ends succeeded with its artifacts
 present and decodable from any instance, no output was completed twice (counted in
 the database), the jobs submitted to the dead instance were served by the others,
-and GET answers the same on every instance. Prints the counts and times."""
+and GET answers the same on every instance. Then one job of nine files x (render,
+STL, glb): its files are claimed by different instances, one instance is SIGKILLed
+holding a file, and every output ends succeeded exactly once with one artifact.
+Prints the counts and times."""
 import json
 import os
 import pathlib
@@ -178,4 +181,76 @@ def test_three_instances_survive_losing_one():
         for inst in insts:
             if inst is not victim and inst.proc.returncode not in (0, None):
                 print(inst.log_path.read_text()[-3000:])
+        subprocess.run(["rm", "-rf", str(tmp)])
+
+
+def test_one_job_of_nine_files_spread_over_three_instances_survives_losing_one():
+    """One job of 9 files x (render + STL + glb): its files are claimed by different instances (a claim takes
+    one file's outputs, which one read serves); one instance is SIGKILLed while it holds a file; every output
+    ends succeeded exactly once (completions counted in the database), with one artifact each on disk."""
+    from test_conversions import parse_glb, parse_stl
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix="nurbsrt-scale-files-"))
+    data_dir = tmp / "data"
+    insts = [Instance(name, data_dir, tmp) for name in ("inst-d", "inst-e", "inst-f")]
+    victim = insts[2]
+    try:
+        # Nine distinct files (the same small part, each with its own trailing bytes: nine hashes, nine reads).
+        screw = FILES[0].read_bytes()
+        files = [(f"part{k}.step", screw + b"\n" * (k + 1)) for k in range(9)]
+        spec = {"outputs": [o for k in range(9) for o in (
+            {"file": k, "type": "render", "options": {"width": 160, "height": 120}},
+            {"file": k, "type": "conversion", "format": "stl"},
+            {"file": k, "type": "conversion", "format": "glb"})]}
+        job_id = accepted(submit(insts[0].url, files, spec))["id"]
+        wait_until(lambda: sql(f"SELECT 1 FROM job_outputs WHERE job_id = '{job_id}' AND lease_owner = 'inst-f' "
+                               "AND lease_token <> '' AND state IN ('queued', 'running')"),
+                   120, "inst-f never took a file of the job")
+        held = sql(f"SELECT idx, file FROM job_outputs WHERE job_id = '{job_id}' AND lease_owner = 'inst-f' "
+                   "AND lease_token <> '' AND state IN ('queued', 'running')")
+        victim.proc.kill()
+        victim.proc.wait(timeout=10)
+        assert held and len({f for _, f in held}) == 1, held  # one claim: one file's outputs
+        held_file = int(held[0][1])
+
+        survivors = insts[:2]
+        deadline = time.monotonic() + 300
+        while (job := get_job(survivors[1].url, job_id))["state"] not in ("succeeded", "failed"):
+            assert time.monotonic() < deadline, json.dumps(job)[:600]
+            time.sleep(0.2)
+        assert job["state"] == "succeeded", json.dumps(job)[:1000]
+        assert get_job(survivors[0].url, job_id) == job
+        outs = job["outputs"]
+        assert len(outs) == 27 and all(o["state"] == "succeeded" for o in outs)
+        for o in outs:
+            data = requests.get(survivors[0].url + o["artifact"]["url"], timeout=60).content
+            assert len(data) == o["artifact"]["bytes"] > 0
+            if o["type"] == "render":
+                check_artifact(survivors[0].url, o)
+            elif o["format"] == "stl":
+                assert len(parse_stl(data)) > 100
+            else:
+                assert parse_glb(data)[0]["meshes"]
+        # One artifact per output on disk (the killed run's partial files aside: the age sweep removes them).
+        names = sorted(p.name for p in (data_dir / "jobs" / job_id).iterdir()
+                       if not p.name.startswith(("input-", "partial-")))
+        assert names == sorted(o["artifact"]["name"] for o in outs), names
+        (count, once, most, rerun, owners), = sql(
+            f"SELECT COUNT(*), SUM((completions = 1)::int), MAX(completions), SUM((attempts > 1)::int), "
+            f"COUNT(DISTINCT lease_owner) FROM job_outputs WHERE job_id = '{job_id}'")
+        assert (int(count), int(once), int(most)) == (27, 27, 1)
+        assert int(rerun) >= len(held)  # the killed instance's file ran again elsewhere
+        assert int(owners) >= 2  # the job's files spread over the instances
+        # Each file's outputs came from one read; the killed one's from two at most (what it finished, then
+        # the rest after the takeover).
+        by_file = {}
+        for o in outs:
+            by_file.setdefault(o["file"], set()).add((o.get("statistics") or o["report"])["read"]["id"])
+        assert all(len(ids) == 1 for f, ids in by_file.items() if f != held_file), by_file
+        assert len(by_file[held_file]) in (1, 2) and job["statistics"]["reads"] == 8 + len(by_file[held_file])
+        print(f"\nscale_out: one job of 9 files x 3 outputs on 3 instances, inst-f SIGKILLed holding file "
+              f"{held_file} ({len(held)} outputs); {rerun} output(s) re-run; every output completed exactly once; "
+              f"outputs completed by {owners} instance(s) in all")
+    finally:
+        for inst in insts:
+            inst.stop()
         subprocess.run(["rm", "-rf", str(tmp)])
