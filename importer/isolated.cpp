@@ -529,24 +529,11 @@ int run_file_worker(const std::vector<std::string>& args) {
     if (scene_path != "-")
         record_outcome(scene_path + ".error", "import",
                        [&] { write_scene_file(import_file(in_path, import_options), scene_path); });
-    // Then the conversions, the mesh outputs last: they mesh the shape at one
-    // set of parameters (importer/convert), so the first makes the mesh the
-    // others find, once the import's meshes are gone.
-    auto is_mesh = [](const std::string& out) {
-        const ConversionFormat f = conversion_format_from_extension(out);
-        return f == ConversionFormat::stl || f == ConversionFormat::glb || f == ConversionFormat::vrml;
-    };
-    bool meshes_forgotten = false;
-    for (const bool meshes : {false, true})
-        for (size_t i = 3; i + 1 < positional.size(); i += 2) {
-            if (is_mesh(positional[i]) != meshes) continue;
-            if (meshes && !meshes_forgotten) {
-                read.forget_meshes();
-                meshes_forgotten = true;
-            }
-            record_outcome(positional[i + 1] + ".error", "conversion",
-                           [&] { write_convert_report(positional[i + 1], convert_file(in_path, positional[i])); });
-        }
+    // Then the conversions, in the plan's order: convert_file takes the
+    // earlier uses' meshes off the shared shape, so each writes what it would alone.
+    for (size_t i = 3; i + 1 < positional.size(); i += 2)
+        record_outcome(positional[i + 1] + ".error", "conversion",
+                       [&] { write_convert_report(positional[i + 1], convert_file(in_path, positional[i])); });
     return record_outcome(summary_path + ".error", "import",
                           [&] {
                               std::ofstream out(summary_path, std::ios::binary | std::ios::trunc);

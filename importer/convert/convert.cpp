@@ -6,6 +6,7 @@
 
 #include "importer/convert/convert_writers.h"
 #include "importer/importer.h"
+#include "importer/internal.h"
 #include "core/error.h"
 #include "core/io/scene_json.h"
 
@@ -47,6 +48,10 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))
         throw Error(ErrorCode::io, "cannot write '" + out_path + "': no such directory");
 
+    // A shared read's shape may carry the triangulations of an earlier use
+    // (the import, another mesh output): gone, so that BRepMesh meshes anew
+    // (with its degenerate triangles counted again) and BREP writes none.
+    occt::forget_shared_meshes();
     switch (r.output) {
         case ConversionFormat::step:
         case ConversionFormat::iges:

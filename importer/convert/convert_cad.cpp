@@ -13,6 +13,7 @@
 #include <set>
 #include <vector>
 
+#include <BRepBuilderAPI_Copy.hxx>
 #include <BRepTools.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Writer.hxx>
@@ -25,6 +26,8 @@
 #include <TDF_LabelMap.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TopAbs_ShapeEnum.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_Editor.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
@@ -270,6 +273,21 @@ void write_step(const Handle(TDocStd_Document) & doc, const std::string& out_pat
         throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
 }
 
+// BREP writes the shapes' state flags (free, modified, checked) and
+// triangulations as it finds them, and the earlier uses of a shared read
+// (importer/shared_read.h: the import, other outputs) change both (measured:
+// a face re-meshed loses "checked"): a copy of the topology (the geometry
+// shared, no meshes) with "checked" cleared, a cache that only says BRepCheck
+// saw the shape, writes the same file whatever came before.
+TopoDS_Shape fresh_copy(const TopoDS_Shape& shape) {
+    TopoDS_Shape copy = BRepBuilderAPI_Copy(shape, /*copyGeom=*/Standard_False, /*copyMesh=*/Standard_False).Shape();
+    TopTools_IndexedMapOfShape all;
+    TopExp::MapShapes(copy, all);
+    for (int i = 1; i <= all.Extent(); ++i) all(i).TShape()->Checked(Standard_False);
+    copy.Checked(Standard_False);
+    return copy;
+}
+
 // The model written in `out_format`: STEP and IGES from its XDE document in
 // `unit` (the writers scale the document's mm to it), BREP as OCCT's own text
 // (the shape alone: no colours, names or unit). Callers hold exchange_mutex and
@@ -280,14 +298,16 @@ void write_model(const OcctModel& model, const std::string& out_path, CadFormat 
         write_iges(model.document, out_path, unit, options.iges_mode);
     else if (out_format == CadFormat::step)
         write_step(model.document, out_path, unit, options.step_schema);
-    else if (!BRepTools::Write(model.shape, out_path.c_str()))
+    else if (!BRepTools::Write(fresh_copy(model.shape), out_path.c_str()))
         throw Error(ErrorCode::io, "BREP writer: cannot write '" + out_path + "'");
 }
 
 }  // namespace
 
-OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r) {
-    OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
+OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r,
+                          bool changes_document) {
+    OcctModel model = changes_document ? read_model_from_file(in_path, /*read_attributes=*/true, /*keep_document=*/true)
+                                       : read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
     r.in_format = model.format;
     r.faces = model.faces.Extent();
     r.in_units = model.units;
@@ -299,12 +319,15 @@ OcctModel read_for_export(const std::string& in_path, const std::string& target,
 
 void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
                ConvertReport& r) {
-    OcctModel model = read_for_export(in_path, format_name(r.out_format), r);
+    // IGES to STEP changes the document (expand_named_groups): on a read of
+    // its own, never the shared one the file's other outputs are written from.
+    const bool expands = r.out_format == CadFormat::step && detect_format(in_path) == CadFormat::iges;
+    OcctModel model = read_for_export(in_path, format_name(r.out_format), r, expands);
     DocumentCloser closer{model.document};
     // Formats without a declared unit (BREP) are written in OCCT's mm.
     const bool declares_units = conversion_format_declares_units(r.output);
     const LengthUnit unit = declares_units ? target_unit(model.units, options.units) : LengthUnit::mm;
-    if (model.format == CadFormat::iges && r.out_format == CadFormat::step) expand_named_groups(model.document);
+    if (expands) expand_named_groups(model.document);
 
     const auto t0 = std::chrono::steady_clock::now();
     {

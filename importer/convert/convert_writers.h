@@ -18,8 +18,10 @@ namespace nurbsrt::occt {
 // Reads `in_path` with its XDE document (colours, names, assembly) for an export
 // to `target` (the output format's name), filling r.in_format, r.faces and
 // r.in_units and r.read_ms; throws occt_failure when the reader gives no document. The caller
-// closes the document (DocumentCloser).
-OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r);
+// closes the document (DocumentCloser). `changes_document`: a read of the caller's own,
+// not the SharedRead's (whose document the file's later outputs are written from).
+OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r,
+                          bool changes_document = false);
 
 // STEP, IGES or BREP through OCCT's writers (exact geometry, topology kept);
 // STEP and IGES in options.units or the source's unit, with options' schema / mode.
