@@ -148,7 +148,24 @@ std::string listed_names(const std::vector<std::string>& names) {
     return s;
 }
 
-std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out, CadFormat out_format) {
+// What the output lost of the source's attributes, counted once for the
+// warnings and the report.
+struct Losses {
+    int faces_losing_colour = 0;
+    std::vector<std::string> names;  // sorted; names the source never had (is_generated_name) left out
+};
+
+Losses losses_of(const XdeContent& in, const XdeContent& out) {
+    Losses l;
+    l.faces_losing_colour = faces_losing_colour(in, out);
+    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
+                        std::back_inserter(l.names));
+    std::erase_if(l.names, is_generated_name);
+    return l;
+}
+
+std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out, const Losses& lost,
+                                    CadFormat out_format) {
     std::vector<std::string> w;
     const std::string fmt = format_name(out_format);
     // IGES 5.3 has no product structure like STEP's; its subfigure instances
@@ -171,17 +188,13 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     if (out.faces != in.faces)
         w.push_back("the written " + fmt + " file holds " + std::to_string(out.faces) + " face(s), the input " +
                     std::to_string(in.faces));
-    if (const int lost = faces_losing_colour(in, out); lost > 0)
-        w.push_back(std::to_string(lost) + " of " + std::to_string(in.coloured_faces) +
+    if (lost.faces_losing_colour > 0)
+        w.push_back(std::to_string(lost.faces_losing_colour) + " of " + std::to_string(in.coloured_faces) +
                     " coloured face(s) lost their colour (the written " + fmt + " file has " +
                     std::to_string(out.coloured_faces) + " coloured face(s))");
-    std::vector<std::string> missing;
-    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
-                        std::back_inserter(missing));
-    std::erase_if(missing, is_generated_name);
-    if (!missing.empty())
-        w.push_back(std::to_string(missing.size()) + " of " + std::to_string(in.names.size()) +
-                    " name(s) not in the written " + fmt + " file: " + listed_names(missing));
+    if (!lost.names.empty())
+        w.push_back(std::to_string(lost.names.size()) + " of " + std::to_string(in.names.size()) +
+                    " name(s) not in the written " + fmt + " file: " + listed_names(lost.names));
     return w;
 }
 
@@ -218,12 +231,9 @@ void expand_named_groups(const Handle(TDocStd_Document) & doc) {
 
 // The XDE part of the fidelity report: colours, names and the assembly of the
 // source and the output, with the first names lost.
-nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& out) {
-    std::vector<std::string> lost;
-    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(), std::back_inserter(lost));
-    std::erase_if(lost, is_generated_name);
-    const size_t lost_count = lost.size();
-    if (lost.size() > kNamesListed) lost.resize(kNamesListed);
+nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& out, const Losses& losses) {
+    std::vector<std::string> lost(losses.names.begin(),
+                                  losses.names.begin() + std::min(losses.names.size(), kNamesListed));
     auto tree = [](const XdeContent& c) {
         return nlohmann::ordered_json{
             {"assemblies", c.assemblies}, {"components", c.components}, {"instances", c.instances}};
@@ -231,9 +241,12 @@ nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& o
     return {{"colours",
              {{"source_coloured_faces", in.coloured_faces},
               {"output_coloured_faces", out.coloured_faces},
-              {"faces_losing_colour", faces_losing_colour(in, out)}}},
+              {"faces_losing_colour", losses.faces_losing_colour}}},
             {"names",
-             {{"source", in.names.size()}, {"output", out.names.size()}, {"lost", lost_count}, {"lost_first", lost}}},
+             {{"source", in.names.size()},
+              {"output", out.names.size()},
+              {"lost", losses.names.size()},
+              {"lost_first", lost}}},
             {"assembly", {{"source", tree(in)}, {"output", tree(out)}}}};
 }
 
@@ -346,18 +359,19 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
         OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
         DocumentCloser written_closer{written.document};
         const XdeContent in = content_of(model), out = content_of(written);
-        r.warnings = shortfalls(in, out, r.out_format);
+        const Losses lost = losses_of(in, out);
+        r.warnings = shortfalls(in, out, lost, r.out_format);
         r.out_units = declares_units ? written.units : length_unit_name(unit);
         if (r.out_units != length_unit_name(unit))
             r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +
                                  length_unit_name(unit) + "'");
         // Geometry read back in mm, as the source: directly comparable whatever the written unit.
-        const GeometryMeasures gin = measure_geometry(model.shape), gout = measure_geometry(written.shape);
+        const GeometryMeasures &gin = measure_source(model), gout = measure_geometry(written.shape);
         nlohmann::ordered_json f = {{"source", source_json(model, gin)}};
         f["output"] = {
             {"format", conversion_format_name(r.output)}, {"units", r.out_units}, {"geometry", geometry_json(gout)}};
         f["relative_differences"] = compare_geometry(gin, gout, r.warnings);
-        f["attributes"] = attributes_json(in, out);
+        f["attributes"] = attributes_json(in, out, lost);
         r.fidelity = f.dump();
     } catch (const Error& e) {
         // The file is written; that OCCT cannot read it back is worth knowing

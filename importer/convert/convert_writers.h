@@ -63,6 +63,8 @@ struct GeometryMeasures {
     bool valid = true;
 };
 GeometryMeasures measure_geometry(const TopoDS_Shape& shape);
+// measure_geometry of the model's shape, once per read (OcctModel::measures).
+const GeometryMeasures& measure_source(const OcctModel& model);
 // The triangles of the faces' triangulations (placed, every occurrence): their
 // area, the volume they enclose (divergence theorem) and their box.
 struct MeshMeasures {
@@ -86,8 +88,9 @@ nlohmann::ordered_json mesh_json(const GeometryMeasures& in, const MeshMeasures&
 // the triangle's (u, v) centroid; where that point is trimmed away, the face's
 // boundary, counted in `outside_trim`). Empty without a triangulation with (u, v).
 std::vector<double> face_mesh_deviations(const TopoDS_Face& face, long long& outside_trim);
-// Max, p99 and mean of those over every face of `meshed`, in mm and relative to
-// `diagonal`; null when nothing was meshed.
+// Max, p99 and mean of those over the distinct faces of `meshed` (a part placed
+// n times has its faces, and their mesh, once: measured once, counted in
+// `face_instances`), in mm and relative to `diagonal`; null when nothing was meshed.
 nlohmann::ordered_json mesh_deviation_json(const TopoDS_Shape& meshed, double diagonal);
 // The source's part of a report: format, declared units, geometry.
 nlohmann::ordered_json source_json(const OcctModel& model, const GeometryMeasures& m);

@@ -92,6 +92,12 @@ GeometryMeasures measure_geometry(const TopoDS_Shape& s) {
     return m;
 }
 
+const GeometryMeasures& measure_source(const OcctModel& model) {
+    if (!model.measures->source)
+        model.measures->source = std::make_shared<GeometryMeasures>(measure_geometry(model.shape));
+    return *model.measures->source;
+}
+
 MeshMeasures measure_mesh(const TopoDS_Shape& s) {
     MeshMeasures m;
     Bnd_Box box;
@@ -172,7 +178,7 @@ nlohmann::ordered_json source_json(const OcctModel& model, const GeometryMeasure
 }
 
 std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, const ConvertReport& r) {
-    const GeometryMeasures in = measure_geometry(model.shape);
+    const GeometryMeasures& in = measure_source(model);
     nlohmann::ordered_json f = {{"source", source_json(model, in)}};
     const nlohmann::ordered_json m = mesh_json(in, measure_mesh(meshed), r);
     // Measured in the model's mm, whatever unit the file is written in.
