@@ -124,12 +124,11 @@ void add_convert_command(CLI::App& app) {
         // An option OUT's format does not take is a usage error, never ignored
         // (as the API refuses it).
         const ConversionFormat format = conversion_format_from_extension(*out);
-        if (cmd->count("--step-schema") > 0 && format != ConversionFormat::step)
-            throw CLI::ValidationError("--step-schema", "applies to STEP outputs only");
-        if (cmd->count("--iges-mode") > 0 && format != ConversionFormat::iges)
-            throw CLI::ValidationError("--iges-mode", "applies to IGES outputs only");
-        if (cmd->count("--units") > 0 && !conversion_format_declares_units(format))
-            throw CLI::ValidationError("--units", "applies to STEP and IGES outputs only");
+        for (const auto& [flag, option] :
+             {std::pair{"--units", ConversionOption::units}, std::pair{"--step-schema", ConversionOption::step_schema},
+              std::pair{"--iges-mode", ConversionOption::iges_mode}})
+            if (const std::string why = conversion_option_refusal(option, format); cmd->count(flag) > 0 && !why.empty())
+                throw CLI::ValidationError(flag, why);
         const auto [quiet, strict] = *flags;
         // Removes the partial file on every way out but the rename below.
         struct PartialFile {

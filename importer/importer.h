@@ -79,7 +79,6 @@ const char* conversion_format_content_type(ConversionFormat f);
 CadFormat cad_format_of(ConversionFormat f);
 // Whether the format declares a length unit (STEP, IGES): the `units` option applies.
 bool conversion_format_declares_units(ConversionFormat f);
-
 // The length units a CAD file can declare: IGES 5.3's list (global parameter
 // 14), which OCCT's STEP writer offers as well. `unknown`: none declared, or
 // for an option, "the source's".
@@ -94,6 +93,22 @@ std::vector<std::string> length_unit_names();
 // unknown for 3 (a unit named only by parameter 15) and anything out of range.
 int iges_unit_flag(LengthUnit u);
 LengthUnit length_unit_from_iges_flag(int flag);
+
+// The unit a format writes whatever the source declares (STL, VRML, BREP and
+// NURBS JSON mm, glb m); unknown for STEP and IGES (the source's, or `units`).
+LengthUnit conversion_format_fixed_unit(ConversionFormat f);
+// Whether the format is a triangle mesh (STL, glb, VRML): written from a
+// BRepMesh tessellation, its fidelity the mesh's deviation from the exact faces.
+bool conversion_format_is_mesh(ConversionFormat f);
+
+// The conversion options that apply to some output formats only (which, the
+// formats' table in importer/format.cpp says): the CLI, the service, the job
+// specs and convert_file refuse one given for another format by this alone.
+enum class ConversionOption { units, step_schema, iges_mode };
+// The API's name of the option: "units", "step_schema", "iges_mode".
+const char* conversion_option_name(ConversionOption o);
+// "" when `o` applies to `f`, else why not ("applies to STEP and IGES outputs only").
+std::string conversion_option_refusal(ConversionOption o, ConversionFormat f);
 
 // The STEP application protocol written: AP214 (automotive design, what most
 // CAD systems read) or AP242 (its successor; OCCT 7.6 writes the DIS schema).

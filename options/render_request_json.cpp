@@ -347,14 +347,16 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
     r.strict = strict;
     r.format = conversion_format_from_name(format);
     if (r.format == ConversionFormat::unknown) bad("option 'format' must be one of " + formats);
-    // An option the format does not take is refused, never ignored.
-    auto only_for = [&](const std::string& value, const char* key, bool applies, const char* formats_taking_it) {
-        if (!value.empty() && !applies)
-            bad(std::string("option '") + key + "' applies to " + formats_taking_it + " outputs only, not " + format);
+    // An option the format does not take is refused, never ignored (which
+    // applies where: the formats' table, conversion_option_refusal).
+    auto only_for = [&](const std::string& value, ConversionOption option) {
+        if (value.empty()) return;
+        if (const std::string why = conversion_option_refusal(option, r.format); !why.empty())
+            bad(std::string("option '") + conversion_option_name(option) + "' " + why + ", not " + format);
     };
-    only_for(units, "units", conversion_format_declares_units(r.format), "step and iges");
-    only_for(schema, "step_schema", r.format == ConversionFormat::step, "step");
-    only_for(mode, "iges_mode", r.format == ConversionFormat::iges, "iges");
+    only_for(units, ConversionOption::units);
+    only_for(schema, ConversionOption::step_schema);
+    only_for(mode, ConversionOption::iges_mode);
     if (!units.empty())
         r.options.units = conversion_enum<LengthUnit>("units", units, length_unit_from_name, length_unit_names());
     if (!schema.empty())

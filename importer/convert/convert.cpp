@@ -22,7 +22,6 @@ void write_nurbs_json(const std::string& in_path, const std::string& out_path, C
     r.in_format = detect_format(in_path);
     r.faces = static_cast<int>(scene.faces.size());
     r.in_units = scene.units;
-    r.out_units = length_unit_name(LengthUnit::mm);  // the Scene's coordinates
     r.read_ms = scene.timings.read_ms;
     r.mesh_ms = scene.timings.nurbs_convert_ms + scene.timings.mesh_ms;
     const auto t0 = std::chrono::steady_clock::now();
@@ -40,9 +39,12 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
         throw Error(ErrorCode::unsupported_format,
                     "output '" + out_path +
                         "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb, .json, .brep or .wrl)");
-    if (options.units != LengthUnit::unknown && !conversion_format_declares_units(r.output))
-        throw Error(ErrorCode::invalid_argument, std::string("option 'units' applies to STEP and IGES outputs; ") +
+    if (const std::string why = conversion_option_refusal(ConversionOption::units, r.output);
+        options.units != LengthUnit::unknown && !why.empty())
+        throw Error(ErrorCode::invalid_argument, std::string("option 'units' ") + why + "; " +
                                                      conversion_format_name(r.output) + " has a unit of its own");
+    if (const LengthUnit fixed = conversion_format_fixed_unit(r.output); fixed != LengthUnit::unknown)
+        r.out_units = length_unit_name(fixed);
     const std::filesystem::path out_dir = std::filesystem::path(out_path).parent_path();
     std::error_code ec;
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))

@@ -337,9 +337,10 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
     const bool expands = r.out_format == CadFormat::step && detect_format(in_path) == CadFormat::iges;
     OcctModel model = read_for_export(in_path, format_name(r.out_format), r, expands);
     DocumentCloser closer{model.document};
-    // Formats without a declared unit (BREP) are written in OCCT's mm.
+    // Formats without a declared unit (BREP) are written in their own.
     const bool declares_units = conversion_format_declares_units(r.output);
-    const LengthUnit unit = declares_units ? target_unit(model.units, options.units) : LengthUnit::mm;
+    const LengthUnit unit =
+        declares_units ? target_unit(model.units, options.units) : conversion_format_fixed_unit(r.output);
     if (expands) expand_named_groups(model.document);
 
     const auto t0 = std::chrono::steady_clock::now();

@@ -76,7 +76,6 @@ private:
 void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
-    r.out_units = length_unit_name(LengthUnit::m);
 
     const TopoDS_Shape meshed = mesh_document_for_export(model.document, r);
     TDF_LabelSequence roots;

@@ -14,7 +14,6 @@ void write_stl(const std::string& in_path, const std::string& out_path, ConvertR
     r.in_format = model.format;
     r.faces = model.faces.Extent();
     r.in_units = model.units;
-    r.out_units = length_unit_name(LengthUnit::mm);
     r.read_ms = model.read_ms;
     mesh_for_export(model.shape, r);
 
