@@ -149,11 +149,7 @@ void add_convert_command(CLI::App& app) {
         options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
         options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
         const ConvertReport r = convert_file(*in, partial.path.string(), options);
-        std::vector<std::string> warnings;
-        if (r.unmeshed_faces > 0)
-            warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
-                               *out);
-        warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+        const std::vector<std::string>& warnings = r.warnings;
         if (!report_path->empty()) {
             std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
             nlohmann::ordered_json j =

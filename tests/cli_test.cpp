@@ -271,6 +271,26 @@ TEST(Cli, ConvertStrictRefusesWhatTheOutputLoses) {
     fs::remove_all(dir);
 }
 
+// Faces BRepMesh cannot triangulate are missing from a mesh output: a warning
+// made by the conversion itself (importer/convert), so --strict here and
+// strict in the service (tests/api/test_conversions.py) refuse the same file.
+TEST(Cli, ConvertStrictRefusesUnmeshedFaces) {
+    NURBSRT_REQUIRE_SHARED_MODELS();
+    const std::string in = nurbsrt::test::shared_model("step/trj3_s1-al-214.stp");
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-unmeshed-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun plain = run_nurbsrt("convert " + in + " " + (dir / "t.stl").string());
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    EXPECT_NE(
+        plain.err.find("nurbsrt: warning: 10 of 94 face(s) could not be meshed and are missing from the STL output"),
+        std::string::npos)
+        << plain.err;
+    const CliRun strict = run_nurbsrt("convert --strict " + in + " " + (dir / "s.stl").string());
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    fs::remove_all(dir);
+}
+
 // A render says what its import worked around (this turbine's face 2: BRepMesh
 // leaves part of it without triangles, filled from a grid) unless --quiet, and
 // --strict refuses it before rendering.

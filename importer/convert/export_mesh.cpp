@@ -111,6 +111,12 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
             r.triangles += t->NbTriangles();
     }
     r.mesh_ms = ms_since(t0);
+    // A face missing from the output is a loss like any other: a warning,
+    // which strict refuses (the CLI and the service alike).
+    if (r.unmeshed_faces > 0 && r.triangles > 0)
+        r.warnings.push_back(std::to_string(r.unmeshed_faces) + " of " + std::to_string(faces.Extent()) +
+                             " face(s) could not be meshed and are missing from the " +
+                             conversion_format_name(r.output) + " output");
     if (r.triangles == 0)
         throw Error(ErrorCode::occt_failure,
                     "BRepMesh produced no triangles for any of the " + std::to_string(faces.Extent()) + " faces");

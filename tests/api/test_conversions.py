@@ -122,6 +122,11 @@ def test_stl_reports_faces_it_could_not_mesh(url):
     validate(j, "ConversionResponse")
     assert j["unmeshed_faces"] == 10 and j["faces"] == 94 and j["triangles"] > 0
     assert j["degenerate_triangles"] > 0
+    # The missing faces are a warning, as on the CLI, and strict refuses them alike.
+    assert "10 of 94 face(s) could not be meshed and are missing from the STL output" in j["warnings"], j["warnings"]
+    detail = check_problem(post_raw(url, "/v1/conversions", model.read_bytes(), params={"format": "stl", "strict": "true"}),
+                           422, "strict_refused")["detail"]
+    assert "could not be meshed" in detail, detail
 
 
 @pytest.mark.parametrize("model", real_models())
