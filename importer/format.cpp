@@ -69,6 +69,7 @@ struct ConversionFormatInfo {
     const char* content_type;
     CadFormat cad;          // exact B-rep formats: the CadFormat (also readable); unknown for the others
     LengthUnit fixed_unit;  // unknown: writes a declared length unit (the `units` option applies)
+    bool unitless;          // the file says nothing of its unit (fixed_unit is what readers assume)
     bool mesh;              // a triangle mesh from BRepMesh
     unsigned options;       // bits of the ConversionOptions that apply (option_bit)
 };
@@ -76,11 +77,13 @@ struct ConversionFormatInfo {
 constexpr unsigned option_bit(ConversionOption o) { return 1u << static_cast<unsigned>(o); }
 constexpr unsigned kStepOptions = option_bit(ConversionOption::units) | option_bit(ConversionOption::step_schema);
 constexpr unsigned kIgesOptions = option_bit(ConversionOption::units) | option_bit(ConversionOption::iges_mode);
+constexpr unsigned kMeshOptions = option_bit(ConversionOption::deflection);
 
 constexpr EnumName<ConversionOption> kConversionOptionNames[] = {{ConversionOption::units, "units"},
                                                                  {ConversionOption::step_schema, "step_schema"},
-                                                                 {ConversionOption::iges_mode, "iges_mode"}};
-static_assert(names_every_value(kConversionOptionNames, ConversionOption::iges_mode));
+                                                                 {ConversionOption::iges_mode, "iges_mode"},
+                                                                 {ConversionOption::deflection, "deflection"}};
+static_assert(names_every_value(kConversionOptionNames, ConversionOption::deflection));
 // Content types: IANA's model/step, model/iges, model/stl, model/gltf-binary and
 // model/vrml; OCCT's BREP has no registered type.
 constexpr ConversionFormatInfo kConversionFormats[] = {
@@ -94,6 +97,7 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      CadFormat::unknown,
      LengthUnit::unknown,
      false,
+     false,
      0},
     {ConversionFormat::step,
      "step",
@@ -105,6 +109,7 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      CadFormat::step,
      LengthUnit::unknown,
      false,
+     false,
      kStepOptions},
     {ConversionFormat::iges,
      "iges",
@@ -115,6 +120,7 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      "model/iges",
      CadFormat::iges,
      LengthUnit::unknown,
+     false,
      false,
      kIgesOptions},
     // STL and VRML have no unit: the model's mm, as CAD tools reading them assume.
@@ -128,7 +134,8 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      CadFormat::unknown,
      LengthUnit::mm,
      true,
-     0},
+     true,
+     kMeshOptions},
     // glTF 2.0 §3.4: metres.
     {ConversionFormat::glb,
      "glb",
@@ -139,9 +146,10 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      "model/gltf-binary",
      CadFormat::unknown,
      LengthUnit::m,
+     false,
      true,
-     0},
-    // The imported Scene's coordinates.
+     kMeshOptions},
+    // The imported Scene's coordinates (the Scene names the source's unit).
     {ConversionFormat::nurbs_json,
      "json",
      nullptr,
@@ -151,6 +159,7 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      "application/json",
      CadFormat::unknown,
      LengthUnit::mm,
+     false,
      false,
      0},
     // OCCT's readers deliver mm, and BREP declares no unit.
@@ -163,6 +172,7 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      "application/octet-stream",
      CadFormat::brep,
      LengthUnit::mm,
+     true,
      false,
      0},
     {ConversionFormat::vrml,
@@ -175,7 +185,8 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      CadFormat::unknown,
      LengthUnit::mm,
      true,
-     0},
+     true,
+     kMeshOptions},
 };
 static_assert(std::size(kConversionFormats) == static_cast<size_t>(ConversionFormat::vrml) + 1);
 
@@ -275,6 +286,7 @@ bool conversion_format_declares_units(ConversionFormat f) {
 }
 LengthUnit conversion_format_fixed_unit(ConversionFormat f) { return info_of(f).fixed_unit; }
 bool conversion_format_is_mesh(ConversionFormat f) { return info_of(f).mesh; }
+bool conversion_format_is_unitless(ConversionFormat f) { return info_of(f).unitless; }
 
 const char* conversion_option_name(ConversionOption o) { return enum_name(kConversionOptionNames, o, "?"); }
 

@@ -100,12 +100,15 @@ LengthUnit conversion_format_fixed_unit(ConversionFormat f);
 // Whether the format is a triangle mesh (STL, glb, VRML): written from a
 // BRepMesh tessellation, its fidelity the mesh's deviation from the exact faces.
 bool conversion_format_is_mesh(ConversionFormat f);
+// Whether the format's files carry no unit at all (STL, VRML, BREP): written
+// in mm, as readers of them assume; a source in another unit is a warning.
+bool conversion_format_is_unitless(ConversionFormat f);
 
 // The conversion options that apply to some output formats only (which, the
 // formats' table in importer/format.cpp says): the CLI, the service, the job
 // specs and convert_file refuse one given for another format by this alone.
-enum class ConversionOption { units, step_schema, iges_mode };
-// The API's name of the option: "units", "step_schema", "iges_mode".
+enum class ConversionOption { units, step_schema, iges_mode, deflection };
+// The API's name of the option: "units", "step_schema", "iges_mode", "deflection".
 const char* conversion_option_name(ConversionOption o);
 // "" when `o` applies to `f`, else why not ("applies to STEP and IGES outputs only").
 std::string conversion_option_refusal(ConversionOption o, ConversionFormat f);
@@ -132,7 +135,14 @@ struct ConvertOptions {
     LengthUnit units = LengthUnit::unknown;
     StepSchema step_schema = StepSchema::ap214;  // STEP outputs
     IgesMode iges_mode = IgesMode::brep;         // IGES outputs
+    // Mesh outputs: BRepMesh's linear deflection as a fraction of the model's
+    // bounding-box diagonal, in (0, kMaxConversionDeflection]; 0: ImportOptions'
+    // mesh_relative_deflection (0.002).
+    double deflection = 0;
 };
+// The coarsest deflection a conversion takes: a tenth of the model's size
+// between mesh and surface is no longer the model's shape.
+inline constexpr double kMaxConversionDeflection = 0.1;
 
 // Writes the geometry of `in_path` to `out_path`, the output format taken from
 // the extension (see ConversionFormat). Throws nurbsrt::Error (unsupported_format

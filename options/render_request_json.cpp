@@ -112,7 +112,7 @@ unsigned aov_bits(const json& v, const std::string& key) {
 }
 
 // The option names, for messages that list them (kept in step with the parsers below).
-constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, strict";
+constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, deflection, strict";
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
@@ -326,6 +326,7 @@ E conversion_enum(const std::string& key, const std::string& value, FromName fro
 ConversionRequest parse_conversion_request(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format, units, schema, mode;
+    std::optional<double> deflection;
     bool strict = false;
     for (const auto& [key, v] : o.items()) {
         if (key == "format")
@@ -336,6 +337,8 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
             schema = text(v, key);
         else if (key == "iges_mode")
             mode = text(v, key);
+        else if (key == "deflection")
+            deflection = number(v, key);
         else if (key == "strict")
             strict = boolean(v, key);
         else
@@ -357,6 +360,13 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
     only_for(units, ConversionOption::units);
     only_for(schema, ConversionOption::step_schema);
     only_for(mode, ConversionOption::iges_mode);
+    if (deflection) {
+        only_for("given", ConversionOption::deflection);
+        if (!(*deflection > 0 && *deflection <= kMaxConversionDeflection))
+            bad("option 'deflection' must be a number in (0, " + std::to_string(kMaxConversionDeflection) +
+                "], a fraction of the model's diagonal");
+        r.options.deflection = *deflection;
+    }
     if (!units.empty())
         r.options.units = conversion_enum<LengthUnit>("units", units, length_unit_from_name, length_unit_names());
     if (!schema.empty())

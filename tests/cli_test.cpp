@@ -291,6 +291,27 @@ TEST(Cli, ConvertStrictRefusesUnmeshedFaces) {
     fs::remove_all(dir);
 }
 
+// A coarse mesh (--deflection 0.1 of the diagonal on a free-form face: 0.02 of
+// the diagonal from it) is a warning, --strict refuses it; --deflection is a
+// mesh option, refused for an exact output before any work.
+TEST(Cli, ConvertCoarseMeshWarnsAndStrictRefuses) {
+    const std::string in = nurbsrt::test::freeform_bspline();
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-coarse-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun plain = run_nurbsrt("convert --deflection 0.1 " + in + " " + (dir / "c.stl").string());
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    EXPECT_NE(plain.err.find("nurbsrt: warning: the STL mesh lies up to "), std::string::npos) << plain.err;
+    const CliRun strict = run_nurbsrt("convert --strict --deflection 0.1 " + in + " " + (dir / "s.stl").string());
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    const CliRun fine = run_nurbsrt("convert --strict " + in + " " + (dir / "f.stl").string());
+    EXPECT_EQ(fine.status, 0) << fine.err;
+    const CliRun exact = run_nurbsrt("convert --deflection 0.1 " + in + " " + (dir / "e.step").string());
+    EXPECT_NE(exact.status, 0);
+    EXPECT_NE(exact.err.find("applies to STL, GLB and VRML outputs only"), std::string::npos) << exact.err;
+    fs::remove_all(dir);
+}
+
 // A render says what its import worked around (this turbine's face 2: BRepMesh
 // leaves part of it without triangles, filled from a grid) unless --quiet, and
 // --strict refuses it before rendering.

@@ -43,6 +43,12 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
         options.units != LengthUnit::unknown && !why.empty())
         throw Error(ErrorCode::invalid_argument, std::string("option 'units' ") + why + "; " +
                                                      conversion_format_name(r.output) + " has a unit of its own");
+    if (const std::string why = conversion_option_refusal(ConversionOption::deflection, r.output);
+        options.deflection != 0 && !why.empty())
+        throw Error(ErrorCode::invalid_argument, std::string("option 'deflection' ") + why);
+    if (!(options.deflection >= 0 && options.deflection <= kMaxConversionDeflection))
+        throw Error(ErrorCode::invalid_argument,
+                    "option 'deflection' must be in (0, " + std::to_string(kMaxConversionDeflection) + "]");
     if (const LengthUnit fixed = conversion_format_fixed_unit(r.output); fixed != LengthUnit::unknown)
         r.out_units = length_unit_name(fixed);
     const std::filesystem::path out_dir = std::filesystem::path(out_path).parent_path();
@@ -61,13 +67,13 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
             occt::write_cad(in_path, out_path, options, r);
             break;
         case ConversionFormat::vrml:
-            occt::write_vrml(in_path, out_path, r);
+            occt::write_vrml(in_path, out_path, options, r);
             break;
         case ConversionFormat::stl:
-            occt::write_stl(in_path, out_path, r);
+            occt::write_stl(in_path, out_path, options, r);
             break;
         case ConversionFormat::glb:
-            occt::write_glb(in_path, out_path, r);
+            occt::write_glb(in_path, out_path, options, r);
             break;
         case ConversionFormat::nurbs_json:
             write_nurbs_json(in_path, out_path, r);
@@ -75,6 +81,12 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
         case ConversionFormat::unknown:
             break;
     }
+    // A unit the source declares that the file cannot say is a change a
+    // reader will not see (it assumes mm).
+    const std::string declared = r.in_units.substr(0, r.in_units.find(','));
+    if (conversion_format_is_unitless(r.output) && !declared.empty() && declared != r.out_units)
+        r.warnings.push_back(std::string("the source is in ") + declared + "; " + conversion_format_name(r.output) +
+                             " files have no unit: the coordinates are written in " + r.out_units);
     return r;
 }
 

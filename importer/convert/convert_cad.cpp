@@ -361,7 +361,7 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
         DocumentCloser written_closer{written.document};
         const XdeContent in = content_of(model), out = content_of(written);
         const Losses lost = losses_of(in, out);
-        r.warnings = shortfalls(in, out, lost, r.out_format);
+        for (std::string& w : shortfalls(in, out, lost, r.out_format)) r.warnings.push_back(std::move(w));
         r.out_units = declares_units ? written.units : length_unit_name(unit);
         if (r.out_units != length_unit_name(unit))
             r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +

@@ -73,11 +73,12 @@ private:
 
 }  // namespace
 
-void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+void write_glb(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
 
-    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r);
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options.deflection);
     TDF_LabelSequence roots;
     XCAFDoc_DocumentTool::ShapeTool(model.document->Main())->GetFreeShapes(roots);
 
