@@ -321,10 +321,19 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// The child's own stages are measured inside its lifetime, so what is left of
-// the parent's wait is the isolation's cost (never below 0 but for clock noise).
-double isolation_ms(Clock::time_point t0, Clock::time_point child_end, double child_stages_ms) {
-    return std::max(0.0, ms_between(t0, child_end) - child_stages_ms);
+// The call's stages from its time points (start, child started, child done,
+// end): the pre-scan before the child, the transfer after it, and the
+// isolation what the whole call leaves beside them and the child's own stages
+// (measured inside the child's lifetime on the same monotonic clock, so never
+// more than its wait): they cover the call exactly, by construction.
+IsolationTimings call_timings(Clock::time_point t0, Clock::time_point t_child, Clock::time_point t_read,
+                              Clock::time_point t_end, double child_stages_ms) {
+    IsolationTimings t;
+    t.total_ms = ms_between(t0, t_end);
+    t.prescan_ms = ms_between(t0, t_child);
+    t.transfer_ms = ms_between(t_read, t_end);
+    t.isolation_ms = t.total_ms - t.prescan_ms - t.transfer_ms - child_stages_ms;
+    return t;
 }
 
 ConvertReport parse_convert_report(const std::string& text) {
@@ -368,9 +377,7 @@ Scene import_isolated(const std::string& path, const ImportOptions& options, con
     scratch.remove();  // inside the transfer stage: the stages cover the whole call
     if (timings) {
         const ImportTimings& c = scene.timings;
-        timings->prescan_ms = ms_between(t0, t_child);
-        timings->isolation_ms = isolation_ms(t_child, t_read, c.read_ms + c.nurbs_convert_ms + c.mesh_ms);
-        timings->transfer_ms = ms_between(t_read, Clock::now());
+        *timings = call_timings(t0, t_child, t_read, Clock::now(), c.read_ms + c.nurbs_convert_ms + c.mesh_ms);
     }
     return scene;
 }
@@ -389,11 +396,8 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
     const auto t_read = Clock::now();
     ConvertReport r = parse_convert_report(read_small_file(scratch.scene));
     scratch.remove();  // inside the transfer stage: the stages cover the whole call
-    if (timings) {
-        timings->prescan_ms = ms_between(t0, t_child);
-        timings->isolation_ms = isolation_ms(t_child, t_read, r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms);
-        timings->transfer_ms = ms_between(t_read, Clock::now());
-    }
+    if (timings)
+        *timings = call_timings(t0, t_child, t_read, Clock::now(), r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms);
     return r;
 }
 
@@ -513,9 +517,7 @@ FileResult process_file_isolated(const std::string& path, const FilePlan& plan, 
         }
         r.conversions.push_back(std::move(c));
     }
-    r.timings.prescan_ms = ms_between(t0, t_child);
-    r.timings.isolation_ms = isolation_ms(t_child, t_read, child_stages_ms);
-    r.timings.transfer_ms = ms_between(t_read, Clock::now());
+    r.timings = call_timings(t0, t_child, t_read, Clock::now(), child_stages_ms);
     return r;
 }
 
