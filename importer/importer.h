@@ -127,6 +127,18 @@ const char* iges_mode_name(IgesMode m);
 std::optional<IgesMode> iges_mode_from_name(std::string_view name);
 std::vector<std::string> iges_mode_names();
 
+// What OCCT's BRepCheck_Analyzer says of a file's shape (read as import_file
+// reads it; served by a living SharedRead): valid, or how many of its solids,
+// shells, faces and edges it finds invalid. `failure`: the checker itself
+// threw (then not valid). Throws what the read throws.
+struct ShapeValidity {
+    bool valid = true;
+    int invalid_solids = 0, invalid_shells = 0, invalid_faces = 0, invalid_edges = 0;
+    std::string failure;
+    double check_ms = 0;
+};
+ShapeValidity check_validity(const std::string& path);
+
 // What a conversion may change beyond the output format.
 struct ConvertOptions {
     // STEP/IGES outputs: the length unit written (geometry scaled to it);
