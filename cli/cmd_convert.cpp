@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -76,7 +77,8 @@ void add_convert_command(CLI::App& app) {
                            "              (STEP/IGES: written in the source's length unit unless --units\n"
                            "              names another; the written file is read back; what it lost is\n"
                            "              printed as warnings)\n"
-                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal;\n"
+                           "  .stl        binary STL, millimetres (mesh: deflection 0.002 x bounding-box diagonal, or\n"
+                           "              --deflection;\n"
                            "              triangles of no area or repeated are left out, and counted)\n"
                            "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
                            "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
@@ -98,6 +100,7 @@ void add_convert_command(CLI::App& app) {
     auto report_path = std::make_shared<std::string>();
     auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
     auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
+    auto deflection = std::make_shared<double>(0.0);
     cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
     cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .json, .brep or .wrl)")
         ->required()
@@ -113,6 +116,10 @@ void add_convert_command(CLI::App& app) {
     cmd->add_option("--iges-mode", *mode, "IGES outputs: brep (solids and shells) or faces (trimmed surfaces)")
         ->check(CLI::IsMember(iges_mode_names()))
         ->capture_default_str();
+    cmd->add_option("--deflection", *deflection,
+                    "STL, glb and VRML outputs: the mesh's linear deflection, a fraction of the model's\n"
+                    "bounding-box diagonal (default 0.002)")
+        ->check(CLI::Range(std::numeric_limits<double>::min(), kMaxConversionDeflection));
     cmd->add_option("--report", *report_path,
                     "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
                     "also when --strict refuses the conversion")
@@ -120,16 +127,16 @@ void add_convert_command(CLI::App& app) {
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([cmd, in, out, flags, units, schema, mode, report_path] {
+    cmd->callback([cmd, in, out, flags, units, schema, mode, deflection, report_path] {
         // An option OUT's format does not take is a usage error, never ignored
         // (as the API refuses it).
         const ConversionFormat format = conversion_format_from_extension(*out);
-        if (cmd->count("--step-schema") > 0 && format != ConversionFormat::step)
-            throw CLI::ValidationError("--step-schema", "applies to STEP outputs only");
-        if (cmd->count("--iges-mode") > 0 && format != ConversionFormat::iges)
-            throw CLI::ValidationError("--iges-mode", "applies to IGES outputs only");
-        if (cmd->count("--units") > 0 && !conversion_format_declares_units(format))
-            throw CLI::ValidationError("--units", "applies to STEP and IGES outputs only");
+        for (const auto& [flag, option] :
+             {std::pair{"--units", ConversionOption::units}, std::pair{"--step-schema", ConversionOption::step_schema},
+              std::pair{"--iges-mode", ConversionOption::iges_mode},
+              std::pair{"--deflection", ConversionOption::deflection}})
+            if (const std::string why = conversion_option_refusal(option, format); cmd->count(flag) > 0 && !why.empty())
+                throw CLI::ValidationError(flag, why);
         const auto [quiet, strict] = *flags;
         // Removes the partial file on every way out but the rename below.
         struct PartialFile {
@@ -149,12 +156,9 @@ void add_convert_command(CLI::App& app) {
         options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
         options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
         options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
+        options.deflection = *deflection;
         const ConvertReport r = convert_file(*in, partial.path.string(), options);
-        std::vector<std::string> warnings;
-        if (r.unmeshed_faces > 0)
-            warnings.push_back(std::to_string(r.unmeshed_faces) + " face(s) could not be meshed and are missing from " +
-                               *out);
-        warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+        const std::vector<std::string>& warnings = r.warnings;
         if (!report_path->empty()) {
             std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
             nlohmann::ordered_json j =

@@ -5,6 +5,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+#include <vector>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -14,6 +18,7 @@
 #include "core/io/assembly_tree_json.h"
 #include "importer/importer.h"
 #include "importer/isolated.h"
+#include "importer/shared_read.h"
 #include "cli/validators.h"
 
 namespace nurbsrt::cli {
@@ -22,6 +27,9 @@ namespace {
 using nlohmann::json;
 
 json vec_json(Vec3 v) { return json::array({v.x, v.y, v.z}); }
+
+// The text form lists at most this many colours (the JSON all of them).
+constexpr size_t kColoursListed = 8;
 
 // "  0/1/2  name  N faces  colour r,g,b  at (x, y, z)", indented by depth.
 void print_parts(const json& parts) {
@@ -68,6 +76,40 @@ json face_json(const Face& f, const Scene& scene) {
     return j;
 }
 
+// The faces' own colours, distinct (the same 8-bit colour is one; the first
+// face's value shown), most used first.
+json colours_json(const Scene& scene) {
+    std::map<std::array<long, 3>, std::pair<Color, int>> count;
+    for (const Face& f : scene.faces)
+        if (f.has_color) {
+            auto& [first, n] = count
+                                   .try_emplace({std::lround(f.color.r * 255), std::lround(f.color.g * 255),
+                                                 std::lround(f.color.b * 255)},
+                                                f.color, 0)
+                                   .first->second;
+            ++n;
+        }
+    std::vector<std::pair<Color, int>> sorted;
+    for (const auto& [key, value] : count) sorted.push_back(value);
+    std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    json colours = json::array();
+    for (const auto& [c, faces] : sorted) colours.push_back({{"rgb", {c.r, c.g, c.b}}, {"faces", faces}});
+    return colours;
+}
+
+json validity_json(const std::optional<ShapeValidity>& v) {
+    if (!v) return nullptr;  // not checked (--isolated: the check would run outside the child)
+    json j = {{"valid", v->valid},
+              {"invalid",
+               {{"solids", v->invalid_solids},
+                {"shells", v->invalid_shells},
+                {"faces", v->invalid_faces},
+                {"edges", v->invalid_edges}}},
+              {"check_ms", v->check_ms}};
+    if (!v->failure.empty()) j["failure"] = v->failure;
+    return j;
+}
+
 json scene_summary(const Scene& scene, bool per_face, double total_ms) {
     std::map<std::string, int> degrees;
     size_t rational = 0, reversed = 0, poles = 0, max_poles = 0, loops = 0, inner = 0, triangles = 0, fallback = 0,
@@ -105,6 +147,7 @@ json scene_summary(const Scene& scene, bool per_face, double total_ms) {
         {"trim_loops", {{"total", loops}, {"inner", inner}, {"outer", loops - inner}}},
         {"mesh", {{"triangles", triangles}, {"fallback_faces", fallback}}},
         {"colored_faces", colored},
+        {"colours", colours_json(scene)},
         {"timings_ms",
          {{"read", scene.timings.read_ms},
           {"nurbs_convert", scene.timings.nurbs_convert_ms},
@@ -152,6 +195,32 @@ void print_text(const json& j) {
     std::printf("timings:     read %.1f ms, nurbs_convert %.1f ms, mesh %.1f ms, total %.1f ms\n",
                 t["read"].get<double>(), t["nurbs_convert"].get<double>(), t["mesh"].get<double>(),
                 t["total"].get<double>());
+    std::string colours;
+    size_t listed = 0;
+    for (const json& c : j["colours"]) {
+        if (++listed > kColoursListed) {
+            colours += ", ...";
+            break;
+        }
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%s%.3g,%.3g,%.3g (%d faces)", colours.empty() ? "" : ", ",
+                      c["rgb"][0].get<double>(), c["rgb"][1].get<double>(), c["rgb"][2].get<double>(),
+                      c["faces"].get<int>());
+        colours += buf;
+    }
+    std::printf("colours:     %zu distinct%s%s\n", j["colours"].size(), colours.empty() ? "" : ": ", colours.c_str());
+    if (const json& v = j["validity"]; v.is_null()) {
+        std::printf("validity:    not checked (--isolated)\n");
+    } else if (v["valid"].get<bool>()) {
+        std::printf("validity:    valid (BRepCheck_Analyzer, %.1f ms)\n", v["check_ms"].get<double>());
+    } else {
+        const json& n = v["invalid"];
+        std::printf(
+            "validity:    INVALID (BRepCheck_Analyzer): %d solid(s), %d shell(s), %d face(s), %d edge(s) invalid%s%s\n",
+            n["solids"].get<int>(), n["shells"].get<int>(), n["faces"].get<int>(), n["edges"].get<int>(),
+            v.contains("failure") ? "; the checker failed: " : "",
+            v.contains("failure") ? v["failure"].get<std::string>().c_str() : "");
+    }
     print_parts(j["parts"]);
     for (const auto& w : j["warnings"]) std::printf("warning:     %s\n", w.get<std::string>().c_str());
     if (j.contains("face_list")) {
@@ -178,10 +247,12 @@ void add_info_command(CLI::App& app) {
         double time_limit_s = 300;
     };
     auto a = std::make_shared<Args>();
-    auto* cmd = app.add_subcommand("info",
-                                   "Import a STEP or IGES file and describe it: format, units, bounding box,\n"
-                                   "faces, B-spline degrees, poles, trim loops, mesh, and the import's stage times.\n"
-                                   "Example: nurbsrt info part.step --faces");
+    auto* cmd =
+        app.add_subcommand("info",
+                           "Import a STEP, IGES or BREP file and describe it: format, declared units, bounding\n"
+                           "box, faces, B-spline degrees, poles, trim loops, mesh, colours, validity\n"
+                           "(BRepCheck_Analyzer), the assembly tree with names, and the import's stage times.\n"
+                           "Example: nurbsrt info part.step --faces");
     cmd->add_option("FILE", a->file, "STEP or IGES file (format recognised from its content)")
         ->required()
         ->check(CLI::ExistingFile);
@@ -201,16 +272,21 @@ void add_info_command(CLI::App& app) {
         a->options.read_attributes = !a->no_attributes;
         const auto t0 = std::chrono::steady_clock::now();
         Scene scene;
+        std::optional<ShapeValidity> validity;
         if (a->isolated) {
             IsolationLimits limits;
             limits.time_limit_s = a->time_limit_s;
             scene = import_isolated(a->file, a->options, limits);
         } else {
+            // One read for the import and the validity check.
+            SharedRead read(a->file);
             scene = import_file(a->file, a->options);
+            validity = check_validity(a->file);
         }
         const double total_ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        const json j = scene_summary(scene, a->faces, total_ms);
+        json j = scene_summary(scene, a->faces, total_ms);
+        j["validity"] = validity_json(validity);
         if (a->json)
             std::cout << j.dump(2) << "\n";
         else

@@ -51,6 +51,7 @@ Scene import_one(const std::string& path, const LoadOptions& options, IsolationT
         isolation->prescan_ms += t.prescan_ms;
         isolation->isolation_ms += t.isolation_ms;
         isolation->transfer_ms += t.transfer_ms;
+        isolation->total_ms += t.total_ms;
     }
     return scene;
 }

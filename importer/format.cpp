@@ -7,6 +7,7 @@
 #include <fstream>
 #include <string_view>
 
+#include "core/enum_names.h"
 #include "importer/importer.h"
 #include "core/error.h"
 #include "core/ascii.h"
@@ -66,13 +67,38 @@ struct ConversionFormatInfo {
     const char* written_extension;
     std::array<const char*, 3> extensions;  // lower case, without the dot; nullptr pads
     const char* content_type;
-    CadFormat cad;        // exact B-rep formats: the CadFormat (also readable); unknown for the others
-    bool declares_units;  // writes a declared length unit (the `units` option applies)
+    CadFormat cad;          // exact B-rep formats: the CadFormat (also readable); unknown for the others
+    LengthUnit fixed_unit;  // unknown: writes a declared length unit (the `units` option applies)
+    bool unitless;          // the file says nothing of its unit (fixed_unit is what readers assume)
+    bool mesh;              // a triangle mesh from BRepMesh
+    unsigned options;       // bits of the ConversionOptions that apply (option_bit)
 };
+
+constexpr unsigned option_bit(ConversionOption o) { return 1u << static_cast<unsigned>(o); }
+constexpr unsigned kStepOptions = option_bit(ConversionOption::units) | option_bit(ConversionOption::step_schema);
+constexpr unsigned kIgesOptions = option_bit(ConversionOption::units) | option_bit(ConversionOption::iges_mode);
+constexpr unsigned kMeshOptions = option_bit(ConversionOption::deflection);
+
+constexpr EnumName<ConversionOption> kConversionOptionNames[] = {{ConversionOption::units, "units"},
+                                                                 {ConversionOption::step_schema, "step_schema"},
+                                                                 {ConversionOption::iges_mode, "iges_mode"},
+                                                                 {ConversionOption::deflection, "deflection"}};
+static_assert(names_every_value(kConversionOptionNames, ConversionOption::deflection));
 // Content types: IANA's model/step, model/iges, model/stl, model/gltf-binary and
 // model/vrml; OCCT's BREP has no registered type.
 constexpr ConversionFormatInfo kConversionFormats[] = {
-    {ConversionFormat::unknown, "", nullptr, "unknown", "", {}, "application/octet-stream", CadFormat::unknown, false},
+    {ConversionFormat::unknown,
+     "",
+     nullptr,
+     "unknown",
+     "",
+     {},
+     "application/octet-stream",
+     CadFormat::unknown,
+     LengthUnit::unknown,
+     false,
+     false,
+     0},
     {ConversionFormat::step,
      "step",
      "stp",
@@ -81,10 +107,49 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      {"stp", "step", "p21"},
      "model/step",
      CadFormat::step,
-     true},
-    {ConversionFormat::iges, "iges", "igs", "IGES", ".igs", {"igs", "iges"}, "model/iges", CadFormat::iges, true},
-    {ConversionFormat::stl, "stl", nullptr, "STL", ".stl", {"stl"}, "model/stl", CadFormat::unknown, false},
-    {ConversionFormat::glb, "glb", nullptr, "GLB", ".glb", {"glb"}, "model/gltf-binary", CadFormat::unknown, false},
+     LengthUnit::unknown,
+     false,
+     false,
+     kStepOptions},
+    {ConversionFormat::iges,
+     "iges",
+     "igs",
+     "IGES",
+     ".igs",
+     {"igs", "iges"},
+     "model/iges",
+     CadFormat::iges,
+     LengthUnit::unknown,
+     false,
+     false,
+     kIgesOptions},
+    // STL and VRML have no unit: the model's mm, as CAD tools reading them assume.
+    {ConversionFormat::stl,
+     "stl",
+     nullptr,
+     "STL",
+     ".stl",
+     {"stl"},
+     "model/stl",
+     CadFormat::unknown,
+     LengthUnit::mm,
+     true,
+     true,
+     kMeshOptions},
+    // glTF 2.0 §3.4: metres.
+    {ConversionFormat::glb,
+     "glb",
+     nullptr,
+     "GLB",
+     ".glb",
+     {"glb"},
+     "model/gltf-binary",
+     CadFormat::unknown,
+     LengthUnit::m,
+     false,
+     true,
+     kMeshOptions},
+    // The imported Scene's coordinates (the Scene names the source's unit).
     {ConversionFormat::nurbs_json,
      "json",
      nullptr,
@@ -93,7 +158,11 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      {"json"},
      "application/json",
      CadFormat::unknown,
-     false},
+     LengthUnit::mm,
+     false,
+     false,
+     0},
+    // OCCT's readers deliver mm, and BREP declares no unit.
     {ConversionFormat::brep,
      "brep",
      "brp",
@@ -102,8 +171,22 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      {"brep", "brp"},
      "application/octet-stream",
      CadFormat::brep,
-     false},
-    {ConversionFormat::vrml, "vrml", "wrl", "VRML", ".wrl", {"wrl", "vrml"}, "model/vrml", CadFormat::unknown, false},
+     LengthUnit::mm,
+     true,
+     false,
+     0},
+    {ConversionFormat::vrml,
+     "vrml",
+     "wrl",
+     "VRML",
+     ".wrl",
+     {"wrl", "vrml"},
+     "model/vrml",
+     CadFormat::unknown,
+     LengthUnit::mm,
+     true,
+     true,
+     kMeshOptions},
 };
 static_assert(std::size(kConversionFormats) == static_cast<size_t>(ConversionFormat::vrml) + 1);
 
@@ -198,7 +281,25 @@ const char* conversion_format_name(ConversionFormat f) { return info_of(f).name;
 const char* conversion_format_extension(ConversionFormat f) { return info_of(f).written_extension; }
 const char* conversion_format_content_type(ConversionFormat f) { return info_of(f).content_type; }
 CadFormat cad_format_of(ConversionFormat f) { return info_of(f).cad; }
-bool conversion_format_declares_units(ConversionFormat f) { return info_of(f).declares_units; }
+bool conversion_format_declares_units(ConversionFormat f) {
+    return f != ConversionFormat::unknown && info_of(f).fixed_unit == LengthUnit::unknown;
+}
+LengthUnit conversion_format_fixed_unit(ConversionFormat f) { return info_of(f).fixed_unit; }
+bool conversion_format_is_mesh(ConversionFormat f) { return info_of(f).mesh; }
+bool conversion_format_is_unitless(ConversionFormat f) { return info_of(f).unitless; }
+
+const char* conversion_option_name(ConversionOption o) { return enum_name(kConversionOptionNames, o, "?"); }
+
+std::string conversion_option_refusal(ConversionOption o, ConversionFormat f) {
+    if ((info_of(f).options & option_bit(o)) != 0) return {};
+    std::vector<std::string> taking;
+    for (const ConversionFormatInfo& i : kConversionFormats)
+        if ((i.options & option_bit(o)) != 0) taking.emplace_back(i.name);
+    std::string list;
+    for (size_t k = 0; k < taking.size(); ++k)
+        list += (k == 0 ? "" : k + 1 == taking.size() ? " and " : ", ") + taking[k];
+    return "applies to " + list + " outputs only";
+}
 
 std::string conversion_format_names() {
     std::string s;

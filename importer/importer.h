@@ -79,7 +79,6 @@ const char* conversion_format_content_type(ConversionFormat f);
 CadFormat cad_format_of(ConversionFormat f);
 // Whether the format declares a length unit (STEP, IGES): the `units` option applies.
 bool conversion_format_declares_units(ConversionFormat f);
-
 // The length units a CAD file can declare: IGES 5.3's list (global parameter
 // 14), which OCCT's STEP writer offers as well. `unknown`: none declared, or
 // for an option, "the source's".
@@ -95,6 +94,25 @@ std::vector<std::string> length_unit_names();
 int iges_unit_flag(LengthUnit u);
 LengthUnit length_unit_from_iges_flag(int flag);
 
+// The unit a format writes whatever the source declares (STL, VRML, BREP and
+// NURBS JSON mm, glb m); unknown for STEP and IGES (the source's, or `units`).
+LengthUnit conversion_format_fixed_unit(ConversionFormat f);
+// Whether the format is a triangle mesh (STL, glb, VRML): written from a
+// BRepMesh tessellation, its fidelity the mesh's deviation from the exact faces.
+bool conversion_format_is_mesh(ConversionFormat f);
+// Whether the format's files carry no unit at all (STL, VRML, BREP): written
+// in mm, as readers of them assume; a source in another unit is a warning.
+bool conversion_format_is_unitless(ConversionFormat f);
+
+// The conversion options that apply to some output formats only (which, the
+// formats' table in importer/format.cpp says): the CLI, the service, the job
+// specs and convert_file refuse one given for another format by this alone.
+enum class ConversionOption { units, step_schema, iges_mode, deflection };
+// The API's name of the option: "units", "step_schema", "iges_mode", "deflection".
+const char* conversion_option_name(ConversionOption o);
+// "" when `o` applies to `f`, else why not ("applies to STEP and IGES outputs only").
+std::string conversion_option_refusal(ConversionOption o, ConversionFormat f);
+
 // The STEP application protocol written: AP214 (automotive design, what most
 // CAD systems read) or AP242 (its successor; OCCT 7.6 writes the DIS schema).
 enum class StepSchema { ap214, ap242 };
@@ -109,6 +127,18 @@ const char* iges_mode_name(IgesMode m);
 std::optional<IgesMode> iges_mode_from_name(std::string_view name);
 std::vector<std::string> iges_mode_names();
 
+// What OCCT's BRepCheck_Analyzer says of a file's shape (read as import_file
+// reads it; served by a living SharedRead): valid, or how many of its solids,
+// shells, faces and edges it finds invalid. `failure`: the checker itself
+// threw (then not valid). Throws what the read throws.
+struct ShapeValidity {
+    bool valid = true;
+    int invalid_solids = 0, invalid_shells = 0, invalid_faces = 0, invalid_edges = 0;
+    std::string failure;
+    double check_ms = 0;
+};
+ShapeValidity check_validity(const std::string& path);
+
 // What a conversion may change beyond the output format.
 struct ConvertOptions {
     // STEP/IGES outputs: the length unit written (geometry scaled to it);
@@ -117,7 +147,14 @@ struct ConvertOptions {
     LengthUnit units = LengthUnit::unknown;
     StepSchema step_schema = StepSchema::ap214;  // STEP outputs
     IgesMode iges_mode = IgesMode::brep;         // IGES outputs
+    // Mesh outputs: BRepMesh's linear deflection as a fraction of the model's
+    // bounding-box diagonal, in (0, kMaxConversionDeflection]; 0: ImportOptions'
+    // mesh_relative_deflection (0.002).
+    double deflection = 0;
 };
+// The coarsest deflection a conversion takes: a tenth of the model's size
+// between mesh and surface is no longer the model's shape.
+inline constexpr double kMaxConversionDeflection = 0.1;
 
 // Writes the geometry of `in_path` to `out_path`, the output format taken from
 // the extension (see ConversionFormat). Throws nurbsrt::Error (unsupported_format

@@ -91,6 +91,16 @@ struct DocumentCloser {
 // The TDataStd_Name of an XDE label as UTF-8 ("" when it has none).
 std::string label_name(const TDF_Label& label);
 
+// read_model without the SharedRead (importer/shared_read.h): the file read
+// anew, for a use that changes the document it is given (the served one is
+// every later use's too).
+OcctModel read_model_from_file(const std::string& path, bool read_attributes, bool keep_document);
+
+// Takes the triangulations off the SharedRead's shape (BRepTools::Clean), so
+// that the next use meets the shape as a lone read delivers it; nothing
+// without a SharedRead.
+void forget_shared_meshes();
+
 // Serializes STEP/IGES reading, transfer and writing process-wide (concurrent
 // use corrupts OCCT's heap: the readers and writers share global state).
 std::mutex& exchange_mutex();

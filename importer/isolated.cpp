@@ -148,6 +148,12 @@ std::vector<std::string> convert_options_to_args(const ConvertOptions& o) {
     std::vector<std::string> args = {std::string("--step-schema=") + step_schema_name(o.step_schema),
                                      std::string("--iges-mode=") + iges_mode_name(o.iges_mode)};
     if (o.units != LengthUnit::unknown) args.push_back(std::string("--units=") + length_unit_name(o.units));
+    if (o.deflection != 0) {
+        std::ostringstream d;
+        d.precision(17);
+        d << o.deflection;
+        args.push_back("--deflection=" + d.str());
+    }
     return args;
 }
 
@@ -166,6 +172,10 @@ ConvertOptions convert_options_from_args(const std::vector<std::string>& args) {
         } else if (key == "--iges-mode") {
             const std::optional<IgesMode> m = iges_mode_from_name(value);
             if ((ok = m.has_value())) o.iges_mode = *m;
+        } else if (key == "--deflection") {
+            char* end = nullptr;
+            o.deflection = std::strtod(value.c_str(), &end);
+            ok = !value.empty() && *end == '\0';
         }
         if (!ok) throw Error(ErrorCode::invalid_argument, "bad worker option: " + a);
     }
@@ -311,10 +321,19 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// The child's own stages are measured inside its lifetime, so what is left of
-// the parent's wait is the isolation's cost (never below 0 but for clock noise).
-double isolation_ms(Clock::time_point t0, Clock::time_point child_end, double child_stages_ms) {
-    return std::max(0.0, ms_between(t0, child_end) - child_stages_ms);
+// The call's stages from its time points (start, child started, child done,
+// end): the pre-scan before the child, the transfer after it, and the
+// isolation what the whole call leaves beside them and the child's own stages
+// (measured inside the child's lifetime on the same monotonic clock, so never
+// more than its wait): they cover the call exactly, by construction.
+IsolationTimings call_timings(Clock::time_point t0, Clock::time_point t_child, Clock::time_point t_read,
+                              Clock::time_point t_end, double child_stages_ms) {
+    IsolationTimings t;
+    t.total_ms = ms_between(t0, t_end);
+    t.prescan_ms = ms_between(t0, t_child);
+    t.transfer_ms = ms_between(t_read, t_end);
+    t.isolation_ms = t.total_ms - t.prescan_ms - t.transfer_ms - child_stages_ms;
+    return t;
 }
 
 ConvertReport parse_convert_report(const std::string& text) {
@@ -358,9 +377,7 @@ Scene import_isolated(const std::string& path, const ImportOptions& options, con
     scratch.remove();  // inside the transfer stage: the stages cover the whole call
     if (timings) {
         const ImportTimings& c = scene.timings;
-        timings->prescan_ms = ms_between(t0, t_child);
-        timings->isolation_ms = isolation_ms(t_child, t_read, c.read_ms + c.nurbs_convert_ms + c.mesh_ms);
-        timings->transfer_ms = ms_between(t_read, Clock::now());
+        *timings = call_timings(t0, t_child, t_read, Clock::now(), c.read_ms + c.nurbs_convert_ms + c.mesh_ms);
     }
     return scene;
 }
@@ -379,11 +396,8 @@ ConvertReport convert_isolated(const std::string& in_path, const std::string& ou
     const auto t_read = Clock::now();
     ConvertReport r = parse_convert_report(read_small_file(scratch.scene));
     scratch.remove();  // inside the transfer stage: the stages cover the whole call
-    if (timings) {
-        timings->prescan_ms = ms_between(t0, t_child);
-        timings->isolation_ms = isolation_ms(t_child, t_read, r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms);
-        timings->transfer_ms = ms_between(t_read, Clock::now());
-    }
+    if (timings)
+        *timings = call_timings(t0, t_child, t_read, Clock::now(), r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms);
     return r;
 }
 
@@ -503,9 +517,7 @@ FileResult process_file_isolated(const std::string& path, const FilePlan& plan, 
         }
         r.conversions.push_back(std::move(c));
     }
-    r.timings.prescan_ms = ms_between(t0, t_child);
-    r.timings.isolation_ms = isolation_ms(t_child, t_read, child_stages_ms);
-    r.timings.transfer_ms = ms_between(t_read, Clock::now());
+    r.timings = call_timings(t0, t_child, t_read, Clock::now(), child_stages_ms);
     return r;
 }
 
@@ -529,24 +541,11 @@ int run_file_worker(const std::vector<std::string>& args) {
     if (scene_path != "-")
         record_outcome(scene_path + ".error", "import",
                        [&] { write_scene_file(import_file(in_path, import_options), scene_path); });
-    // Then the conversions, the mesh outputs last: they mesh the shape at one
-    // set of parameters (importer/convert), so the first makes the mesh the
-    // others find, once the import's meshes are gone.
-    auto is_mesh = [](const std::string& out) {
-        const ConversionFormat f = conversion_format_from_extension(out);
-        return f == ConversionFormat::stl || f == ConversionFormat::glb || f == ConversionFormat::vrml;
-    };
-    bool meshes_forgotten = false;
-    for (const bool meshes : {false, true})
-        for (size_t i = 3; i + 1 < positional.size(); i += 2) {
-            if (is_mesh(positional[i]) != meshes) continue;
-            if (meshes && !meshes_forgotten) {
-                read.forget_meshes();
-                meshes_forgotten = true;
-            }
-            record_outcome(positional[i + 1] + ".error", "conversion",
-                           [&] { write_convert_report(positional[i + 1], convert_file(in_path, positional[i])); });
-        }
+    // Then the conversions, in the plan's order: convert_file takes the
+    // earlier uses' meshes off the shared shape, so each writes what it would alone.
+    for (size_t i = 3; i + 1 < positional.size(); i += 2)
+        record_outcome(positional[i + 1] + ".error", "conversion",
+                       [&] { write_convert_report(positional[i + 1], convert_file(in_path, positional[i])); });
     return record_outcome(summary_path + ".error", "import",
                           [&] {
                               std::ofstream out(summary_path, std::ios::binary | std::ios::trunc);

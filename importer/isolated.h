@@ -52,6 +52,9 @@ struct IsolationTimings {
     // its libraries, writing its result for this process, and its exit.
     double isolation_ms = 0;
     double transfer_ms = 0;  // reading the child's result (scene, report) into this process
+    // The whole call, on one clock. The three above and the child's own stages
+    // add up to it by construction: isolation_ms is what the others leave.
+    double total_ms = 0;
 };
 
 // Runs import_file(path, options) in a child process. Throws nurbsrt::Error with

@@ -3,6 +3,7 @@
 // reference) may include it; never include it from a widely used header.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,15 @@ struct FaceAttributes {
     uint32_t body = 0;  // index into OcctModel::bodies
 };
 
+struct GeometryMeasures;  // importer/convert/convert_writers.h
+
+// A read's measures of its own shape (the fidelity report's source half),
+// taken by the first conversion that needs them (measure_source) and shared by
+// every copy of the model a SharedRead serves: measured once per read.
+struct MeasuresCache {
+    std::shared_ptr<const GeometryMeasures> source;
+};
+
 // A file as OCCT reads it: all transferred roots in one shape, and the faces
 // in the order of the face-index contract (faces.FindKey(i) is face i, 1-based).
 struct OcctModel {
@@ -41,6 +51,7 @@ struct OcctModel {
     // read_model was asked to keep it; the caller closes it
     // (XCAFApp_Application::GetApplication()->Close) when done.
     Handle(TDocStd_Document) document;
+    std::shared_ptr<MeasuresCache> measures = std::make_shared<MeasuresCache>();
 };
 
 // Reads STEP or IGES (format by content). Serialized by a process-wide mutex

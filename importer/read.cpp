@@ -395,8 +395,6 @@ SharedModel& shared_model() {
     return s;
 }
 
-OcctModel read_model_from_file(const std::string& path, bool read_attributes, bool keep_document);
-
 }  // namespace
 
 DocumentCloser::~DocumentCloser() {
@@ -443,7 +441,11 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
     return m;
 }
 
-namespace {
+void forget_shared_meshes() {
+    SharedModel& s = shared_model();
+    std::lock_guard<std::mutex> lock(s.m);
+    if (s.done && !s.error) BRepTools::Clean(s.model.shape);
+}
 
 OcctModel read_model_from_file(const std::string& path, bool read_attributes, bool keep_document) {
     if (keep_document) read_attributes = true;
@@ -481,8 +483,6 @@ OcctModel read_model_from_file(const std::string& path, bool read_attributes, bo
     return m;
 }
 
-}  // namespace
-
 }  // namespace nurbsrt::occt
 
 namespace nurbsrt {
@@ -506,11 +506,7 @@ SharedRead::~SharedRead() {
     s.read_ms = 0;
 }
 
-void SharedRead::forget_meshes() {
-    occt::SharedModel& s = occt::shared_model();
-    std::lock_guard<std::mutex> lock(s.m);
-    if (s.done && !s.error) BRepTools::Clean(s.model.shape);
-}
+void SharedRead::forget_meshes() { occt::forget_shared_meshes(); }
 
 int SharedRead::reads() const {
     std::lock_guard<std::mutex> lock(occt::shared_model().m);

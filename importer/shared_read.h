@@ -19,9 +19,9 @@ public:
 
     // Uses share the shape as the last one left it, with the triangulations its
     // meshing added: a mesher finding them keeps them instead of meshing at its
-    // own parameters. Removes them (BRepTools::Clean), so that the next use
-    // meshes as it would alone; uses that mesh with the same parameters (the
-    // mesh outputs) need not call it between them.
+    // own parameters, and an exact writer (BREP) writes them. Removes them
+    // (BRepTools::Clean); convert_file does so before each conversion, so that
+    // every output is what a lone conversion writes.
     void forget_meshes();
 
     // How many times the file was really read (0 or 1) and what that cost.

@@ -112,7 +112,7 @@ unsigned aov_bits(const json& v, const std::string& key) {
 }
 
 // The option names, for messages that list them (kept in step with the parsers below).
-constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, strict";
+constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, deflection, strict";
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
@@ -371,6 +371,7 @@ E conversion_enum(const std::string& key, const std::string& value, FromName fro
 ConversionRequest parse_conversion_request(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format, units, schema, mode;
+    std::optional<double> deflection;
     bool strict = false;
     for (const auto& [key, v] : o.items()) {
         if (key == "format")
@@ -381,6 +382,8 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
             schema = text(v, key);
         else if (key == "iges_mode")
             mode = text(v, key);
+        else if (key == "deflection")
+            deflection = number(v, key);
         else if (key == "strict")
             strict = boolean(v, key);
         else
@@ -392,14 +395,23 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
     r.strict = strict;
     r.format = conversion_format_from_name(format);
     if (r.format == ConversionFormat::unknown) bad("option 'format' must be one of " + formats);
-    // An option the format does not take is refused, never ignored.
-    auto only_for = [&](const std::string& value, const char* key, bool applies, const char* formats_taking_it) {
-        if (!value.empty() && !applies)
-            bad(std::string("option '") + key + "' applies to " + formats_taking_it + " outputs only, not " + format);
+    // An option the format does not take is refused, never ignored (which
+    // applies where: the formats' table, conversion_option_refusal).
+    auto only_for = [&](const std::string& value, ConversionOption option) {
+        if (value.empty()) return;
+        if (const std::string why = conversion_option_refusal(option, r.format); !why.empty())
+            bad(std::string("option '") + conversion_option_name(option) + "' " + why + ", not " + format);
     };
-    only_for(units, "units", conversion_format_declares_units(r.format), "step and iges");
-    only_for(schema, "step_schema", r.format == ConversionFormat::step, "step");
-    only_for(mode, "iges_mode", r.format == ConversionFormat::iges, "iges");
+    only_for(units, ConversionOption::units);
+    only_for(schema, ConversionOption::step_schema);
+    only_for(mode, ConversionOption::iges_mode);
+    if (deflection) {
+        only_for("given", ConversionOption::deflection);
+        if (!(*deflection > 0 && *deflection <= kMaxConversionDeflection))
+            bad("option 'deflection' must be a number in (0, " + std::to_string(kMaxConversionDeflection) +
+                "], a fraction of the model's diagonal");
+        r.options.deflection = *deflection;
+    }
     if (!units.empty())
         r.options.units = conversion_enum<LengthUnit>("units", units, length_unit_from_name, length_unit_names());
     if (!schema.empty())

@@ -97,6 +97,42 @@ TEST(Cli, InfoTextCountsColouredFacesAsJsonDoes) {
         << text.out;
 }
 
+// The text form shows what the file declares and holds beyond geometry: its
+// unit, its colours (distinct, with their faces), the parts' names in the
+// assembly tree, and validity by BRepCheck_Analyzer (the JSON the same).
+TEST(Cli, InfoTextShowsUnitsColoursNamesValidityAndTree) {
+    const std::string file = nurbsrt::test::fixture_by_name("assembly");
+    const CliRun text = run_nurbsrt("info " + file);
+    const CliRun js = run_nurbsrt("info --json " + file);
+    ASSERT_EQ(text.status, 0) << text.err;
+    ASSERT_EQ(js.status, 0) << js.err;
+    const nlohmann::json j = nlohmann::json::parse(js.out);
+    EXPECT_NE(text.out.find("declared units mm"), std::string::npos) << text.out;
+    // One colour on both instances of the bracket (kAssemblyColor 0.9, 0.1, 0.2).
+    ASSERT_EQ(j["colours"].size(), 1u) << j["colours"].dump();
+    EXPECT_EQ(j["colours"][0]["faces"].get<int>(), 2 * nurbsrt::test::kAssemblyPartFaces);
+    EXPECT_NE(text.out.find("colours:     1 distinct: 0.9,0.1,0.2 (14 faces)"), std::string::npos) << text.out;
+    EXPECT_TRUE(j["validity"]["valid"].get<bool>());
+    EXPECT_NE(text.out.find("validity:    valid (BRepCheck_Analyzer"), std::string::npos) << text.out;
+    for (const char* name : nurbsrt::test::kAssemblyInstanceNames)
+        EXPECT_NE(text.out.find(name), std::string::npos) << name << " missing from the tree:\n" << text.out;
+    EXPECT_NE(text.out.find("parts:       "), std::string::npos) << text.out;
+}
+
+// An invalid shape is said so, with what the analyzer found invalid (a real
+// file from ../shared/models: four faces of its solid fail BRepCheck).
+TEST(Cli, InfoTextShowsAnInvalidShape) {
+    NURBSRT_REQUIRE_SHARED_MODELS();
+    const CliRun text = run_nurbsrt("info " + nurbsrt::test::shared_model("broken/trj6_b1-ec-214.stp"));
+    ASSERT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("validity:    INVALID (BRepCheck_Analyzer): 1 solid(s), 1 shell(s), 4 face(s), 0 edge(s) "
+                            "invalid"),
+              std::string::npos)
+        << text.out;
+    const CliRun isolated = run_nurbsrt("info --isolated " + nurbsrt::test::shared_model("broken/trj6_b1-ec-214.stp"));
+    EXPECT_NE(isolated.out.find("validity:    not checked (--isolated)"), std::string::npos) << isolated.out;
+}
+
 // Commands that write no image start without OpenImageIO and the ~260 libraries
 // it brings (renderer/image_module.h): the dynamic loader's own trace of the
 // files it loads shows none of them for `info`, and the writer module and
@@ -268,6 +304,47 @@ TEST(Cli, ConvertStrictRefusesWhatTheOutputLoses) {
     const CliRun kept = run_nurbsrt("convert --strict " + in + " " + (dir / "s.stp").string());
     EXPECT_EQ(kept.status, 0) << kept.err;  // STEP loses nothing: nothing to refuse
     EXPECT_TRUE(fs::exists(dir / "s.stp"));
+    fs::remove_all(dir);
+}
+
+// Faces BRepMesh cannot triangulate are missing from a mesh output: a warning
+// made by the conversion itself (importer/convert), so --strict here and
+// strict in the service (tests/api/test_conversions.py) refuse the same file.
+TEST(Cli, ConvertStrictRefusesUnmeshedFaces) {
+    NURBSRT_REQUIRE_SHARED_MODELS();
+    const std::string in = nurbsrt::test::shared_model("step/trj3_s1-al-214.stp");
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-unmeshed-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun plain = run_nurbsrt("convert " + in + " " + (dir / "t.stl").string());
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    EXPECT_NE(
+        plain.err.find("nurbsrt: warning: 10 of 94 face(s) could not be meshed and are missing from the STL output"),
+        std::string::npos)
+        << plain.err;
+    const CliRun strict = run_nurbsrt("convert --strict " + in + " " + (dir / "s.stl").string());
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    fs::remove_all(dir);
+}
+
+// A coarse mesh (--deflection 0.1 of the diagonal on a free-form face: 0.02 of
+// the diagonal from it) is a warning, --strict refuses it; --deflection is a
+// mesh option, refused for an exact output before any work.
+TEST(Cli, ConvertCoarseMeshWarnsAndStrictRefuses) {
+    const std::string in = nurbsrt::test::freeform_bspline();
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-coarse-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun plain = run_nurbsrt("convert --deflection 0.1 " + in + " " + (dir / "c.stl").string());
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    EXPECT_NE(plain.err.find("nurbsrt: warning: the STL mesh lies up to "), std::string::npos) << plain.err;
+    const CliRun strict = run_nurbsrt("convert --strict --deflection 0.1 " + in + " " + (dir / "s.stl").string());
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_FALSE(fs::exists(dir / "s.stl"));
+    const CliRun fine = run_nurbsrt("convert --strict " + in + " " + (dir / "f.stl").string());
+    EXPECT_EQ(fine.status, 0) << fine.err;
+    const CliRun exact = run_nurbsrt("convert --deflection 0.1 " + in + " " + (dir / "e.step").string());
+    EXPECT_NE(exact.status, 0);
+    EXPECT_NE(exact.err.find("applies to STL, GLB and VRML outputs only"), std::string::npos) << exact.err;
     fs::remove_all(dir);
 }
 

@@ -25,7 +25,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "importer/convert/convert_writers.h"
 #include "importer/importer.h"
+#include "core/error.h"
 #include "tests/support/fixtures.h"
 
 namespace {
@@ -108,6 +110,66 @@ TEST(ConvertFidelity, WhatChangesIsCountedAndWarned) {
     EXPECT_TRUE(mentions(r.warnings, "the output holds 0 shell(s), the source 1"));
     // The faces' geometry itself is unchanged.
     EXPECT_LT(f["relative_differences"]["area"].get<double>(), 1e-6);
+}
+
+// Each threshold that turns a fidelity difference into a warning, with a
+// fixture that crosses it. Mesh: a coarse deflection (0.1 of the diagonal)
+// puts the free-form face's mesh 0.02 of the diagonal from it, and cuts 6.6%
+// of the fan's volume (measured); the default deflection keeps both within
+// their tolerances.
+TEST(ConvertFidelity, CoarseMeshIsWarned) {
+    nurbsrt::ConvertOptions coarse;
+    coarse.deflection = nurbsrt::kMaxConversionDeflection;
+    const std::string freeform = nurbsrt::test::freeform_bspline(), fan = nurbsrt::test::blade_fan();
+    const nurbsrt::ConvertReport far = nurbsrt::convert_file(freeform, out_path("coarse.stl"), coarse);
+    const json f = json::parse(far.fidelity);
+    EXPECT_GT(f["output"]["deviation_in_mm"]["relative_to_diagonal"]["max"].get<double>(), 0.01);
+    EXPECT_TRUE(mentions(far.warnings, "the STL mesh lies up to ")) << far.warnings.size();
+    const nurbsrt::ConvertReport cut = nurbsrt::convert_file(fan, out_path("coarse.glb"), coarse);
+    const json g = json::parse(cut.fidelity);
+    EXPECT_GT(g["relative_differences"]["volume"].get<double>(), 0.05);
+    EXPECT_EQ(g["relative_differences"]["tolerance"].get<double>(), 0.05);
+    EXPECT_TRUE(mentions(cut.warnings, "the GLB mesh's volume differs from the exact faces' by"));
+    for (const std::string& in : {freeform, fan}) {
+        const nurbsrt::ConvertReport fine = nurbsrt::convert_file(in, out_path("fine.stl"));
+        EXPECT_TRUE(fine.warnings.empty()) << in << ": " << fine.warnings.front();
+    }
+    // deflection is a mesh option: refused for an exact output, and out of range.
+    EXPECT_THROW(nurbsrt::convert_file(fan, out_path("coarse.step"), coarse), nurbsrt::Error);
+    coarse.deflection = 0.5;
+    EXPECT_THROW(nurbsrt::convert_file(fan, out_path("too-coarse.stl"), coarse), nurbsrt::Error);
+}
+
+// Exact outputs: a volume or area moved past 1e-6 relative, and a valid
+// source written invalid, measured on generated measures (no OCCT writer
+// loses these on a sound file).
+TEST(ConvertFidelity, ExactDifferencesAndValidityLostAreWarned) {
+    nurbsrt::occt::GeometryMeasures in;
+    in.solids = in.shells = 1;
+    in.faces = 6;
+    in.edges = 12;
+    in.volume = 1000;
+    in.area = 600;
+    in.box = {0, 0, 0, 10, 10, 10};
+    std::vector<std::string> none;
+    nurbsrt::occt::compare_geometry(in, in, none);
+    EXPECT_TRUE(none.empty());
+    nurbsrt::occt::GeometryMeasures out = in;
+    out.volume *= 1 + 1e-5;
+    out.area *= 1 + 1e-5;
+    out.valid = false;
+    std::vector<std::string> w;
+    const json d = nurbsrt::occt::compare_geometry(in, out, w);
+    EXPECT_NEAR(d["volume"].get<double>(), 1e-5, 1e-9);
+    EXPECT_TRUE(mentions(w, "the output's volume differs from the source's by"));
+    EXPECT_TRUE(mentions(w, "the output's area differs from the source's by"));
+    EXPECT_TRUE(mentions(w, "the output is not a valid shape (BRepCheck_Analyzer); the source is"));
+    // Within the exact formats' tolerance: no warning.
+    out = in;
+    out.volume *= 1 + 1e-7;
+    std::vector<std::string> within;
+    nurbsrt::occt::compare_geometry(in, out, within);
+    EXPECT_TRUE(within.empty());
 }
 
 TEST(ConvertFidelity, MeshAreaIsTheWrittenTrianglesArea) {

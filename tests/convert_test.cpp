@@ -53,6 +53,7 @@
 #include "importer/importer.h"
 #include "importer/isolated.h"
 #include "importer/occt_shape.h"
+#include "options/render_request.h"
 #include "core/error.h"
 #include "core/scene/nurbs.h"
 #include "core/io/scene_json.h"
@@ -160,6 +161,48 @@ TEST(ConvertNames, ExtensionsNamesAndContentTypes) {
     EXPECT_EQ(nurbsrt::format_from_extension("a.brp"), nurbsrt::CadFormat::brep);
     EXPECT_TRUE(nurbsrt::conversion_format_declares_units(ConversionFormat::step));
     EXPECT_FALSE(nurbsrt::conversion_format_declares_units(ConversionFormat::brep));
+}
+
+// Which option applies to which format, the fixed units and the mesh formats:
+// one table (importer/format.cpp) that the CLI, the service and convert_file read.
+TEST(ConvertNames, OptionsUnitsAndMeshesByFormat) {
+    using nurbsrt::ConversionOption;
+    using nurbsrt::LengthUnit;
+    const ConversionFormat all[] = {ConversionFormat::step, ConversionFormat::iges,       ConversionFormat::stl,
+                                    ConversionFormat::glb,  ConversionFormat::nurbs_json, ConversionFormat::brep,
+                                    ConversionFormat::vrml};
+    for (ConversionFormat f : all) {
+        const bool step = f == ConversionFormat::step, iges = f == ConversionFormat::iges;
+        EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::units, f).empty(), step || iges);
+        EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::step_schema, f).empty(), step);
+        EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::iges_mode, f).empty(), iges);
+        EXPECT_EQ(nurbsrt::conversion_format_declares_units(f), step || iges);
+        EXPECT_EQ(nurbsrt::conversion_format_fixed_unit(f) == LengthUnit::unknown, step || iges);
+        EXPECT_EQ(nurbsrt::conversion_format_is_mesh(f),
+                  f == ConversionFormat::stl || f == ConversionFormat::glb || f == ConversionFormat::vrml);
+    }
+    EXPECT_EQ(nurbsrt::conversion_format_fixed_unit(ConversionFormat::glb), LengthUnit::m);
+    EXPECT_EQ(nurbsrt::conversion_format_fixed_unit(ConversionFormat::brep), LengthUnit::mm);
+    EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::units, ConversionFormat::stl),
+              "applies to STEP and IGES outputs only");
+    EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::iges_mode, ConversionFormat::step),
+              "applies to IGES outputs only");
+    EXPECT_STREQ(nurbsrt::conversion_option_name(ConversionOption::step_schema), "step_schema");
+    // The service's request model refuses by the same rule, naming the option.
+    try {
+        nurbsrt::parse_conversion_request(R"({"format":"glb","step_schema":"ap242"})");
+        FAIL() << "no error";
+    } catch (const nurbsrt::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("option 'step_schema' applies to STEP outputs only, not glb"),
+                  std::string::npos)
+            << e.what();
+    }
+    // And convert_file, for the one option it cannot tell from a default.
+    nurbsrt::ConvertOptions inch;
+    inch.units = LengthUnit::inch;
+    EXPECT_THROW(nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("inch", ".glb"), inch),
+                 nurbsrt::Error);
+    EXPECT_EQ(nurbsrt::parse_conversion_request(R"({"format":"step","units":"inch"})").options.units, LengthUnit::inch);
 }
 
 TEST(ConvertNames, UnknownExtensionIsUnsupported) {
@@ -471,7 +514,9 @@ TEST(ConvertIsolated, ReportsCrossTheProcessBoundary) {
 }
 
 // The child's stages and the parent's share (IsolationTimings) are the whole
-// call: what the service's conversion timings add up from.
+// call, by construction (no timing threshold: a loaded machine cannot fail
+// it): they add up to the call's total, which lies within the wall time seen
+// from outside; what the service's conversion timings add up from.
 TEST(ConvertIsolated, StagesAndIsolationAreTheWholeCall) {
     nurbsrt::IsolationLimits limits;
     limits.time_limit_s = 120;
@@ -484,11 +529,12 @@ TEST(ConvertIsolated, StagesAndIsolationAreTheWholeCall) {
         const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         const double sum =
             t.prescan_ms + t.isolation_ms + t.transfer_ms + r.read_ms + r.mesh_ms + r.write_ms + r.verify_ms;
+        EXPECT_NEAR(sum, t.total_ms, 1e-9 * t.total_ms) << ext;
+        EXPECT_LE(t.total_ms, wall) << ext;
         EXPECT_GT(t.isolation_ms, 0) << ext;  // starting a process is never free
         EXPECT_GE(t.prescan_ms, 0) << ext;
         EXPECT_GE(t.transfer_ms, 0) << ext;
-        EXPECT_LE(sum, wall) << ext;
-        EXPECT_GE(sum, 0.98 * wall) << ext;
+        EXPECT_GT(r.read_ms, 0) << ext;
     }
 }
 

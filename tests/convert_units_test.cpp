@@ -145,6 +145,25 @@ TEST(ConvertUnits, MeshOutputsRefuseAUnit) {
     }
 }
 
+// A file without a unit (STL, VRML, BREP) cannot say the source was in
+// inches: the coordinates are mm, and the report says so (a warning, which
+// strict refuses); glb states its metres, STEP keeps the inch: no warning.
+TEST(ConvertUnits, UnitlessOutputsWarnTheSourcesUnitIsNotCarried) {
+    for (const char* ext : {".stl", ".wrl", ".brep"}) {
+        const nurbsrt::ConvertReport r = nurbsrt::convert_file(inch_iges(), out_path(std::string("unitless") + ext));
+        ASSERT_FALSE(r.warnings.empty()) << ext;
+        EXPECT_NE(r.warnings.back().find("the source is in inch; "), std::string::npos) << r.warnings.back();
+        EXPECT_NE(r.warnings.back().find(" files have no unit: the coordinates are written in mm"), std::string::npos)
+            << r.warnings.back();
+    }
+    for (const char* ext : {".glb", ".step"})
+        for (const std::string& w : nurbsrt::convert_file(inch_iges(), out_path(std::string("stated") + ext)).warnings)
+            EXPECT_EQ(w.find("no unit"), std::string::npos) << ext << ": " << w;
+    // A source in mm written as mm loses nothing.
+    for (const std::string& w : nurbsrt::convert_file(nurbsrt::test::box_with_holes(), out_path("mm.stl")).warnings)
+        EXPECT_EQ(w.find("no unit"), std::string::npos) << w;
+}
+
 TEST(ConvertUnits, NamesAndIgesFlags) {
     for (const std::string& n : nurbsrt::length_unit_names()) {
         const auto u = nurbsrt::length_unit_from_name(n);

@@ -18,6 +18,7 @@
 #include <Poly_Triangulation.hxx>
 #include <Precision.hxx>
 #include <TopExp.hxx>
+#include <TopLoc_Location.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 
@@ -29,6 +30,7 @@
 
 #include "importer/convert/convert_writers.h"
 #include "importer/occt_shape.h"
+#include "importer/shared_read.h"
 #include "tests/support/fixtures.h"
 
 namespace {
@@ -90,5 +92,55 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, MeshDeviation,
                          ::testing::Values("box_with_holes", "sphere", "torus", "filleted_box_blend",
                                            "freeform_bspline", "freeform_rational"),
                          [](const auto& info) { return std::string(info.param); });
+
+}  // namespace
+
+namespace {
+
+// An assembly's part placed twice has its faces, and their one mesh, measured
+// once: the report counts the distinct faces and their instances, and its
+// statistics are those of the part alone (placements are rigid).
+TEST(MeshDeviationReport, MeasuresEachDistinctFaceOnce) {
+    const nurbsrt::occt::OcctModel m = nurbsrt::occt::read_model(nurbsrt::test::assembly(), false);
+    nurbsrt::ConvertReport r;
+    nurbsrt::occt::mesh_for_export(m.shape, r);
+    const nlohmann::ordered_json d = nurbsrt::occt::mesh_deviation_json(m.shape, 100.0);
+    ASSERT_TRUE(d.is_object());
+    EXPECT_EQ(d["distinct_faces"].get<int>(), nurbsrt::test::kAssemblyPartFaces);
+    EXPECT_EQ(d["face_instances"].get<int>(), 2 * nurbsrt::test::kAssemblyPartFaces);
+    // The points of one instance: every vertex and triangle of the part's faces.
+    long long part_points = 0;
+    TopTools_IndexedMapOfShape distinct;
+    for (int i = 1; i <= m.faces.Extent(); ++i) distinct.Add(m.faces(i).Located(TopLoc_Location()));
+    for (int i = 1; i <= distinct.Extent(); ++i) {
+        TopLoc_Location loc;
+        const Handle(Poly_Triangulation) t = BRep_Tool::Triangulation(TopoDS::Face(distinct(i)), loc);
+        ASSERT_FALSE(t.IsNull());
+        part_points += t->NbNodes() + t->NbTriangles();
+    }
+    EXPECT_EQ(d["points"].get<long long>(), part_points);
+    // Measuring the first instance alone gives the same statistics.
+    const nlohmann::ordered_json one = nurbsrt::occt::mesh_deviation_json(m.faces(1), 100.0);
+    EXPECT_LE(one["max"].get<double>(), d["max"].get<double>());
+}
+
+// The source's measures are taken once per read: the copies a SharedRead
+// serves share them, and a second conversion finds them taken.
+TEST(MeshDeviationReport, SourceMeasuredOncePerSharedRead) {
+    const std::string in = nurbsrt::test::box_with_holes();
+    nurbsrt::SharedRead read(in);
+    const nurbsrt::occt::OcctModel a = nurbsrt::occt::read_model(in, true), b = nurbsrt::occt::read_model(in, false);
+    EXPECT_EQ(a.measures.get(), b.measures.get());
+    EXPECT_FALSE(b.measures->source);
+    nurbsrt::convert_file(in, nurbsrt::test::fixture_dir() + "/measured-once.stl");
+    ASSERT_TRUE(b.measures->source);
+    const nurbsrt::occt::GeometryMeasures* first = b.measures->source.get();
+    nurbsrt::convert_file(in, nurbsrt::test::fixture_dir() + "/measured-once.step");
+    EXPECT_EQ(b.measures->source.get(), first) << "measured again";
+    EXPECT_EQ(first->faces, 8);
+    // A lone read measures its own.
+    const nurbsrt::occt::OcctModel alone = nurbsrt::occt::read_model(nurbsrt::test::sphere(), false);
+    EXPECT_NE(alone.measures.get(), a.measures.get());
+}
 
 }  // namespace

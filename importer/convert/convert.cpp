@@ -6,6 +6,7 @@
 
 #include "importer/convert/convert_writers.h"
 #include "importer/importer.h"
+#include "importer/internal.h"
 #include "core/error.h"
 #include "core/io/scene_json.h"
 
@@ -21,7 +22,6 @@ void write_nurbs_json(const std::string& in_path, const std::string& out_path, C
     r.in_format = detect_format(in_path);
     r.faces = static_cast<int>(scene.faces.size());
     r.in_units = scene.units;
-    r.out_units = length_unit_name(LengthUnit::mm);  // the Scene's coordinates
     r.read_ms = scene.timings.read_ms;
     r.mesh_ms = scene.timings.nurbs_convert_ms + scene.timings.mesh_ms;
     const auto t0 = std::chrono::steady_clock::now();
@@ -39,14 +39,27 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
         throw Error(ErrorCode::unsupported_format,
                     "output '" + out_path +
                         "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb, .json, .brep or .wrl)");
-    if (options.units != LengthUnit::unknown && !conversion_format_declares_units(r.output))
-        throw Error(ErrorCode::invalid_argument, std::string("option 'units' applies to STEP and IGES outputs; ") +
+    if (const std::string why = conversion_option_refusal(ConversionOption::units, r.output);
+        options.units != LengthUnit::unknown && !why.empty())
+        throw Error(ErrorCode::invalid_argument, std::string("option 'units' ") + why + "; " +
                                                      conversion_format_name(r.output) + " has a unit of its own");
+    if (const std::string why = conversion_option_refusal(ConversionOption::deflection, r.output);
+        options.deflection != 0 && !why.empty())
+        throw Error(ErrorCode::invalid_argument, std::string("option 'deflection' ") + why);
+    if (!(options.deflection >= 0 && options.deflection <= kMaxConversionDeflection))
+        throw Error(ErrorCode::invalid_argument,
+                    "option 'deflection' must be in (0, " + std::to_string(kMaxConversionDeflection) + "]");
+    if (const LengthUnit fixed = conversion_format_fixed_unit(r.output); fixed != LengthUnit::unknown)
+        r.out_units = length_unit_name(fixed);
     const std::filesystem::path out_dir = std::filesystem::path(out_path).parent_path();
     std::error_code ec;
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))
         throw Error(ErrorCode::io, "cannot write '" + out_path + "': no such directory");
 
+    // A shared read's shape may carry the triangulations of an earlier use
+    // (the import, another mesh output): gone, so that BRepMesh meshes anew
+    // (with its degenerate triangles counted again) and BREP writes none.
+    occt::forget_shared_meshes();
     switch (r.output) {
         case ConversionFormat::step:
         case ConversionFormat::iges:
@@ -54,13 +67,13 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
             occt::write_cad(in_path, out_path, options, r);
             break;
         case ConversionFormat::vrml:
-            occt::write_vrml(in_path, out_path, r);
+            occt::write_vrml(in_path, out_path, options, r);
             break;
         case ConversionFormat::stl:
-            occt::write_stl(in_path, out_path, r);
+            occt::write_stl(in_path, out_path, options, r);
             break;
         case ConversionFormat::glb:
-            occt::write_glb(in_path, out_path, r);
+            occt::write_glb(in_path, out_path, options, r);
             break;
         case ConversionFormat::nurbs_json:
             write_nurbs_json(in_path, out_path, r);
@@ -68,6 +81,12 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
         case ConversionFormat::unknown:
             break;
     }
+    // A unit the source declares that the file cannot say is a change a
+    // reader will not see (it assumes mm).
+    const std::string declared = r.in_units.substr(0, r.in_units.find(','));
+    if (conversion_format_is_unitless(r.output) && !declared.empty() && declared != r.out_units)
+        r.warnings.push_back(std::string("the source is in ") + declared + "; " + conversion_format_name(r.output) +
+                             " files have no unit: the coordinates are written in " + r.out_units);
     return r;
 }
 

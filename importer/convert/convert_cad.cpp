@@ -13,6 +13,7 @@
 #include <set>
 #include <vector>
 
+#include <BRepBuilderAPI_Copy.hxx>
 #include <BRepTools.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Writer.hxx>
@@ -25,6 +26,8 @@
 #include <TDF_LabelMap.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TopAbs_ShapeEnum.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_Editor.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
@@ -145,7 +148,24 @@ std::string listed_names(const std::vector<std::string>& names) {
     return s;
 }
 
-std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out, CadFormat out_format) {
+// What the output lost of the source's attributes, counted once for the
+// warnings and the report.
+struct Losses {
+    int faces_losing_colour = 0;
+    std::vector<std::string> names;  // sorted; names the source never had (is_generated_name) left out
+};
+
+Losses losses_of(const XdeContent& in, const XdeContent& out) {
+    Losses l;
+    l.faces_losing_colour = faces_losing_colour(in, out);
+    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
+                        std::back_inserter(l.names));
+    std::erase_if(l.names, is_generated_name);
+    return l;
+}
+
+std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out, const Losses& lost,
+                                    CadFormat out_format) {
     std::vector<std::string> w;
     const std::string fmt = format_name(out_format);
     // IGES 5.3 has no product structure like STEP's; its subfigure instances
@@ -168,17 +188,13 @@ std::vector<std::string> shortfalls(const XdeContent& in, const XdeContent& out,
     if (out.faces != in.faces)
         w.push_back("the written " + fmt + " file holds " + std::to_string(out.faces) + " face(s), the input " +
                     std::to_string(in.faces));
-    if (const int lost = faces_losing_colour(in, out); lost > 0)
-        w.push_back(std::to_string(lost) + " of " + std::to_string(in.coloured_faces) +
+    if (lost.faces_losing_colour > 0)
+        w.push_back(std::to_string(lost.faces_losing_colour) + " of " + std::to_string(in.coloured_faces) +
                     " coloured face(s) lost their colour (the written " + fmt + " file has " +
                     std::to_string(out.coloured_faces) + " coloured face(s))");
-    std::vector<std::string> missing;
-    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(),
-                        std::back_inserter(missing));
-    std::erase_if(missing, is_generated_name);
-    if (!missing.empty())
-        w.push_back(std::to_string(missing.size()) + " of " + std::to_string(in.names.size()) +
-                    " name(s) not in the written " + fmt + " file: " + listed_names(missing));
+    if (!lost.names.empty())
+        w.push_back(std::to_string(lost.names.size()) + " of " + std::to_string(in.names.size()) +
+                    " name(s) not in the written " + fmt + " file: " + listed_names(lost.names));
     return w;
 }
 
@@ -215,12 +231,9 @@ void expand_named_groups(const Handle(TDocStd_Document) & doc) {
 
 // The XDE part of the fidelity report: colours, names and the assembly of the
 // source and the output, with the first names lost.
-nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& out) {
-    std::vector<std::string> lost;
-    std::set_difference(in.names.begin(), in.names.end(), out.names.begin(), out.names.end(), std::back_inserter(lost));
-    std::erase_if(lost, is_generated_name);
-    const size_t lost_count = lost.size();
-    if (lost.size() > kNamesListed) lost.resize(kNamesListed);
+nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& out, const Losses& losses) {
+    std::vector<std::string> lost(losses.names.begin(),
+                                  losses.names.begin() + std::min(losses.names.size(), kNamesListed));
     auto tree = [](const XdeContent& c) {
         return nlohmann::ordered_json{
             {"assemblies", c.assemblies}, {"components", c.components}, {"instances", c.instances}};
@@ -228,9 +241,12 @@ nlohmann::ordered_json attributes_json(const XdeContent& in, const XdeContent& o
     return {{"colours",
              {{"source_coloured_faces", in.coloured_faces},
               {"output_coloured_faces", out.coloured_faces},
-              {"faces_losing_colour", faces_losing_colour(in, out)}}},
+              {"faces_losing_colour", losses.faces_losing_colour}}},
             {"names",
-             {{"source", in.names.size()}, {"output", out.names.size()}, {"lost", lost_count}, {"lost_first", lost}}},
+             {{"source", in.names.size()},
+              {"output", out.names.size()},
+              {"lost", losses.names.size()},
+              {"lost_first", lost}}},
             {"assembly", {{"source", tree(in)}, {"output", tree(out)}}}};
 }
 
@@ -270,6 +286,21 @@ void write_step(const Handle(TDocStd_Document) & doc, const std::string& out_pat
         throw Error(ErrorCode::io, "STEP writer: cannot write '" + out_path + "'");
 }
 
+// BREP writes the shapes' state flags (free, modified, checked) and
+// triangulations as it finds them, and the earlier uses of a shared read
+// (importer/shared_read.h: the import, other outputs) change both (measured:
+// a face re-meshed loses "checked"): a copy of the topology (the geometry
+// shared, no meshes) with "checked" cleared, a cache that only says BRepCheck
+// saw the shape, writes the same file whatever came before.
+TopoDS_Shape fresh_copy(const TopoDS_Shape& shape) {
+    TopoDS_Shape copy = BRepBuilderAPI_Copy(shape, /*copyGeom=*/Standard_False, /*copyMesh=*/Standard_False).Shape();
+    TopTools_IndexedMapOfShape all;
+    TopExp::MapShapes(copy, all);
+    for (int i = 1; i <= all.Extent(); ++i) all(i).TShape()->Checked(Standard_False);
+    copy.Checked(Standard_False);
+    return copy;
+}
+
 // The model written in `out_format`: STEP and IGES from its XDE document in
 // `unit` (the writers scale the document's mm to it), BREP as OCCT's own text
 // (the shape alone: no colours, names or unit). Callers hold exchange_mutex and
@@ -280,14 +311,16 @@ void write_model(const OcctModel& model, const std::string& out_path, CadFormat 
         write_iges(model.document, out_path, unit, options.iges_mode);
     else if (out_format == CadFormat::step)
         write_step(model.document, out_path, unit, options.step_schema);
-    else if (!BRepTools::Write(model.shape, out_path.c_str()))
+    else if (!BRepTools::Write(fresh_copy(model.shape), out_path.c_str()))
         throw Error(ErrorCode::io, "BREP writer: cannot write '" + out_path + "'");
 }
 
 }  // namespace
 
-OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r) {
-    OcctModel model = read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
+OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r,
+                          bool changes_document) {
+    OcctModel model = changes_document ? read_model_from_file(in_path, /*read_attributes=*/true, /*keep_document=*/true)
+                                       : read_model(in_path, /*read_attributes=*/true, /*keep_document=*/true);
     r.in_format = model.format;
     r.faces = model.faces.Extent();
     r.in_units = model.units;
@@ -299,12 +332,16 @@ OcctModel read_for_export(const std::string& in_path, const std::string& target,
 
 void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
                ConvertReport& r) {
-    OcctModel model = read_for_export(in_path, format_name(r.out_format), r);
+    // IGES to STEP changes the document (expand_named_groups): on a read of
+    // its own, never the shared one the file's other outputs are written from.
+    const bool expands = r.out_format == CadFormat::step && detect_format(in_path) == CadFormat::iges;
+    OcctModel model = read_for_export(in_path, format_name(r.out_format), r, expands);
     DocumentCloser closer{model.document};
-    // Formats without a declared unit (BREP) are written in OCCT's mm.
+    // Formats without a declared unit (BREP) are written in their own.
     const bool declares_units = conversion_format_declares_units(r.output);
-    const LengthUnit unit = declares_units ? target_unit(model.units, options.units) : LengthUnit::mm;
-    if (model.format == CadFormat::iges && r.out_format == CadFormat::step) expand_named_groups(model.document);
+    const LengthUnit unit =
+        declares_units ? target_unit(model.units, options.units) : conversion_format_fixed_unit(r.output);
+    if (expands) expand_named_groups(model.document);
 
     const auto t0 = std::chrono::steady_clock::now();
     {
@@ -323,18 +360,19 @@ void write_cad(const std::string& in_path, const std::string& out_path, const Co
         OcctModel written = read_model(out_path, /*read_attributes=*/true, /*keep_document=*/true);
         DocumentCloser written_closer{written.document};
         const XdeContent in = content_of(model), out = content_of(written);
-        r.warnings = shortfalls(in, out, r.out_format);
+        const Losses lost = losses_of(in, out);
+        for (std::string& w : shortfalls(in, out, lost, r.out_format)) r.warnings.push_back(std::move(w));
         r.out_units = declares_units ? written.units : length_unit_name(unit);
         if (r.out_units != length_unit_name(unit))
             r.warnings.push_back(std::string("the written file declares the unit '") + written.units + "', not '" +
                                  length_unit_name(unit) + "'");
         // Geometry read back in mm, as the source: directly comparable whatever the written unit.
-        const GeometryMeasures gin = measure_geometry(model.shape), gout = measure_geometry(written.shape);
+        const GeometryMeasures &gin = measure_source(model), gout = measure_geometry(written.shape);
         nlohmann::ordered_json f = {{"source", source_json(model, gin)}};
         f["output"] = {
             {"format", conversion_format_name(r.output)}, {"units", r.out_units}, {"geometry", geometry_json(gout)}};
         f["relative_differences"] = compare_geometry(gin, gout, r.warnings);
-        f["attributes"] = attributes_json(in, out);
+        f["attributes"] = attributes_json(in, out, lost);
         r.fidelity = f.dump();
     } catch (const Error& e) {
         // The file is written; that OCCT cannot read it back is worth knowing

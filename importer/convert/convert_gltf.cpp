@@ -37,32 +37,48 @@ constexpr float kPaintRoughness = 0.5f;
 // writer a metallic factor of 1, glTF's default (glTF 2.0 §3.9.2), and viewers
 // show every part as chrome. One PBR material, metallic 0, on every free shape
 // of the document (styles are inherited down the assembly) and as the writer's
-// default; the parts' own colours still set its base colour.
-XCAFPrs_Style paint_material(const Handle(TDocStd_Document) & doc, const TDF_LabelSequence& roots) {
-    Handle(XCAFDoc_VisMaterial) paint = new XCAFDoc_VisMaterial();
-    XCAFDoc_VisMaterialPBR pbr;
-    pbr.IsDefined = Standard_True;
-    pbr.Metallic = 0.0f;
-    pbr.Roughness = kPaintRoughness;
-    pbr.BaseColor =
-        Quantity_ColorRGBA(Quantity_Color(0.8, 0.8, 0.8, Quantity_TOC_RGB), 1.0f);  // core/scene's default grey
-    paint->SetPbrMaterial(pbr);
-    const Handle(XCAFDoc_VisMaterialTool) materials = XCAFDoc_DocumentTool::VisMaterialTool(doc->Main());
-    const TDF_Label label = materials->AddMaterial(paint, "paint");
-    for (const TDF_Label& root : roots) materials->SetShapeMaterial(root, label);
-    XCAFPrs_Style style;
-    style.SetMaterial(paint);
-    return style;
-}
+// default; the parts' own colours still set its base colour. Taken off the
+// document again when done: it may be a shared read's (importer/shared_read.h),
+// and a later STEP or VRML output of it must not find the material.
+class PaintMaterial {
+public:
+    PaintMaterial(const Handle(TDocStd_Document) & doc, const TDF_LabelSequence& roots)
+        : materials_(XCAFDoc_DocumentTool::VisMaterialTool(doc->Main())), roots_(roots) {
+        Handle(XCAFDoc_VisMaterial) paint = new XCAFDoc_VisMaterial();
+        XCAFDoc_VisMaterialPBR pbr;
+        pbr.IsDefined = Standard_True;
+        pbr.Metallic = 0.0f;
+        pbr.Roughness = kPaintRoughness;
+        pbr.BaseColor =
+            Quantity_ColorRGBA(Quantity_Color(0.8, 0.8, 0.8, Quantity_TOC_RGB), 1.0f);  // core/scene's default grey
+        paint->SetPbrMaterial(pbr);
+        label_ = materials_->AddMaterial(paint, "paint");
+        for (const TDF_Label& root : roots_) materials_->SetShapeMaterial(root, label_);
+        style_.SetMaterial(paint);
+    }
+    ~PaintMaterial() {
+        for (const TDF_Label& root : roots_) materials_->UnSetShapeMaterial(root);
+        materials_->RemoveMaterial(label_);
+    }
+    PaintMaterial(const PaintMaterial&) = delete;
+    PaintMaterial& operator=(const PaintMaterial&) = delete;
+    const XCAFPrs_Style& style() const { return style_; }
+
+private:
+    Handle(XCAFDoc_VisMaterialTool) materials_;
+    TDF_LabelSequence roots_;
+    TDF_Label label_;
+    XCAFPrs_Style style_;
+};
 
 }  // namespace
 
-void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+void write_glb(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
-    r.out_units = length_unit_name(LengthUnit::m);
 
-    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r);
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options.deflection);
     TDF_LabelSequence roots;
     XCAFDoc_DocumentTool::ShapeTool(model.document->Main())->GetFreeShapes(roots);
 
@@ -74,7 +90,8 @@ void write_glb(const std::string& in_path, const std::string& out_path, ConvertR
         cs.SetInputCoordinateSystem(RWMesh_CoordinateSystem_Zup);
         cs.SetOutputLengthUnit(1.0);                                 // glTF: metres
         cs.SetOutputCoordinateSystem(RWMesh_CoordinateSystem_glTF);  // Y-up
-        writer.SetDefaultStyle(paint_material(model.document, roots));
+        const PaintMaterial paint(model.document, roots);
+        writer.SetDefaultStyle(paint.style());
         TColStd_IndexedDataMapOfStringString info;
         info.Add("generator", "nurbsrt");
         if (!writer.Perform(model.document, info, Message_ProgressRange()))

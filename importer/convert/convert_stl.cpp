@@ -9,14 +9,14 @@
 
 namespace nurbsrt::occt {
 
-void write_stl(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+void write_stl(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r) {
     const OcctModel model = read_model(in_path, /*read_attributes=*/false);
     r.in_format = model.format;
     r.faces = model.faces.Extent();
     r.in_units = model.units;
-    r.out_units = length_unit_name(LengthUnit::mm);
     r.read_ms = model.read_ms;
-    mesh_for_export(model.shape, r);
+    mesh_for_export(model.shape, r, options.deflection);
 
     const auto t0 = std::chrono::steady_clock::now();
     try {

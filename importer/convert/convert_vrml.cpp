@@ -18,13 +18,13 @@ constexpr double kVrmlScale = 1.0;
 
 }  // namespace
 
-void write_vrml(const std::string& in_path, const std::string& out_path, ConvertReport& r) {
+void write_vrml(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+                ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "VRML", r);
     DocumentCloser closer{model.document};
-    r.out_units = length_unit_name(LengthUnit::mm);
     // The writer meshes faces without a triangulation itself, at its own
     // deflection: ours first, with the degenerate triangles taken out.
-    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r);
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options.deflection);
 
     const auto t0 = std::chrono::steady_clock::now();
     try {

@@ -18,37 +18,44 @@ namespace nurbsrt::occt {
 // Reads `in_path` with its XDE document (colours, names, assembly) for an export
 // to `target` (the output format's name), filling r.in_format, r.faces and
 // r.in_units and r.read_ms; throws occt_failure when the reader gives no document. The caller
-// closes the document (DocumentCloser).
-OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r);
+// closes the document (DocumentCloser). `changes_document`: a read of the caller's own,
+// not the SharedRead's (whose document the file's later outputs are written from).
+OcctModel read_for_export(const std::string& in_path, const std::string& target, ConvertReport& r,
+                          bool changes_document = false);
 
 // STEP, IGES or BREP through OCCT's writers (exact geometry, topology kept);
 // STEP and IGES in options.units or the source's unit, with options' schema / mode.
 void write_cad(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
                ConvertReport& r);
-// Binary STL of the whole model, meshed by mesh_for_export.
-void write_stl(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+// Binary STL of the whole model, meshed by mesh_for_export at options.deflection.
+void write_stl(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r);
 // Binary glTF 2.0 (.glb) from the XDE document: colours, names and assembly
 // instances kept; Y-up, metres (see convert_gltf.cpp).
-void write_glb(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+void write_glb(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r);
 // VRML 2.0 (.wrl) from the XDE document: colours and the assembly's placements
 // kept; coordinates in mm (see convert_vrml.cpp).
-void write_vrml(const std::string& in_path, const std::string& out_path, ConvertReport& r);
+void write_vrml(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+                ConvertReport& r);
 
 // Meshes every face of `shape` with BRepMesh for export: linear deflection
-// ImportOptions{}.mesh_relative_deflection times the diagonal of the faces'
-// bounding box, angular deflection ImportOptions{}.mesh_angular_deflection.
+// `relative_deflection` (0: ImportOptions{}.mesh_relative_deflection) times the
+// diagonal of the faces' bounding box, angular deflection
+// ImportOptions{}.mesh_angular_deflection.
 // Fills r.mesh_ms, r.triangles (over all face occurrences, instances counted
 // separately) and r.unmeshed_faces (faces left without a triangulation, which
-// mesh outputs cannot contain). Triangles of no area at float precision or
+// mesh outputs cannot contain, a warning). Triangles of no area at float precision or
 // repeating another of their face are taken out of the faces' triangulations
 // (the writers read those) and counted in r.degenerate_triangles.
 // Returns the deflection used.
-double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r);
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection = 0);
 // The same for the shapes an XDE document holds (the writers that take a
 // document read the triangulations from them); parts placed twice share their
 // faces, so are meshed once.
 // Returns the meshed compound of the document's free shapes.
-TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r);
+TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r,
+                                      double relative_deflection);
 
 // --- the fidelity report (fidelity.cpp) ----------------------------------------
 // A shape as OCCT measures it: distinct (located) sub-shapes, the volume of its
@@ -61,6 +68,8 @@ struct GeometryMeasures {
     bool valid = true;
 };
 GeometryMeasures measure_geometry(const TopoDS_Shape& shape);
+// measure_geometry of the model's shape, once per read (OcctModel::measures).
+const GeometryMeasures& measure_source(const OcctModel& model);
 // The triangles of the faces' triangulations (placed, every occurrence): their
 // area, the volume they enclose (divergence theorem) and their box.
 struct MeshMeasures {
@@ -84,13 +93,16 @@ nlohmann::ordered_json mesh_json(const GeometryMeasures& in, const MeshMeasures&
 // the triangle's (u, v) centroid; where that point is trimmed away, the face's
 // boundary, counted in `outside_trim`). Empty without a triangulation with (u, v).
 std::vector<double> face_mesh_deviations(const TopoDS_Face& face, long long& outside_trim);
-// Max, p99 and mean of those over every face of `meshed`, in mm and relative to
-// `diagonal`; null when nothing was meshed.
+// Max, p99 and mean of those over the distinct faces of `meshed` (a part placed
+// n times has its faces, and their mesh, once: measured once, counted in
+// `face_instances`), in mm and relative to `diagonal`; null when nothing was meshed.
 nlohmann::ordered_json mesh_deviation_json(const TopoDS_Shape& meshed, double diagonal);
 // The source's part of a report: format, declared units, geometry.
 nlohmann::ordered_json source_json(const OcctModel& model, const GeometryMeasures& m);
 // The whole report of a mesh output: `meshed` is the shape whose faces carry
-// the triangulations written.
-std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, const ConvertReport& r);
+// the triangulations written. Adds a warning to r.warnings for a mesh farther
+// from the exact faces, or an area or enclosed volume more different from
+// theirs, than the tolerances of fidelity.cpp.
+std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, ConvertReport& r);
 
 }  // namespace nurbsrt::occt

@@ -79,7 +79,7 @@ long long drop_degenerate_triangles(const TopoDS_Face& face) {
 
 }  // namespace
 
-double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection) {
     const auto t0 = std::chrono::steady_clock::now();
     TopTools_IndexedMapOfShape faces;
     TopExp::MapShapes(shape, TopAbs_FACE, faces);
@@ -90,7 +90,8 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
     const double diag = box.IsVoid() ? 0.0 : std::sqrt(box.SquareExtent());
     const ImportOptions defaults;
     IMeshTools_Parameters params;
-    params.Deflection = diag > 0 && std::isfinite(diag) ? defaults.mesh_relative_deflection * diag : 1e-3;
+    const double relative = relative_deflection > 0 ? relative_deflection : defaults.mesh_relative_deflection;
+    params.Deflection = diag > 0 && std::isfinite(diag) ? relative * diag : 1e-3;
     params.Angle = defaults.mesh_angular_deflection;
     params.InParallel = Standard_True;
     try {
@@ -111,6 +112,12 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
             r.triangles += t->NbTriangles();
     }
     r.mesh_ms = ms_since(t0);
+    // A face missing from the output is a loss like any other: a warning,
+    // which strict refuses (the CLI and the service alike).
+    if (r.unmeshed_faces > 0 && r.triangles > 0)
+        r.warnings.push_back(std::to_string(r.unmeshed_faces) + " of " + std::to_string(faces.Extent()) +
+                             " face(s) could not be meshed and are missing from the " +
+                             conversion_format_name(r.output) + " output");
     if (r.triangles == 0)
         throw Error(ErrorCode::occt_failure,
                     "BRepMesh produced no triangles for any of the " + std::to_string(faces.Extent()) + " faces");
@@ -121,7 +128,8 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r) {
 
 namespace nurbsrt::occt {
 
-TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r) {
+TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r,
+                                      double relative_deflection) {
     const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
     TDF_LabelSequence roots;
     shapes->GetFreeShapes(roots);
@@ -129,7 +137,7 @@ TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, Conv
     BRep_Builder builder;
     builder.MakeCompound(all);
     for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
-    mesh_for_export(all, r);
+    mesh_for_export(all, r, relative_deflection);
     return all;
 }
 

@@ -96,10 +96,15 @@ std::vector<double> face_mesh_deviations(const TopoDS_Face& face, long long& out
 nlohmann::ordered_json mesh_deviation_json(const TopoDS_Shape& meshed, double diagonal) {
     TopTools_IndexedMapOfShape faces;
     TopExp::MapShapes(meshed, TopAbs_FACE, faces);
+    // A face's instances share its triangulation (on the TFace) and are placed
+    // rigidly: its deviation is the same in each, so each distinct face (the
+    // face unplaced) is measured once.
+    TopTools_IndexedMapOfShape distinct;
+    for (int i = 1; i <= faces.Extent(); ++i) distinct.Add(faces(i).Located(TopLoc_Location()));
     std::vector<double> all;
     long long outside = 0;
-    for (int i = 1; i <= faces.Extent(); ++i) {
-        std::vector<double> d = face_mesh_deviations(TopoDS::Face(faces(i)), outside);
+    for (int i = 1; i <= distinct.Extent(); ++i) {
+        std::vector<double> d = face_mesh_deviations(TopoDS::Face(distinct(i)), outside);
         all.insert(all.end(), d.begin(), d.end());
     }
     if (all.empty()) return nullptr;
@@ -111,7 +116,9 @@ nlohmann::ordered_json mesh_deviation_json(const TopoDS_Shape& meshed, double di
     const double max = *std::max_element(all.begin(), all.end());
     const double mean = sum / static_cast<double>(all.size());
     auto rel = [&](double x) { return diagonal > 0 ? x / diagonal : 0.0; };
-    return {{"points", all.size()},
+    return {{"distinct_faces", distinct.Extent()},
+            {"face_instances", faces.Extent()},
+            {"points", all.size()},
             {"centroids_projected_to_the_boundary", outside},
             {"max", max},
             {"p99", at_p99},

@@ -35,7 +35,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
     StageClock stages(GuardedServer::request_received_at());
-    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode", "strict"});
+    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode", "deflection", "strict"});
     const ConversionRequest request = parse_conversion_request(upload.options_json);
     const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.

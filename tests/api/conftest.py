@@ -44,6 +44,22 @@ def pg_store_for(data_dir):
     return PG_ADMIN.rsplit("/", 1)[0] + "/" + name
 
 
+_GENERATED = {}
+
+
+def generated_fixture(name):
+    """A test fixture made by OCCT (tests/support/fixtures.cpp, the nurbsrt_fixture tool
+    beside the binary under test), written once per run; the test skips without the tool."""
+    if name not in _GENERATED:
+        tool = pathlib.Path(os.environ.get("NURBSRT_BIN", "build/nurbsrt")).resolve().parent / "nurbsrt_fixture"
+        if not tool.is_file():
+            pytest.skip(f"{tool} is absent: cannot generate the fixture {name}")
+        out = pathlib.Path(tempfile.mkdtemp(prefix="nurbsrt-api-fixture-")) / f"{name}.step"
+        subprocess.run([str(tool), name, str(out)], check=True, capture_output=True, timeout=120)
+        _GENERATED[name] = out
+    return _GENERATED[name]
+
+
 def validate(instance, name):
     """Validates `instance` against components/schemas/<name> of the OpenAPI document."""
     schema = {"$ref": f"#/components/schemas/{name}", "components": SCHEMA["components"]}

@@ -9,7 +9,8 @@ import jsonschema
 import pytest
 import requests
 
-from conftest import BEARING, MODELS, REPO, SCHEMA, SCREW, TIMEOUT, check_problem, post_raw, validate
+from conftest import (BEARING, MODELS, REPO, SCHEMA, SCREW, TIMEOUT, check_problem, generated_fixture, post_raw,
+                      validate)
 
 NURBS_SCHEMA = json.loads((REPO / "api_schema" / "nurbs_scene.schema.json").read_text())
 ASSEMBLY = MODELS / "step" / "as1-oc-214.stp"  # an assembly with colours and instance names
@@ -122,6 +123,11 @@ def test_stl_reports_faces_it_could_not_mesh(url):
     validate(j, "ConversionResponse")
     assert j["unmeshed_faces"] == 10 and j["faces"] == 94 and j["triangles"] > 0
     assert j["degenerate_triangles"] > 0
+    # The missing faces are a warning, as on the CLI, and strict refuses them alike.
+    assert "10 of 94 face(s) could not be meshed and are missing from the STL output" in j["warnings"], j["warnings"]
+    detail = check_problem(post_raw(url, "/v1/conversions", model.read_bytes(), params={"format": "stl", "strict": "true"}),
+                           422, "strict_refused")["detail"]
+    assert "could not be meshed" in detail, detail
 
 
 @pytest.mark.parametrize("model", real_models())
@@ -368,3 +374,32 @@ def test_step_schema_and_iges_mode(url):
         detail = check_problem(post_raw(url, "/v1/conversions", SCREW.read_bytes(), params=params),
                                400, "invalid_argument")["detail"]
         assert f"'{name}'" in detail, detail
+
+
+def test_coarse_mesh_is_a_warning_strict_refuses(url):
+    """deflection asks for a mesh; what it achieved past the fidelity thresholds is a
+    warning (header and JSON), which strict refuses. A free-form face meshed at 0.1 of
+    the diagonal lies 0.02 of the diagonal from its mesh (the threshold is 0.01)."""
+    data = generated_fixture("freeform_bspline").read_bytes()
+    r = post_raw(url, "/v1/conversions", data, params={"format": "stl", "deflection": "0.1"})
+    assert r.status_code == 200, r.text[:300]
+    count, _, listed = r.headers["X-Nurbsrt-Warnings"].partition("; ")
+    assert int(count) >= 1 and "the STL mesh lies up to" in listed, r.headers["X-Nurbsrt-Warnings"]
+    j = requests.post(url + "/v1/conversions", data=data, params={"format": "stl", "deflection": "0.1"},
+                      headers={"Content-Type": "application/octet-stream", "Accept": "application/json"},
+                      timeout=TIMEOUT).json()
+    validate(j, "ConversionResponse")
+    assert any("the STL mesh lies up to" in w for w in j["warnings"]), j["warnings"]
+    assert j["fidelity"]["output"]["deviation_in_mm"]["relative_to_diagonal"]["max"] > 0.01
+    detail = check_problem(post_raw(url, "/v1/conversions", data,
+                                    params={"format": "stl", "deflection": "0.1", "strict": "true"}),
+                           422, "strict_refused")["detail"]
+    assert "the STL mesh lies up to" in detail, detail
+    # The default deflection loses nothing here: no warning, strict answers the file.
+    r = post_raw(url, "/v1/conversions", data, params={"format": "stl", "strict": "true"})
+    assert r.status_code == 200 and "X-Nurbsrt-Warnings" not in r.headers, r.text[:300]
+    # deflection is a mesh option, in (0, 0.1].
+    for params, what in (({"format": "step", "deflection": "0.01"}, "applies to STL, GLB and VRML outputs only"),
+                         ({"format": "stl", "deflection": "0.5"}, "must be a number in (0, ")):
+        detail = check_problem(post_raw(url, "/v1/conversions", data, params=params), 400)["detail"]
+        assert what in detail, detail
