@@ -71,8 +71,9 @@ def spec_for(n):
     src = FILES[n % len(FILES)]
     target = "iges" if src.suffix == ".step" else "step"
     size = 160 + 40 * (n % 5)
+    # force: specs repeat every 20 jobs; each is made anew, not served from an earlier job's artifacts.
     return src, {"outputs": [{"file": 0, "type": "render", "options": {"width": size, "height": size}},
-                             {"file": 0, "type": "conversion", "format": target}]}
+                             {"file": 0, "type": "conversion", "format": target}], "force": True}
 
 
 def wait_until(pred, timeout, what):
