@@ -36,10 +36,12 @@ PACKAGES=(
   libpq-dev postgresql libzip-dev
   iproute2
   clang libclang-rt-14-dev clang-format
-  python3 python3-pytest python3-requests python3-jsonschema python3-numpy
+  python3 python3-pytest python3-requests python3-jsonschema python3-numpy python3-venv python3-setuptools
   chromium python3-websocket
 )
 # fonts-dejavu-core: the labels of contact sheets (OpenImageIO draws DejaVu Sans).
+# python3-venv, python3-setuptools: the Python client package (clients/python) is
+# installed into a venv by its tests, built offline with Debian's setuptools.
 # libzip-dev: ZIP answers of requests that make several files (a render's separate views).
 # npm: tests/spectral.sh lints the OpenAPI document with Spectral, and
 # tests/gltf_validator.sh checks our glb with the Khronos glTF validator, from the npm
