@@ -91,7 +91,7 @@ function requestOptions(job) {
   const image = job.final ? imageOptions() : previewLook(imageOptions());
   const o = { ...image, ...cad.options(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
-  else o.view = job.view;
+  else Object.assign(o, { view: job.view, projection: $('projection').value });
   if (job.aovs) o.aovs = aovsFor($('look').value);
   return o;
 }
@@ -337,6 +337,12 @@ $('edges').addEventListener('change', () => {
   renderFinal();
 });
 for (const id of ['edge-color', 'edge-width']) $(id).addEventListener('change', () => { if ($('edges').checked) renderFinal(); });
+// The projection of the named views and of the camera the user orbits (the
+// view keeps its size at the target across the switch).
+$('projection').addEventListener('change', () => {
+  if (state.camera) state.camera.setProjection($('projection').value);
+  renderFinal();
+});
 $('look').addEventListener('change', () => {
   const look = $('look').value, aov = state.frame?.aov;
   if (state.frame && look !== 'shaded' && (!aov || (look === 'normal' && !aov.normal))) renderFinal();

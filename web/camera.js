@@ -17,21 +17,49 @@ function rotate(v, k, a) {
 }
 
 export class Camera {
-  constructor(eye, target, up, fovDeg) {
+  // projection: 'perspective' (fovDeg) or 'orthographic' (orthoHeight, the view's
+  // height in model units), as the API's named views answer (orthographic by default).
+  constructor(eye, target, up, fovDeg, projection = 'perspective', orthoHeight = 0) {
     this.eye = eye;
     this.target = target;
     this.up = up;
     this.fovDeg = fovDeg || 30;
+    this.projection = projection;
+    this.orthoHeight = orthoHeight || 2 * length(sub(target, eye)) * Math.tan((this.fovDeg * Math.PI) / 360);
   }
 
   static fromStatistics(c) {
-    return new Camera(c.eye, c.target, c.up, c.fov_deg);
+    return new Camera(c.eye, c.target, c.up, c.fov_deg, c.projection || 'perspective', c.ortho_height);
   }
 
   // The `camera` render option.
   toOption() {
     const round = (v) => v.map((x) => Number(x.toPrecision(12)));
-    return { eye: round(this.eye), target: round(this.target), up: round(this.up), fov_deg: this.fovDeg };
+    const o = { eye: round(this.eye), target: round(this.target), up: round(this.up), projection: this.projection };
+    if (this.projection === 'orthographic') o.ortho_height = Number(this.orthoHeight.toPrecision(12));
+    else o.fov_deg = this.fovDeg;
+    return o;
+  }
+
+  // Switches projection keeping what the view shows at the target the same size:
+  // a perspective view of field fov at distance d shows 2 d tan(fov / 2) there.
+  setProjection(projection) {
+    if (projection === this.projection) return;
+    const d = length(sub(this.eye, this.target));
+    const tanHalf = Math.tan((this.fovDeg * Math.PI) / 360);
+    if (projection === 'orthographic') {
+      this.orthoHeight = 2 * d * tanHalf;
+    } else {
+      const dir = normalize(sub(this.eye, this.target));
+      this.eye = add(this.target, scale(dir, this.orthoHeight / (2 * tanHalf)));
+    }
+    this.projection = projection;
+  }
+
+  // The view's height at the target, model units.
+  viewHeight() {
+    return this.projection === 'orthographic' ? this.orthoHeight
+      : 2 * length(sub(this.target, this.eye)) * Math.tan((this.fovDeg * Math.PI) / 360);
   }
 
   basis() {
@@ -58,15 +86,21 @@ export class Camera {
   // Moves eye and target together by a fraction of the view's height.
   pan(dxFraction, dyFraction) {
     const { r, u } = this.basis();
-    const viewHeight = 2 * length(sub(this.target, this.eye)) * Math.tan((this.fovDeg * Math.PI) / 360);
+    const viewHeight = this.viewHeight();
     const move = add(scale(r, -dxFraction * viewHeight), scale(u, dyFraction * viewHeight));
     this.eye = add(this.eye, move);
     this.target = add(this.target, move);
   }
 
-  // factor < 1 moves closer.
+  // factor < 1 moves closer (an orthographic view narrows instead: moving its
+  // eye would change nothing on screen).
   zoom(factor) {
+    const f = Math.min(Math.max(factor, 0.2), 5);
+    if (this.projection === 'orthographic') {
+      this.orthoHeight *= f;
+      return;
+    }
     const offset = sub(this.eye, this.target);
-    this.eye = add(this.target, scale(offset, Math.min(Math.max(factor, 0.2), 5)));
+    this.eye = add(this.target, scale(offset, f));
   }
 }

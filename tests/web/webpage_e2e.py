@@ -582,6 +582,20 @@ def step_cad_views(page, assembly):
     page.ev("window.scrollTo(0, 0)")
     page.b.pump(0.2)
     page.b.screenshot(ARTIFACTS / "cad-explode.png")
+    # Projection: the named views are orthographic; the switch keeps the view's size at the target,
+    # and an orbit keeps the projection chosen.
+    for projection in ("perspective", "orthographic"):
+        _, stats = final_exchange(page, f"(() => {{ const s = document.getElementById('projection');"
+                                        f" s.value = '{projection}'; s.dispatchEvent(new Event('change')); }})()",
+                                  projection)
+        assert stats["camera"]["projection"] == projection, stats["camera"]
+    since, before = time.monotonic(), page.frames()
+    drag(page, 60, 6, 0.05)
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    cam = render_exchanges(page, since)[-1][1]["camera"]
+    log(f"projection: both ways, an orbit stays {cam['projection']} (ortho_height {cam.get('ortho_height')})")
+    assert cam["projection"] == "orthographic" and cam["ortho_height"] > 0, cam
 
 
 def step_narrow(page):
