@@ -107,7 +107,8 @@ async function send(job, signal) {
   const doc = await render(job.fileId, requestOptions(job), signal);
   const blob = new Blob([base64Bytes(doc.image_base64)], { type: doc.content_type });
   const bitmap = await createImageBitmap(blob);
-  return { width: doc.width, height: doc.height, blob, bitmap, aov: doc.aovs ? decodeAovs(doc.aovs) : null, stats: doc.statistics };
+  // The bitmap's own size: a contact sheet is several views of width x height.
+  return { width: bitmap.width, height: bitmap.height, blob, bitmap, aov: doc.aovs ? decodeAovs(doc.aovs) : null, stats: doc.statistics };
 }
 
 // The import's warnings beside the image (a face left empty, a healed loop).
@@ -337,6 +338,14 @@ $('edges').addEventListener('change', () => {
   renderFinal();
 });
 for (const id of ['edge-color', 'edge-width']) $(id).addEventListener('change', () => { if ($('edges').checked) renderFinal(); });
+// A contact sheet of the drawing's views (one request: one prepare, four frames)
+// with the current image options; a named view or an orbit goes back to one view.
+const SHEET_VIEWS = ['front', 'top', 'right', 'iso'];
+$('sheet').addEventListener('click', () => {
+  if (!state.fileId) return;
+  scheduler.submit({ fileId: state.fileId, final: true, aovs: false, override: { views: SHEET_VIEWS, projection: $('projection').value } });
+});
+
 // The projection of the named views and of the camera the user orbits (the
 // view keeps its size at the target across the switch).
 $('projection').addEventListener('change', () => {
@@ -374,6 +383,10 @@ function hover(e) {
   state.pointer = { clientX: e.clientX, clientY: e.clientY };
   const f = state.frame;
   if (!f || canvas.dataset.final !== '1') return;
+  if (f.stats.views) {  // a contact sheet: no AOVs to read (its cells are other cameras)
+    $('hover').textContent = 'A contact sheet: pick a view to read its pixels.';
+    return;
+  }
   if (!f.aov) {
     if (!f.aovAsked && canvas.dataset.busy !== '1') {
       f.aovAsked = true;

@@ -423,7 +423,7 @@ def step_accessibility(page):
     # Tab order follows the page: key, file, views, options, image, ..., compare.
     page.ev("document.getElementById('api-key').focus()")
     order = []
-    for _ in range(40):
+    for _ in range(60):
         page.b.key("Tab", "Tab", 9)
         order.append(page.ev("document.activeElement.id || document.activeElement.dataset.view || document.activeElement.tagName"))
     wanted = ["key-save", "file", "iso", "resolution", "look", "view", "compare", "job-files", "convert-submit"]
@@ -582,6 +582,13 @@ def step_cad_views(page, assembly):
     page.ev("window.scrollTo(0, 0)")
     page.b.pump(0.2)
     page.b.screenshot(ARTIFACTS / "cad-explode.png")
+    _, stats = final_exchange(page, "document.getElementById('sheet').click()", "the 4-view sheet")
+    size = page.ev("[document.getElementById('view').width, document.getElementById('view').height]")
+    log(f"4-view sheet: {[v['view'] for v in stats['views']]}, canvas {size}")
+    assert [v["view"] for v in stats["views"]] == ["front", "top", "right", "iso"] and size == [1600, 1200], size
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "cad-sheet.png")
     # Projection: the named views are orthographic; the switch keeps the view's size at the target,
     # and an orbit keeps the projection chosen.
     for projection in ("perspective", "orthographic"):
