@@ -22,6 +22,7 @@ cd "$(dirname "$0")/.."
 # chromium, python3-websocket: the web page's end-to-end test (tests/webpage.sh) drives
 # Debian's headless Chromium over the DevTools protocol from Python; nothing downloads
 # a browser of its own.
+# libzip-dev: the service answers a conversion to OBJ (an .obj and its .mtl) as one ZIP.
 # libpq-dev: the PostgreSQL job store (nurbsrt serve --job-store postgresql://...);
 # postgresql: the server the multi-instance tests start themselves (tests/scale_out.sh,
 # tests/api_postgres.sh: initdb and pg_ctl from /usr/lib/postgresql/15/bin).
@@ -33,7 +34,7 @@ PACKAGES=(
   libfontconfig-dev
   libosmesa6-dev libopenimageio-dev libcpp-httplib-dev nlohmann-json3-dev fonts-dejavu-core
   libsqlite3-dev sqlite3 libembree-dev
-  libpq-dev postgresql
+  libpq-dev postgresql libzip-dev
   iproute2
   clang libclang-rt-14-dev clang-format
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy
