@@ -1,4 +1,4 @@
-// nurbsrt convert IN OUT: STEP/IGES/BREP to STEP, IGES, BREP, STL, glb, VRML or
+// nurbsrt convert IN OUT: STEP/IGES/BREP to STEP, IGES, BREP, STL, glb, VRML, OBJ or
 // NURBS JSON, the output format from OUT's extension.
 #include <CLI/CLI.hpp>
 
@@ -82,6 +82,9 @@ void add_convert_command(CLI::App& app) {
                            "              triangles of no area or repeated are left out, and counted)\n"
                            "  .glb        binary glTF 2.0 with colours, names and assembly instances; glTF axes\n"
                            "              and units: Y-up, metres ((x, y, z) mm -> (x, z, -y) / 1000 m)\n"
+                           "  .obj        Wavefront OBJ, millimetres, one object per part instance, and\n"
+                           "              its materials (the face colours) in a .mtl file of the same stem\n"
+                           "              beside it (mesh as for .stl)\n"
                            "  .brep       OCCT's own text format: exact geometry and topology, millimetres; no\n"
                            "              colours, names or assembly (the written file is read back too)\n"
                            "  .wrl        VRML 2.0, millimetres, with colours and the assembly's placements (mesh\n"
@@ -102,10 +105,10 @@ void add_convert_command(CLI::App& app) {
     auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
     auto deflection = std::make_shared<double>(0.0);
     cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
-    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .json, .brep or .wrl)")
+    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .obj, .json, .brep or .wrl)")
         ->required()
         ->check(output_file_validator(
-            {".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".json", ".brep", ".brp", ".wrl", ".vrml"}));
+            {".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".obj", ".json", ".brep", ".brp", ".wrl", ".vrml"}));
     cmd->add_option("--units", *units,
                     "STEP/IGES outputs: the length unit to write (the geometry is scaled to it); default: the\n"
                     "source's")
@@ -117,7 +120,7 @@ void add_convert_command(CLI::App& app) {
         ->check(CLI::IsMember(iges_mode_names()))
         ->capture_default_str();
     cmd->add_option("--deflection", *deflection,
-                    "STL, glb and VRML outputs: the mesh's linear deflection, a fraction of the model's\n"
+                    "STL, glb, VRML and OBJ outputs: the mesh's linear deflection, a fraction of the model's\n"
                     "bounding-box diagonal (default 0.002)")
         ->check(CLI::Range(std::numeric_limits<double>::min(), kMaxConversionDeflection));
     cmd->add_option("--report", *report_path,
@@ -138,26 +141,29 @@ void add_convert_command(CLI::App& app) {
             if (const std::string why = conversion_option_refusal(option, format); cmd->count(flag) > 0 && !why.empty())
                 throw CLI::ValidationError(flag, why);
         const auto [quiet, strict] = *flags;
-        // Removes the partial file on every way out but the rename below.
-        struct PartialFile {
+        // Removes the partial files on every way out but the renames below.
+        struct PartialDir {
             std::filesystem::path path;
-            ~PartialFile() {
+            ~PartialDir() {
                 std::error_code ec;
-                if (!path.empty()) std::filesystem::remove(path, ec);
+                if (!path.empty()) std::filesystem::remove_all(path, ec);
             }
         };
-        // Written under a temporary name beside OUT with OUT's extension (the
-        // writer picks the format by it), renamed when it is kept: OUT exists
-        // only complete, and not at all when --strict refuses it.
+        // Written under OUT's own name in a temporary directory beside it (the
+        // writer picks the format by the extension, and OBJ names its .mtl
+        // after the stem), moved out when kept: OUT exists only complete, and
+        // not at all when --strict refuses it.
         const std::filesystem::path target(*out);
-        PartialFile partial{target.parent_path() / ("." + target.stem().string() + ".partial-" +
-                                                    std::to_string(::getpid()) + target.extension().string())};
+        PartialDir partial{target.parent_path() /
+                           ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()))};
+        std::filesystem::create_directory(partial.path);
+        const std::filesystem::path written = partial.path / target.filename();
         ConvertOptions options;
         options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
         options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
         options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
         options.deflection = *deflection;
-        const ConvertReport r = convert_file(*in, partial.path.string(), options);
+        const ConvertReport r = convert_file(*in, written.string(), options);
         const std::vector<std::string>& warnings = r.warnings;
         if (!report_path->empty()) {
             std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
@@ -169,8 +175,9 @@ void add_convert_command(CLI::App& app) {
         }
         if (!quiet) print_fidelity(r.fidelity);
         report_warnings(warnings, quiet, strict);
-        std::filesystem::rename(partial.path, target);
-        partial.path.clear();
+        // OUT, and what a format writes beside it (OBJ's .mtl).
+        for (const std::filesystem::directory_entry& e : std::filesystem::directory_iterator(partial.path))
+            std::filesystem::rename(e.path(), target.parent_path() / e.path().filename());
         if (quiet) return;
         std::fprintf(stderr, "nurbsrt: converted %s (%s, %s, %d faces) to %s (%s", in->c_str(),
                      format_name(r.in_format), r.in_units.empty() ? "no unit declared" : r.in_units.c_str(), r.faces,

@@ -187,8 +187,25 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
      true,
      true,
      kMeshOptions},
+    // OBJ has no unit either; its materials come in a .mtl file beside it
+    // (the service answers both in a ZIP). model/obj: IANA's registration.
+    {ConversionFormat::obj,
+     "obj",
+     nullptr,
+     "OBJ",
+     ".obj",
+     {"obj"},
+     "model/obj",
+     CadFormat::unknown,
+     LengthUnit::mm,
+     true,
+     true,
+     kMeshOptions},
 };
-static_assert(std::size(kConversionFormats) == static_cast<size_t>(ConversionFormat::vrml) + 1);
+static_assert(std::size(kConversionFormats) == static_cast<size_t>(ConversionFormat::obj) + 1);
+
+// The files a format's writer puts beside the output (same stem, this extension).
+constexpr std::pair<ConversionFormat, const char*> kCompanionFiles[] = {{ConversionFormat::obj, ".mtl"}};
 
 constexpr bool formats_in_order() {
     for (size_t i = 0; i < std::size(kConversionFormats); ++i)
@@ -287,6 +304,12 @@ bool conversion_format_declares_units(ConversionFormat f) {
 LengthUnit conversion_format_fixed_unit(ConversionFormat f) { return info_of(f).fixed_unit; }
 bool conversion_format_is_mesh(ConversionFormat f) { return info_of(f).mesh; }
 bool conversion_format_is_unitless(ConversionFormat f) { return info_of(f).unitless; }
+
+const char* conversion_format_companion(ConversionFormat f) {
+    for (const auto& [format, extension] : kCompanionFiles)
+        if (format == f) return extension;
+    return nullptr;
+}
 
 const char* conversion_option_name(ConversionOption o) { return enum_name(kConversionOptionNames, o, "?"); }
 

@@ -51,14 +51,14 @@ struct ImportOptions {
 Scene import_file(const std::string& path, const ImportOptions& options = {});
 
 // What convert_file can write, chosen by the output file's extension. The CAD
-// formats (STEP, IGES, BREP) keep the exact geometry; STL, glb and VRML are
-// triangle meshes (BRepMesh at ImportOptions' default relative deflection);
+// formats (STEP, IGES, BREP) keep the exact geometry; STL, glb, VRML and OBJ
+// are triangle meshes (BRepMesh at ConvertOptions::deflection);
 // nurbs_json is the imported Scene's patches as JSON (core/io/scene_json.h,
 // api_schema/nurbs_scene.schema.json). Names, extensions and content types are
 // one table (importer/format.cpp).
-enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json, brep, vrml };
+enum class ConversionFormat { unknown, step, iges, stl, glb, nurbs_json, brep, vrml, obj };
 
-// .stp/.step/.p21, .igs/.iges, .stl, .glb, .json, .brep/.brp, .wrl/.vrml
+// .stp/.step/.p21, .igs/.iges, .stl, .glb, .json, .brep/.brp, .wrl/.vrml, .obj
 // (case-insensitive); unknown otherwise.
 ConversionFormat conversion_format_from_extension(const std::string& path);
 // By the short names of the API and CLI: step|stp, iges|igs, stl, glb, json,
@@ -103,6 +103,10 @@ bool conversion_format_is_mesh(ConversionFormat f);
 // Whether the format's files carry no unit at all (STL, VRML, BREP): written
 // in mm, as readers of them assume; a source in another unit is a warning.
 bool conversion_format_is_unitless(ConversionFormat f);
+// The extension of the file the format's writer puts beside the output, same
+// stem (OBJ: ".mtl", its materials, named by the .obj's mtllib line); nullptr
+// for a format written as one file.
+const char* conversion_format_companion(ConversionFormat f);
 
 // The conversion options that apply to some output formats only (which, the
 // formats' table in importer/format.cpp says): the CLI, the service, the job

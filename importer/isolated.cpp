@@ -344,7 +344,7 @@ ConvertReport parse_convert_report(const std::string& text) {
           r.degenerate_triangles >> r.read_ms >> r.mesh_ms >> r.write_ms >> r.verify_ms) ||
         in_format < 0 || in_format > static_cast<int>(CadFormat::brep) || out_format < 0 ||
         out_format > static_cast<int>(CadFormat::brep) || output < 0 ||
-        output > static_cast<int>(ConversionFormat::vrml))
+        output > static_cast<int>(ConversionFormat::obj))
         throw Error(ErrorCode::internal, "conversion worker wrote no valid report");
     r.in_format = static_cast<CadFormat>(in_format);
     r.out_format = static_cast<CadFormat>(out_format);

@@ -42,7 +42,8 @@ PACKAGES=(
 # fonts-dejavu-core: the labels of contact sheets (OpenImageIO draws DejaVu Sans).
 # python3-venv, python3-setuptools: the Python client package (clients/python) is
 # installed into a venv by its tests, built offline with Debian's setuptools.
-# libzip-dev: ZIP answers of requests that make several files (a render's separate views).
+# libzip-dev: ZIP answers of requests that make several files (a render's separate views,
+# a conversion to OBJ and its .mtl).
 # npm: tests/spectral.sh lints the OpenAPI document with Spectral, and
 # tests/gltf_validator.sh checks our glb with the Khronos glTF validator, from the npm
 # registry. Only where no npm is on PATH: a Node.js from elsewhere (NodeSource's

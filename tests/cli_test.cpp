@@ -344,7 +344,29 @@ TEST(Cli, ConvertCoarseMeshWarnsAndStrictRefuses) {
     EXPECT_EQ(fine.status, 0) << fine.err;
     const CliRun exact = run_nurbsrt("convert --deflection 0.1 " + in + " " + (dir / "e.step").string());
     EXPECT_NE(exact.status, 0);
-    EXPECT_NE(exact.err.find("applies to STL, GLB and VRML outputs only"), std::string::npos) << exact.err;
+    EXPECT_NE(exact.err.find("applies to STL, GLB, VRML and OBJ outputs only"), std::string::npos) << exact.err;
+    fs::remove_all(dir);
+}
+
+// OBJ: the .obj and its .mtl land beside each other under OUT's name (the
+// partial files in a directory of their own, gone after); --strict refuses both.
+TEST(Cli, ConvertToObjWritesItsMtlBeside) {
+    const std::string in = nurbsrt::test::assembly();
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-obj-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const CliRun r = run_nurbsrt("convert " + in + " " + (dir / "part.obj").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("(OBJ, mm, "), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "part.obj"));
+    EXPECT_TRUE(fs::exists(dir / "part.mtl"));
+    std::ifstream obj(dir / "part.obj");
+    const std::string text((std::istreambuf_iterator<char>(obj)), {});
+    EXPECT_NE(text.find("mtllib part.mtl"), std::string::npos);
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}), 2) << "a partial file was left";
+    const CliRun strict = run_nurbsrt("convert --strict --deflection 0.1 " + nurbsrt::test::freeform_bspline() + " " +
+                                      (dir / "s.obj").string());
+    EXPECT_EQ(strict.status, 3) << strict.err;
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}), 2) << "refused, yet written";
     fs::remove_all(dir);
 }
 

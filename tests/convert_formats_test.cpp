@@ -10,9 +10,30 @@
 //              mesh deflection, with the part's colour as a diffuse colour.
 //  * Schema:   AP242 writes AP242's schema in the header (AP214 by default), and reads back.
 //  * IgesMode: faces mode writes trimmed surfaces (144) and no solid (186); brep mode a solid.
+//  * Obj:      OCCT's RWObj_CafReader reads the .obj and its .mtl back: the triangles
+//              the report counts, one group per part instance (the assembly's two
+//              brackets, named), the part's colour as its material, the model's box.
 #include <gtest/gtest.h>
 
 #include <BRepBndLib.hxx>
+#include <BRep_Tool.hxx>
+#include <Message_ProgressRange.hxx>
+#include <Poly_Triangulation.hxx>
+#include <Quantity_Color.hxx>
+#include <RWMesh_CoordinateSystem.hxx>
+#include <RWObj_CafReader.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopLoc_Location.hxx>
+#include <TopoDS.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+#include <XCAFDoc_VisMaterialTool.hxx>
+#include <TDF_LabelSequence.hxx>
+#include <XCAFPrs_DocumentExplorer.hxx>
+#include <XCAFDoc_VisMaterial.hxx>
+#include <XCAFPrs_Style.hxx>
 #include <BRepGProp.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
@@ -26,6 +47,7 @@
 #include <fstream>
 #include <limits>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -194,6 +216,66 @@ TEST(ConvertVrml, TheAssemblysColourIsADiffuseColour) {
         << "no diffuse colour";
     EXPECT_GT(std::stod(m[1].str()), std::stod(m[2].str()))
         << "the part is red (" << c.r << ", " << c.g << ", " << c.b << "): " << m[0].str();
+}
+
+TEST(ConvertObj, ReadBackByOcctsObjReader) {
+    const std::string out = out_path("assembly.obj"), mtl = out.substr(0, out.size() - 4) + ".mtl";
+    const nurbsrt::ConvertReport r = nurbsrt::convert_file(nurbsrt::test::assembly(), out);
+    EXPECT_EQ(r.output, nurbsrt::ConversionFormat::obj);
+    EXPECT_EQ(r.out_units, "mm");
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    ASSERT_TRUE(std::ifstream(mtl).good()) << "no .mtl beside the .obj";
+    EXPECT_NE(read_text(out).find("mtllib " + mtl.substr(mtl.find_last_of('/') + 1)), std::string::npos);
+    EXPECT_NE(r.fidelity.find("\"deviation_in_mm\":{"), std::string::npos);
+
+    Handle(TDocStd_Document) doc;
+    XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+    RWObj_CafReader reader;
+    reader.SetDocument(doc);
+    reader.SetSystemLengthUnit(0.001);
+    reader.SetSystemCoordinateSystem(RWMesh_CoordinateSystem_Zup);
+    reader.SetFileLengthUnit(0.001);
+    reader.SetFileCoordinateSystem(RWMesh_CoordinateSystem_Zup);
+    ASSERT_TRUE(reader.Perform(out.c_str(), Message_ProgressRange()));
+    long long triangles = 0;
+    int groups = 0;
+    std::set<std::string> names;
+    bool red = false;
+    const auto c = nurbsrt::test::kAssemblyColor;
+    for (XCAFPrs_DocumentExplorer ex(doc, XCAFPrs_DocumentExplorerFlags_OnlyLeafNodes); ex.More(); ex.Next()) {
+        ++groups;
+        names.insert(TCollection_AsciiString(ex.Current().Id).ToCString());
+        for (TopExp_Explorer f(
+                 ex.Current().Label.IsNull() ? TopoDS_Shape() : XCAFDoc_ShapeTool::GetShape(ex.Current().Label),
+                 TopAbs_FACE);
+             f.More(); f.Next()) {
+            TopLoc_Location loc;
+            const Handle(Poly_Triangulation) t = BRep_Tool::Triangulation(TopoDS::Face(f.Current()), loc);
+            if (!t.IsNull()) triangles += t->NbTriangles();
+        }
+    }
+    // The .mtl's Kd (sRGB) read back as a material's base colour (linear RGB).
+    TDF_LabelSequence materials;
+    XCAFDoc_DocumentTool::VisMaterialTool(doc->Main())->GetMaterials(materials);
+    for (const TDF_Label& l : materials) {
+        const Quantity_Color q =
+            XCAFDoc_DocumentTool::VisMaterialTool(doc->Main())->GetMaterial(l)->BaseColor().GetRGB();
+        red = red ||
+              (std::abs(q.Red() - c.r) < 0.01 && std::abs(q.Green() - c.g) < 0.01 && std::abs(q.Blue() - c.b) < 0.01);
+    }
+    EXPECT_EQ(materials.Length(), 1);
+    XCAFApp_Application::GetApplication()->Close(doc);
+    EXPECT_EQ(triangles, r.triangles);
+    // One group per part instance, named after the part (the reader joins
+    // groups of one name into one shape).
+    EXPECT_EQ(groups, 1);
+    const std::string text = read_text(out);
+    size_t instances = 0;
+    for (size_t at = text.find("\ng two_brackets/bracket\n"); at != std::string::npos;
+         at = text.find("\ng two_brackets/bracket\n", at + 1))
+        ++instances;
+    EXPECT_EQ(instances, 2u) << "one group per bracket instance";
+    EXPECT_TRUE(red) << "the bracket's colour is not a material of the .mtl";
 }
 
 TEST(ConvertStepSchema, Ap242IsWrittenWhenAskedAp214ByDefault) {

@@ -146,11 +146,14 @@ TEST(ConvertNames, ExtensionsNamesAndContentTypes) {
     EXPECT_EQ(nurbsrt::conversion_format_from_extension("b.BREP"), ConversionFormat::brep);
     EXPECT_EQ(nurbsrt::conversion_format_from_extension("b.wrl"), ConversionFormat::vrml);
     EXPECT_EQ(nurbsrt::conversion_format_from_name("wrl"), ConversionFormat::vrml);
-    EXPECT_EQ(nurbsrt::conversion_format_names(), "step, iges, stl, glb, json, brep, vrml");
+    EXPECT_EQ(nurbsrt::conversion_format_names(), "step, iges, stl, glb, json, brep, vrml, obj");
+    EXPECT_STREQ(nurbsrt::conversion_format_content_type(ConversionFormat::obj), "model/obj");
+    EXPECT_STREQ(nurbsrt::conversion_format_companion(ConversionFormat::obj), ".mtl");
+    EXPECT_EQ(nurbsrt::conversion_format_companion(ConversionFormat::stl), nullptr);
     // Every format's written extension, short name and alias lead back to it.
     for (ConversionFormat f :
          {ConversionFormat::step, ConversionFormat::iges, ConversionFormat::stl, ConversionFormat::glb,
-          ConversionFormat::nurbs_json, ConversionFormat::brep, ConversionFormat::vrml}) {
+          ConversionFormat::nurbs_json, ConversionFormat::brep, ConversionFormat::vrml, ConversionFormat::obj}) {
         EXPECT_EQ(nurbsrt::conversion_format_from_extension(std::string("x") + nurbsrt::conversion_format_extension(f)),
                   f);
         EXPECT_EQ(nurbsrt::conversion_format_from_name(nurbsrt::conversion_format_short_name(f)), f);
@@ -170,7 +173,7 @@ TEST(ConvertNames, OptionsUnitsAndMeshesByFormat) {
     using nurbsrt::LengthUnit;
     const ConversionFormat all[] = {ConversionFormat::step, ConversionFormat::iges,       ConversionFormat::stl,
                                     ConversionFormat::glb,  ConversionFormat::nurbs_json, ConversionFormat::brep,
-                                    ConversionFormat::vrml};
+                                    ConversionFormat::vrml, ConversionFormat::obj};
     for (ConversionFormat f : all) {
         const bool step = f == ConversionFormat::step, iges = f == ConversionFormat::iges;
         EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::units, f).empty(), step || iges);
@@ -178,8 +181,8 @@ TEST(ConvertNames, OptionsUnitsAndMeshesByFormat) {
         EXPECT_EQ(nurbsrt::conversion_option_refusal(ConversionOption::iges_mode, f).empty(), iges);
         EXPECT_EQ(nurbsrt::conversion_format_declares_units(f), step || iges);
         EXPECT_EQ(nurbsrt::conversion_format_fixed_unit(f) == LengthUnit::unknown, step || iges);
-        EXPECT_EQ(nurbsrt::conversion_format_is_mesh(f),
-                  f == ConversionFormat::stl || f == ConversionFormat::glb || f == ConversionFormat::vrml);
+        EXPECT_EQ(nurbsrt::conversion_format_is_mesh(f), f == ConversionFormat::stl || f == ConversionFormat::glb ||
+                                                             f == ConversionFormat::vrml || f == ConversionFormat::obj);
     }
     EXPECT_EQ(nurbsrt::conversion_format_fixed_unit(ConversionFormat::glb), LengthUnit::m);
     EXPECT_EQ(nurbsrt::conversion_format_fixed_unit(ConversionFormat::brep), LengthUnit::mm);

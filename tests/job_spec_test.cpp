@@ -80,6 +80,9 @@ TEST(JobSpec, MistakesAreRejected) {
     EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render", "options": {"bogus": 1}},
                                     {"file": 1, "type": "render"}]})"),
               ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "obj"},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
     EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "dwg"},
                                     {"file": 1, "type": "render"}]})"),
               ErrorCode::invalid_argument);

@@ -38,7 +38,7 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
     if (r.output == ConversionFormat::unknown)
         throw Error(ErrorCode::unsupported_format,
                     "output '" + out_path +
-                        "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb, .json, .brep or .wrl)");
+                        "': unknown extension (use .stp/.step, .igs/.iges, .stl, .glb, .obj, .json, .brep or .wrl)");
     if (const std::string why = conversion_option_refusal(ConversionOption::units, r.output);
         options.units != LengthUnit::unknown && !why.empty())
         throw Error(ErrorCode::invalid_argument, std::string("option 'units' ") + why + "; " +
@@ -74,6 +74,9 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
             break;
         case ConversionFormat::glb:
             occt::write_glb(in_path, out_path, options, r);
+            break;
+        case ConversionFormat::obj:
+            occt::write_obj(in_path, out_path, options, r);
             break;
         case ConversionFormat::nurbs_json:
             write_nurbs_json(in_path, out_path, r);

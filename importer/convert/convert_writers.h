@@ -39,6 +39,11 @@ void write_glb(const std::string& in_path, const std::string& out_path, const Co
 void write_vrml(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
                 ConvertReport& r);
 
+// Wavefront OBJ (.obj) and its materials (.mtl, same stem, beside it) from the
+// XDE document: one object per part instance, colours as materials; mm.
+void write_obj(const std::string& in_path, const std::string& out_path, const ConvertOptions& options,
+               ConvertReport& r);
+
 // Meshes every face of `shape` with BRepMesh for export: linear deflection
 // `relative_deflection` (0: ImportOptions{}.mesh_relative_deflection) times the
 // diagonal of the faces' bounding box, angular deflection

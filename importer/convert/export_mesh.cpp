@@ -1,4 +1,4 @@
-// Meshing for the mesh outputs (STL, glb, VRML): see convert_writers.h.
+// Meshing for the mesh outputs (STL, glb, VRML, OBJ): see convert_writers.h.
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -42,7 +42,7 @@ std::string zip_archive(const std::vector<ZipEntry>& entries) {
             fail("entry '" + e.name + "'", nullptr);
         }
         const auto i = static_cast<zip_uint64_t>(index);
-        if (zip_set_file_compression(archive, i, ZIP_CM_STORE, 0) != 0 ||
+        if (zip_set_file_compression(archive, i, e.deflate ? ZIP_CM_DEFLATE : ZIP_CM_STORE, 0) != 0 ||
             zip_file_set_mtime(archive, i, kEntryTime, 0) != 0) {
             zip_discard(archive);
             fail("entry '" + e.name + "'", nullptr);

@@ -129,6 +129,10 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             const ConversionFormat f = conversion_format_from_name(o["format"].get<std::string>());
             if (f == ConversionFormat::unknown)
                 bad_spec(where + ": 'format' must be one of " + conversion_format_names());
+            // An artifact is one file; OBJ's .mtl would be left behind.
+            if (conversion_format_companion(f) != nullptr)
+                bad_spec(where + ": format '" + conversion_format_short_name(f) +
+                         "' writes two files and is not a job output yet (POST /v1/conversions answers it as a ZIP)");
             out.options_json = json{{"format", conversion_format_short_name(f)}}.dump();
             extension = conversion_format_extension(f);
             out.content_type = conversion_format_content_type(f);

@@ -2,6 +2,8 @@
 // of a stored file named by `file_id`, server/store/file_store.h) to
 // STEP, IGES, BREP, STL, glb, VRML or NURBS JSON, run in a child process
 // (importer/isolated.h) under the import time and memory limits.
+#include <filesystem>
+
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
@@ -13,6 +15,7 @@
 #include "server/http/http_server.h"
 #include "core/ascii.h"
 #include "server/http/negotiation.h"
+#include "server/http/zip_archive.h"
 #include "server/routes/handler_util.h"
 #include "options/render_request.h"
 #include "server/routes/routes.h"
@@ -29,6 +32,20 @@ const char* download_extension(ConversionFormat f) {
     return f == ConversionFormat::step ? ".stp" : conversion_format_extension(f);
 }
 
+// A format written as two files (OBJ and its .mtl) is answered as one ZIP of
+// both, named after the download; the .obj's mtllib line names the .mtl's new name.
+
+std::string zip_with_companion(const std::string& companion_path, std::string main, const std::string& stem,
+                               ConversionFormat format) {
+    const std::string companion_ext = conversion_format_companion(format);
+    const std::string written = std::filesystem::path(companion_path).filename().string();
+    const std::string renamed = stem + companion_ext;
+    if (const size_t at = main.find("mtllib " + written); at != std::string::npos)
+        main.replace(at + 7, written.size(), renamed);
+    return zip_archive({{stem + conversion_format_extension(format), std::move(main), true},
+                        {renamed, read_file_bytes(companion_path), true}});
+}
+
 }  // namespace
 
 void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib::Response& res) {
@@ -40,7 +57,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.
     // A NURBS JSON file is application/json itself: the wrapper only when Accept names that type.
-    const std::string file_type = conversion_format_content_type(format);
+    const char* companion = conversion_format_companion(format);
+    const std::string file_type = companion ? kZipMediaType : conversion_format_content_type(format);
     const bool json_answer = negotiate_answer(req, {file_type, kJsonMediaType}) == kJsonMediaType &&
                              (file_type != kJsonMediaType ||
                               ascii_lower(req.get_header_value("Accept")).find(kJsonMediaType) != std::string::npos);
@@ -57,6 +75,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     const TempFile in = ctx.scratch.write("upload", ".cad", bytes);
     // The worker picks the writer by this extension.
     const TempFile out = ctx.scratch.create("converted", conversion_format_extension(format));
+    // What the writer puts beside it, removed with it.
+    const TempFile beside(companion ? std::filesystem::path(out.path()).replace_extension(companion).string() : "");
     stages.mark("isolation");  // handing the bytes to the child
     ConvertReport report;
     IsolationTimings isolated;
@@ -76,7 +96,9 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         throw ServiceError(ServiceCode::strict_refused, detail);
     }
     stages.mark("isolation");
-    const std::string data = read_file_bytes(out.path());
+    const std::string stem = download_name(upload.filename, "");
+    const std::string data = companion ? zip_with_companion(beside.path(), read_file_bytes(out.path()), stem, format)
+                                       : read_file_bytes(out.path());
     ticket.reset();
     stages.mark("transfer");  // the converted file into this process
 
@@ -103,7 +125,7 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         res.set_content(body.dump(), kBulkJsonContentType);
     } else {
         res.set_header("Content-Disposition",
-                       attachment_disposition(download_name(upload.filename, download_extension(format))));
+                       attachment_disposition(stem + (companion ? ".zip" : download_extension(format))));
         set_warnings_header(res, report.warnings);
         res.set_content(data, file_type.c_str());
         stages.mark("response");

@@ -399,7 +399,34 @@ def test_coarse_mesh_is_a_warning_strict_refuses(url):
     r = post_raw(url, "/v1/conversions", data, params={"format": "stl", "strict": "true"})
     assert r.status_code == 200 and "X-Nurbsrt-Warnings" not in r.headers, r.text[:300]
     # deflection is a mesh option, in (0, 0.1].
-    for params, what in (({"format": "step", "deflection": "0.01"}, "applies to STL, GLB and VRML outputs only"),
+    for params, what in (({"format": "step", "deflection": "0.01"}, "applies to STL, GLB, VRML and OBJ outputs only"),
                          ({"format": "stl", "deflection": "0.5"}, "must be a number in (0, ")):
         detail = check_problem(post_raw(url, "/v1/conversions", data, params=params), 400)["detail"]
         assert what in detail, detail
+
+
+def test_obj_is_answered_as_a_zip_of_obj_and_mtl(url):
+    """OBJ writes two files: the answer is a ZIP of <name>.obj and <name>.mtl, the .obj's
+    mtllib naming the .mtl, its groups the assembly's parts; JSON wraps the same ZIP."""
+    import io
+    import zipfile
+    data = generated_fixture("assembly").read_bytes()
+    r = requests.post(url + "/v1/conversions", files={"file": ("two brackets.step", data), "format": (None, "obj")},
+                      timeout=TIMEOUT)
+    assert r.status_code == 200, r.text[:300]
+    assert r.headers["Content-Type"] == "application/zip"
+    assert 'filename="twobrackets.zip"' in r.headers["Content-Disposition"], r.headers["Content-Disposition"]
+    z = zipfile.ZipFile(io.BytesIO(r.content))
+    assert z.namelist() == ["twobrackets.obj", "twobrackets.mtl"]
+    obj = z.read("twobrackets.obj").decode()
+    assert "mtllib twobrackets.mtl" in obj
+    assert obj.count("\ng two_brackets/bracket\n") == 2, obj[:400]
+    assert "newmtl " in z.read("twobrackets.mtl").decode()
+    j = requests.post(url + "/v1/conversions", data=data, params={"format": "obj"},
+                      headers={"Content-Type": "application/octet-stream", "Accept": "application/json"},
+                      timeout=TIMEOUT).json()
+    validate(j, "ConversionResponse")
+    assert j["content_type"] == "application/zip" and j["output_format"] == "OBJ" and j["output_units"] == "mm"
+    assert zipfile.ZipFile(io.BytesIO(base64.b64decode(j["data_base64"]))).namelist() == ["converted.obj", "converted.mtl"]
+    assert j["fidelity"]["output"]["deviation_in_mm"]["face_instances"] == 14
+    assert j["triangles"] > 0 and j["warnings"] == []
