@@ -458,6 +458,9 @@ int run_import_worker(const std::string& in_path, const std::string& out_path, c
 
 namespace {
 
+// Marks the file worker's positional argument holding a conversion's options.
+constexpr const char* kConversionOptionsPrefix = "convert:";
+
 // One scratch file of a file worker's item, with its ".error" companion
 // (held by pointer: ScratchFiles removes its files when destroyed, so it is never copied).
 std::unique_ptr<ScratchFiles> item_scratch(const std::string& dir, const char* stem) {
@@ -491,6 +494,14 @@ FileResult process_file_isolated(const std::string& path, const FilePlan& plan, 
     for (size_t i = 0; i < plan.conversions.size(); ++i) {
         args.push_back(plan.conversions[i]);
         args.push_back(reports[i]->scene);
+        // The conversion's options as one positional argument (the import's
+        // are the "--" ones): its worker arguments, comma-joined, after a prefix.
+        std::string joined = kConversionOptionsPrefix;
+        const ConvertOptions options =
+            i < plan.conversion_options.size() ? plan.conversion_options[i] : ConvertOptions{};
+        for (const std::string& a : convert_options_to_args(options))
+            joined += (joined.size() > std::strlen(kConversionOptionsPrefix) ? "," : "") + a;
+        args.push_back(std::move(joined));
     }
     for (std::string& a : import_options_to_args(plan.options)) args.push_back(std::move(a));
     run_worker(std::move(args), limits, summary->error, "import", path);
@@ -525,8 +536,8 @@ int run_file_worker(const std::vector<std::string>& args) {
     apply_fault_hook();
     std::vector<std::string> positional, options;
     for (const std::string& a : args) (a.rfind("--", 0) == 0 ? options : positional).push_back(a);
-    if (positional.size() < 3 || positional.size() % 2 == 0) {
-        std::fprintf(stderr, "file-worker: IN SUMMARY SCENE|- [OUT REPORT]... [options]\n");
+    if (positional.size() < 3 || positional.size() % 3 != 0) {
+        std::fprintf(stderr, "file-worker: IN SUMMARY SCENE|- [OUT REPORT OPTIONS]... [options]\n");
         return 2;
     }
     const std::string& in_path = positional[0];
@@ -543,9 +554,17 @@ int run_file_worker(const std::vector<std::string>& args) {
                        [&] { write_scene_file(import_file(in_path, import_options), scene_path); });
     // Then the conversions, in the plan's order: convert_file takes the
     // earlier uses' meshes off the shared shape, so each writes what it would alone.
-    for (size_t i = 3; i + 1 < positional.size(); i += 2)
-        record_outcome(positional[i + 1] + ".error", "conversion",
-                       [&] { write_convert_report(positional[i + 1], convert_file(in_path, positional[i])); });
+    for (size_t i = 3; i + 2 < positional.size(); i += 3)
+        record_outcome(positional[i + 1] + ".error", "conversion", [&] {
+            const std::string& joined = positional[i + 2];
+            if (joined.rfind(kConversionOptionsPrefix, 0) != 0)
+                throw Error(ErrorCode::invalid_argument, "bad conversion options: " + joined);
+            std::vector<std::string> args;
+            std::istringstream list(joined.substr(std::strlen(kConversionOptionsPrefix)));
+            for (std::string a; std::getline(list, a, ',');) args.push_back(a);
+            write_convert_report(positional[i + 1],
+                                 convert_file(in_path, positional[i], convert_options_from_args(args)));
+        });
     return record_outcome(summary_path + ".error", "import",
                           [&] {
                               std::ofstream out(summary_path, std::ios::binary | std::ios::trunc);

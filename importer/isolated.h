@@ -78,6 +78,8 @@ struct FilePlan {
     bool scene = false;  // import the scene with `options`
     ImportOptions options;
     std::vector<std::string> conversions;  // output paths, the format by extension as for convert_file
+    // Each conversion's options, in the same order; those beyond its end are the defaults.
+    std::vector<ConvertOptions> conversion_options;
 };
 
 // What the child made. An error of the scene or of one conversion is that
@@ -115,8 +117,9 @@ int run_import_worker(const std::string& in_path, const std::string& out_path, c
 std::vector<std::string> convert_options_to_args(const ConvertOptions& options);
 ConvertOptions convert_options_from_args(const std::vector<std::string>& args);
 
-// Entry point of the file worker: `args` are IN SUMMARY SCENE|- [OUT REPORT]...
-// [name=value import options]; each item's result or error goes to its own
+// Entry point of the file worker: `args` are IN SUMMARY SCENE|- [OUT REPORT
+// OPTIONS]... [name=value import options] (OPTIONS: a conversion's, see
+// process_file_isolated); each item's result or error goes to its own
 // file (the scene as run_import_worker writes it, each report as
 // run_convert_worker does), the read count to SUMMARY. Returns the exit status.
 int run_file_worker(const std::vector<std::string>& args);

@@ -155,6 +155,17 @@ TEST_P(IsolatedImport, FilePlanReadsOnceAndMatchesSeparateCalls) {
         EXPECT_FALSE(sa.empty());
         EXPECT_EQ(sa, sb) << ext;
     }
+    // Each conversion's own options cross to the child (a job output's options).
+    nurbsrt::FilePlan with_options;
+    with_options.conversions = {dir + "/o.stp", dir + "/o.stl"};
+    with_options.conversion_options.resize(2);
+    with_options.conversion_options[0].units = nurbsrt::LengthUnit::cm;
+    with_options.conversion_options[1].deflection = 0.05;
+    const nurbsrt::FileResult o = nurbsrt::process_file_isolated(kScrew, with_options, limits(120));
+    ASSERT_EQ(o.conversions.size(), 2u);
+    ASSERT_TRUE(o.conversions[0].report && o.conversions[1].report);
+    EXPECT_EQ(o.conversions[0].report->out_units, "cm");
+    EXPECT_LT(o.conversions[1].report->triangles, r.conversions[1].report->triangles);
     // A file that cannot be read: every item has the read's error, tried once.
     const std::string junk = dir + "/junk.stp";
     std::ofstream(junk) << "ISO-10303-21;\nHEADER;\nthis is not a STEP file\n";

@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "core/error.h"
+#include "options/render_request.h"
 #include "server/jobs/job_spec.h"
 #include "tests/support/error_code_of.h"
 
@@ -54,6 +55,26 @@ TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
     EXPECT_TRUE(valid_artifact_name("0-conversion-3.wrl"));
 }
 
+// A conversion output takes the options of POST /v1/conversions, stored with
+// its format as that request model reads them.
+TEST(JobSpec, ConversionOptionsAreTheConversionsRequestModel) {
+    ServerConfig config;
+    const auto spec = parse_job_spec(R"({"outputs": [
+        {"file": 0, "type": "conversion", "format": "stp", "options": {"units": "inch", "step_schema": "ap242",
+                                                                       "strict": true, "iges_mode": null}},
+        {"file": 1, "type": "conversion", "format": "glb", "options": {"deflection": 0.01}}]})",
+                                     two_inputs(), config);
+    ASSERT_EQ(spec.outputs.size(), 2u);
+    const nurbsrt::ConversionRequest step = nurbsrt::parse_conversion_request(spec.outputs[0].options_json);
+    EXPECT_EQ(step.format, nurbsrt::ConversionFormat::step);
+    EXPECT_EQ(step.options.units, nurbsrt::LengthUnit::inch);
+    EXPECT_EQ(step.options.step_schema, nurbsrt::StepSchema::ap242);
+    EXPECT_TRUE(step.strict);
+    const nurbsrt::ConversionRequest glb = nurbsrt::parse_conversion_request(spec.outputs[1].options_json);
+    EXPECT_EQ(glb.options.deflection, 0.01);
+    EXPECT_FALSE(glb.strict);
+}
+
 TEST(JobSpec, MistakesAreRejected) {
     ServerConfig config;
     config.max_job_outputs = 2;
@@ -86,7 +107,18 @@ TEST(JobSpec, MistakesAreRejected) {
     EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "dwg"},
                                     {"file": 1, "type": "render"}]})"),
               ErrorCode::invalid_argument);
-    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "step", "options": {}},
+    // A conversion's options are POST /v1/conversions': what that parser refuses, the spec refuses.
+    EXPECT_EQ(
+        parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "step", "options": {"iges_mode": "faces"}},
+                                    {"file": 1, "type": "render"}]})"),
+        ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "stl", "options": {"deflection": 0.5}},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "stl", "options": {"format": "glb"}},
+                                    {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "stl", "options": [1]},
                                     {"file": 1, "type": "render"}]})"),
               ErrorCode::invalid_argument);
     EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render"}, {"file": 1, "type": "render"}], "x": 1})"),

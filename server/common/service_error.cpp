@@ -30,3 +30,13 @@ const char* ProblemCode::name() const {
 }
 
 }  // namespace nurbsrt::server
+
+namespace nurbsrt::server {
+
+ServiceError strict_refusal(const std::vector<std::string>& warnings) {
+    std::string detail = std::to_string(warnings.size()) + " warning(s), refused by strict:";
+    for (const std::string& w : warnings) detail += " " + w + ";";
+    return ServiceError(ServiceCode::strict_refused, detail);
+}
+
+}  // namespace nurbsrt::server

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "core/error.h"
 
@@ -61,5 +62,9 @@ public:
 private:
     ServiceCode code_;
 };
+
+// The refusal of a conversion asked to be strict that has `warnings` (POST
+// /v1/conversions and job outputs alike): strict_refused, every warning in the detail.
+ServiceError strict_refusal(const std::vector<std::string>& warnings);
 
 }  // namespace nurbsrt::server

@@ -16,6 +16,7 @@
 #include "renderer/prepared_scene.h"
 #include "server/common/request_log.h"
 #include "server/common/scratch.h"
+#include "server/common/service_error.h"
 #include "server/common/sha256.h"
 #include "server/jobs/job_runner.h"
 #include "server/jobs/job_spec.h"
@@ -170,7 +171,10 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
 
     FilePlan plan;
     plan.scene = want_scene;
-    for (const JobOutput* out : conversions) plan.conversions.push_back(partial_path(job, *out));
+    for (const JobOutput* out : conversions) {
+        plan.conversions.push_back(partial_path(job, *out));
+        plan.conversion_options.push_back(parse_conversion_request(out->options_json).options);
+    }
     FileResult result;
     try {
         IsolationLimits limits = isolation_limits(ctx_);
@@ -222,6 +226,11 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
                 std::error_code ec;
                 std::filesystem::remove(plan.conversions[i], ec);
                 throw *c.error;
+            }
+            if (parse_conversion_request(out.options_json).strict && !c.report->warnings.empty()) {
+                std::error_code ec;
+                std::filesystem::remove(plan.conversions[i], ec);
+                throw strict_refusal(c.report->warnings);
             }
             store_artifact(job, out, plan.conversions[i],
                            dump_result(conversion_result(*c.report, result, queued, read)), cancel, content_sha256);

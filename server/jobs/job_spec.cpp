@@ -122,10 +122,18 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             }
         } else {
             for (const auto& [key, v] : o.items())
-                if (key != "file" && key != "type" && key != "format")
+                if (key != "file" && key != "type" && key != "format" && key != "options")
                     bad_spec(where + ": unknown field '" + key.substr(0, 64) + "' of a conversion");
             if (!o.contains("format") || !o["format"].is_string())
                 bad_spec(where + ": a conversion needs 'format' (" + conversion_format_names() + ")");
+            // The options of POST /v1/conversions (units, step_schema, iges_mode,
+            // deflection, strict), read by its parser with the format beside them.
+            json options = o.value("options", json::object());
+            if (options.is_null()) options = json::object();
+            if (!options.is_object()) bad_spec(where + ": 'options' must be an object");
+            for (auto it = options.begin(); it != options.end();)
+                it = it->is_null() ? options.erase(it) : std::next(it);
+            if (options.contains("format")) bad_spec(where + ": 'format' is the output's field, not an option");
             const ConversionFormat f = conversion_format_from_name(o["format"].get<std::string>());
             if (f == ConversionFormat::unknown)
                 bad_spec(where + ": 'format' must be one of " + conversion_format_names());
@@ -133,7 +141,13 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             if (conversion_format_companion(f) != nullptr)
                 bad_spec(where + ": format '" + conversion_format_short_name(f) +
                          "' writes two files and is not a job output yet (POST /v1/conversions answers it as a ZIP)");
-            out.options_json = json{{"format", conversion_format_short_name(f)}}.dump();
+            options["format"] = conversion_format_short_name(f);
+            try {
+                (void)parse_conversion_request(options.dump());
+            } catch (const Error& e) {
+                throw Error(e.code(), where + ": " + e.what());
+            }
+            out.options_json = options.dump();
             extension = conversion_format_extension(f);
             out.content_type = conversion_format_content_type(f);
         }

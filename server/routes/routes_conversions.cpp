@@ -89,12 +89,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
         throw;
     }
     add_conversion_stages(report, isolated, stages);
-    if (request.strict && !report.warnings.empty()) {
-        // Nothing of the file is answered: the problem says why.
-        std::string detail = std::to_string(report.warnings.size()) + " warning(s), refused by strict:";
-        for (const std::string& w : report.warnings) detail += " " + w + ";";
-        throw ServiceError(ServiceCode::strict_refused, detail);
-    }
+    // Nothing of the file is answered: the problem says why.
+    if (request.strict && !report.warnings.empty()) throw strict_refusal(report.warnings);
     stages.mark("isolation");
     const std::string stem = download_name(upload.filename, "");
     const std::string data = companion ? zip_with_companion(beside.path(), read_file_bytes(out.path()), stem, format)

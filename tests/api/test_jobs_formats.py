@@ -5,7 +5,7 @@ import json
 
 import jsonschema
 
-from conftest import BEARING, MODELS, REPO, SCREW, post_raw
+from conftest import BEARING, MODELS, REPO, SCREW, check_problem, generated_fixture, post_raw
 from test_conversions import parse_glb, parse_stl
 from test_jobs import accepted, download, submit, wait_finished
 
@@ -68,3 +68,31 @@ def test_job_converts_to_every_format_named_as_posted_ones_and_takes_a_brep_inpu
     assert job["state"] == "succeeded", json.dumps(job)[:800]
     assert job["files"][0]["format"] == "BREP"
     assert download(url, job["outputs"][0]).startswith(b"ISO-10303-21;")
+
+
+def test_job_conversion_options_as_post_conversions(url):
+    """A conversion output takes the options of POST /v1/conversions (units, step_schema,
+    iges_mode, deflection, strict), read by the same parser: the unit asked is written, a
+    coarse deflection is warned, and strict fails that output (strict_refused, no artifact)
+    while the others succeed; an option the format does not take refuses the job (400)."""
+    freeform = generated_fixture("freeform_bspline").read_bytes()
+    outputs = [
+        {"file": 0, "type": "conversion", "format": "step", "options": {"units": "cm", "step_schema": "ap242"}},
+        {"file": 0, "type": "conversion", "format": "stl", "options": {"deflection": 0.1}},
+        {"file": 0, "type": "conversion", "format": "stl", "options": {"deflection": 0.1, "strict": True}},
+    ]
+    job = wait_finished(url, accepted(submit(url, [("ff.step", freeform)], {"outputs": outputs}))["id"])
+    step, coarse, strict = job["outputs"]
+    assert step["state"] == "succeeded", json.dumps(step)[:600]
+    assert step["report"]["fidelity"]["output"]["units"] == "cm"
+    data = download(url, step)
+    assert b"AP242" in data[:2000] or b"ap242" in data[:2000].lower(), data[:600]
+    assert coarse["state"] == "succeeded", json.dumps(coarse)[:600]
+    assert any("the STL mesh lies up to" in w for w in coarse["report"]["warnings"]), coarse["report"]["warnings"]
+    assert strict["state"] == "failed" and strict["error"]["code"] == "strict_refused", json.dumps(strict)[:600]
+    assert "the STL mesh lies up to" in strict["error"]["message"]
+    assert "artifact" not in strict
+    r = submit(url, [("ff.step", freeform)],
+               {"outputs": [{"file": 0, "type": "conversion", "format": "glb", "options": {"units": "inch"}}]})
+    detail = check_problem(r, 400)["detail"]
+    assert "output 0: option 'units' applies to STEP and IGES outputs only" in detail, detail
