@@ -153,11 +153,8 @@ def test_job_render_statistics_add_up(url):
         check_adds_up(t, CONVERSION_STAGES, f"job conversion to {out['format']}")
         assert t["isolation"] > 0 and t["write"] > 0, t
         assert t["upload"] == 0, t  # the input is on disk
-        # With the whole file in one run (SQLite), its one read served the render's import first: it is the
-        # read's cost, not this output's. Claimed output by output (PostgreSQL), each conversion reads.
+        # The whole file is claimed in one run (SQLite, and PostgreSQL since it claims a file's outputs
+        # together): its one read served the render's import first; it is the read's cost, not this output's.
         read = out["report"]["read"]
         assert read["read_ms"] > 0, read
-        if os.environ.get("NURBSRT_API_JOB_STORE"):
-            assert t["read"] > 0 and read["served"] == 1, (t, read)
-        else:
-            assert t["read"] == 0 and read["served"] == 3, (t, read)
+        assert t["read"] == 0 and read["served"] == 3, (t, read)
