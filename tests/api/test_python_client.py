@@ -3,6 +3,7 @@
 index needed), its own tests run there against this test run's service."""
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 
@@ -15,8 +16,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 def venv(tmp_path_factory):
     where = tmp_path_factory.mktemp("client-venv")
     subprocess.run(["/usr/bin/python3", "-m", "venv", "--system-site-packages", str(where)], check=True, timeout=300)
+    # Built from a copy: an in-tree build leaves build/ and *.egg-info in the checkout.
+    source = shutil.copytree(ROOT / "clients" / "python", where / "source",
+                             ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
     pip = subprocess.run([str(where / "bin" / "pip"), "install", "--quiet", "--no-build-isolation", "--no-index",
-                          str(ROOT / "clients" / "python")], capture_output=True, text=True, timeout=300)
+                          str(source)], capture_output=True, text=True, timeout=300)
     assert pip.returncode == 0, pip.stdout[-2000:] + pip.stderr[-2000:]
     return where
 
