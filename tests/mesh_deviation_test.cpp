@@ -10,6 +10,7 @@
 // that it is measured right.)
 #include <gtest/gtest.h>
 
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
@@ -41,10 +42,10 @@ double reference(const gp_Pnt& p, const TopoDS_Face& face) {
     return d.Value();
 }
 
-class MeshDeviation : public ::testing::TestWithParam<const char*> {};
-
-TEST_P(MeshDeviation, AgreesWithBRepExtremaOnEveryPoint) {
-    const nurbsrt::occt::OcctModel m = nurbsrt::occt::read_model(nurbsrt::test::fixture_by_name(GetParam()), false);
+// Compares every `stride`-th point of each face (vertices, then centroids: the
+// order face_mesh_deviations gives them) with the reference; prints a line.
+void expect_agrees_with_reference(const std::string& model, const std::string& label, int stride) {
+    const nurbsrt::occt::OcctModel m = nurbsrt::occt::read_model(model, false);
     nurbsrt::ConvertReport r;
     nurbsrt::occt::mesh_for_export(m.shape, r);  // as the mesh outputs mesh it
     Bnd_Box box;
@@ -52,25 +53,39 @@ TEST_P(MeshDeviation, AgreesWithBRepExtremaOnEveryPoint) {
     const double diagonal = std::sqrt(box.SquareExtent());
     const double tolerance = std::max(1e-7 * diagonal, Precision::Confusion());
     double worst = 0, max_ours = 0;
-    long long points = 0;
+    long long points = 0, beyond_base = 0;
     for (int i = 1; i <= m.faces.Extent(); ++i) {
         const TopoDS_Face& face = TopoDS::Face(m.faces(i));
+        // A face's boundary is known only within its edges' and vertices'
+        // tolerances (BRepCheck's definition of a valid shape): there the 3D
+        // curves the reference measures to and the surface's trim may differ.
+        // The fixtures' tolerances are 1e-7; some real files' are 0.5 mm.
+        const double face_tolerance = std::max(
+            {tolerance, BRep_Tool::MaxTolerance(face, TopAbs_EDGE), BRep_Tool::MaxTolerance(face, TopAbs_VERTEX)});
         long long outside = 0;
         const std::vector<double> ours = nurbsrt::occt::face_mesh_deviations(face, outside);
         TopLoc_Location loc;
         const Handle(Poly_Triangulation) t = BRep_Tool::Triangulation(face, loc);
-        ASSERT_FALSE(t.IsNull());
+        if (t.IsNull()) {
+            EXPECT_TRUE(ours.empty());  // a face BRepMesh could not mesh (the report counts it)
+            continue;
+        }
         // The same points in the same order: vertices, then centroids.
         ASSERT_EQ(ours.size(), static_cast<size_t>(t->NbNodes() + t->NbTriangles())) << "face " << i;
         const gp_Trsf placement = loc.Transformation();
         size_t k = 0;
         auto check = [&](const gp_Pnt& p) {
-            const double ref = reference(p, face);
-            worst = std::max(worst, std::abs(ours[k] - ref));
-            max_ours = std::max(max_ours, ours[k]);
-            EXPECT_NEAR(ours[k], ref, tolerance) << GetParam() << " face " << i << " point " << k;
+            if (k % static_cast<size_t>(stride) == 0) {
+                const double ref = reference(p, face);
+                worst = std::max(worst, std::abs(ours[k] - ref));
+                if (std::abs(ours[k] - ref) > tolerance) ++beyond_base;
+                max_ours = std::max(max_ours, ours[k]);
+                EXPECT_NEAR(ours[k], ref, face_tolerance)
+                    << label << " face " << i << " (surface type " << BRepAdaptor_Surface(face).GetType() << ") "
+                    << (k < static_cast<size_t>(t->NbNodes()) ? "vertex " : "centroid ") << k;
+                ++points;
+            }
             ++k;
-            ++points;
         };
         for (int n = 1; n <= t->NbNodes(); ++n) check(t->Node(n).Transformed(placement));
         for (int j = 1; j <= t->NbTriangles(); ++j) {
@@ -83,9 +98,25 @@ TEST_P(MeshDeviation, AgreesWithBRepExtremaOnEveryPoint) {
     }
     std::printf(
         "%s: %lld points, max deviation %.3g mm (%.2g of the diagonal), largest disagreement with "
-        "BRepExtrema %.2g mm (tolerance %.2g)\n",
-        GetParam(), points, max_ours, max_ours / diagonal, worst, tolerance);
+        "BRepExtrema %.2g mm; %lld points beyond %.2g mm, within their face's edge tolerance\n",
+        label.c_str(), points, max_ours, max_ours / diagonal, worst, beyond_base, tolerance);
     EXPECT_GT(max_ours, 0.0);  // a mesh of chords is off every curved face somewhere
+}
+
+class MeshDeviation : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(MeshDeviation, AgreesWithBRepExtremaOnEveryPoint) {
+    expect_agrees_with_reference(nurbsrt::test::fixture_by_name(GetParam()), GetParam(), 1);
+}
+
+// Real parts from other CAD systems: B-spline faces with many trims, seams and
+// poles, an IGES solid, an assembly. Every 5th point (the reference takes about
+// a millisecond a point; a stride keeps the test short and still covers each face).
+TEST(MeshDeviationRealModels, AgreesWithBRepExtrema) {
+    NURBSRT_REQUIRE_SHARED_MODELS();
+    for (const char* m : {"step/trj8_b1-ec-214.stp", "iges/bearing.iges", "step/as1-oc-214.stp", "iges/heartValve.igs",
+                          "step/screw.step"})
+        expect_agrees_with_reference(nurbsrt::test::shared_model(m), m, 5);
 }
 
 INSTANTIATE_TEST_SUITE_P(Fixtures, MeshDeviation,

@@ -3,6 +3,9 @@
 // tolerances below become warnings.
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include <BRepBndLib.hxx>
 #include <BRepCheck_Analyzer.hxx>
@@ -90,9 +93,16 @@ GeometryMeasures measure_geometry(const TopoDS_Shape& s) {
     BRepGProp::SurfaceProperties(s, a);
     m.area = a.Mass();
     // Faces only, from their geometry: wireframe and shape tolerances would blur the comparison.
+    // (BRepBndLib::AddOptimal searches each face's surface for its extremes:
+    // the faces side by side, their boxes joined in order.)
+    TopTools_IndexedMapOfShape faces;
+    TopExp::MapShapes(s, TopAbs_FACE, faces);
+    std::vector<Bnd_Box> boxes(static_cast<size_t>(faces.Extent()));
+    tbb::parallel_for(size_t(0), boxes.size(), [&](size_t i) {
+        BRepBndLib::AddOptimal(faces(static_cast<int>(i) + 1), boxes[i], Standard_False, Standard_False);
+    });
     Bnd_Box box;
-    for (TopExp_Explorer ex(s, TopAbs_FACE); ex.More(); ex.Next())
-        BRepBndLib::AddOptimal(ex.Current(), box, Standard_False, Standard_False);
+    for (const Bnd_Box& b : boxes) box.Add(b);
     m.box = to_array(box);
     try {
         m.valid = BRepCheck_Analyzer(s).IsValid() == Standard_True;
