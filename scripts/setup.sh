@@ -38,7 +38,12 @@ PACKAGES=(
   clang libclang-rt-14-dev clang-format
   python3 python3-pytest python3-requests python3-jsonschema python3-numpy python3-venv python3-setuptools
   chromium python3-websocket
+  occt-draw libocct-draw-dev xvfb
 )
+# occt-draw, libocct-draw-dev, xvfb: bench/occt_viewer.py times OCCT's own viewer (DRAW,
+# scripted for a thumbnail) against `nurbsrt render`; DRAW's plugin loader opens the
+# unversioned libTKTopTest.so, which only the -dev package holds; its OpenGL view needs
+# an X display (one Xvfb for the whole benchmark).
 # fonts-dejavu-core: the labels of contact sheets (OpenImageIO draws DejaVu Sans).
 # python3-venv, python3-setuptools: the Python client package (clients/python) is
 # installed into a venv by its tests, built offline with Debian's setuptools.
