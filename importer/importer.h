@@ -180,6 +180,9 @@ struct ConvertReport {
                                                     // conversion + meshing (JSON); 0 for STEP/IGES
     double verify_ms = 0;                           // STEP/IGES/BREP: reading the written file back and
                                                     // comparing it (see warnings); 0 otherwise
+    // A mesh output of a shared read (a job's file) that took over the mesh an
+    // earlier output made at the same parameters, and its measured deviation.
+    bool mesh_shared = false;
     // The fidelity report, JSON text (api_schema/openapi.json, FidelityReport):
     // source and output measured alike and compared; "" for NURBS JSON.
     std::string fidelity;

@@ -98,8 +98,9 @@ OcctModel read_model_from_file(const std::string& path, bool read_attributes, bo
 
 // Takes the triangulations off the SharedRead's shape (BRepTools::Clean), so
 // that the next use meets the shape as a lone read delivers it; nothing
-// without a SharedRead.
-void forget_shared_meshes();
+// without a SharedRead. With `keep_export_mesh`, an export mesh (recorded in
+// the model's MeasuresCache) stays for mesh_for_export to take over or replace.
+void forget_shared_meshes(bool keep_export_mesh = false);
 
 // Serializes STEP/IGES reading, transfer and writing process-wide (concurrent
 // use corrupts OCCT's heap: the readers and writers share global state).

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,18 @@ struct GeometryMeasures;  // importer/convert/convert_writers.h
 // every copy of the model a SharedRead serves: measured once per read.
 struct MeasuresCache {
     std::shared_ptr<const GeometryMeasures> source;
+    // The export mesh the shared shape carries (mesh_for_export) and what
+    // making and measuring it found: the next mesh output of the same read
+    // asking the same parameters takes it over, as BRepMesh would make the
+    // same triangulation again (and its deviation is the same).
+    struct ExportMesh {
+        double deflection = 0, angle = 0;  // absolute, as BRepMesh was given them
+        int face_instances = 0;            // of the shape meshed
+        long long triangles = 0, degenerate_triangles = 0;
+        int unmeshed_faces = 0;
+        std::string deviation;  // mesh_deviation_json's text; "" until measured
+    };
+    std::optional<ExportMesh> export_mesh;
 };
 
 // A file as OCCT reads it: all transferred roots in one shape, and the faces

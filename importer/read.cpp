@@ -441,10 +441,13 @@ OcctModel read_model(const std::string& path, bool read_attributes, bool keep_do
     return m;
 }
 
-void forget_shared_meshes() {
+void forget_shared_meshes(bool keep_export_mesh) {
     SharedModel& s = shared_model();
     std::lock_guard<std::mutex> lock(s.m);
-    if (s.done && !s.error) BRepTools::Clean(s.model.shape);
+    if (!s.done || s.error) return;
+    if (keep_export_mesh && s.model.measures->export_mesh) return;
+    BRepTools::Clean(s.model.shape);
+    s.model.measures->export_mesh.reset();
 }
 
 OcctModel read_model_from_file(const std::string& path, bool read_attributes, bool keep_document) {

@@ -2,8 +2,10 @@
 // imports the file once and writes all its conversions from that read) are
 // what lone conversions of the file write, in any order of the outputs:
 //  * byte-identical for BREP, STL, glb and VRML (no timestamps in them): no
-//    triangulation of the import or of an earlier mesh output leaks into BREP,
-//    every mesh output meshes anew;
+//    triangulation of the import or of an earlier mesh output leaks into BREP;
+//    a mesh output takes over the mesh of the mesh output just before it (same
+//    parameters: BRepMesh would make the same one) with its counts and its
+//    measured deviation, and meshes anew after anything else;
 //  * STEP and IGES (whose headers carry the time of writing): the same fidelity
 //    report and warnings, so IGES -> STEP's grouping of named members into
 //    assemblies (a change of the document) is its own, not the later outputs';
@@ -103,6 +105,19 @@ TEST(ConvertSharedRead, EveryMeshOutputCountsItsDegenerateTriangles) {
     const std::vector<Output> lone = convert_all(sphere, {".stl"}, false, "sphere-lone");
     ASSERT_GT(lone[0].report.degenerate_triangles, 0) << "the sphere's poles give BRepMesh degenerate triangles";
     check_orders(sphere, {".stl", ".brep", ".stl", ".glb"}, "sphere");
+}
+
+TEST(ConvertSharedRead, MeshOutputsInARowShareOneMesh) {
+    const std::string sphere = nurbsrt::test::sphere();
+    const std::vector<std::string> outputs = {".stl", ".glb", ".wrl", ".brep", ".stl", ".glb"};
+    const std::vector<Output> lone = convert_all(sphere, outputs, false, "row-lone");
+    const std::vector<Output> shared = convert_all(sphere, outputs, true, "row-shared");
+    const bool expected[] = {false, true, true, false, false, true};
+    for (size_t i = 0; i < outputs.size(); ++i) {
+        EXPECT_FALSE(lone[i].report.mesh_shared) << outputs[i] << " #" << i;
+        EXPECT_EQ(shared[i].report.mesh_shared, expected[i]) << outputs[i] << " #" << i;
+        expect_as_alone(lone[i], shared[i], outputs[i], "row " + outputs[i] + " #" + std::to_string(i));
+    }
 }
 
 }  // namespace

@@ -56,10 +56,11 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
     if (!out_dir.empty() && !std::filesystem::is_directory(out_dir, ec))
         throw Error(ErrorCode::io, "cannot write '" + out_path + "': no such directory");
 
-    // A shared read's shape may carry the triangulations of an earlier use
-    // (the import, another mesh output): gone, so that BRepMesh meshes anew
-    // (with its degenerate triangles counted again) and BREP writes none.
-    occt::forget_shared_meshes();
+    // A shared read's shape may carry the triangulations of an earlier use:
+    // the import's are gone, so that BRepMesh meshes anew and BREP writes
+    // none; another mesh output's stay for mesh_for_export, which takes them
+    // over at the same parameters (with what it counted) or meshes anew.
+    occt::forget_shared_meshes(/*keep_export_mesh=*/conversion_format_is_mesh(r.output));
     switch (r.output) {
         case ConversionFormat::step:
         case ConversionFormat::iges:

@@ -53,14 +53,19 @@ void write_obj(const std::string& in_path, const std::string& out_path, const Co
 // mesh outputs cannot contain, a warning). Triangles of no area at float precision or
 // repeating another of their face are taken out of the faces' triangulations
 // (the writers read those) and counted in r.degenerate_triangles.
+// With `cache` (the model's MeasuresCache): a shape that already carries an
+// export mesh made at the same parameters (a shared read's earlier mesh
+// output) is not meshed again: its counts are taken over and r.mesh_shared
+// set; one made at other parameters is replaced. Records the mesh made.
 // Returns the deflection used.
-double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection = 0);
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection = 0,
+                       MeasuresCache* cache = nullptr);
 // The same for the shapes an XDE document holds (the writers that take a
 // document read the triangulations from them); parts placed twice share their
 // faces, so are meshed once.
 // Returns the meshed compound of the document's free shapes.
 TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r,
-                                      double relative_deflection);
+                                      double relative_deflection, MeasuresCache* cache = nullptr);
 
 // --- the fidelity report (fidelity.cpp) ----------------------------------------
 // A shape as OCCT measures it: distinct (located) sub-shapes, the volume of its

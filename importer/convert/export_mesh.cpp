@@ -7,6 +7,7 @@
 
 #include <BRepBndLib.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
+#include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
@@ -77,23 +78,9 @@ long long drop_degenerate_triangles(const TopoDS_Face& face) {
     return dropped;
 }
 
-}  // namespace
-
-double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection) {
-    const auto t0 = std::chrono::steady_clock::now();
-    TopTools_IndexedMapOfShape faces;
-    TopExp::MapShapes(shape, TopAbs_FACE, faces);
-    // Faces only, as for the import's own mesh: wireframe entities (unbounded
-    // lines, construction geometry) must not inflate the box that sets the deflection.
-    Bnd_Box box;
-    for (int i = 1; i <= faces.Extent(); ++i) BRepBndLib::Add(faces(i), box, Standard_False);
-    const double diag = box.IsVoid() ? 0.0 : std::sqrt(box.SquareExtent());
-    const ImportOptions defaults;
-    IMeshTools_Parameters params;
-    const double relative = relative_deflection > 0 ? relative_deflection : defaults.mesh_relative_deflection;
-    params.Deflection = diag > 0 && std::isfinite(diag) ? relative * diag : 1e-3;
-    params.Angle = defaults.mesh_angular_deflection;
-    params.InParallel = Standard_True;
+// BRepMesh at `params`, then the degenerate triangles out, counted in `r`.
+void mesh_anew(const TopoDS_Shape& shape, const TopTools_IndexedMapOfShape& faces, const IMeshTools_Parameters& params,
+               ConvertReport& r) {
     try {
         BRepMesh_IncrementalMesh mesher(shape, params);
     } catch (const Standard_Failure& f) {
@@ -110,6 +97,49 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relat
             ++r.unmeshed_faces;
         else
             r.triangles += t->NbTriangles();
+    }
+}
+
+}  // namespace
+
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection, MeasuresCache* cache) {
+    const auto t0 = std::chrono::steady_clock::now();
+    TopTools_IndexedMapOfShape faces;
+    TopExp::MapShapes(shape, TopAbs_FACE, faces);
+    // Faces only, as for the import's own mesh: wireframe entities (unbounded
+    // lines, construction geometry) must not inflate the box that sets the deflection.
+    Bnd_Box box;
+    for (int i = 1; i <= faces.Extent(); ++i) BRepBndLib::Add(faces(i), box, Standard_False);
+    const double diag = box.IsVoid() ? 0.0 : std::sqrt(box.SquareExtent());
+    const ImportOptions defaults;
+    IMeshTools_Parameters params;
+    const double relative = relative_deflection > 0 ? relative_deflection : defaults.mesh_relative_deflection;
+    params.Deflection = diag > 0 && std::isfinite(diag) ? relative * diag : 1e-3;
+    params.Angle = defaults.mesh_angular_deflection;
+    params.InParallel = Standard_True;
+    const bool shared = cache && cache->export_mesh && cache->export_mesh->deflection == params.Deflection &&
+                        cache->export_mesh->angle == params.Angle &&
+                        cache->export_mesh->face_instances == faces.Extent();
+    if (shared) {
+        const MeasuresCache::ExportMesh& e = *cache->export_mesh;
+        r.triangles = e.triangles;
+        r.unmeshed_faces = e.unmeshed_faces;
+        r.degenerate_triangles = e.degenerate_triangles;
+        r.mesh_shared = true;
+    } else {
+        if (cache && cache->export_mesh) {
+            BRepTools::Clean(shape);  // another output's mesh, at other parameters
+            cache->export_mesh.reset();
+        }
+        mesh_anew(shape, faces, params, r);
+        if (cache)
+            cache->export_mesh = MeasuresCache::ExportMesh{params.Deflection,
+                                                           params.Angle,
+                                                           faces.Extent(),
+                                                           r.triangles,
+                                                           r.degenerate_triangles,
+                                                           r.unmeshed_faces,
+                                                           ""};
     }
     r.mesh_ms = ms_since(t0);
     // A face missing from the output is a loss like any other: a warning,
@@ -129,7 +159,7 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relat
 namespace nurbsrt::occt {
 
 TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r,
-                                      double relative_deflection) {
+                                      double relative_deflection, MeasuresCache* cache) {
     const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
     TDF_LabelSequence roots;
     shapes->GetFreeShapes(roots);
@@ -137,7 +167,7 @@ TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, Conv
     BRep_Builder builder;
     builder.MakeCompound(all);
     for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
-    mesh_for_export(all, r, relative_deflection);
+    mesh_for_export(all, r, relative_deflection, cache);
     return all;
 }
 

@@ -3,6 +3,7 @@
 // tolerances below become warnings.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -214,7 +215,12 @@ std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, Co
                                      " (relative; a mesh's chords keep it within " +
                                      std::to_string(kMeshMeasureTolerance) + ")");
         }
-    const nlohmann::ordered_json deviation = mesh_deviation_json(meshed, diagonal(in.box));
+    // A mesh taken over from an earlier output of the read was measured then.
+    std::optional<MeasuresCache::ExportMesh>& made = model.measures->export_mesh;
+    const nlohmann::ordered_json deviation = r.mesh_shared && made && !made->deviation.empty()
+                                                 ? nlohmann::ordered_json::parse(made->deviation)
+                                                 : mesh_deviation_json(meshed, diagonal(in.box));
+    if (made && made->deviation.empty()) made->deviation = deviation.dump();
     if (deviation.is_object()) {
         if (const double rel = deviation["relative_to_diagonal"]["max"].get<double>(); rel > kMeshDeviationTolerance)
             r.warnings.push_back(std::string("the ") + fmt + " mesh lies up to " +
