@@ -49,7 +49,10 @@ void print_fidelity(const std::string& text) {
                      "nurbsrt: fidelity: mesh against the exact faces: relative difference of area %.2g, box %.2g",
                      num(d, "area"), num(d, "box"));
         if (d.contains("volume")) std::fprintf(stderr, ", enclosed volume %.2g", num(d, "volume"));
-        std::fputc('\n', stderr);
+        if (d.contains("volume_centroid")) std::fprintf(stderr, ", volume centroid %.2g", num(d, "volume_centroid"));
+        const nlohmann::json& mesh = f["output"]["mesh_in_mm"];
+        std::fprintf(stderr, "; edges: %lld open, %lld non-manifold\n", mesh["open_edges"].get<long long>(),
+                     mesh["non_manifold_edges"].get<long long>());
         if (const nlohmann::json& dev = f["output"]["deviation_in_mm"]; dev.is_object())
             std::fprintf(stderr,
                          "nurbsrt: fidelity: deviation of %lld vertices and centroids from the trimmed faces: max "

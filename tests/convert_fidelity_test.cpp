@@ -11,6 +11,9 @@
 //            difference from the exact area it states is the one measured here.
 #include <gtest/gtest.h>
 
+#include <map>
+#include <utility>
+
 #include <BRepGProp.hxx>
 #include <GProp_GProps.hxx>
 #include <IGESControl_Reader.hxx>
@@ -194,6 +197,73 @@ TEST(ConvertFidelity, MeshAreaIsTheWrittenTrianglesArea) {
     EXPECT_LT(area, exact);
     EXPECT_LT(f["relative_differences"]["area"].get<double>(), 0.01);
     EXPECT_TRUE(mesh.contains("volume"));
+}
+
+// The edge counts and the volume's centroid of a mesh output, against the
+// written STL as OCCT's reader joins it (RWStl merges equal nodes).
+double box_extent_squared(const json& box) {
+    double sq = 0;
+    for (int i = 0; i < 3; ++i) sq += std::pow(box["max"][i].get<double>() - box["min"][i].get<double>(), 2);
+    return sq;
+}
+
+struct StlEdges {
+    long long open = 0, non_manifold = 0;
+    gp_XYZ centroid;
+};
+
+StlEdges edges_of_stl(const std::string& path) {
+    const Handle(Poly_Triangulation) t = RWStl::ReadFile(path.c_str(), Message_ProgressRange());
+    EXPECT_FALSE(t.IsNull());
+    std::map<std::pair<int, int>, int> uses;
+    gp_XYZ moment(0, 0, 0);
+    double volume = 0;
+    for (int k = 1; k <= t->NbTriangles(); ++k) {
+        int n[3];
+        t->Triangle(k).Get(n[0], n[1], n[2]);
+        for (int i = 0; i < 3; ++i) ++uses[std::minmax(n[i], n[(i + 1) % 3])];
+        const gp_XYZ a = t->Node(n[0]).XYZ(), b = t->Node(n[1]).XYZ(), c = t->Node(n[2]).XYZ();
+        const double v = a.Dot(b.Crossed(c)) / 6;
+        volume += v;
+        moment += v * (a + b + c) / 4;
+    }
+    StlEdges e;
+    for (const auto& [edge, n] : uses) {
+        e.open += n == 1;
+        e.non_manifold += n > 2;
+    }
+    e.centroid = moment / volume;
+    return e;
+}
+
+TEST(ConvertFidelity, MeshEdgesAndVolumeCentroidAreMeasured) {
+    // A closed solid: no open or non-manifold edge, and its mesh's volume
+    // centroid near the exact one (BRepGProp), as the STL's own is.
+    const std::string in = nurbsrt::test::filleted_box(), out = out_path("filleted-edges.stl");
+    const json f = json::parse(nurbsrt::convert_file(in, out).fidelity);
+    const json& mesh = f["output"]["mesh_in_mm"];
+    const StlEdges stl = edges_of_stl(out);
+    EXPECT_EQ(stl.open, 0);
+    EXPECT_EQ(mesh["open_edges"].get<long long>(), stl.open);
+    EXPECT_EQ(mesh["non_manifold_edges"].get<long long>(), stl.non_manifold);
+    EXPECT_EQ(mesh["non_manifold_triangles"].get<long long>(), 0);
+    const json& exact = f["source"]["geometry"]["volume_centroid"];
+    ASSERT_TRUE(exact.is_array());
+    const double diag = std::sqrt(box_extent_squared(f["source"]["geometry"]["box"]));
+    double moved = 0;
+    for (int i = 0; i < 3; ++i) {
+        // float32 corners: the STL's centroid agrees with ours to about 1e-6 of the diagonal.
+        EXPECT_NEAR(mesh["volume_centroid"][i].get<double>(), stl.centroid.Coord(i + 1), 1e-6 * diag);
+        moved += std::pow(mesh["volume_centroid"][i].get<double>() - exact[i].get<double>(), 2);
+    }
+    EXPECT_NEAR(f["relative_differences"]["volume_centroid"].get<double>(), std::sqrt(moved) / diag, 1e-12);
+    EXPECT_LT(f["relative_differences"]["volume_centroid"].get<double>(), 1e-3);
+    // An open B-spline sheet: its rim is open, as the STL's.
+    const std::string sheet = out_path("sheet-edges.stl");
+    const json g =
+        json::parse(nurbsrt::convert_file(nurbsrt::test::fixture_by_name("freeform_bspline"), sheet).fidelity);
+    EXPECT_GT(edges_of_stl(sheet).open, 0);
+    EXPECT_EQ(g["output"]["mesh_in_mm"]["open_edges"].get<long long>(), edges_of_stl(sheet).open);
 }
 
 }  // namespace

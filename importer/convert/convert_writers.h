@@ -74,18 +74,25 @@ TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, Conv
 struct GeometryMeasures {
     int solids = 0, shells = 0, faces = 0, edges = 0;
     double volume = 0, area = 0;
-    std::array<double, 6> box{};  // min x y z, max x y z
+    std::array<double, 6> box{};       // min x y z, max x y z
+    std::array<double, 3> centroid{};  // of the solids' volume (none without solids)
     bool valid = true;
 };
 GeometryMeasures measure_geometry(const TopoDS_Shape& shape);
 // measure_geometry of the model's shape, once per read (OcctModel::measures).
 const GeometryMeasures& measure_source(const OcctModel& model);
 // The triangles of the faces' triangulations (placed, every occurrence): their
-// area, the volume they enclose (divergence theorem) and their box.
+// area, the volume they enclose and its centroid (divergence theorem), their
+// box, and their edges as a reader of the written file joins them (vertices
+// equal at float precision, as STL, glb and OBJ store them): edges of one
+// triangle (open: a hole or an open shell) and of more than two (non-manifold),
+// and the triangles that have a non-manifold edge.
 struct MeshMeasures {
     long long triangles = 0;
     double area = 0, volume = 0;
     std::array<double, 6> box{};
+    std::array<double, 3> centroid{};
+    long long open_edges = 0, non_manifold_edges = 0, non_manifold_triangles = 0;
 };
 MeshMeasures measure_mesh(const TopoDS_Shape& shape);
 nlohmann::ordered_json geometry_json(const GeometryMeasures& m);

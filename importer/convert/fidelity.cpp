@@ -2,6 +2,10 @@
 // output measured alike, by OCCT, and compared; differences past the
 // tolerances below become warnings.
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <tuple>
 #include <cmath>
 #include <optional>
 #include <vector>
@@ -76,6 +80,53 @@ std::array<double, 6> to_array(const Bnd_Box& box) {
     return b;
 }
 
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+// A mesh's edges as a reader of the written file joins them: vertices equal
+// at float precision (what STL, glb and OBJ store) are one vertex.
+class MeshEdges {
+public:
+    void add(const gp_Pnt& a, const gp_Pnt& b, const gp_Pnt& c) {
+        const uint32_t v[3] = {vertex(a), vertex(b), vertex(c)};
+        for (int i = 0; i < 3; ++i) {
+            const uint32_t p = v[i], q = v[(i + 1) % 3];
+            edges_.push_back({std::min(p, q), std::max(p, q), triangle_});
+        }
+        ++triangle_;
+    }
+    void count(MeshMeasures& m) {
+        std::sort(edges_.begin(), edges_.end());
+        std::vector<bool> non_manifold(triangle_, false);
+        for (size_t i = 0; i < edges_.size();) {
+            size_t j = i;
+            while (j < edges_.size() && edges_[j].a == edges_[i].a && edges_[j].b == edges_[i].b) ++j;
+            if (j - i == 1) ++m.open_edges;
+            if (j - i > 2) {
+                ++m.non_manifold_edges;
+                for (size_t k = i; k < j; ++k) non_manifold[edges_[k].triangle] = true;
+            }
+            i = j;
+        }
+        m.non_manifold_triangles = std::count(non_manifold.begin(), non_manifold.end(), true);
+    }
+
+private:
+    struct Edge {
+        uint32_t a, b, triangle;
+        bool operator<(const Edge& o) const { return std::tie(a, b, triangle) < std::tie(o.a, o.b, o.triangle); }
+    };
+    uint32_t vertex(const gp_Pnt& p) {
+        const std::array<float, 3> key = {static_cast<float>(p.X()), static_cast<float>(p.Y()),
+                                          static_cast<float>(p.Z())};
+        return ids_.try_emplace(key, static_cast<uint32_t>(ids_.size())).first->second;
+    }
+    std::map<std::array<float, 3>, uint32_t> ids_;
+    std::vector<Edge> edges_;
+    uint32_t triangle_ = 0;
+};
+
 }  // namespace
 
 GeometryMeasures measure_geometry(const TopoDS_Shape& s) {
@@ -85,11 +136,14 @@ GeometryMeasures measure_geometry(const TopoDS_Shape& s) {
     m.faces = count(s, TopAbs_FACE);
     m.edges = count(s, TopAbs_EDGE);
     // Volume of the solids only: the "volume" of open shells is no property of the model.
+    gp_XYZ moment(0, 0, 0);
     for (TopExp_Explorer ex(s, TopAbs_SOLID); ex.More(); ex.Next()) {
         GProp_GProps v;
         BRepGProp::VolumeProperties(ex.Current(), v);
         m.volume += std::abs(v.Mass());
+        moment += std::abs(v.Mass()) * v.CentreOfMass().XYZ();
     }
+    if (m.volume > 0) m.centroid = {moment.X() / m.volume, moment.Y() / m.volume, moment.Z() / m.volume};
     GProp_GProps a;
     BRepGProp::SurfaceProperties(s, a);
     m.area = a.Mass();
@@ -122,6 +176,8 @@ const GeometryMeasures& measure_source(const OcctModel& model) {
 MeshMeasures measure_mesh(const TopoDS_Shape& s) {
     MeshMeasures m;
     Bnd_Box box;
+    gp_XYZ moment(0, 0, 0);
+    MeshEdges edges;
     TopTools_IndexedMapOfShape faces;
     TopExp::MapShapes(s, TopAbs_FACE, faces);
     for (int i = 1; i <= faces.Extent(); ++i) {
@@ -139,20 +195,29 @@ MeshMeasures measure_mesh(const TopoDS_Shape& s) {
                          c = t->Node(n[2]).Transformed(placement);
             const gp_Vec cross = gp_Vec(a, b).Crossed(gp_Vec(a, c));
             m.area += cross.Magnitude() / 2;
-            // Signed volume of the tetrahedron to the origin (divergence theorem).
-            m.volume += gp_Vec(a.XYZ()).Dot(gp_Vec(b.XYZ()).Crossed(gp_Vec(c.XYZ()))) / 6;
+            // Signed volume of the tetrahedron to the origin (divergence theorem),
+            // and its first moment (the tetrahedron's centroid is (a + b + c) / 4).
+            const double v = gp_Vec(a.XYZ()).Dot(gp_Vec(b.XYZ()).Crossed(gp_Vec(c.XYZ()))) / 6;
+            m.volume += v;
+            moment += v * (a.XYZ() + b.XYZ() + c.XYZ()) / 4;
+            edges.add(a, b, c);
             ++m.triangles;
             for (const gp_Pnt* p : {&a, &b, &c}) box.Add(*p);
         }
     }
+    if (m.volume != 0) m.centroid = {moment.X() / m.volume, moment.Y() / m.volume, moment.Z() / m.volume};
     m.volume = std::abs(m.volume);
     m.box = to_array(box);
+    edges.count(m);
     return m;
 }
 
 nlohmann::ordered_json geometry_json(const GeometryMeasures& m) {
-    return {{"solids", m.solids}, {"shells", m.shells}, {"faces", m.faces},       {"edges", m.edges},
-            {"volume", m.volume}, {"area", m.area},     {"box", box_json(m.box)}, {"valid", m.valid}};
+    nlohmann::ordered_json j = {{"solids", m.solids}, {"shells", m.shells}, {"faces", m.faces},      {"edges", m.edges},
+                                {"volume", m.volume}, {"area", m.area},     {"box", box_json(m.box)}};
+    if (m.solids > 0) j["volume_centroid"] = m.centroid;
+    j["valid"] = m.valid;
+    return j;
 }
 
 nlohmann::ordered_json compare_geometry(const GeometryMeasures& in, const GeometryMeasures& out,
@@ -173,24 +238,41 @@ nlohmann::ordered_json compare_geometry(const GeometryMeasures& in, const Geomet
                                std::to_string(d) + " (relative; exact formats keep it within " +
                                std::to_string(kExactTolerance) + ")");
     };
-    if (in.solids > 0 && out.solids > 0) moved("volume", volume);
+    if (in.solids > 0 && out.solids > 0) {
+        moved("volume", volume);
+        moved("volume centroid", distance(in.centroid, out.centroid) / std::max(diagonal(in.box), 1e-300));
+    }
     moved("area", area);
     moved("bounding box", box);
     if (in.valid && !out.valid)
         warnings.push_back("the output is not a valid shape (BRepCheck_Analyzer); the source is");
-    return {{"volume", volume}, {"area", area}, {"box", box}, {"tolerance", kExactTolerance}};
+    nlohmann::ordered_json d = {{"volume", volume}, {"area", area}, {"box", box}};
+    // The centroid's move relative to the diagonal (solids only).
+    if (in.solids > 0 && out.solids > 0)
+        d["volume_centroid"] = distance(in.centroid, out.centroid) / std::max(diagonal(in.box), 1e-300);
+    d["tolerance"] = kExactTolerance;
+    return d;
 }
 
 nlohmann::ordered_json mesh_json(const GeometryMeasures& in, const MeshMeasures& mesh, const ConvertReport& r) {
     nlohmann::ordered_json j = {{"triangles", mesh.triangles},
                                 {"degenerate_triangles_left_out", r.degenerate_triangles},
                                 {"unmeshed_faces", r.unmeshed_faces},
+                                {"open_edges", mesh.open_edges},
+                                {"non_manifold_edges", mesh.non_manifold_edges},
+                                {"non_manifold_triangles", mesh.non_manifold_triangles},
                                 {"area", mesh.area},
                                 {"box", box_json(mesh.box)}};
     // The enclosed volume means something only for closed solids.
-    if (in.solids > 0) j["volume"] = mesh.volume;
+    if (in.solids > 0) {
+        j["volume"] = mesh.volume;
+        j["volume_centroid"] = mesh.centroid;
+    }
     nlohmann::ordered_json d = {{"area", relative(in.area, mesh.area)}, {"box", box_difference(in.box, mesh.box)}};
-    if (in.solids > 0) d["volume"] = relative(in.volume, mesh.volume);
+    if (in.solids > 0) {
+        d["volume"] = relative(in.volume, mesh.volume);
+        d["volume_centroid"] = distance(in.centroid, mesh.centroid) / std::max(diagonal(in.box), 1e-300);
+    }
     return {{"mesh", j}, {"relative_differences", d}};
 }
 
