@@ -20,10 +20,11 @@ export function decodeAovs(aovs) {
 export const LOOKS = [['shaded', 'shaded'], ['depth', 'depth'], ['face', 'face id'], ['normal', 'normals'],
   ['uv', '(u, v)'], ['iterations', 'Newton iterations']];
 
-// The AOVs each view needs; hovering needs z, face, uv and iterations.
+// The AOVs each view needs; hovering needs z, face, uv and iterations, the
+// normals view and measuring (angles between faces) the normals too.
 export const HOVER_AOVS = ['z', 'face', 'uv', 'iterations'];
-export function aovsFor(look) {
-  return look === 'normal' ? [...HOVER_AOVS, 'normal'] : HOVER_AOVS;
+export function aovsFor(look, measuring = false) {
+  return look === 'normal' || measuring ? [...HOVER_AOVS, 'normal'] : HOVER_AOVS;
 }
 
 // Perceptual heat map stops (the endpoints and quartiles of matplotlib's

@@ -1,0 +1,94 @@
+// The model's exact boundary for the measuring tool: the faces of the stored
+// file's NURBS JSON (POST /v1/conversions, format json: the same scene the
+// renderer draws, double precision), their trim loops lifted onto the surfaces
+// as 3D polylines, and the B-rep vertices among their points. A snap to a
+// vertex gives S(u, v) at the loop's corner, evaluated in double, not a pixel.
+
+// The knot span of u (Piegl & Tiller A2.1, FindSpan).
+function findSpan(n, p, u, U) {
+  if (u >= U[n + 1]) return n;
+  if (u <= U[p]) return p;
+  let low = p, high = n + 1, mid = (low + high) >> 1;
+  while (u < U[mid] || u >= U[mid + 1]) {
+    if (u < U[mid]) high = mid;
+    else low = mid;
+    mid = (low + high) >> 1;
+  }
+  return mid;
+}
+
+// The p + 1 non-zero basis functions at u (Piegl & Tiller A2.2, BasisFuns).
+function basisFuns(i, u, p, U) {
+  const N = [1], left = [], right = [];
+  for (let j = 1; j <= p; j++) {
+    left[j] = u - U[i + 1 - j];
+    right[j] = U[i + j] - u;
+    let saved = 0;
+    for (let r = 0; r < j; r++) {
+      const temp = N[r] / (right[r + 1] + left[j - r]);
+      N[r] = saved + right[r + 1] * temp;
+      saved = left[j - r] * temp;
+    }
+    N[j] = saved;
+  }
+  return N;
+}
+
+// S(u, v) of a face's surface as the NURBS JSON writes it (homogeneous
+// control points, u-major): Piegl & Tiller A4.3 (SurfacePoint, rational).
+export function surfacePoint(s, u, v) {
+  const p = s.degree_u, q = s.degree_v;
+  const su = findSpan(s.num_u - 1, p, u, s.knots_u), sv = findSpan(s.num_v - 1, q, v, s.knots_v);
+  const Nu = basisFuns(su, u, p, s.knots_u), Nv = basisFuns(sv, v, q, s.knots_v);
+  const h = [0, 0, 0, 0];
+  for (let k = 0; k <= p; k++) {
+    for (let l = 0; l <= q; l++) {
+      const c = s.control_points[(su - p + k) * s.num_v + (sv - q + l)];
+      const w = Nu[k] * Nv[l];
+      for (let m = 0; m < 4; m++) h[m] += w * c[m];
+    }
+  }
+  return [h[0] / h[3], h[1] / h[3], h[2] / h[3]];
+}
+
+// A loop point is a vertex where the boundary turns by more than this in 3D:
+// a corner between two edges. Samples along one smooth edge turn by a few
+// degrees at most (the loops follow the pcurves within the trim tolerance).
+const VERTEX_TURN_DEG = 20;
+
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const norm = (a) => Math.hypot(a[0], a[1], a[2]);
+
+// The face's loops as (u, v) polylines; an untrimmed face is bounded by its parameter box.
+function faceLoops(f) {
+  if (f.trim_loops.length) return f.trim_loops.map((l) => l.points);
+  const [u0, u1] = f.u_range, [v0, v1] = f.v_range;
+  return [[[u0, v0], [u1, v0], [u1, v1], [u0, v1]]];
+}
+
+// Vertices [{p, face}] and edge segments [{a, b, uvA, uvB, face}] of the model.
+export function modelEdges(doc) {
+  const vertices = [], segments = [];
+  const cosTurn = Math.cos((VERTEX_TURN_DEG * Math.PI) / 180);
+  for (const f of doc.faces) {
+    for (const loop of faceLoops(f)) {
+      const pts = loop.map(([u, v]) => surfacePoint(f.surface, u, v));
+      const n = pts.length;
+      for (let i = 0; i < n; i++) {
+        const j = (i + 1) % n;
+        if (norm(sub(pts[j], pts[i])) > 0) segments.push({ a: pts[i], b: pts[j], uvA: loop[i], uvB: loop[j], face: f.index, surface: f.surface });
+      }
+      // The turn at each point, between the nearest distinct neighbours (a
+      // degenerate edge, such as a sphere's pole, is a point in 3D).
+      for (let i = 0; i < n; i++) {
+        let back = null, ahead = null;
+        for (let k = 1; k < n && !back; k++) { const d = sub(pts[i], pts[(i - k + n) % n]); if (norm(d) > 0) back = d; }
+        for (let k = 1; k < n && !ahead; k++) { const d = sub(pts[(i + k) % n], pts[i]); if (norm(d) > 0) ahead = d; }
+        if (!back || !ahead) continue;
+        if (dot(back, ahead) / (norm(back) * norm(ahead)) < cosTurn) vertices.push({ p: pts[i], face: f.index });
+      }
+    }
+  }
+  return { vertices, segments };
+}
