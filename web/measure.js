@@ -118,6 +118,8 @@ export class Measure {
   // A new file: nothing measured on the last one stays.
   reset() {
     this.edges = null;
+    this.hovered = null;
+    this.cursor = null;
     this.clearResults();
   }
 
@@ -128,14 +130,18 @@ export class Measure {
       this.hint('Open a file to measure it.');
       return;
     }
+    // No frame yet: the one on its way asks for the AOVs itself (renderFinal reads `on`).
     const f = this.frame();
-    if (!f || !f.aov || !f.aov.normal) this.needAovs();
+    if (f && (!f.aov || !f.aov.normal)) this.needAovs();
     try {
+      const t0 = performance.now();
       if (!this.models.has(file.id)) this.models.set(file.id, this.loadModel(file.id));
       const edges = await this.models.get(file.id);
       if (this.file()?.id !== file.id) return;
       this.edges = edges;
-      this.$('measure-overlay').dataset.vertices = String(edges.vertices.length);
+      // For the browser test's log: the model's size and the time to have it.
+      Object.assign(this.overlay.dataset, { vertices: String(edges.vertices.length), segments: String(edges.segments.length),
+        modelMs: (performance.now() - t0).toFixed(0) });
       if (this.on) this.promptNext();
     } catch (error) {
       this.models.delete(file.id);
@@ -196,9 +202,14 @@ export class Measure {
   // The seen edge point nearest the pointer's ray, on the nearest edge within `radius`.
   snapEdge(f, px, py, radius) {
     const ray = f.camera.rayAt(px, py, f.width, f.height);
+    // The loop points on this frame, projected once (a large part has 10^5).
+    if (f.edges !== this.edges) {
+      f.edges = this.edges;
+      f.screen = this.edges.points.map(f.project);
+    }
     let best = null;
     for (const seg of this.edges.segments) {
-      const p = f.project(seg.a), q = f.project(seg.b);
+      const p = f.screen[seg.ia], q = f.screen[seg.ib];
       const d = screenDistance(px, py, p, q);
       if (d > radius || (best && d >= best.d)) continue;
       const s = segmentParamNearRay(seg.a, seg.b, ray.origin, ray.dir);
@@ -364,7 +375,9 @@ export class Measure {
 
   // Shows what a pick at (px, py) would take: the snap marker and a line of text.
   preview(px, py) {
+    const t0 = performance.now();
     this.hovered = this.locate(px, py);
+    this.overlay.dataset.locateMs = (performance.now() - t0).toFixed(1);  // the browser test logs it
     this.canvas.dataset.snap = this.hovered ? this.hovered.kind : '';
     this.drawOverlay();
   }

@@ -67,17 +67,71 @@ function faceLoops(f) {
   return [[[u0, v0], [u1, v0], [u1, v1], [u0, v1]]];
 }
 
-// Vertices [{p, face}] and edge segments [{a, b, uvA, uvB, face}] of the model.
+// The loop points that are no corner but lie within about `tolerance` (the
+// neighbouring cells of a grid that fine) of loop points of `faces` distinct
+// faces (theirs included): a B-rep vertex joins at least three faces (two at
+// most meet along one edge), which finds the vertices where edges meet
+// tangentially (a slot's straight side and its round end), where the
+// boundary does not turn. One point a face and cell.
+function sharedPoints(points, tolerance, faces) {
+  // cells: x -> y -> z -> Set of faces (numeric keys: string keys were most of the time on 120k points).
+  const cells = new Map();
+  const cellOf = (p) => [Math.floor(p[0] / tolerance), Math.floor(p[1] / tolerance), Math.floor(p[2] / tolerance)];
+  const cellAt = (x, y, z) => cells.get(x)?.get(y)?.get(z);
+  for (const pt of points) {
+    const [x, y, z] = cellOf(pt.p);
+    if (!cells.has(x)) cells.set(x, new Map());
+    const cx = cells.get(x);
+    if (!cx.has(y)) cx.set(y, new Map());
+    const cy = cx.get(y);
+    if (!cy.has(z)) cy.set(z, new Set());
+    cy.get(z).add(pt.face);
+  }
+  const out = [];
+  const taken = new Map();  // a cell's Set of faces -> the faces already given a point there
+  for (const pt of points) {
+    if (pt.corner) continue;
+    const [x, y, z] = cellOf(pt.p), own = cellAt(x, y, z);
+    if (!taken.has(own)) {
+      const near = new Set();
+      for (let dx = -1; dx <= 1; dx++)
+        for (let dy = -1; dy <= 1; dy++)
+          for (let dz = -1; dz <= 1; dz++) {
+            const cell = cellAt(x + dx, y + dy, z + dz);
+            if (cell) for (const face of cell) near.add(face);
+          }
+      taken.set(own, near.size >= faces ? new Set() : null);
+    }
+    const given = taken.get(own);
+    if (given && !given.has(pt.face)) {
+      given.add(pt.face);
+      out.push(pt);
+    }
+  }
+  return out;
+}
+
+// Loop points closer than this fraction of the model's size (and at least
+// VERTEX_JOIN_MM) are one vertex: the faces' pcurves meet their shared vertex
+// within the file's edge tolerance, which STEP writers keep well under it.
+const VERTEX_JOIN_FRACTION = 1e-6, VERTEX_JOIN_MM = 1e-4;
+const VERTEX_FACES = 3;
+
+// Vertices [{p, face}], edge segments [{a, b, uvA, uvB, face, surface}] and
+// every loop point (`points`; a segment's ends are points[ia] and points[ib],
+// so that a frame projects each point once) of the model.
 export function modelEdges(doc) {
-  const vertices = [], segments = [];
+  const vertices = [], segments = [], loopPoints = [], points = [];
   const cosTurn = Math.cos((VERTEX_TURN_DEG * Math.PI) / 180);
   for (const f of doc.faces) {
     for (const loop of faceLoops(f)) {
-      const pts = loop.map(([u, v]) => surfacePoint(f.surface, u, v));
+      const pts = loop.map(([u, v]) => surfacePoint(f.surface, u, v)), first = points.length;
+      points.push(...pts);
       const n = pts.length;
       for (let i = 0; i < n; i++) {
         const j = (i + 1) % n;
-        if (norm(sub(pts[j], pts[i])) > 0) segments.push({ a: pts[i], b: pts[j], uvA: loop[i], uvB: loop[j], face: f.index, surface: f.surface });
+        if (norm(sub(pts[j], pts[i])) > 0)
+          segments.push({ a: pts[i], b: pts[j], ia: first + i, ib: first + j, uvA: loop[i], uvB: loop[j], face: f.index, surface: f.surface });
       }
       // The turn at each point, between the nearest distinct neighbours (a
       // degenerate edge, such as a sphere's pole, is a point in 3D).
@@ -85,10 +139,13 @@ export function modelEdges(doc) {
         let back = null, ahead = null;
         for (let k = 1; k < n && !back; k++) { const d = sub(pts[i], pts[(i - k + n) % n]); if (norm(d) > 0) back = d; }
         for (let k = 1; k < n && !ahead; k++) { const d = sub(pts[(i + k) % n], pts[i]); if (norm(d) > 0) ahead = d; }
-        if (!back || !ahead) continue;
-        if (dot(back, ahead) / (norm(back) * norm(ahead)) < cosTurn) vertices.push({ p: pts[i], face: f.index });
+        const corner = !!(back && ahead && dot(back, ahead) / (norm(back) * norm(ahead)) < cosTurn);
+        if (corner) vertices.push({ p: pts[i], face: f.index });
+        loopPoints.push({ p: pts[i], face: f.index, corner });
       }
     }
   }
-  return { vertices, segments };
+  const box = doc.bbox ? Math.hypot(...sub(doc.bbox.max, doc.bbox.min)) : 0;
+  vertices.push(...sharedPoints(loopPoints, Math.max(VERTEX_JOIN_MM, VERTEX_JOIN_FRACTION * box), VERTEX_FACES));
+  return { vertices, segments, points };
 }

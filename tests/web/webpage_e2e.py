@@ -454,6 +454,20 @@ def step_big_part_latency(page, part):
     page.set_select("look", "iterations")
     step_latency(page, f"{part.name}, iterations view, with AOVs")
     page.set_select("look", "shaded")
+    # Measuring on it: the time to read its edges (NURBS JSON) and to find the snap under the pointer.
+    click(page, "measure-toggle")
+    page.b.wait_for("document.getElementById('measure-hint').textContent.startsWith('Click')", 120, "the model's edges")
+    page.b.wait_for("(() => { const c = document.getElementById('view');"
+                    " return c.dataset.final === '1' && c.dataset.busy === '0'; })()", 120, "the frame with normals")
+    x, y, _ = page.canvas_centre()
+    locate = []
+    for dx in range(0, 40, 4):
+        page.b.mouse("mouseMoved", x + dx, y, buttons=0)
+        locate.append(float(page.ev("document.getElementById('measure-overlay').dataset.locateMs")))
+    m = page.ev("({...document.getElementById('measure-overlay').dataset})")
+    log(f"{part.name}, measuring: {m['vertices']} vertices and {m['segments']} edge segments read in {m['modelMs']} ms; "
+        f"snap under the pointer median {statistics.median(locate):.1f} ms over {len(locate)} moves (max {max(locate):.1f})")
+    click(page, "measure-toggle")
 
 
 def step_problem_shown(page, tmp):
