@@ -19,8 +19,8 @@ const VISIBLE_PX = 2;
 const VISIBLE_DEPTH_PX = 4;
 // Relative rounding of a float32 (the z AOV's hit distance): half an ulp.
 const FLOAT32_EPS = 2 ** -24;
-// A vertex or edge point is S(u, v) evaluated in double: its error is the
-// model's own, OCCT's vertex tolerance (Precision::Confusion, 1e-7 mm).
+// A vertex is S(u, v) at a loop's corner evaluated in double: its error is the
+// model's own, at best OCCT's vertex tolerance (Precision::Confusion, 1e-7 mm).
 const MODEL_PRECISION_MM = 1e-7;
 // Arrow keys move the keyboard cursor by this many image pixels (shift: FAST).
 const KEY_STEP = 1, KEY_STEP_FAST = 10;
@@ -95,7 +95,6 @@ export class Measure {
     this.picks = [];
     this.hovered = null;
     if (on) {
-      this.hint('Loading the model\'s edges…');
       this.prepare();
     } else {
       this.hint('');
@@ -118,6 +117,7 @@ export class Measure {
   // A new file: nothing measured on the last one stays.
   reset() {
     this.edges = null;
+    for (const k of ['vertices', 'segments', 'modelMs']) delete this.overlay.dataset[k];
     this.hovered = null;
     this.cursor = null;
     this.clearResults();
@@ -130,6 +130,7 @@ export class Measure {
       this.hint('Open a file to measure it.');
       return;
     }
+    this.hint('Loading the model\'s edges…');
     // No frame yet: the one on its way asks for the AOVs itself (renderFinal reads `on`).
     const f = this.frame();
     if (f && (!f.aov || !f.aov.normal)) this.needAovs();
@@ -217,9 +218,12 @@ export class Measure {
       // within the loop's sampling tolerance on a curved one.
       const [u, v] = lerp(seg.uvA, seg.uvB, s);
       const point = surfacePoint(seg.surface, u, v);
-      if (this.visible(f, f.project(point))) best = { d, point, face: seg.face };
+      // Off the true edge by up to the face's trim tolerance, taken to 3D by the segment's length ratio.
+      const speed = Math.hypot(...sub(seg.b, seg.a)) / Math.hypot(seg.uvB[0] - seg.uvA[0], seg.uvB[1] - seg.uvA[1]);
+      const precision = Math.max(MODEL_PRECISION_MM, seg.toleranceUv * (Number.isFinite(speed) ? speed : 0));
+      if (this.visible(f, f.project(point))) best = { d, point, face: seg.face, precision };
     }
-    return best && { kind: 'edge', point: best.point, face: best.face, precision: MODEL_PRECISION_MM };
+    return best && { kind: 'edge', point: best.point, face: best.face, precision: best.precision };
   }
 
   // The exact surface hit of the pixel under (px, py): its pixel ray at the z AOV's distance.

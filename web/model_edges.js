@@ -117,7 +117,8 @@ function sharedPoints(points, tolerance, faces) {
 const VERTEX_JOIN_FRACTION = 1e-6, VERTEX_JOIN_MM = 1e-4;
 const VERTEX_FACES = 3;
 
-// Vertices [{p, face}], edge segments [{a, b, uvA, uvB, face, surface}] and
+// Vertices [{p, face}], edge segments [{a, b, uvA, uvB, face, surface,
+// toleranceUv: the face's trim tolerance, how far its loops may be off the edges}] and
 // every loop point (`points`; a segment's ends are points[ia] and points[ib],
 // so that a frame projects each point once) of the model.
 export function modelEdges(doc) {
@@ -131,7 +132,8 @@ export function modelEdges(doc) {
       for (let i = 0; i < n; i++) {
         const j = (i + 1) % n;
         if (norm(sub(pts[j], pts[i])) > 0)
-          segments.push({ a: pts[i], b: pts[j], ia: first + i, ib: first + j, uvA: loop[i], uvB: loop[j], face: f.index, surface: f.surface });
+          segments.push({ a: pts[i], b: pts[j], ia: first + i, ib: first + j, uvA: loop[i], uvB: loop[j], face: f.index,
+            surface: f.surface, toleranceUv: f.trim_tolerance_uv || 0 });
       }
       // The turn at each point, between the nearest distinct neighbours (a
       // degenerate edge, such as a sphere's pole, is a point in 3D).

@@ -3,7 +3,7 @@ DevTools protocol, against a running `nurbsrt serve` (NURBSRT_URL). Started by
 tests/webpage.sh. Each step checks what a user would see; the first failure
 saves a screenshot and the page's console to NURBSRT_WEB_ARTIFACTS and fails.
 
-Usage: webpage_e2e.py STEP_FILE OTHER_CAD_FILE [PART_OF_ABOUT_300_FACES [ASSEMBLY [CUBE_10MM]]]"""
+Usage: webpage_e2e.py STEP_FILE OTHER_CAD_FILE [PART_OF_ABOUT_300_FACES [ASSEMBLY [CUBE_10MM [CYLINDER]]]]"""
 import json
 import os
 import pathlib
@@ -647,7 +647,7 @@ def project(camera, p, width, height):
     return (sx * height / width + 1) * 0.5 * width, (1 - sy) * 0.5 * height, dot(f, d)
 
 
-def step_measure(page, cube, shot):
+def step_measure(page, cube, cylinder, shot):
     """Exact measuring on a 10 mm cube: snapped to two vertices of an edge the distance reads
     10.000 mm within 1e-4 mm; the angle between two adjacent faces 90 degrees; a vertex's
     coordinates; Esc cancels a pick, the keyboard picks, the results clear."""
@@ -763,10 +763,50 @@ def step_measure(page, cube, shot):
         log(f"screenshot saved to {shot}")
     click(page, "measure-clear")
     assert page.ev("document.querySelectorAll('#measure-results li').length") == 0, "the results were not cleared"
+    if cylinder:
+        step_measure_curved(page, cylinder)
     page.ev("document.getElementById('view').focus()")
     page.b.key("Escape", "Escape", 27)
     assert page.ev("document.getElementById('measure-toggle').getAttribute('aria-pressed')") == "false", \
         "Esc with nothing under way did not leave measuring"
+
+
+def step_measure_curved(page, cylinder):
+    """A point snapped to the top rim of a cylinder (r 10, h 30, axis Z: `nurbsrt_fixture cylinder`)
+    lies on that circle within the precision the page shows for it (the face's trim tolerance)."""
+    import math
+    page.scroll_to("file")
+    since, before = time.monotonic(), page.frames()
+    page.set_files("file", [cylinder])
+    page.wait_final_after(before)
+    page.b.wait_for("document.getElementById('measure-overlay').dataset.modelMs", 60, "the cylinder's edges")
+    page.b.wait_for("(() => { const c = document.getElementById('view');"
+                    " return c.dataset.final === '1' && c.dataset.busy === '0'; })()", 60, "the frame with normals")
+    page.b.pump(0.2)
+    camera = render_exchanges(page, since)[-1][1]["camera"]
+    page.set_select("measure-kind", "point")
+    size = page.ev("[document.getElementById('view').width, document.getElementById('view').height]")
+    _, _, rect = page.canvas_centre()
+    # The rim's point nearest the eye (seen), 3 px off it towards the cylinder's inside.
+    eye = camera["eye"]
+    angle = math.atan2(eye[1], eye[0])
+    rim = [10 * math.cos(angle + 0.3), 10 * math.sin(angle + 0.3), 30.0]
+    x, y, _ = project(camera, rim, *size)
+    cx, cy = rect[0] + x * rect[2] / size[0], rect[1] + (y + 3) * rect[3] / size[1]
+    page.b.mouse("mouseMoved", cx - 1, cy, buttons=0)
+    page.b.mouse("mouseMoved", cx, cy, buttons=0)
+    page.b.wait_for("document.getElementById('view').dataset.snap === 'edge'", 10, "an edge snap on the rim")
+    count = page.ev("document.querySelectorAll('#measure-results li').length")
+    page.b.mouse("mousePressed", cx, cy)
+    page.b.mouse("mouseReleased", cx, cy, buttons=0)
+    page.b.wait_for(f"document.querySelectorAll('#measure-results li').length === {count + 1}", 10, "the point")
+    r = page.ev("(() => { const li = [...document.querySelectorAll('#measure-results li')].pop();"
+                " return {text: li.textContent, value: JSON.parse(li.dataset.value), precision: Number(li.dataset.precision)}; })()")
+    p = r["value"]
+    off = max(abs(math.hypot(p[0], p[1]) - 10), abs(p[2] - 30))
+    log(f"measure, curved edge: {r['text']} (off the rim circle by {off:.1e} mm)")
+    assert off <= r["precision"] and r["precision"] < 1e-2, r
+    click(page, "measure-clear")
 
 
 def step_stored_files(page):
@@ -825,6 +865,7 @@ def main():
     big_part = pathlib.Path(sys.argv[3]) if len(sys.argv) > 3 and pathlib.Path(sys.argv[3]).is_file() else None
     assembly = pathlib.Path(sys.argv[4]) if len(sys.argv) > 4 and pathlib.Path(sys.argv[4]).is_file() else None
     cube = pathlib.Path(sys.argv[5]) if len(sys.argv) > 5 and pathlib.Path(sys.argv[5]).is_file() else None
+    cylinder = pathlib.Path(sys.argv[6]) if len(sys.argv) > 6 and pathlib.Path(sys.argv[6]).is_file() else None
     chromium = find_chromium()
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="nurbsrt-web-test-")
@@ -840,7 +881,7 @@ def main():
         current = "load"; step_load(page)
         if ONLY == "measure":  # a quick run of the measuring step alone, while working on it
             current = "upload"; step_upload(page, step_file)
-            current = "measure"; step_measure(page, cube, MEASURE_SCREENSHOT)
+            current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
             current = "stored files"; step_stored_files(page)
             log("the measuring and stored-files steps passed (NURBSRT_WEB_ONLY=measure: no other step ran)")
             return 0
@@ -879,7 +920,7 @@ def main():
         else:
             log("SKIPPED the CAD views: no generated assembly given")
         if cube:
-            current = "measure"; step_measure(page, cube, MEASURE_SCREENSHOT)
+            current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
         else:
             log("SKIPPED measuring: no generated cube given")
         current = "stored files"; step_stored_files(page)
