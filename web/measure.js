@@ -19,6 +19,9 @@ const VISIBLE_PX = 2;
 const VISIBLE_DEPTH_PX = 4;
 // Relative rounding of a float32 (the z AOV's hit distance): half an ulp.
 const FLOAT32_EPS = 2 ** -24;
+// Two unit normals rounded to float32 (the normal AOV) turn by at most about
+// an ulp each: the angle between them is known to this, in degrees.
+const ANGLE_PRECISION_DEG = (4 * FLOAT32_EPS * 180) / Math.PI;
 // A vertex is S(u, v) at a loop's corner evaluated in double: its error is the
 // model's own, at best OCCT's vertex tolerance (Precision::Confusion, 1e-7 mm).
 const MODEL_PRECISION_MM = 1e-7;
@@ -177,6 +180,7 @@ export class Measure {
   }
 
   visible(f, s) {
+    if (!(s.t > 0)) return false;  // behind a perspective eye: projected mirrored, never seen
     const ix = Math.floor(s.x), iy = Math.floor(s.y);
     const eps = VISIBLE_DEPTH_PX * f.camera.pixelSize(s.t, f.height);
     for (let y = iy - VISIBLE_PX; y <= iy + VISIBLE_PX; y++) {
@@ -309,7 +313,7 @@ export class Measure {
       const [a, b] = picks;
       const c = dot(a.normal, b.normal) / Math.hypot(...a.normal) / Math.hypot(...b.normal);
       value = (Math.acos(Math.min(1, Math.max(-1, c))) * 180) / Math.PI;
-      text = `angle between the normals of faces ${a.face} and ${b.face}: ${value.toFixed(3)}°`;
+      text = `angle between the normals of faces ${a.face} and ${b.face}: ${value.toFixed(3)}° ±${ANGLE_PRECISION_DEG.toExponential(0)}°`;
     } else {
       const [a] = picks;
       value = a.point;
