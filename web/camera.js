@@ -2,13 +2,7 @@
 // `camera` option and the statistics' `camera` carry them), and the orbit, pan
 // and zoom of a turntable viewer.
 
-const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-const length = (a) => Math.hypot(a[0], a[1], a[2]);
-const normalize = (a) => scale(a, 1 / (length(a) || 1));
+import { sub, add, scale, dot, cross, length, normalize } from './vec3.js';
 
 // Rotation of v about the unit axis k by angle a (Rodrigues' formula).
 function rotate(v, k, a) {

@@ -7,6 +7,8 @@
 import { call, base64Bytes } from './api.js';
 import { Camera } from './camera.js';
 import { modelEdges, surfacePoint } from './model_edges.js';
+import { exactEdgePoint, projectOnSurface } from './edge_point.js';
+import { sub, dot, lerp } from './vec3.js';
 
 // A vertex or edge this close to the pointer (CSS pixels) is snapped to.
 const SNAP_CSS_PX = 8;
@@ -25,6 +27,12 @@ const ANGLE_PRECISION_DEG = (4 * FLOAT32_EPS * 180) / Math.PI;
 // A vertex is S(u, v) at a loop's corner evaluated in double: its error is the
 // model's own, at best OCCT's vertex tolerance (Precision::Confusion, 1e-7 mm).
 const MODEL_PRECISION_MM = 1e-7;
+// The neighbour face's loop must pass within this many times the two loops'
+// tolerances of an edge point, and the exact point lie as near (else the
+// loops are not of one edge, or the iteration found another branch).
+const EDGE_REACH = 10;
+// How many of the nearest other faces' chords are tried as the neighbour.
+const EDGE_CANDIDATES = 4;
 // Arrow keys move the keyboard cursor by this many image pixels (shift: FAST).
 const KEY_STEP = 1, KEY_STEP_FAST = 10;
 // A click is a press and release this close (CSS px); farther, it was an orbit.
@@ -34,9 +42,6 @@ const UNIT_MM = { mm: 1, cm: 10, m: 1000, km: 1e6, micron: 1e-3, inch: 25.4, foo
 // What each kind of measurement needs: picks, and whether vertices and edges snap (an angle needs faces).
 const KINDS = { distance: { picks: 2, snap: true }, angle: { picks: 2, snap: false }, point: { picks: 1, snap: true } };
 
-const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const lerp = (a, b, s) => a.map((x, i) => x + s * (b[i] - x));
 
 // Decimals that show a value of this precision (mm), at least 3, at most 6.
 const decimals = (precision) => Math.min(6, Math.max(3, Math.ceil(-Math.log10(precision))));
@@ -225,9 +230,9 @@ export class Measure {
       // Off the true edge by up to the face's trim tolerance, taken to 3D by the segment's length ratio.
       const speed = Math.hypot(...sub(seg.b, seg.a)) / Math.hypot(seg.uvB[0] - seg.uvA[0], seg.uvB[1] - seg.uvA[1]);
       const precision = Math.max(MODEL_PRECISION_MM, seg.toleranceUv * (Number.isFinite(speed) ? speed : 0));
-      if (this.visible(f, f.project(point))) best = { d, point, face: seg.face, precision };
+      if (this.visible(f, f.project(point))) best = { d, point, face: seg.face, precision, surface: seg.surface, uv: [u, v] };
     }
-    return best && { kind: 'edge', point: best.point, face: best.face, precision: best.precision };
+    return best && { kind: 'edge', point: best.point, face: best.face, precision: best.precision, surface: best.surface, uv: best.uv };
   }
 
   // The exact surface hit of the pixel under (px, py): its pixel ray at the z AOV's distance.
@@ -269,7 +274,8 @@ export class Measure {
       this.needAovs();
       return;
     }
-    const hit = this.locate(px, py);
+    let hit = this.locate(px, py);
+    if (hit?.kind === 'edge') hit = this.exactEdge(hit);
     if (!hit) {
       this.hint('Nothing there: pick a point on the part.');
       return;
@@ -286,6 +292,37 @@ export class Measure {
     }
     this.promptNext();
     this.drawOverlay();
+  }
+
+  // An edge point moved onto the true edge, where its face meets the
+  // neighbour whose loop passes nearest (edge_point.js); kept as it is where
+  // that fails or would move it farther than the loops' tolerances allow.
+  exactEdge(hit) {
+    // The other faces' chords near the point (a chord is within `sagitta` of its
+    // curve), then their surfaces' true distance from it, the nearest first.
+    const near = [];
+    for (const seg of this.edges.segments) {
+      if (seg.face === hit.face) continue;
+      const e = sub(seg.b, seg.a), l2 = dot(e, e);
+      const s = l2 > 0 ? Math.min(1, Math.max(0, dot(sub(hit.point, seg.a), e) / l2)) : 0;
+      const d = Math.hypot(...sub(lerp(seg.a, seg.b, s), hit.point));
+      if (d <= this.edges.sagitta + EDGE_REACH * hit.precision) near.push({ d, seg, s });
+    }
+    near.sort((x, y) => x.d - y.d);
+    let best = null;
+    for (const { seg, s } of near.slice(0, EDGE_CANDIDATES)) {
+      const on = projectOnSurface(seg.surface, hit.point, lerp(seg.uvA, seg.uvB, s));
+      const d = Math.hypot(...sub(on.point, hit.point));
+      if (!best || d < best.d) best = { d, seg, uv: on.uv };
+    }
+    if (!best) return hit;
+    const seg = best.seg;
+    const speed = Math.hypot(...sub(seg.b, seg.a)) / Math.hypot(seg.uvB[0] - seg.uvA[0], seg.uvB[1] - seg.uvA[1]);
+    const reach = EDGE_REACH * (hit.precision + seg.toleranceUv * (Number.isFinite(speed) ? speed : 0));
+    if (best.d > reach) return hit;
+    const exact = exactEdgePoint(hit.point, { surface: hit.surface, uv: hit.uv }, { surface: seg.surface, uv: best.uv });
+    if (!exact || Math.hypot(...sub(exact.point, hit.point)) > reach) return hit;
+    return { ...hit, point: exact.point, precision: Math.max(MODEL_PRECISION_MM, exact.residual) };
   }
 
   // ---- results ------------------------------------------------------------------

@@ -4,6 +4,8 @@
 // as 3D polylines, and the B-rep vertices among their points. A snap to a
 // vertex gives S(u, v) at the loop's corner, evaluated in double, not a pixel.
 
+import { sub, dot, length as norm } from './vec3.js';
+
 // The knot span of u (Piegl & Tiller A2.1, FindSpan).
 function findSpan(n, p, u, U) {
   if (u >= U[n + 1]) return n;
@@ -56,9 +58,6 @@ export function surfacePoint(s, u, v) {
 // degrees at most (the loops follow the pcurves within the trim tolerance).
 const VERTEX_TURN_DEG = 20;
 
-const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const norm = (a) => Math.hypot(a[0], a[1], a[2]);
 
 // The face's loops as (u, v) polylines; an untrimmed face is bounded by its parameter box.
 function faceLoops(f) {
@@ -117,23 +116,52 @@ function sharedPoints(points, tolerance, faces) {
 const VERTEX_JOIN_FRACTION = 1e-6, VERTEX_JOIN_MM = 1e-4;
 const VERTEX_FACES = 3;
 
+// A loop's segment is straight in (u, v) but may be a long curve in 3D (a
+// cylinder's rim is one segment from u = 0 to 2 pi): it is split at its (u, v)
+// midpoint while the surface's midpoint lies farther than this fraction of
+// the model's size from the chord's, at most MAX_SPLITS deep. The chords only
+// find the edge under the pointer; the picked point is on the surface.
+const CHORD_SAGITTA_FRACTION = 1e-3, MAX_SPLITS = 8;
+
+// Appends the points after `a` up to and including `b` to `chain`.
+function subdivide(surface, a, b, sagitta, depth, chain) {
+  const uv = [(a.uv[0] + b.uv[0]) / 2, (a.uv[1] + b.uv[1]) / 2];
+  const m = { uv, p: surfacePoint(surface, uv[0], uv[1]) };
+  const chordMid = [(a.p[0] + b.p[0]) / 2, (a.p[1] + b.p[1]) / 2, (a.p[2] + b.p[2]) / 2];
+  if (depth > 0 && norm(sub(m.p, chordMid)) > sagitta) {
+    subdivide(surface, a, m, sagitta, depth - 1, chain);
+    subdivide(surface, m, b, sagitta, depth - 1, chain);
+  } else {
+    chain.push(b);
+  }
+}
+
 // Vertices [{p, face}], edge segments [{a, b, uvA, uvB, face, surface,
 // toleranceUv: the face's trim tolerance, how far its loops may be off the edges}] and
-// every loop point (`points`; a segment's ends are points[ia] and points[ib],
-// so that a frame projects each point once) of the model.
+// every chord's end (`points`; a segment's ends are points[ia] and points[ib],
+// so that a frame projects each point once) of the model, and how far a chord
+// may be from its curve (`sagitta`, mm).
 export function modelEdges(doc) {
   const vertices = [], segments = [], loopPoints = [], points = [];
   const cosTurn = Math.cos((VERTEX_TURN_DEG * Math.PI) / 180);
+  const box = doc.bbox ? Math.hypot(...sub(doc.bbox.max, doc.bbox.min)) : 0;
+  const sagitta = CHORD_SAGITTA_FRACTION * box;
   for (const f of doc.faces) {
     for (const loop of faceLoops(f)) {
-      const pts = loop.map(([u, v]) => surfacePoint(f.surface, u, v)), first = points.length;
-      points.push(...pts);
+      const pts = loop.map(([u, v]) => surfacePoint(f.surface, u, v));
       const n = pts.length;
       for (let i = 0; i < n; i++) {
         const j = (i + 1) % n;
-        if (norm(sub(pts[j], pts[i])) > 0)
-          segments.push({ a: pts[i], b: pts[j], ia: first + i, ib: first + j, uvA: loop[i], uvB: loop[j], face: f.index,
+        // The segment's image on the surface as chords within `sagitta` of it.
+        const chain = [{ uv: loop[i], p: pts[i] }];
+        subdivide(f.surface, chain[0], { uv: loop[j], p: pts[j] }, sagitta, MAX_SPLITS, chain);
+        for (let k = 1; k < chain.length; k++) {
+          const a = chain[k - 1], b = chain[k];
+          if (!(norm(sub(b.p, a.p)) > 0)) continue;
+          points.push(a.p, b.p);
+          segments.push({ a: a.p, b: b.p, ia: points.length - 2, ib: points.length - 1, uvA: a.uv, uvB: b.uv, face: f.index,
             surface: f.surface, toleranceUv: f.trim_tolerance_uv || 0 });
+        }
       }
       // The turn at each point, between the nearest distinct neighbours (a
       // degenerate edge, such as a sphere's pole, is a point in 3D).
@@ -147,7 +175,6 @@ export function modelEdges(doc) {
       }
     }
   }
-  const box = doc.bbox ? Math.hypot(...sub(doc.bbox.max, doc.bbox.min)) : 0;
   vertices.push(...sharedPoints(loopPoints, Math.max(VERTEX_JOIN_MM, VERTEX_JOIN_FRACTION * box), VERTEX_FACES));
-  return { vertices, segments, points };
+  return { vertices, segments, points, sagitta };
 }
