@@ -9,7 +9,7 @@ import { CadControls } from './cad.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
 import { bindInteraction } from './interaction.js';
-import { decodeAovs, aovsFor, paint, drawLegend, describePixel, LOOKS } from './aov.js';
+import { decodeAovs, aovsFor, hasAovsFor, paint, drawLegend, describePixel, LOOKS } from './aov.js';
 import { showStages, showHistogram, histogramBounds, fmt } from './stats.js';
 import { bindJobs, bindConversions } from './jobs.js';
 import { Measure } from './measure.js';
@@ -127,7 +127,7 @@ function draw() {
   const ctx = canvas.getContext('2d');
   ctx.clearRect(0, 0, frame.width, frame.height);
   const legendBox = $('legend');
-  if (look === 'shaded' || !frame.aov || (look === 'normal' && !frame.aov.normal)) {
+  if (look === 'shaded' || !hasAovsFor(look, frame.aov)) {
     ctx.drawImage(frame.bitmap, 0, 0);
     legendBox.hidden = true;
     canvas.dataset.look = 'shaded';
@@ -215,9 +215,9 @@ const scheduler = new RenderScheduler({
   fail: (error) => { report(error); setStatus('The render failed.'); },
 });
 
-// A full-size frame. The AOVs (about 17 bytes a pixel, 8 MB at 800x600; 29
-// bytes and 14 MB with the normals measuring reads) come with it only when the
-// view shows them or measuring reads them; the shaded view
+// A full-size frame. The AOVs (about 17 bytes a pixel, 8 MB at 800x600; 20
+// bytes, 10 MB, the ones measuring reads) come with it only when the view
+// shows them or measuring reads them; the shaded view
 // fetches them on the first hover, so that a release shows the image without
 // waiting for them.
 function renderFinal(extra = {}) {
@@ -370,7 +370,7 @@ $('projection').addEventListener('change', () => {
 });
 $('look').addEventListener('change', () => {
   const look = $('look').value, aov = state.frame?.aov;
-  if (state.frame && look !== 'shaded' && (!aov || (look === 'normal' && !aov.normal))) renderFinal();
+  if (state.frame && !hasAovsFor(look, aov)) renderFinal();
   else draw();
 });
 

@@ -467,6 +467,7 @@ def step_big_part_latency(page, part):
     m = page.ev("({...document.getElementById('measure-overlay').dataset})")
     log(f"{part.name}, measuring: {m['vertices']} vertices and {m['segments']} edge segments read in {m['modelMs']} ms; "
         f"snap under the pointer median {statistics.median(locate):.1f} ms over {len(locate)} moves (max {max(locate):.1f})")
+    step_latency(page, f"{part.name}, measuring (z, face and normal AOVs)")
     click(page, "measure-toggle")
 
 
