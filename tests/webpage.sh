@@ -41,9 +41,15 @@ rm -rf "$ARTIFACTS"
 # An assembly of two brackets under a node (the CAD views' parts panel), made with OCCT.
 ASSEMBLY="$TMP/assembly.step"
 "$(dirname "$BIN")/nurbsrt_fixture" assembly "$ASSEMBLY"
+# The 10 mm cube the measuring step measures (its corner off the origin), made with OCCT.
+CUBE="$TMP/cube10.step"
+"$(dirname "$BIN")/nurbsrt_fixture" cube10 "$CUBE"
+# A cylinder (r 10, h 30): a point snapped to its top rim, a curved edge.
+CYLINDER="$TMP/cylinder.step"
+"$(dirname "$BIN")/nurbsrt_fixture" cylinder "$CYLINDER"
 status=0
 NURBSRT_URL="$URL" NURBSRT_WEB_ARTIFACTS="$ARTIFACTS" NURBSRT_WEB_KEY="$KEY" \
-  timeout 600 "$PY" "$HERE/web/webpage_e2e.py" "$STEP" "$OTHER" "$BIG" "$ASSEMBLY" || status=$?
+  timeout 600 "$PY" "$HERE/web/webpage_e2e.py" "$STEP" "$OTHER" "$BIG" "$ASSEMBLY" "$CUBE" "$CYLINDER" || status=$?
 if [ $status -ne 0 ]; then
   echo "webpage.sh: FAILED; artifacts in $ARTIFACTS; server log (last 30 lines):"; tail -n 30 "$TMP/server.log"
 fi

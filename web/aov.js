@@ -20,10 +20,22 @@ export function decodeAovs(aovs) {
 export const LOOKS = [['shaded', 'shaded'], ['depth', 'depth'], ['face', 'face id'], ['normal', 'normals'],
   ['uv', '(u, v)'], ['iterations', 'Newton iterations']];
 
-// The AOVs each view needs; hovering needs z, face, uv and iterations.
+// The AOVs a frame comes with: hovering reads z, face, uv and iterations;
+// measuring z, face and normal (and the hover readout then shows those only:
+// uv and iterations would make every frame 9 bytes a pixel larger); each
+// false-colour view adds its own.
 export const HOVER_AOVS = ['z', 'face', 'uv', 'iterations'];
-export function aovsFor(look) {
-  return look === 'normal' ? [...HOVER_AOVS, 'normal'] : HOVER_AOVS;
+export const MEASURE_AOVS = ['z', 'face', 'normal'];
+const LOOK_AOV = { depth: 'z', face: 'face', normal: 'normal', uv: 'uv', iterations: 'iterations' };
+export function aovsFor(look, measuring = false) {
+  const base = measuring ? MEASURE_AOVS : HOVER_AOVS, own = LOOK_AOV[look];
+  return own && !base.includes(own) ? [...base, own] : base;
+}
+
+// Whether decoded AOVs can paint the view `look` (the shaded view needs none).
+export function hasAovsFor(look, aov) {
+  const own = LOOK_AOV[look];
+  return !own || !!(aov && aov.face && aov[own]);
 }
 
 // Perceptual heat map stops (the endpoints and quartiles of matplotlib's
@@ -133,11 +145,12 @@ export function describePixel(aov, width, x, y) {
   const i = y * width + x;
   if (!aov.face || !aov.face[i]) return `pixel (${x}, ${y}): background`;
   const f = (v, d) => Number(v).toFixed(d);
+  // A frame fetched for measuring has no uv or iterations.
   return [
     `pixel (${x}, ${y})`,
     `face        ${aov.face[i]}`,
-    `(u, v)      (${f(aov.uv[2 * i], 5)}, ${f(aov.uv[2 * i + 1], 5)})`,
+    aov.uv && `(u, v)      (${f(aov.uv[2 * i], 5)}, ${f(aov.uv[2 * i + 1], 5)})`,
     `depth       ${f(aov.z[i], 4)} mm`,
-    `iterations  ${aov.iterations[i]}`,
-  ].join('\n');
+    aov.iterations && `iterations  ${aov.iterations[i]}`,
+  ].filter(Boolean).join('\n');
 }

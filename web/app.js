@@ -9,9 +9,11 @@ import { CadControls } from './cad.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
 import { bindInteraction } from './interaction.js';
-import { decodeAovs, aovsFor, paint, drawLegend, describePixel, LOOKS } from './aov.js';
+import { decodeAovs, aovsFor, hasAovsFor, paint, drawLegend, describePixel, LOOKS } from './aov.js';
 import { showStages, showHistogram, histogramBounds, fmt } from './stats.js';
 import { bindJobs, bindConversions } from './jobs.js';
+import { Measure } from './measure.js';
+import { bindStoredFiles } from './stored_files.js';
 
 const $ = (id) => document.getElementById(id);
 for (const [value, label] of LOOKS) $('look').append(new Option(label, value));
@@ -92,7 +94,7 @@ function requestOptions(job) {
   const o = { ...image, ...cad.options(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
   else Object.assign(o, { view: job.view, projection: $('projection').value });
-  if (job.aovs) o.aovs = aovsFor($('look').value);
+  if (job.aovs) o.aovs = aovsFor($('look').value, measure.on);
   return o;
 }
 
@@ -125,7 +127,7 @@ function draw() {
   const ctx = canvas.getContext('2d');
   ctx.clearRect(0, 0, frame.width, frame.height);
   const legendBox = $('legend');
-  if (look === 'shaded' || !frame.aov || (look === 'normal' && !frame.aov.normal)) {
+  if (look === 'shaded' || !hasAovsFor(look, frame.aov)) {
     ctx.drawImage(frame.bitmap, 0, 0);
     legendBox.hidden = true;
     canvas.dataset.look = 'shaded';
@@ -164,6 +166,7 @@ function show(frame, job) {
     }
     setStatus(text);
     if (state.pointer && frame.aov) hover(state.pointer);
+    measure.frameShown();
   } else {
     canvas.width = frame.width * PREVIEW_DIVISOR;
     canvas.height = frame.height * PREVIEW_DIVISOR;
@@ -171,6 +174,7 @@ function show(frame, job) {
     ctx.clearRect(0, 0, canvas.width, canvas.height);
     ctx.drawImage(frame.bitmap, 0, 0, canvas.width, canvas.height);
     canvas.dataset.final = '0';
+    measure.drawOverlay();
   }
 }
 
@@ -211,12 +215,14 @@ const scheduler = new RenderScheduler({
   fail: (error) => { report(error); setStatus('The render failed.'); },
 });
 
-// A full-size frame. The AOVs (about 17 bytes a pixel, 8 MB at 800x600) come
-// with it only when the view shows them; the shaded view fetches them on the
-// first hover, so that a release shows the image without waiting for them.
+// A full-size frame. The AOVs (about 17 bytes a pixel, 8 MB at 800x600; 20
+// bytes, 10 MB, the ones measuring reads) come with it only when the view
+// shows them or measuring reads them; the shaded view
+// fetches them on the first hover, so that a release shows the image without
+// waiting for them.
 function renderFinal(extra = {}) {
   if (!state.fileId) return;
-  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded', ...extra };
+  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded' || measure.on, ...extra };
   // A named view still chosen is fitted again (explode, hidden parts change what
   // it frames); after an orbit, the camera the user left.
   if (!job.view && !state.view && state.camera) job.camera = state.camera.toOption();
@@ -241,6 +247,7 @@ function clearFrame() {
   showWarnings([]);
   $('save-png').disabled = true;
   cad.setModel(null);
+  measure.reset();
   setStatus('');
 }
 
@@ -257,6 +264,7 @@ function remember() {
 function openStored(fileId, name, fileName, summary, view = 'iso') {
   state.fileId = fileId;
   state.fileName = fileName;
+  state.units = summary?.units || '';
   cad.setModel(summary);
   state.view = view;
   $('file-name').textContent = name;
@@ -264,6 +272,7 @@ function openStored(fileId, name, fileName, summary, view = 'iso') {
   pressView(view);
   remember();
   renderFinal({ view, first: true });
+  if (measure.on) measure.prepare();
 }
 
 async function loadFile(file) {
@@ -279,6 +288,7 @@ async function loadFile(file) {
     const stored = await storeFile(file);
     if (state.file !== file) return;  // another file was picked meanwhile
     openStored(stored.id, label, file.name, stored.summary);
+    storedFiles.reload();
   } catch (error) {
     if (state.file !== file) return;
     state.file = null;
@@ -288,6 +298,13 @@ async function loadFile(file) {
   }
 }
 
+// A stored file as GET /v1/files{/id} describes it, reopened without an upload.
+function openRecord(stored, view = 'iso') {
+  clearFrame();
+  state.file = null;
+  openStored(stored.id, `${stored.filename} (${(stored.bytes / 1024).toFixed(0)} KiB, stored)`, stored.filename, stored.summary, view);
+}
+
 // A link with #file=ID&view=V reopens that stored file without uploading it.
 async function openFromAddress() {
   const params = new URLSearchParams(location.hash.slice(1));
@@ -295,8 +312,7 @@ async function openFromAddress() {
   if (!id) return;
   const view = ['iso', 'front', 'back', 'left', 'right', 'top', 'bottom'].includes(params.get('view')) ? params.get('view') : 'iso';
   try {
-    const stored = await storedFile(id);
-    openStored(stored.id, `${stored.filename} (${(stored.bytes / 1024).toFixed(0)} KiB, stored)`, stored.filename, stored.summary, view);
+    openRecord(await storedFile(id), view);
   } catch (error) {
     report(error);
   }
@@ -354,7 +370,7 @@ $('projection').addEventListener('change', () => {
 });
 $('look').addEventListener('change', () => {
   const look = $('look').value, aov = state.frame?.aov;
-  if (state.frame && look !== 'shaded' && (!aov || (look === 'normal' && !aov.normal))) renderFinal();
+  if (state.frame && !hasAovsFor(look, aov)) renderFinal();
   else draw();
 });
 
@@ -399,6 +415,18 @@ function hover(e) {
   const x = Math.floor(((e.clientX - r.left) * f.width) / r.width), y = Math.floor(((e.clientY - r.top) * f.height) / r.height);
   if (x >= 0 && y >= 0 && x < f.width && y < f.height) $('hover').textContent = describePixel(f.aov, f.width, x, y);
 }
+
+// ---- measuring -------------------------------------------------------------------
+// On the full-size frame with its AOVs; snapping to the stored model's vertices
+// and edges only while the image shows that model as stored (no section,
+// explode or hidden part moves or removes them).
+const measure = new Measure($, {
+  frame: () => state.frame,
+  needAovs: () => { if (state.frame && !state.frame.stats.views) renderFinal({ aovs: true }); },
+  file: () => (state.fileId ? { id: state.fileId, units: state.units } : null),
+  snapAllowed: () => Object.keys(cad.options()).length === 0,
+  report,
+});
 
 // ---- compare methods -------------------------------------------------------------
 const COMPARED_METHODS = ['proposed', 'martin'];
@@ -461,6 +489,10 @@ bindJobs({
 bindConversions({
   form: $('convert-form'), file: $('convert-file'), format: $('convert-format'), result: $('convert-result'),
   currentFile: () => (state.fileId ? { id: state.fileId, name: state.fileName } : null), report,
+});
+
+const storedFiles = bindStoredFiles({
+  panel: $('stored-box'), list: $('stored-files'), refresh: $('stored-refresh'), open: (f) => openRecord(f), report,
 });
 
 openFromAddress();

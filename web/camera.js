@@ -2,13 +2,7 @@
 // `camera` option and the statistics' `camera` carry them), and the orbit, pan
 // and zoom of a turntable viewer.
 
-const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-const length = (a) => Math.hypot(a[0], a[1], a[2]);
-const normalize = (a) => scale(a, 1 / (length(a) || 1));
+import { sub, add, scale, dot, cross, length, normalize } from './vec3.js';
 
 // Rotation of v about the unit axis k by angle a (Rodrigues' formula).
 function rotate(v, k, a) {
@@ -66,6 +60,40 @@ export class Camera {
     const f = normalize(sub(this.target, this.eye));
     const r = normalize(cross(f, this.up));
     return { f, r, u: cross(r, f) };
+  }
+
+  // The pixel ray of the renderer's camera contract (renderer/camera.h) at the
+  // continuous pixel position (px, py) of a width x height frame (pixel i spans
+  // [i, i + 1)): {origin, dir}, dir of unit length, hit = origin + t dir, the t
+  // of the z AOV.
+  rayAt(px, py, width, height) {
+    const { f, r, u } = this.basis();
+    const sx = (2 * px / width - 1) * (width / height), sy = 1 - 2 * py / height;
+    if (this.projection === 'orthographic')
+      return { origin: add(this.eye, add(scale(r, 0.5 * this.orthoHeight * sx), scale(u, 0.5 * this.orthoHeight * sy))), dir: f };
+    const tan = Math.tan((this.fovDeg * Math.PI) / 360);
+    return { origin: this.eye, dir: normalize(add(f, add(scale(r, tan * sx), scale(u, tan * sy)))) };
+  }
+
+  // Where a point p falls in a width x height frame: a function of p giving {x, y}
+  // (continuous pixel position, as rayAt takes it) and t, its distance along
+  // that ray. The basis is computed once: measuring projects every edge point.
+  projector(width, height) {
+    const { f, r, u } = this.basis(), aspect = width / height;
+    const half = 0.5 * this.orthoHeight, tan = Math.tan((this.fovDeg * Math.PI) / 360);
+    const ortho = this.projection === 'orthographic', eye = this.eye;
+    return (p) => {
+      const d = sub(p, eye), zc = dot(f, d);
+      const k = ortho ? 1 / half : 1 / (zc * tan);
+      const t = ortho ? zc : Math.sign(zc) * length(d);
+      return { x: (dot(r, d) * k / aspect + 1) * 0.5 * width, y: (1 - dot(u, d) * k) * 0.5 * height, t };
+    };
+  }
+
+  // The size of one pixel of a frame `height` pixels high, at distance t, model units.
+  pixelSize(t, height) {
+    return this.projection === 'orthographic' ? this.orthoHeight / height
+      : (2 * t * Math.tan((this.fovDeg * Math.PI) / 360)) / height;
   }
 
   // Turntable orbit about the target: yaw about the up vector, pitch about the

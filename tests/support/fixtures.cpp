@@ -407,6 +407,11 @@ std::string freeform_rational() {
     });
 }
 std::string assembly() { return cached("assembly", "assembly.step", write_assembly); }
+std::string cube10() {
+    return step_fixture("cube10", [] {
+        return BRepPrimAPI_MakeBox(gp_Pnt(kCube10Corner.x, kCube10Corner.y, kCube10Corner.z), 10.0, 10.0, 10.0).Shape();
+    });
+}
 
 std::string dense_bspline(int degree, int poles) {
     if (degree < 1 || degree > Geom_BSplineSurface::MaxDegree() || poles <= degree)
@@ -456,6 +461,7 @@ std::vector<std::string> fixture_names() {
 }
 
 std::string fixture_by_name(const std::string& name) {
+    if (name == "cube10") return cube10();
     for (const Named& f : kFixtures)
         if (name == f.name) return f.make();
     const std::string suffix = "_iges";

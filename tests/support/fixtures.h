@@ -55,6 +55,15 @@ std::string torus();     // R 20, r 6, 1 face (doubly periodic)
 // fitted-view test needs its shape).
 std::string elongated_rod();
 
+// A 10 mm cube with its lowest corner at kCube10Corner (off the origin, so that a
+// measurement cannot pass by ignoring the placement): the web page's measuring
+// test. Not in fixture_names() (only that test needs it; nurbsrt_fixture writes it).
+std::string cube10();
+struct Offset {
+    double x, y, z;
+};
+constexpr Offset kCube10Corner{5.0, -3.0, 2.0};
+
 // --- free-form faces ----------------------------------------------------------
 // A non-planar, non-rational degree 3x3 Geom_BSplineSurface (6 x 5 poles,
 // non-uniform knots with a double interior knot in u, parameter box
@@ -85,9 +94,6 @@ struct Rgb {
     double r, g, b;
 };
 constexpr Rgb kAssemblyColor{0.9, 0.1, 0.2};
-struct Offset {
-    double x, y, z;
-};
 constexpr Offset kAssemblyOffsets[2] = {{-40.0, 0.0, 0.0}, {60.0, 25.0, 5.0}};
 
 // IGES (BRep mode, IGESControl_Writer("MM", 1)) copy of a STEP file, written

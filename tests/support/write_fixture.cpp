@@ -1,6 +1,6 @@
 // nurbsrt_fixture: writes one generated test fixture to a file, for the API
 // tests and the benchmark scripts (which cannot call OCCT themselves).
-//   nurbsrt_fixture NAME OUT        NAME: any of fixture_names()
+//   nurbsrt_fixture NAME OUT        NAME: any of fixture_names(), or cube10
 //   nurbsrt_fixture dense_bspline DEGREE POLES OUT
 #include <cstdio>
 #include <exception>

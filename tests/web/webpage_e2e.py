@@ -3,7 +3,7 @@ DevTools protocol, against a running `nurbsrt serve` (NURBSRT_URL). Started by
 tests/webpage.sh. Each step checks what a user would see; the first failure
 saves a screenshot and the page's console to NURBSRT_WEB_ARTIFACTS and fails.
 
-Usage: webpage_e2e.py STEP_FILE OTHER_CAD_FILE [PART_OF_ABOUT_300_FACES]"""
+Usage: webpage_e2e.py STEP_FILE OTHER_CAD_FILE [PART_OF_ABOUT_300_FACES [ASSEMBLY [CUBE_10MM [CYLINDER]]]]"""
 import json
 import os
 import pathlib
@@ -20,6 +20,8 @@ URL = os.environ["NURBSRT_URL"]
 ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS") or tempfile.mkdtemp(prefix="nurbsrt-web-"))
 SCREENSHOT = os.environ.get("NURBSRT_WEB_SCREENSHOT")  # where to save the README picture, if set
 KEY = os.environ.get("NURBSRT_WEB_KEY", "")  # the service's API key, typed into the page
+MEASURE_SCREENSHOT = os.environ.get("NURBSRT_WEB_MEASURE_SCREENSHOT")  # the README's measuring picture, if set
+ONLY = os.environ.get("NURBSRT_WEB_ONLY")  # "measure": the page's load, the upload and the measuring steps only
 RENDERS = "/v1/renders"
 
 # Pixels of the canvas: how many differ from the background, a checksum, and
@@ -452,6 +454,21 @@ def step_big_part_latency(page, part):
     page.set_select("look", "iterations")
     step_latency(page, f"{part.name}, iterations view, with AOVs")
     page.set_select("look", "shaded")
+    # Measuring on it: the time to read its edges (NURBS JSON) and to find the snap under the pointer.
+    click(page, "measure-toggle")
+    page.b.wait_for("document.getElementById('measure-hint').textContent.startsWith('Click')", 120, "the model's edges")
+    page.b.wait_for("(() => { const c = document.getElementById('view');"
+                    " return c.dataset.final === '1' && c.dataset.busy === '0'; })()", 120, "the frame with normals")
+    x, y, _ = page.canvas_centre()
+    locate = []
+    for dx in range(0, 40, 4):
+        page.b.mouse("mouseMoved", x + dx, y, buttons=0)
+        locate.append(float(page.ev("document.getElementById('measure-overlay').dataset.locateMs")))
+    m = page.ev("({...document.getElementById('measure-overlay').dataset})")
+    log(f"{part.name}, measuring: {m['vertices']} vertices and {m['segments']} edge segments read in {m['modelMs']} ms; "
+        f"snap under the pointer median {statistics.median(locate):.1f} ms over {len(locate)} moves (max {max(locate):.1f})")
+    step_latency(page, f"{part.name}, measuring (z, face and normal AOVs)")
+    click(page, "measure-toggle")
 
 
 def step_problem_shown(page, tmp):
@@ -605,6 +622,217 @@ def step_cad_views(page, assembly):
     assert cam["projection"] == "orthographic" and cam["ortho_height"] > 0, cam
 
 
+# The 10 mm cube of `nurbsrt_fixture cube10` (tests/support/fixtures.h: kCube10Corner).
+CUBE_CORNER, CUBE_SIZE = (5.0, -3.0, 2.0), 10.0
+
+
+def project(camera, p, width, height):
+    """Where the point p falls in the frame (continuous pixel position) and its distance
+    along the view direction: the renderer's camera contract (renderer/camera.h), written
+    again here so that the page's projection is checked against an independent one."""
+    sub = lambda a, b: [a[i] - b[i] for i in range(3)]
+    dot = lambda a, b: sum(a[i] * b[i] for i in range(3))
+    cross = lambda a, b: [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    unit = lambda a: [x / dot(a, a) ** 0.5 for x in a]
+    f = unit(sub(camera["target"], camera["eye"]))
+    r = unit(cross(f, camera["up"]))
+    u = cross(r, f)
+    d = sub(p, camera["eye"])
+    if camera["projection"] == "orthographic":
+        half = camera["ortho_height"] / 2
+        sx, sy = dot(r, d) / half, dot(u, d) / half
+    else:
+        import math
+        tan = math.tan(math.radians(camera["fov_deg"]) / 2)
+        sx, sy = dot(r, d) / (dot(f, d) * tan), dot(u, d) / (dot(f, d) * tan)
+    return (sx * height / width + 1) * 0.5 * width, (1 - sy) * 0.5 * height, dot(f, d)
+
+
+def step_measure(page, cube, cylinder, shot):
+    """Exact measuring on a 10 mm cube: snapped to two vertices of an edge the distance reads
+    10.000 mm within 1e-4 mm; the angle between two adjacent faces 90 degrees; a vertex's
+    coordinates; Esc cancels a pick, the keyboard picks, the results clear."""
+    page.scroll_to("file")
+    page.set_select("look", "shaded")
+    since, before = time.monotonic(), page.frames()
+    page.set_files("file", [cube])
+    page.wait_final_after(before)
+    before = page.frames()
+    click(page, "measure-toggle")
+    assert page.ev("document.getElementById('measure-toggle').getAttribute('aria-pressed')") == "true"
+    page.wait_final_after(before)  # the frame again with the normals measuring reads
+    page.b.wait_for("document.getElementById('measure-hint').textContent.startsWith('Click')", 60,
+                    "the model's edges")
+    page.b.pump(0.2)
+    cam = {"camera": render_exchanges(page, since)[-1][1]["camera"]}
+    vertices = page.ev("Number(document.getElementById('measure-overlay').dataset.vertices)")
+    lo = CUBE_CORNER
+    corners = [[lo[0] + CUBE_SIZE * i, lo[1] + CUBE_SIZE * j, lo[2] + CUBE_SIZE * k]
+               for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    size = page.ev("[document.getElementById('view').width, document.getElementById('view').height]")
+    _, _, rect = page.canvas_centre()
+    to_client = lambda x, y: (rect[0] + x * rect[2] / size[0], rect[1] + y * rect[3] / size[1])
+    screen = {tuple(c): project(cam["camera"], c, *size) for c in corners}
+    near = min(corners, key=lambda c: screen[tuple(c)][2])  # the corner nearest the eye: seen
+    ends = [c for c in corners if sum(a != b for a, b in zip(c, near)) == 1]  # its three edges' other ends
+    log(f"measure: {vertices} model vertices; nearest corner {near}, camera {cam['camera']['projection']}")
+
+    def pick_at(p, offset, wanted_snap):
+        x, y, _ = project(cam["camera"], p, *size)
+        cx, cy = to_client(x + offset[0], y + offset[1])
+        page.b.mouse("mouseMoved", cx - 1, cy, buttons=0)
+        page.b.mouse("mouseMoved", cx, cy, buttons=0)
+        if wanted_snap:
+            page.b.wait_for(f"document.getElementById('view').dataset.snap === '{wanted_snap}'", 10,
+                            f"a {wanted_snap} snap near {p}")
+        page.b.mouse("mousePressed", cx, cy)
+        page.b.mouse("mouseReleased", cx, cy, buttons=0)
+
+    def last_result(count):
+        page.b.wait_for(f"document.querySelectorAll('#measure-results li').length === {count}", 10, f"result {count}")
+        return page.ev("(() => { const li = [...document.querySelectorAll('#measure-results li')].pop();"
+                       " return {text: li.textContent, value: JSON.parse(li.dataset.value), snaps: li.dataset.snaps,"
+                       " precision: Number(li.dataset.precision)}; })()")
+
+    def set_projection(projection):
+        since, before = time.monotonic(), page.frames()
+        page.set_select("projection", projection)
+        page.wait_final_after(before)
+        page.b.pump(0.2)
+        cam["camera"] = render_exchanges(page, since)[-1][1]["camera"]
+        assert cam["camera"]["projection"] == projection, cam
+
+    def measure_edge(end, count):
+        """The edge from `near` to `end`, each vertex picked 3 px beside it: the snaps take the exact vertices."""
+        pick_at(near, (3, -2), "vertex")
+        pick_at(end, (-2, 3), "vertex")
+        r = last_result(count)
+        log(f"measure, {cam['camera']['projection']}: edge {near} - {end}: {r['text']} "
+            f"(|d - 10 mm| = {abs(r['value'] - CUBE_SIZE):.1e} mm)")
+        assert r["snaps"] == "vertex vertex" and abs(r["value"] - CUBE_SIZE) <= 1e-4 and "10.000" in r["text"], r
+
+    measure_edge(ends[0], 1)
+    set_projection("perspective")  # the other camera of the contract
+    measure_edge(ends[1], 2)
+    set_projection("orthographic")
+
+    page.set_select("measure-kind", "angle")
+    face_a = [near[i] + 0.35 * (ends[0][i] - near[i]) + 0.35 * (ends[1][i] - near[i]) for i in range(3)]
+    face_b = [near[i] + 0.35 * (ends[1][i] - near[i]) + 0.35 * (ends[2][i] - near[i]) for i in range(3)]
+    pick_at(face_a, (0, 0), "surface")
+    pick_at(face_b, (0, 0), "surface")
+    r = last_result(3)
+    log(f"measure: {r['text']} (|a - 90°| = {abs(r['value'] - 90.0):.1e}°)")
+    assert abs(r["value"] - 90.0) <= 1e-3 and "90.000" in r["text"], r
+
+    page.set_select("measure-kind", "point")
+    pick_at(near, (2, 2), "vertex")
+    r = last_result(4)
+    log(f"measure: {r['text']}")
+    assert max(abs(a - b) for a, b in zip(r["value"], near)) <= 1e-4, (r, near)
+    # Without snapping, a surface point: on the face's plane within the precision it shows.
+    click(page, "measure-snap")
+    pick_at(face_a, (0, 0), "surface")
+    r = last_result(5)
+    k = next(i for i in range(3) if ends[2][i] != near[i])  # the axis across face_a's plane
+    log(f"measure: {r['text']} (off the plane by {abs(r['value'][k] - near[k]):.1e} mm)")
+    assert r["snaps"] == "surface" and abs(r["value"][k] - near[k]) <= r["precision"] < 1e-5, (r, near)
+    click(page, "measure-snap")
+
+    # Esc cancels a measurement under way; the keyboard moves a cursor and picks.
+    page.set_select("measure-kind", "distance")
+    pick_at(face_a, (0, 0), None)
+    assert "second point" in page.ev("document.getElementById('measure-hint').textContent")
+    page.ev("document.getElementById('view').focus()")
+    page.b.key("Escape", "Escape", 27)
+    assert "first point" in page.ev("document.getElementById('measure-hint').textContent"), "Esc did not cancel"
+    frames = page.frames()
+    for _ in range(3):
+        page.b.key("ArrowRight", "ArrowRight", 39)
+    page.b.key("Enter", "Enter", 13, text="\r")
+    page.b.key("ArrowDown", "ArrowDown", 40, shift=True)
+    page.b.key("Enter", "Enter", 13, text="\r")
+    r = last_result(6)
+    log(f"measure, by keyboard: {r['text']}")
+    assert page.frames() == frames, "the measuring keys orbited the view"
+    page.ev("window.scrollTo(0, 0)")
+    page.b.mouse("mouseMoved", *to_client(*project(cam["camera"], ends[1], *size)[:2]), buttons=0)
+    page.b.pump(0.3)
+    page.b.screenshot(ARTIFACTS / "measure.png")
+    if shot:
+        page.b.screenshot(shot)
+        log(f"screenshot saved to {shot}")
+    click(page, "measure-clear")
+    assert page.ev("document.querySelectorAll('#measure-results li').length") == 0, "the results were not cleared"
+    if cylinder:
+        step_measure_curved(page, cylinder)
+    page.ev("document.getElementById('view').focus()")
+    page.b.key("Escape", "Escape", 27)
+    assert page.ev("document.getElementById('measure-toggle').getAttribute('aria-pressed')") == "false", \
+        "Esc with nothing under way did not leave measuring"
+
+
+def step_measure_curved(page, cylinder):
+    """A point snapped to the top rim of a cylinder (r 10, h 30, axis Z: `nurbsrt_fixture cylinder`)
+    lies on that circle within the precision the page shows for it, at most 1e-6 mm: made exact
+    where the top face meets the side, not left on the trim loop's samples."""
+    import math
+    page.scroll_to("file")
+    since, before = time.monotonic(), page.frames()
+    page.set_files("file", [cylinder])
+    page.wait_final_after(before)
+    page.b.wait_for("document.getElementById('measure-overlay').dataset.modelMs", 60, "the cylinder's edges")
+    page.b.wait_for("(() => { const c = document.getElementById('view');"
+                    " return c.dataset.final === '1' && c.dataset.busy === '0'; })()", 60, "the frame with normals")
+    page.b.pump(0.2)
+    camera = render_exchanges(page, since)[-1][1]["camera"]
+    page.set_select("measure-kind", "point")
+    size = page.ev("[document.getElementById('view').width, document.getElementById('view').height]")
+    _, _, rect = page.canvas_centre()
+    # The rim's point nearest the eye (seen), 3 px off it towards the cylinder's inside.
+    eye = camera["eye"]
+    angle = math.atan2(eye[1], eye[0])
+    rim = [10 * math.cos(angle + 0.3), 10 * math.sin(angle + 0.3), 30.0]
+    x, y, _ = project(camera, rim, *size)
+    cx, cy = rect[0] + x * rect[2] / size[0], rect[1] + (y + 3) * rect[3] / size[1]
+    page.b.mouse("mouseMoved", cx - 1, cy, buttons=0)
+    page.b.mouse("mouseMoved", cx, cy, buttons=0)
+    page.b.wait_for("document.getElementById('view').dataset.snap === 'edge'", 10, "an edge snap on the rim")
+    count = page.ev("document.querySelectorAll('#measure-results li').length")
+    page.b.mouse("mousePressed", cx, cy)
+    page.b.mouse("mouseReleased", cx, cy, buttons=0)
+    page.b.wait_for(f"document.querySelectorAll('#measure-results li').length === {count + 1}", 10, "the point")
+    r = page.ev("(() => { const li = [...document.querySelectorAll('#measure-results li')].pop();"
+                " return {text: li.textContent, value: JSON.parse(li.dataset.value), precision: Number(li.dataset.precision)}; })()")
+    p = r["value"]
+    off = max(abs(math.hypot(p[0], p[1]) - 10), abs(p[2] - 30))
+    log(f"measure, curved edge: {r['text']} (off the rim circle by {off:.1e} mm)")
+    # Moved onto the true edge (the plane meets the cylinder there), not left on the loop's samples.
+    assert off <= r["precision"] <= 1e-6, r
+    click(page, "measure-clear")
+
+
+def step_stored_files(page):
+    """The stored-files panel lists what was uploaded (GET /v1/files); a click reopens one by id, without an upload."""
+    uploads = lambda: sum(1 for e in page.b.events if e["method"] == "Network.requestWillBeSent"
+                          and e["params"]["request"]["method"] == "POST"
+                          and e["params"]["request"]["url"].endswith("/v1/files"))
+    before_uploads, before = uploads(), page.frames()
+    page.scroll_to("stored-box")
+    loaded = int(page.ev("Number(document.getElementById('stored-files').dataset.loaded || 0)"))
+    page.ev("document.querySelector('#stored-box summary').click()")
+    page.b.wait_for(f"Number(document.getElementById('stored-files').dataset.loaded || 0) > {loaded}", 10, "the list")
+    names = page.ev("[...document.querySelectorAll('#stored-files button.reopen')].map((b) => b.textContent)")
+    log(f"stored files: {names}")
+    assert "screw.step" in names, names
+    page.ev("[...document.querySelectorAll('#stored-files button.reopen')].find((b) => b.textContent === 'screw.step').click()")
+    page.wait_final_after(before)
+    name = page.ev("document.getElementById('file-name').textContent")
+    log(f"stored files: reopened {name!r}, {uploads() - before_uploads} uploads")
+    assert "screw.step" in name and uploads() == before_uploads, (name, uploads() - before_uploads)
+    page.ev("document.querySelector('#stored-box summary').click()")
+
+
 def step_narrow(page):
     """At a phone's width (390 px) nothing is wider than the viewport."""
     page.b.call("Emulation.setDeviceMetricsOverride", width=390, height=844, deviceScaleFactor=1, mobile=True)
@@ -639,6 +867,8 @@ def main():
     step_file, other_file = map(pathlib.Path, sys.argv[1:3])
     big_part = pathlib.Path(sys.argv[3]) if len(sys.argv) > 3 and pathlib.Path(sys.argv[3]).is_file() else None
     assembly = pathlib.Path(sys.argv[4]) if len(sys.argv) > 4 and pathlib.Path(sys.argv[4]).is_file() else None
+    cube = pathlib.Path(sys.argv[5]) if len(sys.argv) > 5 and pathlib.Path(sys.argv[5]).is_file() else None
+    cylinder = pathlib.Path(sys.argv[6]) if len(sys.argv) > 6 and pathlib.Path(sys.argv[6]).is_file() else None
     chromium = find_chromium()
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="nurbsrt-web-test-")
@@ -652,6 +882,12 @@ def main():
             browser.call(f"{domain}.enable")
         browser.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
         current = "load"; step_load(page)
+        if ONLY == "measure":  # a quick run of the measuring step alone, while working on it
+            current = "upload"; step_upload(page, step_file)
+            current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
+            current = "stored files"; step_stored_files(page)
+            log("the measuring and stored-files steps passed (NURBSRT_WEB_ONLY=measure: no other step ran)")
+            return 0
         current = "upload"; px = step_upload(page, step_file)
         current = "orbit"; px = step_orbit(page, px)
         current = "latency"; step_latency(page, "shaded view")
@@ -686,6 +922,11 @@ def main():
             current = "CAD views"; step_cad_views(page, assembly)
         else:
             log("SKIPPED the CAD views: no generated assembly given")
+        if cube:
+            current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
+        else:
+            log("SKIPPED measuring: no generated cube given")
+        current = "stored files"; step_stored_files(page)
         current = "failed load"; step_failed_load(page, tmp)
         current = "problem+json"; step_problem_shown(page, tmp)
         current = "CSP"; step_csp_enforced(page)  # last: the refusal is logged as an error
