@@ -9,5 +9,6 @@ from .client import Client, Conversion, Event, Progress, Render, parse_sse
 from .errors import ApiError, InvalidRequest, NotFound, Unavailable, TooLarge, Unprocessable, error_for
 from .webhooks import verify_signature
 
-__all__ = ["Client", "Conversion", "Event", "Progress", "Render", "parse_sse", "ApiError", "InvalidRequest", "NotFound", "Unavailable", "TooLarge",
+__all__ = ["Client", "Conversion", "Event", "Progress", "Render", "parse_sse",
+           "ApiError", "InvalidRequest", "NotFound", "Unavailable", "TooLarge",
            "Unprocessable", "error_for", "verify_signature"]

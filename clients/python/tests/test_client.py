@@ -159,6 +159,32 @@ def test_events_reconnect_with_last_event_id_when_dropped(monkeypatch):
     assert "Last-Event-ID" not in session.sent[0] and session.sent[1]["Last-Event-ID"] == "2"
 
 
+class BusyStreamSession:
+    """The job document, 503 for its events stream (the service's stream cap is reached), then the job done."""
+
+    def __init__(self):
+        self.headers, self.paths, self.polls = {}, [], 0
+
+    def request(self, method, url, timeout=None, headers=None, **kw):
+        self.paths.append(url.split("/v1/")[1])
+        if url.endswith("/events"):
+            return FakeResponse(503, {"Retry-After": "1"}, {"code": "overloaded", "title": "Busy"})
+        self.polls += 1
+        state = "running" if self.polls < 3 else "succeeded"
+        outputs = [{"state": "succeeded" if state == "succeeded" else "running"}]
+        return FakeResponse(200, {}, {"id": "j", "state": state, "outputs": outputs})
+
+
+def test_wait_polls_when_the_service_refuses_a_stream():
+    session = BusyStreamSession()
+    seen = []
+    job = Client("http://127.0.0.1:9", session=session).wait("a" * 32, progress=seen.append, interval=0.01)
+    assert job["state"] == "succeeded"
+    assert session.paths.count(f"jobs/{'a' * 32}/events") == 1  # not retried: polling serves at once
+    assert [(p.state, p.outputs_done, p.outputs_total) for p in seen] == [("running", 0, 1), ("succeeded", 1, 1)]
+    assert all(p.event is None for p in seen)
+
+
 def test_cli_job_prints_progress_and_downloads(tmp_path):
     out = tmp_path / "out"
     r = subprocess.run([sys.executable, "-m", "nurbsrt_client.cli", "--url", URL, "job", str(variant(tmp_path, 4131)),
