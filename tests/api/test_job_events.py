@@ -176,6 +176,8 @@ def test_stream_cap_is_503_and_frees_on_close(own_server):
     check_problem(r, 503, "overloaded")
     assert int(r.headers["Retry-After"]) > 0
     assert requests.get(f"{s.url}/v1/jobs/{job['id']}", timeout=TIMEOUT).status_code == 200  # requests still served
+    metrics = requests.get(s.url + "/metrics", timeout=TIMEOUT).text
+    assert "\nnurbsrt_event_streams 1\n" in metrics and "\nnurbsrt_event_streams_max 1\n" in metrics
     held.close()
     deadline = time.monotonic() + 10
     while True:  # the slot frees once the server notices the closed connection (within a poll)
