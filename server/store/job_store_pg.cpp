@@ -278,14 +278,12 @@ std::array<int64_t, 3> PgJobStore::progress_row(const std::string& id) {
 
 std::optional<std::vector<JobEvent>> PgJobStore::events(const std::string& id, int64_t after_seq, int limit) {
     std::lock_guard<std::mutex> lock(m_);
-    // One snapshot: the job's existence and its events agree.
-    PgConn::Transaction t(*conn_);
-    conn_->exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
-    if (conn_->exec("SELECT 1 FROM jobs WHERE id = $1", {id}).rows() == 0) return std::nullopt;
+    // One statement while events come (every stream polls this); the job's
+    // existence is asked only when none did: events go with their job.
     const PgResult r = conn_->exec(kSelectEventsSql, {id, std::to_string(after_seq), std::to_string(limit)});
+    if (r.rows() == 0 && conn_->exec("SELECT 1 FROM jobs WHERE id = $1", {id}).rows() == 0) return std::nullopt;
     std::vector<JobEvent> events;
     for (int i = 0; i < r.rows(); ++i) events.push_back(event_of_row(r.row(i)));
-    t.commit();
     return events;
 }
 

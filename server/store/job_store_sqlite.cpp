@@ -272,15 +272,17 @@ void SqliteJobStore::requeue(const std::string& id) {
 
 std::optional<std::vector<JobEvent>> SqliteJobStore::events(const std::string& id, int64_t after_seq, int limit) {
     std::lock_guard<std::mutex> lock(m_);
+    std::vector<JobEvent> events;
     {
+        Impl::Stmt s(*impl_, kSelectEventsSql);
+        s.bind(1, id).bind(2, after_seq).bind(3, limit);
+        while (s.step()) events.push_back(event_of_row(s));
+    }
+    if (events.empty()) {  // none: is the job there at all? (its events go with it)
         Impl::Stmt s(*impl_, "SELECT 1 FROM jobs WHERE id = ?");
         s.bind(1, id);
         if (!s.step()) return std::nullopt;
     }
-    std::vector<JobEvent> events;
-    Impl::Stmt s(*impl_, kSelectEventsSql);
-    s.bind(1, id).bind(2, after_seq).bind(3, limit);
-    while (s.step()) events.push_back(event_of_row(s));
     return events;
 }
 
