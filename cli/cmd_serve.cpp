@@ -184,6 +184,12 @@ void add_job_options(CLI::App* cmd, ServeArgs& a) {
         ->envname("NURBSRT_MAX_QUEUED_JOBS")
         ->check(in_range(1, 1000000))
         ->capture_default_str();
+    cmd->add_option("--max-event-streams", a.c.max_event_streams,
+                    "GET /v1/jobs/{id}/events streams open at once, each holding one of\n"
+                    "--max-connections; beyond: 503 + Retry-After (0: a quarter of --max-connections)")
+        ->envname("NURBSRT_MAX_EVENT_STREAMS")
+        ->check(in_range(0, 100000))
+        ->capture_default_str();
     cmd->add_option("--max-job-files", a.c.max_job_files, "most files in one batch job")
         ->envname("NURBSRT_MAX_JOB_FILES")
         ->check(in_range(1, 10000))

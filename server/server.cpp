@@ -410,6 +410,7 @@ int run_server(const ServerConfig& given) {
                 // start waits for that (or the stop went unheard: the service
                 // hung, 4 times in 20 with SIGTERM as the port file appeared).
                 while (!done && !svr.is_running()) std::this_thread::sleep_for(kStartPoll);
+                ctx.stopping = true;  // event streams end (the stop waits for their threads)
                 svr.stop();
                 return;
             }

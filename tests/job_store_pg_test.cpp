@@ -169,7 +169,7 @@ TEST_F(PgJobStoreTest, AVersion1SchemaIsMigrated) {
     b_.reset();
     {
         nurbsrt::server::PgConn c(url());
-        c.exec("DROP TABLE IF EXISTS job_outputs, job_inputs, jobs, schema_version");
+        c.exec("DROP TABLE IF EXISTS job_events, job_outputs, job_inputs, jobs, schema_version");
         c.exec("CREATE TABLE schema_version (version INTEGER NOT NULL); INSERT INTO schema_version VALUES (1)");
         c.exec(
             "CREATE TABLE jobs (seq BIGSERIAL PRIMARY KEY, id TEXT NOT NULL UNIQUE, state TEXT NOT NULL, "
@@ -200,7 +200,44 @@ TEST_F(PgJobStoreTest, AVersion1SchemaIsMigrated) {
     store.create(j);
     EXPECT_EQ(store.get(j.id)->callback_url, j.callback_url);
     nurbsrt::server::PgConn c(url());
-    EXPECT_EQ(c.exec("SELECT MAX(version) FROM schema_version").i64(0, 0), 2);
+    EXPECT_EQ(c.exec("SELECT MAX(version) FROM schema_version").i64(0, 0), 3);
+}
+
+// Events appended by two instances running one job's files: one sequence, in
+// commit order, each output's end once (a fenced stale update appends none),
+// read alike by either instance.
+TEST_F(PgJobStoreTest, EventsOfTwoInstancesFormOneSequence) {
+    JobRecord j = make_job(std::string(32, 'e'), 4, 2);
+    a_->create(j);
+    auto ca = a_->claim_next(2000), cb = b_->claim_next(2000);
+    ASSERT_TRUE(ca && cb);
+    for (const int k : {0, 2}) ASSERT_TRUE(a_->output_running(j.id, k, 2100, ca->lease));
+    for (const int k : {1, 3}) ASSERT_TRUE(b_->output_running(j.id, k, 2100, cb->lease));
+    ASSERT_TRUE(b_->output_succeeded(j.id, 1, 5, "", 2200, cb->lease));
+    EXPECT_FALSE(a_->output_succeeded(j.id, 1, 5, "", 2200, ca->lease));  // not its lease: no event
+    ASSERT_TRUE(a_->output_succeeded(j.id, 0, 5, "", 2300, ca->lease));
+    ASSERT_TRUE(a_->output_succeeded(j.id, 2, 5, "", 2300, ca->lease));
+    ASSERT_TRUE(b_->output_succeeded(j.id, 3, 5, "", 2400, cb->lease));
+    EXPECT_EQ(a_->finish(j.id, 2500), std::optional<JobState>(JobState::succeeded));
+    const auto on_a = a_->events(j.id, 0, 1000), on_b = b_->events(j.id, 0, 1000);
+    ASSERT_TRUE(on_a && on_b);
+    ASSERT_EQ(on_a->size(), on_b->size());
+    int running = 0, artifacts = 0;
+    for (size_t i = 0; i < on_b->size(); ++i) {
+        const JobEvent& e = (*on_b)[i];
+        EXPECT_EQ(e.seq, static_cast<int64_t>(i + 1));
+        EXPECT_EQ(e.data_json, (*on_a)[i].data_json);
+        if (e.type == JobEventType::state && e.data_json == R"({"state":"running"})") ++running;
+        if (e.type == JobEventType::artifact) ++artifacts;
+    }
+    EXPECT_EQ(running, 1);  // two claims, one job becoming running
+    EXPECT_EQ(artifacts, 4);
+    EXPECT_EQ(on_b->front().data_json, R"({"state":"queued"})");
+    EXPECT_EQ(on_b->back().data_json, R"({"state":"succeeded"})");
+    EXPECT_EQ(on_b->at(on_b->size() - 2).data_json,
+              R"({"artifact_bytes":20,"fraction":1.0,"outputs_done":4,"outputs_total":4})");
+    ASSERT_TRUE(a_->remove(j.id));
+    EXPECT_FALSE(b_->events(j.id, 0, 10));
 }
 
 }  // namespace

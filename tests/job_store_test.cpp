@@ -423,4 +423,81 @@ TEST_F(JobStoreTest, AVersion1DatabaseIsMigrated) {
     EXPECT_EQ(store.get(j.id)->callback_url, j.callback_url);
 }
 
+// The events a job's transitions append (JobEvent): in seq order from 1, the
+// output's own, its artifact once it succeeded, the progress after each; read
+// after a seq; gone with the job.
+TEST_F(JobStoreTest, EventsFollowEveryTransitionInOrderAndGoWithTheJob) {
+    SqliteJobStore store(db_);
+    JobRecord j = make_job(1, 2);
+    store.create(j);
+    ASSERT_TRUE(store.claim_next(2000));
+    ASSERT_TRUE(store.output_running(j.id, 0, 2100));
+    ASSERT_TRUE(store.output_succeeded(j.id, 0, 77, "{}", 2300));
+    EXPECT_FALSE(store.output_succeeded(j.id, 0, 77, "{}", 2400));  // no change, no event
+    ASSERT_TRUE(store.output_failed(j.id, 1, "unreadable_file", "bad \"bytes\"", 2500));
+    EXPECT_EQ(store.finish(j.id, 2600), std::optional<JobState>(JobState::failed));
+    const auto events = store.events(j.id, 0, 100);
+    ASSERT_TRUE(events);
+    std::vector<std::string> seen;
+    for (size_t i = 0; i < events->size(); ++i) {
+        const JobEvent& e = (*events)[i];
+        EXPECT_EQ(e.seq, static_cast<int64_t>(i + 1));
+        seen.push_back(std::string(job_event_type_name(e.type)) + " " + e.data_json);
+    }
+    const std::vector<std::string> expected = {
+        R"(state {"state":"queued"})",
+        R"(state {"state":"running"})",
+        R"(output {"artifact":"0-render-0.png","file":0,"kind":"render","output":0,"started_ms":2100,"state":"running"})",
+        R"(progress {"artifact_bytes":0,"fraction":0.0,"outputs_done":0,"outputs_total":2})",
+        R"(output {"artifact":"0-render-0.png","duration_ms":200,"file":0,"finished_ms":2300,"kind":"render","output":0,"started_ms":2100,"state":"succeeded"})",
+        R"(artifact {"bytes":77,"content_type":"image/png","name":"0-render-0.png","output":0,"url":"/v1/jobs/00000000000000000000000000000001/artifacts/0-render-0.png"})",
+        R"(progress {"artifact_bytes":77,"fraction":0.5,"outputs_done":1,"outputs_total":2})",
+        R"(output {"artifact":"0-conversion-1.igs","error":{"code":"unreadable_file","message":"bad \"bytes\""},"file":0,"finished_ms":2500,"kind":"conversion","output":1,"state":"failed"})",
+        R"(progress {"artifact_bytes":77,"fraction":1.0,"outputs_done":2,"outputs_total":2})",
+        R"(state {"error":{"code":"unreadable_file","message":"1 of 2 outputs failed; first: bad \"bytes\""},"state":"failed"})"};
+    EXPECT_EQ(seen, expected);
+    EXPECT_EQ(events->front().time_ms, 1000);  // created at
+    const auto after = store.events(j.id, 8, 100);
+    ASSERT_TRUE(after);
+    ASSERT_EQ(after->size(), 2u);
+    EXPECT_EQ(after->front().seq, 9);
+    EXPECT_EQ(store.events(j.id, 0, 3)->size(), 3u);
+    EXPECT_TRUE(store.events(j.id, 10, 100)->empty());
+    ASSERT_TRUE(store.remove(j.id));
+    EXPECT_FALSE(store.events(j.id, 0, 100));
+}
+
+TEST_F(JobStoreTest, CancelRequeueAndRecoveryAppendStateEvents) {
+    auto states = [](JobStore& store, const std::string& id) {
+        std::vector<std::string> out;
+        const auto events = store.events(id, 0, 100);
+        for (const JobEvent& e : *events)
+            if (e.type == JobEventType::state) out.push_back(e.data_json);
+        return out;
+    };
+    JobRecord a = make_job(1, 1), b = make_job(2, 1);
+    {
+        SqliteJobStore store(db_);
+        store.create(a);
+        store.create(b);
+        ASSERT_TRUE(store.claim_next(2000));  // a
+        store.requeue(a.id);
+        EXPECT_EQ(states(store, a.id), (std::vector<std::string>{R"({"state":"queued"})", R"({"state":"running"})",
+                                                                 R"({"state":"queued"})"}));
+        ASSERT_TRUE(store.claim_next(2100));  // a again
+        ASSERT_TRUE(store.claim_next(2200));  // b
+        ASSERT_TRUE(store.output_running(b.id, 0, 2300));
+        EXPECT_EQ(store.delete_job(b.id, 2400), JobStore::DeleteOutcome::canceling);
+        EXPECT_EQ(
+            states(store, b.id).back(),
+            R"({"error":{"code":"canceled","message":"deleted while running; removed once its current step stops"},"state":"canceled"})");
+        ASSERT_TRUE(store.output_running(a.id, 0, 2500));
+    }
+    SqliteJobStore store(db_);  // a restart: a was running
+    const RecoveryReport r = store.recover(3, 3000);
+    EXPECT_EQ(r.requeued, std::vector<std::string>{a.id});
+    EXPECT_EQ(states(store, a.id).back(), R"({"state":"queued"})");
+    EXPECT_FALSE(store.events(b.id, 0, 100));  // removed with its events
+}
+
 }  // namespace

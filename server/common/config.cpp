@@ -48,6 +48,10 @@ size_t ServerConfig::render_memory_capacity() const {
     return budget > reserved ? budget - reserved : 0;
 }
 
+int ServerConfig::event_stream_cap() const {
+    return max_event_streams ? max_event_streams : std::max(1, connection.max_connections / kEventStreamShare);
+}
+
 void ServerConfig::validate() const {
     auto fail = [](const std::string& what) { throw Error(ErrorCode::invalid_argument, what); };
     if (host.empty()) fail("host must not be empty");
@@ -81,6 +85,8 @@ void ServerConfig::validate() const {
     if (import_max_nesting < 1 || import_max_nesting > 10000) fail("import max nesting must be in 1..10000");
     if (job_runners < 1 || job_runners > 256) fail("job runners must be in 1..256");
     if (max_queued_jobs < 1) fail("max queued jobs must be positive");
+    if (max_event_streams < 0 || (max_event_streams > 0 && max_event_streams >= connection.max_connections))
+        fail("max event streams must be in 1..max connections - 1 (0: a quarter of max connections)");
     if (max_output_attempts < 1 || max_output_attempts > 100) fail("max output attempts must be in 1..100");
     if (max_job_files < 1 || max_job_files > 10000) fail("max job files must be in 1..10000");
     if (max_job_outputs < 1 || max_job_outputs > 10000) fail("max job outputs must be in 1..10000");

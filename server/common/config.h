@@ -23,6 +23,10 @@ struct ConnectionLimits {
     int retry_after_s = 2;  // Retry-After of the connection-cap 503
 };
 
+// The default event-stream cap: a quarter of the connections (128 of the
+// default 512); three quarters stay for renders, uploads and polls.
+inline constexpr int kEventStreamShare = 4;
+
 struct ServerConfig {
     std::string host = "127.0.0.1";
     int port = 8080;                // 0: any free port (see port_file)
@@ -74,8 +78,14 @@ struct ServerConfig {
     // Batch jobs (POST /v1/jobs): kept in DATA_DIR/jobs.db and DATA_DIR/jobs/.
     int job_runners = 2;        // jobs run at once (their outputs still pass the admission gate)
     int max_queued_jobs = 100;  // jobs waiting; beyond -> 503
-    int max_job_files = 16;     // files per job
-    int max_job_outputs = 64;   // outputs per job
+    // GET /v1/jobs/{id}/events streams open at once; beyond -> 503. Each holds
+    // a connection and its thread for the job's life, within max_connections:
+    // 0 (the default) takes a kEventStreamShare-th of them, so most
+    // connections (and the pool's threads, sized above max_connections)
+    // always remain for ordinary requests. A set value must leave at least one.
+    int max_event_streams = 0;
+    int max_job_files = 16;    // files per job
+    int max_job_outputs = 64;  // outputs per job
     // Job artifacts of all kept jobs together (server/jobs/artifact_quota.h): checked
     // at submission against an estimate and when each artifact is written.
     // 0: half the size of the data directory's file system, taken at start.
@@ -135,6 +145,8 @@ struct ServerConfig {
     // What the renders may hold together: the budget less the scene cache and
     // the service's own base (kServiceBaseBytes in config.cpp).
     size_t render_memory_capacity() const;
+    // max_event_streams, or its default share of the connections when it is 0.
+    int event_stream_cap() const;
 };
 
 }  // namespace nurbsrt::server

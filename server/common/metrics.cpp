@@ -142,6 +142,8 @@ std::string Metrics::exposition(const Gauges& g) const {
     gauge("nurbsrt_scene_cache_bytes", "Estimated memory held by cached scenes.", static_cast<double>(g.cache_bytes));
     gauge("nurbsrt_scene_cache_entries", "Cached scenes.", static_cast<double>(g.cache_entries));
     gauge("nurbsrt_scene_cache_capacity_bytes", "Scene cache bound.", static_cast<double>(g.cache_capacity));
+    gauge("nurbsrt_event_streams", "Job event streams open.", g.event_streams);
+    gauge("nurbsrt_event_streams_max", "Job event streams allowed at once (--max-event-streams).", g.max_event_streams);
     return out;
 }
 

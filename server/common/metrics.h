@@ -28,6 +28,7 @@ public:
         int renders_active = 0, renders_queued = 0;
         size_t render_memory_used = 0, render_memory_capacity = 0;
         size_t cache_bytes = 0, cache_entries = 0, cache_capacity = 0;
+        int event_streams = 0, max_event_streams = 0;  // GET /v1/jobs/{id}/events open, and their cap
         std::map<std::string, int64_t> jobs_by_state;  // from the job store (shared: every instance's jobs)
         std::string instance, job_store;               // this process's id; the store's backend
     };

@@ -2,6 +2,7 @@
 // cache, the metrics, the scratch directory, the stored files and the batch jobs. Free of HTTP and JSON headers.
 #pragma once
 
+#include <atomic>
 #include <string_view>
 
 #include "server/render/admission.h"
@@ -32,6 +33,11 @@ struct ServerContext {
     ScratchDir scratch;
     FileStore files;             // POST /v1/files: shared with every instance on the same data dir
     JobService* jobs = nullptr;  // set by run_server once the job store is open
+    // GET /v1/jobs/{id}/events: streams open now (capped by
+    // config.event_stream_cap()), and the stop that ends them (set before the
+    // HTTP server stops: it waits for every connection's thread).
+    std::atomic<int> event_streams{0};
+    std::atomic<bool> stopping{false};
 };
 
 // The OpenAPI document, embedded at build time from api_schema/openapi.json.

@@ -19,6 +19,7 @@ const std::vector<Route>& route_table() {
         {"/v1/conversions", "/v1/conversions", {{M::post, handle_conversion}}},
         {"/v1/jobs", "/v1/jobs", {{M::get, handle_job_list}, {M::post, handle_job_submit}}},
         {"/v1/jobs/{id}", R"(/v1/jobs/([^/]+))", {{M::get, handle_job_get}, {M::del, handle_job_delete}}},
+        {"/v1/jobs/{id}/events", R"(/v1/jobs/([^/]+)/events)", {{M::get, handle_job_events}}},
         {"/v1/jobs/{id}/artifacts/{name}", R"(/v1/jobs/([^/]+)/artifacts/([^/]+))", {{M::get, handle_job_artifact}}},
         {"/v1/files", "/v1/files", {{M::get, handle_file_list}, {M::post, handle_file_upload}}},
         {"/v1/files/{id}",

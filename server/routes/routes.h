@@ -4,6 +4,8 @@
 // (core/error.h, server/common/service_error.h) and answered as problem+json.
 #pragma once
 
+#include <string>
+
 namespace httplib {
 struct Request;
 struct Response;
@@ -23,6 +25,10 @@ void handle_job_list(ServerContext& ctx, const httplib::Request& req, httplib::R
 void handle_job_get(ServerContext& ctx, const httplib::Request& req, httplib::Response& res);
 void handle_job_delete(ServerContext& ctx, const httplib::Request& req, httplib::Response& res);
 void handle_job_artifact(ServerContext& ctx, const httplib::Request& req, httplib::Response& res);
+// The job id of a path; ServiceError(not_found) when it cannot be one.
+std::string checked_id(const std::string& id);
+// routes_job_events.cpp: GET /v1/jobs/{id}/events (Server-Sent Events)
+void handle_job_events(ServerContext& ctx, const httplib::Request& req, httplib::Response& res);
 // routes_files.cpp: POST and GET /v1/files, GET, PATCH and DELETE /v1/files/{id}, GET /v1/files/{id}/content
 void handle_file_upload(ServerContext& ctx, const httplib::Request& req, httplib::Response& res);
 void handle_file_list(ServerContext& ctx, const httplib::Request& req, httplib::Response& res);

@@ -45,6 +45,8 @@ void handle_metrics(ServerContext& ctx, const httplib::Request&, httplib::Respon
     g.cache_bytes = ctx.cache.bytes();
     g.cache_entries = ctx.cache.entries();
     g.cache_capacity = ctx.cache.capacity();
+    g.event_streams = ctx.event_streams.load();
+    g.max_event_streams = ctx.config.event_stream_cap();
     if (ctx.jobs)
         for (const auto& [state, n] : ctx.jobs->store().count_by_state()) g.jobs_by_state[job_state_name(state)] = n;
     g.instance = ctx.config.instance_id;

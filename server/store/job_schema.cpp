@@ -1,5 +1,7 @@
 #include "server/store/job_schema.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string_view>
 
 namespace nurbsrt::server {
@@ -73,6 +75,20 @@ ALTER TABLE jobs ADD COLUMN callback_done_ms $INT64 NOT NULL DEFAULT 0;
 CREATE INDEX IF NOT EXISTS jobs_callback_due ON jobs(callback_state, callback_due_ms);
 )sql";
 
+// Events (job_store.h, JobEvent), with a per-job counter in jobs. Deleting a
+// job deletes its events (ON DELETE CASCADE, and SQLite's explicit deletion).
+constexpr const char* kEvents = R"sql(
+ALTER TABLE jobs ADD COLUMN event_seq $INT64 NOT NULL DEFAULT 0;
+CREATE TABLE IF NOT EXISTS job_events (
+  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
+  seq $INT64 NOT NULL,
+  type TEXT NOT NULL,
+  data TEXT NOT NULL,
+  time_ms $INT64 NOT NULL,
+  PRIMARY KEY (job_id, seq)
+);
+)sql";
+
 void replace_all(std::string& s, std::string_view token, std::string_view by) {
     for (size_t at = s.find(token); at != std::string::npos; at = s.find(token, at + by.size()))
         s.replace(at, token.size(), by);
@@ -97,5 +113,58 @@ std::string job_schema_v1(SqlDialect dialect) {
 }
 
 std::string job_schema_v2(SqlDialect dialect) { return in_dialect(kColumnsV2, dialect); }
+
+std::string job_schema_events(SqlDialect dialect) { return in_dialect(kEvents, dialect); }
+
+const std::string& select_output_sql() {
+    static const std::string sql =
+        std::string("SELECT ") + kOutputColumns + " FROM job_outputs WHERE job_id = $1 AND idx = $2";
+    return sql;
+}
+
+namespace {
+
+using nlohmann::json;
+
+json error_json(const std::string& code, const std::string& message) { return {{"code", code}, {"message", message}}; }
+
+}  // namespace
+
+std::string state_event_data(JobState state, const std::string& error_code, const std::string& error_message) {
+    json d = {{"state", job_state_name(state)}};
+    if (!error_code.empty()) d["error"] = error_json(error_code, error_message);
+    return d.dump();
+}
+
+std::string output_event_data(const JobOutput& o) {
+    json d = {{"output", o.index},
+              {"file", o.file},
+              {"kind", output_kind_name(o.kind)},
+              {"artifact", o.artifact},
+              {"state", job_state_name(o.state)}};
+    if (o.started_ms) d["started_ms"] = o.started_ms;
+    if (o.finished_ms) d["finished_ms"] = o.finished_ms;
+    if (o.started_ms && o.finished_ms) d["duration_ms"] = o.finished_ms - o.started_ms;
+    if (!o.error_code.empty()) d["error"] = error_json(o.error_code, o.error_message);
+    return d.dump();
+}
+
+std::string artifact_event_data(const std::string& job_id, const JobOutput& o) {
+    // The same URL as the job document's (GET /v1/jobs/{id}/artifacts/{name}).
+    return json{{"output", o.index},
+                {"name", o.artifact},
+                {"bytes", o.artifact_bytes},
+                {"content_type", o.content_type},
+                {"url", "/v1/jobs/" + job_id + "/artifacts/" + o.artifact}}
+        .dump();
+}
+
+std::string progress_event_data(int64_t done, int64_t total, int64_t artifact_bytes) {
+    return json{{"outputs_done", done},
+                {"outputs_total", total},
+                {"fraction", total > 0 ? static_cast<double>(done) / static_cast<double>(total) : 0.0},
+                {"artifact_bytes", artifact_bytes}}
+        .dump();
+}
 
 }  // namespace nurbsrt::server

@@ -5,6 +5,7 @@
 // process does not need.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "server/store/job_store.h"
@@ -17,6 +18,9 @@ enum class SqlDialect { sqlite, postgres };
 // columns of jobs) in `dialect`, as the migrations apply them.
 std::string job_schema_v1(SqlDialect dialect);
 std::string job_schema_v2(SqlDialect dialect);
+// The events table (JobEvent) and the jobs' event counter: PostgreSQL's
+// version 3, SQLite's version 4.
+std::string job_schema_events(SqlDialect dialect);
 
 // The columns job_of_row, input_of_row and output_of_row read, in their order.
 inline constexpr const char* kJobColumns =
@@ -71,6 +75,52 @@ JobOutput output_of_row(const Row& r) {
             .started_ms = r.i64(11),
             .finished_ms = r.i64(12),
             .result_json = r.text(13)};
+}
+
+// Events (JobEvent). Parameters are written $1, $2 (PostgreSQL's form; SQLite
+// reads $1 as a named parameter whose index is its order, also 1, 2, ...).
+// The next seq of a job: its counter, bumped under the job row's lock, so
+// appends of several instances are serialized and commit in seq order (a
+// reader polling "after seq n" never skips one committed later).
+inline constexpr const char* kNextEventSeqSql =
+    "UPDATE jobs SET event_seq = event_seq + 1 WHERE id = $1 RETURNING event_seq";
+inline constexpr const char* kInsertEventSql =
+    "INSERT INTO job_events(job_id, seq, type, data, time_ms) VALUES ($1, $2, $3, $4, $5)";
+inline constexpr const char* kSelectEventsSql =
+    "SELECT seq, type, data, time_ms FROM job_events WHERE job_id = $1 AND seq > $2 ORDER BY seq LIMIT $3";
+// Outputs finished, outputs in all, artifact bytes written: a progress event's numbers.
+inline constexpr const char* kProgressSql =
+    "SELECT COALESCE(SUM(CASE WHEN state IN ('succeeded', 'failed', 'canceled') THEN 1 ELSE 0 END), 0), COUNT(*), "
+    "COALESCE(SUM(CASE WHEN state = 'succeeded' THEN artifact_bytes ELSE 0 END), 0) FROM job_outputs WHERE job_id = $1";
+// "SELECT <the columns output_of_row reads> FROM job_outputs WHERE job_id = $1 AND idx = $2".
+const std::string& select_output_sql();
+
+std::string state_event_data(JobState state, const std::string& error_code, const std::string& error_message);
+std::string output_event_data(const JobOutput& o);
+std::string artifact_event_data(const std::string& job_id, const JobOutput& o);
+std::string progress_event_data(int64_t done, int64_t total, int64_t artifact_bytes);
+
+// A job's state and error: a state event's data.
+inline constexpr const char* kJobStateSql = "SELECT state, error_code, error_message FROM jobs WHERE id = $1";
+
+template <class Row>
+JobEvent event_of_row(const Row& r) {
+    return {.seq = r.i64(0), .type = stored_job_event_type(r.text(1)), .data_json = r.text(2), .time_ms = r.i64(3)};
+}
+
+// Appends the events of output `index` having changed (in the caller's
+// transaction): the output itself, its artifact once it succeeded, then the
+// job's progress. `store` reads the output's row (output_row(id, index):
+// optional<JobOutput>), the progress numbers (progress_row(id): three
+// int64_t) and appends (append(id, type, data, now_ms)).
+template <class Store>
+void append_output_events(Store& store, const std::string& id, int index, int64_t now_ms) {
+    const std::optional<JobOutput> o = store.output_row(id, index);
+    if (!o) return;
+    store.append(id, JobEventType::output, output_event_data(*o), now_ms);
+    if (o->state == JobState::succeeded) store.append(id, JobEventType::artifact, artifact_event_data(id, *o), now_ms);
+    const auto [done, total, bytes] = store.progress_row(id);
+    store.append(id, JobEventType::progress, progress_event_data(done, total, bytes), now_ms);
 }
 
 }  // namespace nurbsrt::server

@@ -53,6 +53,26 @@ OutputKind stored_output_kind(std::string_view name) {
     throw Error(ErrorCode::io, "the job store holds an unknown output kind '" + std::string(name.substr(0, 32)) + "'");
 }
 
+const char* job_event_type_name(JobEventType t) {
+    switch (t) {
+        case JobEventType::state:
+            return "state";
+        case JobEventType::output:
+            return "output";
+        case JobEventType::artifact:
+            return "artifact";
+        case JobEventType::progress:
+            return "progress";
+    }
+    return "";
+}
+
+JobEventType stored_job_event_type(std::string_view name) {
+    for (JobEventType t : {JobEventType::state, JobEventType::output, JobEventType::artifact, JobEventType::progress})
+        if (name == job_event_type_name(t)) return t;
+    throw Error(ErrorCode::io, "the job store holds an unknown event type '" + std::string(name.substr(0, 32)) + "'");
+}
+
 const char* callback_state_name(CallbackState s) {
     switch (s) {
         case CallbackState::none:

@@ -109,6 +109,24 @@ struct JobClaim : JobRecord {
     std::string lease;
 };
 
+// A job's events (GET /v1/jobs/{id}/events): an append-only sequence per job,
+// seq 1, 2, ... in commit order, appended by the store in the same transaction
+// as the change it reports, so a reader never sees a state without its event.
+// state: the job's state changed; output: an output started or finished (its
+// timings, error); artifact: an output's artifact was written (name, bytes,
+// URL); progress: outputs finished of the total and artifact bytes, after each
+// output and artifact event. Data is one JSON object (job_schema.h builds it).
+enum class JobEventType { state, output, artifact, progress };
+const char* job_event_type_name(JobEventType t);
+JobEventType stored_job_event_type(std::string_view name);
+
+struct JobEvent {
+    int64_t seq = 0;
+    JobEventType type = JobEventType::state;
+    std::string data_json;
+    int64_t time_ms = 0;  // Unix ms, when appended
+};
+
 struct JobPage {
     std::vector<JobRecord> jobs;
     std::optional<int64_t> next_after;  // seq to continue after, when more may follow
@@ -199,6 +217,11 @@ public:
     // callback is no longer pending.
     virtual bool callback_attempted(const std::string& id, const CallbackAttempt& a) = 0;
 
+    // The job's events after `after_seq` (exclusive), oldest first, at most
+    // `limit`; nullopt when the job is gone (deleted, expired: its events go
+    // with it).
+    virtual std::optional<std::vector<JobEvent>> events(const std::string& id, int64_t after_seq, int limit) = 0;
+
     // Several instances share this store (and the data directory): nothing
     // there belongs to this process alone, so no start-up sweep may run.
     virtual bool shared() const = 0;
@@ -235,7 +258,8 @@ public:
     std::vector<std::string> finished_before(int64_t before_ms) override;                                              \
     std::vector<std::string> all_ids() override;                                                                       \
     std::optional<JobRecord> claim_callback(int64_t now_ms, int64_t hold_ms) override;                                 \
-    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override
+    bool callback_attempted(const std::string& id, const CallbackAttempt& a) override;                                 \
+    std::optional<std::vector<JobEvent>> events(const std::string& id, int64_t after_seq, int limit) override
 
 // SQLite in one file (created when needed). Throws Error(io) with a clear
 // message when the file cannot be opened or written, is not a SQLite

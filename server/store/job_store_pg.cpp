@@ -9,8 +9,9 @@
 namespace nurbsrt::server {
 namespace {
 
-// 1: jobs, inputs, outputs (with the leases); 2: the webhook columns of jobs (job_schema.h).
-constexpr int kPgSchemaVersion = 2;
+// 1: jobs, inputs, outputs (with the leases); 2: the webhook columns of jobs;
+// 3: events (all job_schema.h).
+constexpr int kPgSchemaVersion = 3;
 // Any constant: instances starting together migrate one after the other.
 constexpr const char* kMigrationLock = "7353021";
 
@@ -49,6 +50,7 @@ void PgJobStore::migrate() {
     if (version < kPgSchemaVersion) {
         if (version < 1) conn_->exec(job_schema_v1(SqlDialect::postgres).c_str());
         if (version < 2) conn_->exec(job_schema_v2(SqlDialect::postgres).c_str());
+        if (version < 3) conn_->exec(job_schema_events(SqlDialect::postgres).c_str());
         conn_->exec("DELETE FROM schema_version");
         conn_->exec("INSERT INTO schema_version(version) VALUES ($1)", {std::to_string(kPgSchemaVersion)});
     }
@@ -75,6 +77,7 @@ void PgJobStore::create(JobRecord& job) {
             "VALUES ($1, $2, $3, $4, $5, $6, $7, 'queued')",
             {job.id, std::to_string(o.index), std::to_string(o.file), output_kind_name(o.kind), o.options_json,
              o.artifact, o.content_type});
+    append_state(job.id, job.created_ms);
     t.commit();
 }
 
@@ -173,6 +176,7 @@ JobStore::DeleteOutcome PgJobStore::delete_job(const std::string& id, int64_t no
             "UPDATE job_outputs SET state = 'canceled', finished_ms = $1 WHERE job_id = $2 AND "
             "state IN ('queued', 'running')",
             {std::to_string(now_ms), id});
+        append_state(id, now_ms);
         t.commit();
         return DeleteOutcome::canceling;
     }
@@ -246,6 +250,41 @@ bool PgJobStore::callback_attempted(const std::string& id, const CallbackAttempt
                    {callback_state_name(a.state), std::to_string(done ? 0 : a.next_ms), std::to_string(a.status),
                     a.error, std::to_string(done ? a.now_ms : 0), id})
                .affected() > 0;
+}
+
+void PgJobStore::append(const std::string& id, JobEventType type, const std::string& data, int64_t now_ms) {
+    const PgResult r = conn_->exec(kNextEventSeqSql, {id});
+    if (r.rows() == 0) return;  // the job is gone
+    conn_->exec(kInsertEventSql, {id, r.text(0, 0), job_event_type_name(type), data, std::to_string(now_ms)});
+}
+
+void PgJobStore::append_state(const std::string& id, int64_t now_ms) {
+    const PgResult r = conn_->exec(kJobStateSql, {id});
+    if (r.rows() == 0) return;
+    append(id, JobEventType::state, state_event_data(stored_job_state(r.text(0, 0)), r.text(0, 1), r.text(0, 2)),
+           now_ms);
+}
+
+std::optional<JobOutput> PgJobStore::output_row(const std::string& id, int index) {
+    const PgResult r = conn_->exec(select_output_sql().c_str(), {id, std::to_string(index)});
+    if (r.rows() == 0) return std::nullopt;
+    return output_of_row(r.row(0));
+}
+
+std::array<int64_t, 3> PgJobStore::progress_row(const std::string& id) {
+    const PgResult r = conn_->exec(kProgressSql, {id});
+    return {r.i64(0, 0), r.i64(0, 1), r.i64(0, 2)};
+}
+
+std::optional<std::vector<JobEvent>> PgJobStore::events(const std::string& id, int64_t after_seq, int limit) {
+    std::lock_guard<std::mutex> lock(m_);
+    // One statement while events come (every stream polls this); the job's
+    // existence is asked only when none did: events go with their job.
+    const PgResult r = conn_->exec(kSelectEventsSql, {id, std::to_string(after_seq), std::to_string(limit)});
+    if (r.rows() == 0 && conn_->exec("SELECT 1 FROM jobs WHERE id = $1", {id}).rows() == 0) return std::nullopt;
+    std::vector<JobEvent> events;
+    for (int i = 0; i < r.rows(); ++i) events.push_back(event_of_row(r.row(i)));
+    return events;
 }
 
 }  // namespace nurbsrt::server

@@ -11,6 +11,7 @@
 // before the job row, so claims, deletions and finishes cannot deadlock.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <mutex>
 
@@ -33,6 +34,12 @@ public:
     int64_t lease_ms() const override { return lease_ms_; }
     std::string describe() const override { return conn_->where(); }
 
+    // Events (job_schema.h), appended inside the caller's transaction.
+    void append(const std::string& id, JobEventType type, const std::string& data, int64_t now_ms);
+    void append_state(const std::string& id, int64_t now_ms);
+    std::optional<JobOutput> output_row(const std::string& id, int index);
+    std::array<int64_t, 3> progress_row(const std::string& id);
+
 private:
     void migrate();
     // The job and its outputs, inside the caller's transaction.
@@ -50,6 +57,9 @@ private:
     };
     std::optional<JobClaim> claim_outputs(const std::string& id, const std::vector<Claimable>& outputs, int64_t now_ms);
     void lock_outputs(const std::string& id);
+    // One fenced output update (`sql` with `params`) and its events, in one transaction; whether it changed it.
+    bool output_transition(const char* sql, const std::vector<std::string>& params, const std::string& id, int output,
+                           int64_t now_ms);
 
     std::unique_ptr<PgConn> conn_;
     std::string instance_;

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "server/common/request_log.h"
+#include "server/store/job_schema.h"
 
 namespace nurbsrt::server {
 namespace {
@@ -47,6 +48,7 @@ std::optional<JobState> PgJobStore::finish_locked(const std::string& id, int64_t
         "callback_state = CASE WHEN callback_url <> '' THEN 'pending' ELSE '' END, callback_due_ms = $2 "
         "WHERE id = $5",
         {job_state_name(state), str(now_ms), failed ? first_code : std::string(), message, id});
+    append_state(id, now_ms);
     return state;
 }
 
@@ -65,6 +67,7 @@ void PgJobStore::fail_interrupted(const std::string& id, int output, int max_att
         "UPDATE job_outputs SET state = 'failed', error_code = 'interrupted', error_message = $1, "
         "finished_ms = $2, lease_token = '', lease_expires_ms = 0 WHERE job_id = $3 AND idx = $4",
         {reason, str(now_ms), id, str(output)});
+    append_output_events(*this, id, output, now_ms);
     log_event("job_output_interrupted", "{\"job_id\":\"" + id + "\",\"output\":" + str(output) + "}");
 }
 
@@ -84,6 +87,10 @@ std::optional<JobClaim> PgJobStore::claim_outputs(const std::string& id, const s
         attempts = std::max(attempts, o.attempts + 1);
         run.push_back(o.index);
     }
+    // Exactly one claim of a queued job reports it running: the update waits
+    // for the job row's lock and sees the state another claim committed.
+    if (conn_->exec("UPDATE jobs SET state = 'running' WHERE id = $1 AND state = 'queued'", {id}).affected() > 0)
+        append_state(id, now_ms);
     conn_->exec(
         "UPDATE jobs SET state = 'running', attempts = GREATEST(attempts, $2), "
         "started_ms = CASE WHEN started_ms = 0 THEN $3 ELSE started_ms END WHERE id = $1",
@@ -164,12 +171,19 @@ bool PgJobStore::renew(const JobClaim& claim) {
 
 bool PgJobStore::output_running(const std::string& id, int output, int64_t now_ms, const std::string& lease) {
     std::lock_guard<std::mutex> lock(m_);
-    return conn_
-               ->exec(
-                   "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = $1 "
-                   "WHERE job_id = $2 AND idx = $3 AND lease_token = $4 AND state = 'queued'",
-                   {str(now_ms), id, str(output), lease})
-               .affected() > 0;
+    return output_transition(
+        "UPDATE job_outputs SET state = 'running', progress = 0, started_ms = $1 "
+        "WHERE job_id = $2 AND idx = $3 AND lease_token = $4 AND state = 'queued'",
+        {str(now_ms), id, str(output), lease}, id, output, now_ms);
+}
+
+bool PgJobStore::output_transition(const char* sql, const std::vector<std::string>& params, const std::string& id,
+                                   int output, int64_t now_ms) {
+    PgConn::Transaction t(*conn_);
+    const bool changed = conn_->exec(sql, params).affected() > 0;
+    if (changed) append_output_events(*this, id, output, now_ms);
+    t.commit();
+    return changed;
 }
 
 bool PgJobStore::output_progress(const std::string& id, int output, double progress, const std::string& lease) {
@@ -185,26 +199,22 @@ bool PgJobStore::output_progress(const std::string& id, int output, double progr
 bool PgJobStore::output_succeeded(const std::string& id, int output, int64_t artifact_bytes,
                                   const std::string& result_json, int64_t now_ms, const std::string& lease) {
     std::lock_guard<std::mutex> lock(m_);
-    // Fenced: only the run holding the lease finishes the output, once.
-    return conn_
-               ->exec(
-                   "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = $1, result = $2, "
-                   "finished_ms = $3, completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
-                   "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state = 'running'",
-                   {str(artifact_bytes), result_json, str(now_ms), id, str(output), lease})
-               .affected() > 0;
+    // Fenced: only the run holding the lease finishes the output, once (and so reports it once).
+    return output_transition(
+        "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = $1, result = $2, "
+        "finished_ms = $3, completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
+        "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state = 'running'",
+        {str(artifact_bytes), result_json, str(now_ms), id, str(output), lease}, id, output, now_ms);
 }
 
 bool PgJobStore::output_failed(const std::string& id, int output, const std::string& code, const std::string& message,
                                int64_t now_ms, const std::string& lease) {
     std::lock_guard<std::mutex> lock(m_);
-    return conn_
-               ->exec(
-                   "UPDATE job_outputs SET state = 'failed', error_code = $1, error_message = $2, finished_ms = $3, "
-                   "completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
-                   "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state IN ('queued', 'running')",
-                   {code, message, str(now_ms), id, str(output), lease})
-               .affected() > 0;
+    return output_transition(
+        "UPDATE job_outputs SET state = 'failed', error_code = $1, error_message = $2, finished_ms = $3, "
+        "completions = completions + 1, lease_token = '', lease_expires_ms = 0 "
+        "WHERE job_id = $4 AND idx = $5 AND lease_token = $6 AND state IN ('queued', 'running')",
+        {code, message, str(now_ms), id, str(output), lease}, id, output, now_ms);
 }
 
 void PgJobStore::requeue(const JobClaim& claim) {
@@ -217,11 +227,15 @@ void PgJobStore::requeue(const JobClaim& claim) {
         "WHERE job_id = $1 AND lease_token = $2 AND state IN ('queued', 'running')",
         {claim.id, claim.lease});
     // Back to the queue unless another instance runs one of its outputs.
-    conn_->exec(
-        "UPDATE jobs SET state = 'queued', attempts = (SELECT COALESCE(MAX(attempts), 0) FROM job_outputs "
-        "WHERE job_id = $1) WHERE id = $1 AND state = 'running' AND NOT EXISTS (SELECT 1 FROM job_outputs "
-        "WHERE job_id = $1 AND lease_token <> '' AND lease_expires_ms >= " NURBSRT_PG_NOW ")",
-        {claim.id});
+    const bool requeued =
+        conn_
+            ->exec(
+                "UPDATE jobs SET state = 'queued', attempts = (SELECT COALESCE(MAX(attempts), 0) FROM job_outputs "
+                "WHERE job_id = $1) WHERE id = $1 AND state = 'running' AND NOT EXISTS (SELECT 1 FROM job_outputs "
+                "WHERE job_id = $1 AND lease_token <> '' AND lease_expires_ms >= " NURBSRT_PG_NOW ")",
+                {claim.id})
+            .affected() > 0;
+    if (requeued) append_state(claim.id, unix_now_ms());
     t.commit();
 }
 

@@ -40,6 +40,7 @@ SqliteJobStore::SqliteJobStore(const std::string& db_path) : impl_(std::make_uni
             if (version < 1) impl_->exec(job_schema_v1(SqlDialect::sqlite).c_str());
             if (version < 2) impl_->exec(job_schema_v2(SqlDialect::sqlite).c_str());
             if (version < 3) impl_->exec(kSchemaV3);
+            if (version < 4) impl_->exec(job_schema_events(SqlDialect::sqlite).c_str());
             impl_->exec("DELETE FROM schema_version");
             Impl::Stmt(*impl_, "INSERT INTO schema_version(version) VALUES (?)").bind(1, kSchemaVersion).run();
             t.commit();
@@ -86,6 +87,7 @@ void SqliteJobStore::create(JobRecord& job) {
             .bind(5, o.options_json);
         s.bind(6, o.artifact).bind(7, o.content_type).run();
     }
+    impl_->append_state(job.id, job.created_ms);
     t.commit();
 }
 
@@ -154,6 +156,7 @@ std::optional<JobClaim> SqliteJobStore::claim_next(int64_t now_ms, int) {
                      "started_ms = CASE WHEN started_ms = 0 THEN ?2 ELSE started_ms END WHERE id = ?1");
         s.bind(1, id).bind(2, now_ms).run();
     }
+    impl_->append_state(id, now_ms);
     std::optional<JobClaim> claim;
     if (auto job = impl_->get(id)) {
         claim.emplace();
@@ -174,6 +177,7 @@ bool SqliteJobStore::output_running(const std::string& id, int output, int64_t n
     s.bind(1, now_ms).bind(2, id).bind(3, output).run();
     NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
     const bool ok = s.changes() > 0;
+    if (ok) append_output_events(*impl_, id, output, now_ms);
     t.commit();
     return ok;
 }
@@ -191,7 +195,7 @@ bool SqliteJobStore::output_succeeded(const std::string& id, int output, int64_t
     return impl_->update_output(
         "UPDATE job_outputs SET state = 'succeeded', progress = 1, artifact_bytes = ?, result = ?, "
         "finished_ms = ? WHERE job_id = ? AND idx = ? AND state = 'running'",
-        id, output, artifact_bytes, result_json, now_ms);
+        id, output, now_ms, artifact_bytes, result_json, now_ms);
 }
 
 bool SqliteJobStore::output_failed(const std::string& id, int output, const std::string& code,
@@ -200,7 +204,7 @@ bool SqliteJobStore::output_failed(const std::string& id, int output, const std:
     return impl_->update_output(
         "UPDATE job_outputs SET state = 'failed', error_code = ?, error_message = ?, finished_ms = ? "
         "WHERE job_id = ? AND idx = ? AND state IN ('queued', 'running')",
-        id, output, code, message, now_ms);
+        id, output, now_ms, code, message, now_ms);
 }
 
 std::optional<JobState> SqliteJobStore::finish(const std::string& id, int64_t now_ms) {
@@ -242,6 +246,7 @@ JobState SqliteJobStore::Impl::finish_job(const std::string& id, int64_t now_ms)
         .bind(4, message)
         .bind(5, now_ms);
     s.bind(6, id).run();
+    append_state(id, now_ms);
     return state;
 }
 
@@ -250,17 +255,35 @@ void SqliteJobStore::requeue(const JobClaim& claim) { requeue(claim.id); }
 void SqliteJobStore::requeue(const std::string& id) {
     std::lock_guard<std::mutex> lock(m_);
     Impl::Transaction t(*impl_);
-    Impl::Stmt(*impl_,
-               "UPDATE jobs SET state = 'queued', attempts = MAX(attempts - 1, 0) WHERE id = ? AND "
-               "state = 'running'")
-        .bind(1, id)
-        .run();
+    {
+        Impl::Stmt s(*impl_,
+                     "UPDATE jobs SET state = 'queued', attempts = MAX(attempts - 1, 0) WHERE id = ? AND "
+                     "state = 'running'");
+        s.bind(1, id).run();
+        if (s.changes() > 0) impl_->append_state(id, unix_now_ms());
+    }
     Impl::Stmt(*impl_,
                "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0, "
                "attempts = MAX(attempts - 1, 0) WHERE job_id = ? AND state = 'running'")
         .bind(1, id)
         .run();
     t.commit();
+}
+
+std::optional<std::vector<JobEvent>> SqliteJobStore::events(const std::string& id, int64_t after_seq, int limit) {
+    std::lock_guard<std::mutex> lock(m_);
+    std::vector<JobEvent> events;
+    {
+        Impl::Stmt s(*impl_, kSelectEventsSql);
+        s.bind(1, id).bind(2, after_seq).bind(3, limit);
+        while (s.step()) events.push_back(event_of_row(s));
+    }
+    if (events.empty()) {  // none: is the job there at all? (its events go with it)
+        Impl::Stmt s(*impl_, "SELECT 1 FROM jobs WHERE id = ?");
+        s.bind(1, id);
+        if (!s.step()) return std::nullopt;
+    }
+    return events;
 }
 
 }  // namespace nurbsrt::server

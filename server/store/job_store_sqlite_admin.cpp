@@ -4,6 +4,7 @@
 namespace nurbsrt::server {
 
 void SqliteJobStore::Impl::remove_rows(const std::string& id) {
+    Stmt(*this, "DELETE FROM job_events WHERE job_id = ?").bind(1, id).run();
     Stmt(*this, "DELETE FROM job_outputs WHERE job_id = ?").bind(1, id).run();
     Stmt(*this, "DELETE FROM job_inputs WHERE job_id = ?").bind(1, id).run();
     Stmt(*this, "DELETE FROM jobs WHERE id = ?").bind(1, id).run();
@@ -34,6 +35,7 @@ JobStore::DeleteOutcome SqliteJobStore::delete_job(const std::string& id, int64_
             .bind(1, now_ms)
             .bind(2, id)
             .run();
+        impl_->append_state(id, now_ms);
         t.commit();
         return DeleteOutcome::canceling;
     }
@@ -76,6 +78,13 @@ RecoveryReport SqliteJobStore::recover(int max_attempts, int64_t now_ms) {
     const std::string reason = "interrupted by a service restart in each of its " + std::to_string(max_attempts) +
                                " runs (--max-output-attempts)";
     for (const std::string& id : running) {
+        std::vector<int> cut;  // outputs that fail now: each reports it (job_schema.h)
+        {
+            Impl::Stmt s(*impl_,
+                         "SELECT idx FROM job_outputs WHERE job_id = ? AND state = 'running' AND attempts >= ?");
+            s.bind(1, id).bind(2, max_attempts);
+            while (s.step()) cut.push_back(static_cast<int>(s.i64(0)));
+        }
         Impl::Stmt(*impl_,
                    "UPDATE job_outputs SET state = 'failed', finished_ms = ?, error_code = 'interrupted', "
                    "error_message = ? WHERE job_id = ? AND state = 'running' AND attempts >= ?")
@@ -84,6 +93,7 @@ RecoveryReport SqliteJobStore::recover(int max_attempts, int64_t now_ms) {
             .bind(3, id)
             .bind(4, max_attempts)
             .run();
+        for (int output : cut) append_output_events(*impl_, id, output, now_ms);
         Impl::Stmt(*impl_,
                    "UPDATE job_outputs SET state = 'queued', progress = 0, started_ms = 0 "
                    "WHERE job_id = ? AND state = 'running'")
@@ -97,6 +107,7 @@ RecoveryReport SqliteJobStore::recover(int max_attempts, int64_t now_ms) {
         }
         if (work_left) {
             Impl::Stmt(*impl_, "UPDATE jobs SET state = 'queued' WHERE id = ?").bind(1, id).run();
+            impl_->append_state(id, now_ms);
             r.requeued.push_back(id);
         } else if (impl_->finish_job(id, now_ms) == JobState::failed) {
             r.failed.push_back(id);  // (one that had finished every output but its own end is kept succeeded)

@@ -5,6 +5,8 @@
 
 #include <sqlite3.h>
 
+#include <array>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -17,8 +19,8 @@ namespace nurbsrt::server {
 namespace sqlite_store {
 
 // 1: jobs, inputs, outputs; 2: the webhook columns of jobs (both job_schema.h);
-// 3: the runs started of each output (below).
-inline constexpr int kSchemaVersion = 3;
+// 3: the runs started of each output (below); 4: events (job_schema.h).
+inline constexpr int kSchemaVersion = 4;
 
 // Version 3: runs started of each output, so that a crash counts against the
 // output it cut short only (SqliteJobStore::recover).
@@ -147,18 +149,63 @@ struct SqliteJobStore::Impl {
     }
 
     // Runs `sql`, an UPDATE of one output whose last two parameters are its key
-    // (job id, index) after `values`, in a transaction; whether it changed it.
+    // (job id, index) after `values`, in a transaction with the events of the
+    // change (job_schema.h); whether it changed it.
     template <class... Values>
-    bool update_output(const char* sql, const std::string& id, int output, const Values&... values) {
+    bool update_output(const char* sql, const std::string& id, int output, int64_t now_ms, const Values&... values) {
         Transaction t(*this);
-        Stmt s(*this, sql);
-        int k = 1;
-        (s.bind(k++, values), ...);
-        s.bind(k, id).bind(k + 1, output).run();
-        NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
-        const bool changed = s.changes() > 0;
+        bool changed = false;
+        {
+            Stmt s(*this, sql);
+            int k = 1;
+            (s.bind(k++, values), ...);
+            s.bind(k, id).bind(k + 1, output).run();
+            NURBSRT_CHECK(s.changes() <= 1);  // (job_id, idx) is the key
+            changed = s.changes() > 0;
+        }
+        if (changed) append_output_events(*this, id, output, now_ms);
         t.commit();
         return changed;
+    }
+
+    // Events (job_schema.h), in the caller's transaction.
+    void append(const std::string& id, JobEventType type, const std::string& data, int64_t now_ms) {
+        int64_t seq = 0;
+        {
+            Stmt s(*this, kNextEventSeqSql);
+            s.bind(1, id);
+            if (!s.step()) return;  // the job is gone
+            seq = s.i64(0);
+        }
+        Stmt(*this, kInsertEventSql)
+            .bind(1, id)
+            .bind(2, seq)
+            .bind(3, std::string(job_event_type_name(type)))
+            .bind(4, data)
+            .bind(5, now_ms)
+            .run();
+    }
+    void append_state(const std::string& id, int64_t now_ms) {
+        std::string data;
+        {
+            Stmt s(*this, kJobStateSql);
+            s.bind(1, id);
+            if (!s.step()) return;
+            data = state_event_data(stored_job_state(s.text(0)), s.text(1), s.text(2));
+        }
+        append(id, JobEventType::state, data, now_ms);
+    }
+    std::optional<JobOutput> output_row(const std::string& id, int index) {
+        Stmt s(*this, select_output_sql().c_str());
+        s.bind(1, id).bind(2, index);
+        if (!s.step()) return std::nullopt;
+        return output_of_row(s);
+    }
+    std::array<int64_t, 3> progress_row(const std::string& id) {
+        Stmt s(*this, kProgressSql);
+        s.bind(1, id);
+        if (!s.step()) return {0, 0, 0};
+        return {s.i64(0), s.i64(1), s.i64(2)};
     }
 
     std::optional<JobRecord> get(const std::string& id) {

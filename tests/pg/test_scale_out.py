@@ -247,6 +247,18 @@ def test_one_job_of_nine_files_spread_over_three_instances_survives_losing_one()
         for o in outs:
             by_file.setdefault(o["file"], set()).add((o.get("statistics") or o["report"])["read"]["id"])
         assert all(len(ids) == 1 for f, ids in by_file.items() if f != held_file), by_file
+        # The job's events, appended by all three instances (the killed one included), read from each survivor:
+        # one sequence 1..n, each output's end and artifact once, the terminal event last.
+        streams = [requests.get(f"{inst.url}/v1/jobs/{job_id}/events", timeout=60).text for inst in survivors]
+        assert streams[0] == streams[1]
+        events = [dict(line.split(": ", 1) for line in block.split("\n"))
+                  for block in streams[0].split("\n\n") if block]
+        assert [int(e["id"]) for e in events] == list(range(1, len(events) + 1))
+        ends = [json.loads(e["data"])["output"] for e in events
+                if e["event"] == "output" and json.loads(e["data"])["state"] == "succeeded"]
+        arts = [json.loads(e["data"])["output"] for e in events if e["event"] == "artifact"]
+        assert sorted(ends) == sorted(arts) == list(range(27))
+        assert events[-1]["event"] == "state" and json.loads(events[-1]["data"])["state"] == "succeeded"
         assert len(by_file[held_file]) in (1, 2) and job["statistics"]["reads"] == 8 + len(by_file[held_file])
         print(f"\nscale_out: one job of 9 files x 3 outputs on 3 instances, inst-f SIGKILLed holding file "
               f"{held_file} ({len(held)} outputs); {rerun} output(s) re-run; every output completed exactly once; "

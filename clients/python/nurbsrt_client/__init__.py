@@ -5,9 +5,10 @@
     r = c.render("part.step", view="iso", width=800, height=600)
     open("part.png", "wb").write(r.image)
 """
-from .client import Client, Conversion, Render
+from .client import Client, Conversion, Event, Progress, Render, parse_sse
 from .errors import ApiError, InvalidRequest, NotFound, Unavailable, TooLarge, Unprocessable, error_for
 from .webhooks import verify_signature
 
-__all__ = ["Client", "Conversion", "Render", "ApiError", "InvalidRequest", "NotFound", "Unavailable", "TooLarge",
+__all__ = ["Client", "Conversion", "Event", "Progress", "Render", "parse_sse",
+           "ApiError", "InvalidRequest", "NotFound", "Unavailable", "TooLarge",
            "Unprocessable", "error_for", "verify_signature"]

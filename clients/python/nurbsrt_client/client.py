@@ -12,7 +12,7 @@ from typing import Any, Callable, Iterator, Union
 
 import requests
 
-from .errors import ApiError, error_for
+from .errors import ApiError, NotFound, Unavailable, error_for
 
 # A model to send: a path, its bytes, or the id of a file already stored (64 hex digits).
 Source = Union[str, os.PathLike, bytes]
@@ -22,6 +22,15 @@ _FILE_ID = re.compile(r"^[0-9a-f]{64}$")
 # never waiting longer than this per try: a pipeline should not hang on a full queue.
 DEFAULT_RETRIES = 5
 MAX_RETRY_WAIT_S = 30.0
+# The service writes a comment on a quiet event stream every 15 s: a stream silent
+# for four times that is dead, and is reconnected.
+EVENT_READ_TIMEOUT_S = 60.0
+# Dropped event streams reconnected in a row before giving up (each resumes after the
+# last event seen, so nothing is missed or repeated), waiting this long between tries.
+EVENT_RECONNECTS = 5
+EVENT_RECONNECT_WAIT_S = 1.0
+# Job states after which nothing changes.
+FINISHED = ("succeeded", "failed", "canceled")
 
 
 @dataclass
@@ -47,6 +56,55 @@ class Conversion:
         return self.report.get("warnings", [])
 
 
+@dataclass
+class Event:
+    """One event of a job (GET /v1/jobs/{id}/events): its id (seq 1, 2, ... of the job), its
+    type (state, output, artifact, progress) and its data object."""
+    id: int
+    type: str
+    data: dict[str, Any]
+
+    @property
+    def terminal(self) -> bool:
+        """The job's last event: its state became succeeded, failed or canceled."""
+        return self.type == "state" and self.data.get("state") in FINISHED
+
+
+@dataclass
+class Progress:
+    """What `wait` reports: the job's state and its outputs finished of the total (a fraction
+    0..1), the artifact bytes written, and the event that brought it (None when polled)."""
+    state: str
+    fraction: float
+    outputs_done: int
+    outputs_total: int
+    artifact_bytes: int
+    event: Event | None = None
+
+
+def parse_sse(lines: Iterator[str]) -> Iterator[tuple[str, str, str]]:
+    """Server-sent events (WHATWG HTML, "Server-sent events", interpreting an event stream)
+    from the stream's lines: (id, event type, data) of each dispatched event; comments and
+    unknown fields are ignored, `data` lines are joined by newlines."""
+    event_id, event_type, data = "", "", []
+    for line in lines:
+        if line == "":
+            if data:
+                yield event_id, event_type or "message", "\n".join(data)
+            event_type, data = "", []
+            continue
+        if line.startswith(":"):
+            continue
+        name, _, value = line.partition(":")
+        value = value[1:] if value.startswith(" ") else value
+        if name == "data":
+            data.append(value)
+        elif name == "event":
+            event_type = value
+        elif name == "id" and "\0" not in value:
+            event_id = value
+
+
 def _clean(options: dict[str, Any]) -> dict[str, Any]:
     """Keyword options as the API takes them: None means "the default" and is left out."""
     return {k: v for k, v in options.items() if v is not None}
@@ -65,12 +123,16 @@ class Client:
             self.session.headers["Authorization"] = f"Bearer {api_key}"
 
     # ---- transport -------------------------------------------------------------------
-    def _request(self, method: str, path: str, **kw: Any) -> requests.Response:
-        """Sends, retrying busy answers (429, 503) after their Retry-After; raises ApiError
-        (typed by status) for any other non-2xx answer."""
-        for attempt in range(self.retries + 1):
-            resp = self.session.request(method, self.url + path, timeout=self.timeout, **kw)
-            if resp.status_code in (429, 503) and attempt < self.retries:
+    def _request(self, method: str, path: str, read_timeout: float | None = None, retries: int | None = None,
+                 **kw: Any) -> requests.Response:
+        """Sends, retrying busy answers (429, 503) after their Retry-After (`retries` times, default
+        the client's); raises ApiError (typed by status) for any other non-2xx answer.
+        `read_timeout`: the longest silence while reading the answer, when not the client's timeout."""
+        timeout = self.timeout if read_timeout is None else (self.timeout, read_timeout)
+        retries = self.retries if retries is None else retries
+        for attempt in range(retries + 1):
+            resp = self.session.request(method, self.url + path, timeout=timeout, **kw)
+            if resp.status_code in (429, 503) and attempt < retries:
                 try:
                     wait = float(resp.headers.get("Retry-After", "1"))
                 except ValueError:
@@ -168,19 +230,88 @@ class Client:
     def job(self, job_id: str) -> dict[str, Any]:
         return self._request("GET", f"/v1/jobs/{job_id}").json()
 
-    def wait(self, job_id: str, progress: Callable[[dict[str, Any]], None] | None = None,
+    def _open_events(self, job_id: str, last_event_id: int | None, retries: int | None) -> requests.Response:
+        headers = {"Accept": "text/event-stream"}
+        if last_event_id is not None:
+            headers["Last-Event-ID"] = str(last_event_id)
+        return self._request("GET", f"/v1/jobs/{job_id}/events", headers=headers, stream=True,
+                             read_timeout=EVENT_READ_TIMEOUT_S, retries=retries)
+
+    def events(self, job_id: str, last_event_id: int | None = None, reconnects: int = EVENT_RECONNECTS,
+               busy_retries: int | None = None) -> Iterator[Event]:
+        """The job's events as they happen (after `last_event_id`, or from its first), until its
+        terminal state event. A dropped connection is reopened with Last-Event-ID (possibly on
+        another instance behind a balancer): no event is missed or repeated. Raises NotFound
+        for an unknown job, Unavailable when the service refuses a stream `busy_retries` times
+        (default: the client's retries) after its Retry-After."""
+        last = last_event_id
+        failures = 0
+        while True:
+            got = 0
+            try:
+                resp = self._open_events(job_id, last, busy_retries)
+                try:
+                    for sid, kind, data in parse_sse(resp.iter_lines(decode_unicode=True)):
+                        event = Event(int(sid), kind, json.loads(data))
+                        last, got, failures = event.id, got + 1, 0
+                        yield event
+                        if event.terminal:
+                            return
+                finally:
+                    resp.close()
+            except (requests.ConnectionError, requests.Timeout, requests.exceptions.ChunkedEncodingError):
+                failures += 1
+                if failures > reconnects:
+                    raise
+                time.sleep(EVENT_RECONNECT_WAIT_S)
+                continue
+            # The stream ended before the job's end (the service stopping, say): reopen it,
+            # unless it brought nothing and the job is over (every event was seen already).
+            if got == 0 and self.job(job_id)["state"] in FINISHED:
+                return
+
+    def wait(self, job_id: str, progress: Callable[[Progress], None] | None = None,
              interval: float = 0.25, timeout: float | None = None) -> dict[str, Any]:
-        """Waits for a job to end (succeeded or failed) and returns its document. `progress` is
-        called with the document whenever its state, progress or an output's state changed."""
+        """Waits for a job to end and returns its document. `progress` is called with a
+        Progress whenever the job's state or its outputs finished change: fed by the events
+        stream, or by polling every `interval` s where the service has none (404) or refuses
+        one more stream (503)."""
         deadline = None if timeout is None else time.monotonic() + timeout
+        job = self.job(job_id)  # NotFound for an unknown job; a NotFound below means no events endpoint
+        try:
+            return self._wait_events(job_id, progress, deadline, len(job["outputs"]))
+        except (Unavailable, NotFound):
+            pass
+        return self._wait_polling(job_id, progress, interval, deadline, timeout)
+
+    def _wait_events(self, job_id: str, progress: Callable[[Progress], None] | None,
+                     deadline: float | None, outputs: int) -> dict[str, Any]:
+        state, numbers = "queued", (0.0, 0, outputs, 0)
+        for event in self.events(job_id, busy_retries=0):
+            if event.type == "state":
+                state = event.data["state"]
+            elif event.type == "progress":
+                d = event.data
+                numbers = (d["fraction"], d["outputs_done"], d["outputs_total"], d["artifact_bytes"])
+            if progress and event.type in ("state", "progress"):
+                progress(Progress(state, *numbers, event=event))
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"job {job_id} still {state} at its deadline")
+        return self.job(job_id)
+
+    def _wait_polling(self, job_id: str, progress: Callable[[Progress], None] | None, interval: float,
+                      deadline: float | None, timeout: float | None) -> dict[str, Any]:
         last = None
         while True:
             job = self.job(job_id)
-            seen = (job["state"], job["progress"], tuple(o["state"] for o in job["outputs"]))
+            outs = job["outputs"]
+            done = sum(o["state"] in FINISHED for o in outs)
+            seen = Progress(job["state"], done / len(outs) if outs else 0.0, done, len(outs),
+                            sum(o.get("artifact", {}).get("bytes", 0) for o in outs if o["state"] == "succeeded"))
             if progress and seen != last:
-                progress(job)
+                progress(seen)
             last = seen
-            if job["state"] in ("succeeded", "failed"):
+            if job["state"] in FINISHED:
                 return job
             if deadline is not None and time.monotonic() > deadline:
                 raise TimeoutError(f"job {job_id} still {job['state']} after {timeout} s")
@@ -198,4 +329,4 @@ class Client:
         self._request("DELETE", f"/v1/jobs/{job_id}")
 
 
-__all__ = ["ApiError", "Client", "Conversion", "Render"]
+__all__ = ["ApiError", "Client", "Conversion", "Event", "Progress", "Render", "parse_sse"]
