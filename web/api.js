@@ -41,9 +41,10 @@ async function problemOf(res) {
 // connection just as the browser reuses it, and Chromium does not resend a
 // POST whose body is a file (RFC 9112, 9.3.1: a client may retry requests it
 // knows to be idempotent). A job is never sent twice.
-export async function call(path, { method = 'GET', body, signal, accept = 'application/json', retry = method === 'GET', contentType } = {}) {
+export async function call(path, { method = 'GET', body, signal, accept = 'application/json', retry = method === 'GET', contentType, lastEventId } = {}) {
   const headers = { Accept: accept };
   if (contentType) headers['Content-Type'] = contentType;
+  if (lastEventId) headers['Last-Event-ID'] = lastEventId;
   const key = apiKey();
   if (key) headers.Authorization = `Bearer ${key}`;
   const send = () => fetch(path, { method, body, headers, signal, cache: 'no-store' });

@@ -1,10 +1,75 @@
-// Batch jobs (POST /v1/jobs, polled with GET /v1/jobs/{id}, artifacts
-// downloaded with the key) and single conversions (POST /v1/conversions).
+// Batch jobs (POST /v1/jobs, followed through GET /v1/jobs/{id}/events with
+// GET /v1/jobs/{id} for the table, artifacts downloaded with the key) and
+// single conversions (POST /v1/conversions).
 
 import { call, saveBlob, dispositionName, uploadForm, base64Bytes } from './api.js';
 
-const POLL_MS = 500;
+const POLL_MS = 500;  // where the events stream is refused (its cap) or breaks
 const DONE = new Set(['succeeded', 'failed', 'canceled']);
+
+// The Server-Sent Events of one response, as {id, event, data} (WHATWG HTML,
+// "Server-sent events": fields up to a blank line, comments start with ':').
+// fetch() and not EventSource, which cannot send the API key's header.
+async function* serverSentEvents(res) {
+  const reader = res.body.pipeThrough(new TextDecoderStream()).getReader();
+  let buffer = '', event = { data: [] };
+  for (;;) {
+    const { value, done } = await reader.read();
+    if (done) return;
+    buffer += value;
+    let cut;
+    while ((cut = buffer.search(/\r?\n/)) >= 0) {
+      const line = buffer.slice(0, cut);
+      buffer = buffer.slice(cut + (buffer[cut] === '\r' ? 2 : 1));
+      if (line === '') {
+        if (event.data.length) yield { id: event.id, event: event.event || 'message', data: event.data.join('\n') };
+        event = { data: [] };
+      } else if (!line.startsWith(':')) {
+        const colon = line.indexOf(':');
+        const field = colon < 0 ? line : line.slice(0, colon);
+        const text = colon < 0 ? '' : line.slice(colon + 1).replace(/^ /, '');
+        if (field === 'data') event.data.push(text);
+        else if (field === 'id' || field === 'event') event[field] = text;
+      }
+    }
+  }
+}
+
+// Follows a job until it ends: each event re-reads the job document for the
+// table; progress events give the percentage. A stream that breaks is resumed
+// with Last-Event-ID; one refused (503 at its cap) falls back to polling.
+async function followJob(job, show) {
+  let last = '', progress = null;
+  while (!DONE.has(job.state)) {
+    let res = null;
+    try {
+      res = await call(`${job.url}/events`, { accept: 'text/event-stream', ...(last && { lastEventId: last }) });
+    } catch (err) {
+      if (err.status !== 503) throw err;
+    }
+    if (!res) {
+      await new Promise((r) => setTimeout(r, POLL_MS));
+      job = await (await call(job.url)).json();
+      show(job, progress);
+      continue;
+    }
+    try {
+      for await (const e of serverSentEvents(res)) {
+        last = e.id || last;
+        if (e.event === 'progress') progress = JSON.parse(e.data);
+        if (e.event === 'progress' || e.event === 'state') {
+          job = await (await call(job.url)).json();
+          show(job, progress);
+        }
+      }
+    } catch (err) {
+      if (err.name === 'AbortError') throw err;  // a broken stream: resumed from `last` below
+    }
+    job = await (await call(job.url)).json();
+    show(job, progress);
+  }
+  return job;
+}
 
 function el(tag, props = {}, ...children) {
   const e = document.createElement(tag);
@@ -49,9 +114,13 @@ function outputRow(job, o, report) {
     el('td', { textContent: o.state }, ' ', progress), cell);
 }
 
-function renderJob(box, job, report) {
+function renderJob(box, job, report, progress) {
+  const done = progress ? progress.outputs_done : job.outputs.filter((o) => DONE.has(o.state)).length;
+  const total = progress ? progress.outputs_total : job.outputs.length;
+  const percent = total ? Math.floor((100 * done) / total) : 0;
+  box.dataset.percent = String(percent);
   const table = el('table', {},
-    el('caption', { textContent: `Job ${job.id.slice(0, 8)}: ${job.state}` }),
+    el('caption', { textContent: `Job ${job.id.slice(0, 8)}: ${job.state}, ${percent} % (${done} of ${total} outputs)` }),
     el('thead', {}, el('tr', {}, ...['File', 'Output', 'State', 'Artifact'].map((h) => el('th', { scope: 'col', textContent: h })))),
     el('tbody', {}, ...job.outputs.map((o) => outputRow(job, o, report))));
   box.replaceChildren(table);
@@ -77,12 +146,13 @@ export function bindJobs({ form, files, list, renderOptions, report }) {
       const box = el('div', { className: 'job' });
       box.dataset.id = job.id;
       list.prepend(box);
-      renderJob(box, job, report);
-      while (!DONE.has(job.state)) {
-        await new Promise((r) => setTimeout(r, POLL_MS));
-        job = await (await call(job.url)).json();
-        renderJob(box, job, report);
-      }
+      renderJob(box, job, report, null);
+      const percents = [];  // every percentage shown, for the page's test
+      job = await followJob(job, (j, progress) => {
+        renderJob(box, j, report, progress);
+        percents.push(box.dataset.percent);
+        box.dataset.percents = percents.join(',');
+      });
     } catch (err) {
       report(err);
     } finally {

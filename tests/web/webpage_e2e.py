@@ -371,7 +371,16 @@ def step_job(page, files, downloads):
                             " return j && ['succeeded','failed','canceled'].includes(j.dataset.state) ? j.dataset.state : ''; })()",
                             180, "the job to finish")
     rows = page.ev("document.querySelectorAll('#job-list .job tbody tr').length")
-    log(f"job: {state}, {rows} outputs")
+    percents = [int(p) for p in page.ev("document.querySelector('#job-list .job').dataset.percents").split(",") if p]
+    caption = page.ev("document.querySelector('#job-list .job caption').textContent")
+    streams = [e["params"]["request"] for e in page.b.events if e["method"] == "Network.requestWillBeSent"
+               and e["params"]["request"]["url"].endswith("/events")]
+    log(f"job: {state}, {rows} outputs; followed by {len(streams)} events stream(s), percentages shown {percents}; "
+        f"'{caption}'")
+    assert streams, "the job was not followed through its events stream"
+    assert all(s["headers"].get("Accept") == "text/event-stream" for s in streams), streams
+    assert percents and percents == sorted(percents) and percents[-1] == 100, percents
+    assert "100 %" in caption, caption
     assert state == "succeeded", f"job ended {state}"
     assert rows == 2 * len(files), f"{rows} outputs listed"
     page.ev("document.querySelector('#job-list button.download').click()")
