@@ -17,6 +17,7 @@
 #include "cli/warnings.h"
 #include "core/error.h"
 #include "importer/importer.h"
+#include "options/render_request.h"
 
 #include <nlohmann/json.hpp>
 
@@ -104,6 +105,7 @@ void add_convert_command(CLI::App& app) {
     auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
     auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
     auto deflection = std::make_shared<double>(0.0);
+    auto angular = std::make_shared<double>(kDefaultAngularDeflection);
     cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
     cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .obj, .json, .brep or .wrl)")
         ->required()
@@ -123,6 +125,23 @@ void add_convert_command(CLI::App& app) {
                     "STL, glb, VRML and OBJ outputs: the mesh's linear deflection, a fraction of the model's\n"
                     "bounding-box diagonal (default 0.002)")
         ->check(CLI::Range(std::numeric_limits<double>::min(), kMaxConversionDeflection));
+    // Checked by the request model's own check (the API's and the jobs' option), before the import.
+    cmd->add_option("--angular-deflection", *angular,
+                    "STL, glb, VRML and OBJ outputs: the mesh's angular deflection, radians (the largest turn of\n"
+                    "the normal along a triangle's edge)")
+        ->capture_default_str()
+        ->check(CLI::Validator(
+            [](std::string& s) -> std::string {
+                double v = 0;
+                if (!CLI::detail::lexical_cast(s, v)) return "'" + s + "' is not a number";
+                try {
+                    checked_angular_deflection(v, "--angular-deflection");
+                } catch (const Error& e) {
+                    return e.what();
+                }
+                return {};
+            },
+            "RADIANS"));
     cmd->add_option("--report", *report_path,
                     "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
                     "also when --strict refuses the conversion")
@@ -130,14 +149,15 @@ void add_convert_command(CLI::App& app) {
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([cmd, in, out, flags, units, schema, mode, deflection, report_path] {
+    cmd->callback([cmd, in, out, flags, units, schema, mode, deflection, angular, report_path] {
         // An option OUT's format does not take is a usage error, never ignored
         // (as the API refuses it).
         const ConversionFormat format = conversion_format_from_extension(*out);
         for (const auto& [flag, option] :
              {std::pair{"--units", ConversionOption::units}, std::pair{"--step-schema", ConversionOption::step_schema},
               std::pair{"--iges-mode", ConversionOption::iges_mode},
-              std::pair{"--deflection", ConversionOption::deflection}})
+              std::pair{"--deflection", ConversionOption::deflection},
+              std::pair{"--angular-deflection", ConversionOption::angular_deflection}})
             if (const std::string why = conversion_option_refusal(option, format); cmd->count(flag) > 0 && !why.empty())
                 throw CLI::ValidationError(flag, why);
         const auto [quiet, strict] = *flags;
@@ -163,6 +183,7 @@ void add_convert_command(CLI::App& app) {
         options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
         options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
         options.deflection = *deflection;
+        options.angular_deflection = *angular;
         const ConvertReport r = convert_file(*in, written.string(), options);
         const std::vector<std::string>& warnings = r.warnings;
         if (!report_path->empty()) {
