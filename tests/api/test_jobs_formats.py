@@ -75,7 +75,7 @@ def test_job_converts_to_every_format_named_as_posted_ones_and_takes_a_brep_inpu
 
 def test_job_conversion_options_as_post_conversions(url):
     """A conversion output takes the options of POST /v1/conversions (units, step_schema,
-    iges_mode, deflection, strict), read by the same parser: the unit asked is written, a
+    iges_mode, deflection, angular_deflection, strict), read by the same parser: the unit asked is written, a
     coarse deflection is warned, and strict fails that output (strict_refused, no artifact)
     while the others succeed; an option the format does not take refuses the job (400)."""
     freeform = generated_fixture("freeform_bspline").read_bytes()
