@@ -51,13 +51,16 @@ void print_fidelity(const std::string& text) {
                      num(d, "area"), num(d, "box"));
         if (d.contains("volume")) std::fprintf(stderr, ", enclosed volume %.2g", num(d, "volume"));
         std::fputc('\n', stderr);
+        const nlohmann::json& asked = f["output"]["asked"];
         if (const nlohmann::json& dev = f["output"]["deviation_in_mm"]; dev.is_object())
             std::fprintf(stderr,
                          "nurbsrt: fidelity: deviation of %lld vertices and centroids from the trimmed faces: max "
-                         "%.3g mm (%.2g of the diagonal), p99 %.3g mm, mean %.3g mm\n",
+                         "%.3g mm (%.2g of the diagonal), p99 %.3g mm, mean %.3g mm; asked: deflection %.3g of the "
+                         "diagonal (%.3g mm), angular deflection %.3g rad\n",
                          dev["points"].get<long long>(), dev["max"].get<double>(),
                          dev["relative_to_diagonal"]["max"].get<double>(), dev["p99"].get<double>(),
-                         dev["mean"].get<double>());
+                         dev["mean"].get<double>(), num(asked, "deflection"), num(asked, "deflection_mm"),
+                         num(asked, "angular_deflection"));
     }
 }
 
@@ -135,7 +138,7 @@ void add_convert_command(CLI::App& app) {
                 double v = 0;
                 if (!CLI::detail::lexical_cast(s, v)) return "'" + s + "' is not a number";
                 try {
-                    checked_angular_deflection(v, "--angular-deflection");
+                    checked_angular_deflection(v, s);  // CLI11 names the flag before it
                 } catch (const Error& e) {
                     return e.what();
                 }

@@ -370,6 +370,7 @@ TEST(Cli, ConvertAngularDeflection) {
         const auto j = nlohmann::json::parse(text);
         EXPECT_EQ(j["output"]["asked"]["angular_deflection"].get<double>(), std::stod(angles[i]));
         EXPECT_EQ(j["output"]["asked"]["deflection"].get<double>(), 0.002);
+        EXPECT_NE(r.err.find(std::string("angular deflection ") + angles[i] + " rad"), std::string::npos) << r.err;
     }
     EXPECT_GT(triangles[0], triangles[1]) << "a finer angle makes more triangles";
     for (const char* bad : {"0.001", "2", "x"}) {
