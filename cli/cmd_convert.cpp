@@ -133,18 +133,9 @@ void add_convert_command(CLI::App& app) {
                     "STL, glb, VRML and OBJ outputs: the mesh's angular deflection, radians (the largest turn of\n"
                     "the normal along a triangle's edge)")
         ->capture_default_str()
-        ->check(CLI::Validator(
-            [](std::string& s) -> std::string {
-                double v = 0;
-                if (!CLI::detail::lexical_cast(s, v)) return "'" + s + "' is not a number";
-                try {
-                    checked_angular_deflection(v, s);  // CLI11 names the flag before it
-                } catch (const Error& e) {
-                    return e.what();
-                }
-                return {};
-            },
-            "RADIANS"));
+        ->check(shared_check(
+            // CLI11 names the flag before the message.
+            [](const std::string& s) { checked_angular_deflection(std::stod(s), "'" + s + "'"); }, "RADIANS"));
     cmd->add_option("--report", *report_path,
                     "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
                     "also when --strict refuses the conversion")
@@ -181,13 +172,18 @@ void add_convert_command(CLI::App& app) {
                            ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()))};
         std::filesystem::create_directory(partial.path);
         const std::filesystem::path written = partial.path / target.filename();
-        ConvertOptions options;
+        // The request model of POST /v1/conversions and of the jobs (options/render_request.h),
+        // its values checked by the same checks above.
+        ConversionRequest request;
+        request.format = format;
+        request.strict = strict;
+        ConvertOptions& options = request.options;
         options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
         options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
         options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
         options.deflection = *deflection;
         options.angular_deflection = *angular;
-        const ConvertReport r = convert_file(*in, written.string(), options);
+        const ConvertReport r = convert_file(*in, written.string(), request.options);
         const std::vector<std::string>& warnings = r.warnings;
         if (!report_path->empty()) {
             std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
@@ -198,7 +194,7 @@ void add_convert_command(CLI::App& app) {
             if (!report) throw Error(ErrorCode::io, "cannot write the report '" + *report_path + "'");
         }
         if (!quiet) print_fidelity(r.fidelity);
-        report_warnings(warnings, quiet, strict);
+        report_warnings(warnings, quiet, request.strict);
         // OUT, and what a format writes beside it (OBJ's .mtl).
         for (const std::filesystem::directory_entry& e : std::filesystem::directory_iterator(partial.path))
             std::filesystem::rename(e.path(), target.parent_path() / e.path().filename());
