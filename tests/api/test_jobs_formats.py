@@ -218,3 +218,23 @@ def test_synchronous_separate_render_still_answers_a_zip(url):
                  params={"width": "64", "height": "48", "views": "front,iso", "layout": "separate"})
     assert r.status_code == 200 and r.headers["Content-Type"] == "application/zip", r.text[:300]
     assert zipfile.ZipFile(io.BytesIO(r.content)).namelist() == ["front.png", "iso.png"]
+
+
+def test_separate_views_are_reused_per_file_unless_forced(url):
+    """Artifact reuse keeps each view's file under its own key: the same file, options and views again are
+    served from them (every view, byte for byte, no read); `force` renders them anew."""
+    data = SCREW.read_bytes() + b"\n" * (os.getpid() % 991 + 1013)  # bytes of this run
+    spec = {"outputs": [{"file": 0, "type": "render",
+                         "options": {"width": 48, "height": 40, "views": ["front", "iso"], "layout": "separate"}}]}
+    first = wait_finished(url, accepted(submit(url, [("a.step", data)], spec))["id"])
+    again = wait_finished(url, accepted(submit(url, [("b.step", data)], spec))["id"])
+    forced = wait_finished(url, accepted(submit(url, [("c.step", data)], {**spec, "force": True}))["id"])
+    assert [j["state"] for j in (first, again, forced)] == ["succeeded"] * 3
+    assert (first["statistics"]["reused"], again["statistics"]["reused"], forced["statistics"]["reused"]) == (0, 1, 0)
+    # Made anew: rendered from the cached scene (no read either), its statistics without `reused`.
+    assert again["statistics"]["reads"] == 0 and "reused" not in forced["outputs"][0]["statistics"]
+    for job in (again, forced):
+        files = job["outputs"][0]["artifacts"]
+        assert [a["view"] for a in files] == ["front", "iso"]
+        for a, b in zip(first["outputs"][0]["artifacts"], files):
+            assert download(url, {"artifact": a}) == download(url, {"artifact": b})
