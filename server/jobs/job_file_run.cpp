@@ -309,11 +309,13 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
             const std::string& name = files.at(done->load()).name;
             const std::string partial = partial_path(job, name);
             write_durably(partial, view.bytes);
+            // The views done, past the callback's 5% steps, recorded before the
+            // view is placed: whoever sees its file sees the progress that counts it.
+            const double now_done = static_cast<double>(done->load() + 1) / views;
+            if (now_done < 1) store_->output_progress(job.id, out.index, now_done, job.lease);
             sizes.push_back(place_artifact(job, name, partial, placed, cancel));
             placed += sizes.back();
-            // The views done, before the next one starts (past the callback's 5% steps).
-            const double now_done = static_cast<double>(++*done) / views;
-            if (*done < files.size()) store_->output_progress(job.id, out.index, now_done, job.lease);
+            ++*done;
         };
     }
     const RenderedImage image = render_upload(ctx_, std::string(), r, control);

@@ -204,7 +204,7 @@ def test_separate_views_download_as_each_is_written(own_server):
     assert (first["name"], first["view"]) == ("0-render-0.front.png", "front")
     assert png_size(download(s.url, {"artifact": first})) == (1200, 1200)
     assert job["statistics"]["artifacts"] >= 1 and job["statistics"]["succeeded"] == 0
-    assert out["progress"] >= 1 / 3 - 1e-9, out["progress"]
+    assert out["progress"] >= 0.333, out["progress"]  # PostgreSQL keeps 6 digits
     # A view not written yet: 404 naming its output's state.
     missing = requests.get(f"{s.url}/v1/jobs/{job['id']}/artifacts/0-render-0.iso.png", timeout=TIMEOUT)
     assert "is not available: its output is running" in check_problem(missing, 404)["detail"]
