@@ -17,6 +17,7 @@
 #include "cli/warnings.h"
 #include "core/error.h"
 #include "importer/importer.h"
+#include "options/render_request.h"
 
 #include <nlohmann/json.hpp>
 
@@ -53,13 +54,16 @@ void print_fidelity(const std::string& text) {
         const nlohmann::json& mesh = f["output"]["mesh_in_mm"];
         std::fprintf(stderr, "; edges: %lld open, %lld non-manifold\n", mesh["open_edges"].get<long long>(),
                      mesh["non_manifold_edges"].get<long long>());
+        const nlohmann::json& asked = f["output"]["asked"];
         if (const nlohmann::json& dev = f["output"]["deviation_in_mm"]; dev.is_object())
             std::fprintf(stderr,
                          "nurbsrt: fidelity: deviation of %lld vertices and centroids from the trimmed faces: max "
-                         "%.3g mm (%.2g of the diagonal), p99 %.3g mm, mean %.3g mm\n",
+                         "%.3g mm (%.2g of the diagonal), p99 %.3g mm, mean %.3g mm; asked: deflection %.3g of the "
+                         "diagonal (%.3g mm), angular deflection %.3g rad\n",
                          dev["points"].get<long long>(), dev["max"].get<double>(),
                          dev["relative_to_diagonal"]["max"].get<double>(), dev["p99"].get<double>(),
-                         dev["mean"].get<double>());
+                         dev["mean"].get<double>(), num(asked, "deflection"), num(asked, "deflection_mm"),
+                         num(asked, "angular_deflection"));
     }
 }
 
@@ -107,6 +111,7 @@ void add_convert_command(CLI::App& app) {
     auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
     auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
     auto deflection = std::make_shared<double>(0.0);
+    auto angular = std::make_shared<double>(kDefaultAngularDeflection);
     cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
     cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .obj, .json, .brep or .wrl)")
         ->required()
@@ -126,6 +131,14 @@ void add_convert_command(CLI::App& app) {
                     "STL, glb, VRML and OBJ outputs: the mesh's linear deflection, a fraction of the model's\n"
                     "bounding-box diagonal (default 0.002)")
         ->check(CLI::Range(std::numeric_limits<double>::min(), kMaxConversionDeflection));
+    // Checked by the request model's own check (the API's and the jobs' option), before the import.
+    cmd->add_option("--angular-deflection", *angular,
+                    "STL, glb, VRML and OBJ outputs: the mesh's angular deflection, radians (the largest turn of\n"
+                    "the normal along a triangle's edge)")
+        ->capture_default_str()
+        ->check(shared_check(
+            // CLI11 names the flag before the message.
+            [](const std::string& s) { checked_angular_deflection(std::stod(s), "'" + s + "'"); }, "RADIANS"));
     cmd->add_option("--report", *report_path,
                     "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
                     "also when --strict refuses the conversion")
@@ -133,14 +146,15 @@ void add_convert_command(CLI::App& app) {
     cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
     cmd->add_flag("--strict", flags->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([cmd, in, out, flags, units, schema, mode, deflection, report_path] {
+    cmd->callback([cmd, in, out, flags, units, schema, mode, deflection, angular, report_path] {
         // An option OUT's format does not take is a usage error, never ignored
         // (as the API refuses it).
         const ConversionFormat format = conversion_format_from_extension(*out);
         for (const auto& [flag, option] :
              {std::pair{"--units", ConversionOption::units}, std::pair{"--step-schema", ConversionOption::step_schema},
               std::pair{"--iges-mode", ConversionOption::iges_mode},
-              std::pair{"--deflection", ConversionOption::deflection}})
+              std::pair{"--deflection", ConversionOption::deflection},
+              std::pair{"--angular-deflection", ConversionOption::angular_deflection}})
             if (const std::string why = conversion_option_refusal(option, format); cmd->count(flag) > 0 && !why.empty())
                 throw CLI::ValidationError(flag, why);
         const auto [quiet, strict] = *flags;
@@ -161,12 +175,18 @@ void add_convert_command(CLI::App& app) {
                            ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()))};
         std::filesystem::create_directory(partial.path);
         const std::filesystem::path written = partial.path / target.filename();
-        ConvertOptions options;
+        // The request model of POST /v1/conversions and of the jobs (options/render_request.h),
+        // its values checked by the same checks above.
+        ConversionRequest request;
+        request.format = format;
+        request.strict = strict;
+        ConvertOptions& options = request.options;
         options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
         options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
         options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
         options.deflection = *deflection;
-        const ConvertReport r = convert_file(*in, written.string(), options);
+        options.angular_deflection = *angular;
+        const ConvertReport r = convert_file(*in, written.string(), request.options);
         const std::vector<std::string>& warnings = r.warnings;
         if (!report_path->empty()) {
             std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
@@ -177,7 +197,7 @@ void add_convert_command(CLI::App& app) {
             if (!report) throw Error(ErrorCode::io, "cannot write the report '" + *report_path + "'");
         }
         if (!quiet) print_fidelity(r.fidelity);
-        report_warnings(warnings, quiet, strict);
+        report_warnings(warnings, quiet, request.strict);
         // OUT, and what a format writes beside it (OBJ's .mtl).
         for (const std::filesystem::directory_entry& e : std::filesystem::directory_iterator(partial.path))
             std::filesystem::rename(e.path(), target.parent_path() / e.path().filename());

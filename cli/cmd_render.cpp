@@ -161,24 +161,6 @@ void add_output_options(CLI::App* cmd, Args& a) {
         ->check(output_file_validator({".json"}) | CLI::IsMember({"-"}));
 }
 
-// The request model's parsers as CLI11 checks, so that the CLI and the API
-// accept and refuse the same values.
-template <class Parse>
-CLI::Validator shared_check(Parse parse, const char* description) {
-    return CLI::Validator(
-        [parse](std::string& s) -> std::string {
-            try {
-                parse(s);
-                return {};
-            } catch (const Error& e) {
-                return e.what();
-            } catch (const std::exception&) {
-                return "not a number: " + s;
-            }
-        },
-        description);
-}
-
 // "x,y,z" of --eye, --target and --up, as the API reads its text points.
 CLI::Validator point_check() {
     return shared_check([](const std::string& s) { parse_point(s, "the value"); }, "X,Y,Z");

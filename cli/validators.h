@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "core/ascii.h"
+#include "core/error.h"
 
 namespace nurbsrt::cli {
 
@@ -30,6 +31,24 @@ CLI::Validator in_range(T lo, T hi) {
             return range(s);
         },
         range.get_description());
+}
+
+// The request model's parsers as CLI11 checks, so that the CLI and the API
+// accept and refuse the same values.
+template <class Parse>
+CLI::Validator shared_check(Parse parse, const char* description) {
+    return CLI::Validator(
+        [parse](std::string& s) -> std::string {
+            try {
+                parse(s);
+                return {};
+            } catch (const Error& e) {
+                return e.what();
+            } catch (const std::exception&) {
+                return "not a number: " + s;
+            }
+        },
+        description);
 }
 
 // A file we are going to write: one of `extensions` (lower case, with the dot),

@@ -77,13 +77,16 @@ struct ConversionFormatInfo {
 constexpr unsigned option_bit(ConversionOption o) { return 1u << static_cast<unsigned>(o); }
 constexpr unsigned kStepOptions = option_bit(ConversionOption::units) | option_bit(ConversionOption::step_schema);
 constexpr unsigned kIgesOptions = option_bit(ConversionOption::units) | option_bit(ConversionOption::iges_mode);
-constexpr unsigned kMeshOptions = option_bit(ConversionOption::deflection);
+constexpr unsigned kMeshOptions =
+    option_bit(ConversionOption::deflection) | option_bit(ConversionOption::angular_deflection);
 
-constexpr EnumName<ConversionOption> kConversionOptionNames[] = {{ConversionOption::units, "units"},
-                                                                 {ConversionOption::step_schema, "step_schema"},
-                                                                 {ConversionOption::iges_mode, "iges_mode"},
-                                                                 {ConversionOption::deflection, "deflection"}};
-static_assert(names_every_value(kConversionOptionNames, ConversionOption::deflection));
+constexpr EnumName<ConversionOption> kConversionOptionNames[] = {
+    {ConversionOption::units, "units"},
+    {ConversionOption::step_schema, "step_schema"},
+    {ConversionOption::iges_mode, "iges_mode"},
+    {ConversionOption::deflection, "deflection"},
+    {ConversionOption::angular_deflection, "angular_deflection"}};
+static_assert(names_every_value(kConversionOptionNames, ConversionOption::angular_deflection));
 // Content types: IANA's model/step, model/iges, model/stl, model/gltf-binary and
 // model/vrml; OCCT's BREP has no registered type.
 constexpr ConversionFormatInfo kConversionFormats[] = {
@@ -204,8 +207,16 @@ constexpr ConversionFormatInfo kConversionFormats[] = {
 };
 static_assert(std::size(kConversionFormats) == static_cast<size_t>(ConversionFormat::obj) + 1);
 
-// The files a format's writer puts beside the output (same stem, this extension).
-constexpr std::pair<ConversionFormat, const char*> kCompanionFiles[] = {{ConversionFormat::obj, ".mtl"}};
+// The files a format's writer puts beside the output (same stem, this
+// extension), their content type (IANA's model/mtl) and the line of the output
+// that names them (OBJ's "mtllib <file>", Wavefront's OBJ specification).
+struct CompanionFile {
+    ConversionFormat format;
+    const char* extension;
+    const char* content_type;
+    const char* reference;
+};
+constexpr CompanionFile kCompanionFiles[] = {{ConversionFormat::obj, ".mtl", "model/mtl", "mtllib "}};
 
 constexpr bool formats_in_order() {
     for (size_t i = 0; i < std::size(kConversionFormats); ++i)
@@ -306,9 +317,26 @@ bool conversion_format_is_mesh(ConversionFormat f) { return info_of(f).mesh; }
 bool conversion_format_is_unitless(ConversionFormat f) { return info_of(f).unitless; }
 
 const char* conversion_format_companion(ConversionFormat f) {
-    for (const auto& [format, extension] : kCompanionFiles)
-        if (format == f) return extension;
+    for (const CompanionFile& c : kCompanionFiles)
+        if (c.format == f) return c.extension;
     return nullptr;
+}
+
+const char* conversion_format_companion_content_type(ConversionFormat f) {
+    for (const CompanionFile& c : kCompanionFiles)
+        if (c.format == f) return c.content_type;
+    return nullptr;
+}
+
+std::string with_companion_renamed(std::string main, ConversionFormat f, const std::string& written,
+                                   const std::string& renamed) {
+    for (const CompanionFile& c : kCompanionFiles) {
+        if (c.format != f) continue;
+        const std::string line = c.reference + written;
+        if (const size_t at = main.find(line); at != std::string::npos)
+            main.replace(at + line.size() - written.size(), written.size(), renamed);
+    }
+    return main;
 }
 
 const char* conversion_option_name(ConversionOption o) { return enum_name(kConversionOptionNames, o, "?"); }

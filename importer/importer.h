@@ -23,11 +23,23 @@ const char* format_name(CadFormat f);  // "STEP", "IGES", "BREP", "unknown"
 // Format implied by a file name's extension (.stp/.step, .igs/.iges, .brep/.brp), for outputs.
 CadFormat format_from_extension(const std::string& path);
 
+// BRepMesh's angular deflection, radians: the largest turn of the surface
+// normal along one triangle edge. 0.35 rad (20 degrees) puts 18 segments on
+// every circle whatever its size, where the linear deflection alone (0.002 of
+// the diagonal) would leave a hole of 1% of the diagonal a triangle.
+inline constexpr double kDefaultAngularDeflection = 0.35;
+// The range a request may ask: below 0.01 rad a circle gets over 600 segments,
+// finer than any view shows, and the mesh of a curved part grows without bound
+// as the angle shrinks; above pi/2 (a circle of 4 segments) the angle bounds
+// nothing the linear deflection does not.
+inline constexpr double kMinAngularDeflection = 0.01;
+inline constexpr double kMaxAngularDeflection = 1.5707963267948966;
+
 struct ImportOptions {
     // Mesh for the preliminary map: linear deflection as a fraction of the
     // model's bounding-box diagonal, and angular deflection in radians.
     double mesh_relative_deflection = 0.002;
-    double mesh_angular_deflection = 0.35;
+    double mesh_angular_deflection = kDefaultAngularDeflection;
     // Wall-clock budget for BRepMesh on the whole model, seconds; faces still
     // unmeshed when it runs out get the trimmed-grid fallback (with a warning).
     double mesh_time_limit_s = 60.0;
@@ -107,12 +119,19 @@ bool conversion_format_is_unitless(ConversionFormat f);
 // stem (OBJ: ".mtl", its materials, named by the .obj's mtllib line); nullptr
 // for a format written as one file.
 const char* conversion_format_companion(ConversionFormat f);
+// The companion's content type ("model/mtl"); nullptr for none.
+const char* conversion_format_companion_content_type(ConversionFormat f);
+// `main` (the output file's bytes) with its reference to the companion file
+// `written` (a file name) changed to `renamed`: the output and its companion
+// then work side by side under their new names.
+std::string with_companion_renamed(std::string main, ConversionFormat f, const std::string& written,
+                                   const std::string& renamed);
 
 // The conversion options that apply to some output formats only (which, the
 // formats' table in importer/format.cpp says): the CLI, the service, the job
 // specs and convert_file refuse one given for another format by this alone.
-enum class ConversionOption { units, step_schema, iges_mode, deflection };
-// The API's name of the option: "units", "step_schema", "iges_mode", "deflection".
+enum class ConversionOption { units, step_schema, iges_mode, deflection, angular_deflection };
+// The API's name of the option: "units", "step_schema", "iges_mode", "deflection", "angular_deflection".
 const char* conversion_option_name(ConversionOption o);
 // "" when `o` applies to `f`, else why not ("applies to STEP and IGES outputs only").
 std::string conversion_option_refusal(ConversionOption o, ConversionFormat f);
@@ -155,6 +174,9 @@ struct ConvertOptions {
     // bounding-box diagonal, in (0, kMaxConversionDeflection]; 0: ImportOptions'
     // mesh_relative_deflection (0.002).
     double deflection = 0;
+    // Mesh outputs: BRepMesh's angular deflection, radians, in
+    // [kMinAngularDeflection, kMaxAngularDeflection].
+    double angular_deflection = kDefaultAngularDeflection;
 };
 // The coarsest deflection a conversion takes: a tenth of the model's size
 // between mesh and surface is no longer the model's shape.
@@ -176,6 +198,9 @@ struct ConvertReport {
     // The length unit the source declares ("" none) and the one the output is
     // written in (STEP/IGES: what the written file declares; STL, VRML, BREP mm; glb m).
     std::string in_units, out_units;
+    // Mesh outputs: the mesh asked of BRepMesh (mesh_for_export): linear
+    // deflection relative to the diagonal and in mm, angular deflection in radians.
+    double mesh_relative_deflection = 0, mesh_deflection_mm = 0, mesh_angular_deflection = 0;
     double read_ms = 0, mesh_ms = 0, write_ms = 0;  // mesh_ms: BRepMesh (STL, glb) or the import's
                                                     // conversion + meshing (JSON); 0 for STEP/IGES
     double verify_ms = 0;                           // STEP/IGES/BREP: reading the written file back and

@@ -148,12 +148,14 @@ std::vector<std::string> convert_options_to_args(const ConvertOptions& o) {
     std::vector<std::string> args = {std::string("--step-schema=") + step_schema_name(o.step_schema),
                                      std::string("--iges-mode=") + iges_mode_name(o.iges_mode)};
     if (o.units != LengthUnit::unknown) args.push_back(std::string("--units=") + length_unit_name(o.units));
-    if (o.deflection != 0) {
+    auto exact = [](double v) {  // 17 digits: the double read back is the one written
         std::ostringstream d;
         d.precision(17);
-        d << o.deflection;
-        args.push_back("--deflection=" + d.str());
-    }
+        d << v;
+        return d.str();
+    };
+    args.push_back("--angular-deflection=" + exact(o.angular_deflection));
+    if (o.deflection != 0) args.push_back("--deflection=" + exact(o.deflection));
     return args;
 }
 
@@ -172,9 +174,9 @@ ConvertOptions convert_options_from_args(const std::vector<std::string>& args) {
         } else if (key == "--iges-mode") {
             const std::optional<IgesMode> m = iges_mode_from_name(value);
             if ((ok = m.has_value())) o.iges_mode = *m;
-        } else if (key == "--deflection") {
+        } else if (key == "--angular-deflection" || key == "--deflection") {
             char* end = nullptr;
-            o.deflection = std::strtod(value.c_str(), &end);
+            (key == "--deflection" ? o.deflection : o.angular_deflection) = std::strtod(value.c_str(), &end);
             ok = !value.empty() && *end == '\0';
         }
         if (!ok) throw Error(ErrorCode::invalid_argument, "bad worker option: " + a);

@@ -13,8 +13,9 @@ namespace {
 // The options whose values are not text, by kind (render options; `pinned` of
 // a stored file).
 const std::set<std::string, std::less<>> kIntegerOptions = {"width", "height", "antialias"};
-const std::set<std::string, std::less<>> kNumberOptions = {"edge_width",    "fov_deg", "ortho_height", "fit_margin",
-                                                           "ground_height", "explode", "deflection"};
+const std::set<std::string, std::less<>> kNumberOptions = {"edge_width", "fov_deg",           "ortho_height",
+                                                           "fit_margin", "ground_height",     "explode",
+                                                           "deflection", "angular_deflection"};
 const std::set<std::string, std::less<>> kBooleanOptions = {"edges",         "shadows", "pinned", "section_caps",
                                                             "section_hatch", "ground",  "strict"};
 

@@ -90,8 +90,8 @@ void check_section_count(size_t planes, const std::string& what);
 inline constexpr size_t kMaxViews = 16;
 
 // How a request's views are delivered: one labelled contact sheet, or an image
-// per view (the CLI: a file each; the API: a ZIP, or in JSON a list; a job: one ZIP
-// artifact).
+// per view (the CLI: a file each; the API: a ZIP, or in JSON a list; a job: an
+// artifact each).
 enum class ViewLayout : uint8_t { sheet, separate };
 const char* view_layout_name(ViewLayout l);  // "sheet", "separate"
 std::optional<ViewLayout> parse_view_layout(std::string_view name);
@@ -195,15 +195,26 @@ void check_camera_without_scene(const RenderRequest& r);
 RenderOptions render_options_for(const RenderRequest& r, const Scene& scene);
 
 // Options for the conversions endpoint: {"format": "step" | "stp" | "iges" | "igs" |
-// "stl" | "glb" | "json" | "brep" | "vrml", "units": a length_unit_names() name
-// (STEP/IGES only), "step_schema", "iges_mode", "strict": boolean};
-// anything else is Error(invalid_argument).
+// "stl" | "glb" | "json" | "brep" | "vrml" | "obj", "units": a length_unit_names() name
+// or "source" (STEP/IGES only), "step_schema", "iges_mode", "deflection",
+// "angular_deflection" (mesh outputs), "strict": boolean}; anything else is
+// Error(invalid_argument).
 struct ConversionRequest {
     ConversionFormat format = ConversionFormat::unknown;
     ConvertOptions options;
     bool strict = false;  // refuse a conversion with warnings (the CLI's --strict)
 };
 ConversionRequest parse_conversion_request(const std::string& options_json);
+// The `units` value that names the default: the source's declared unit.
+inline constexpr const char* kSourceUnits = "source";
+// The request resolved, as JSON text: its format and every option the format
+// takes with its default filled in (units "source", deflection 0.002, ...),
+// so that parse_conversion_request reads it back to the same request.
+std::string conversion_request_json(const ConversionRequest& r);
+// A mesh output's angular deflection checked: radians in [kMinAngularDeflection,
+// kMaxAngularDeflection] (the API's option, a job's, the CLI's
+// --angular-deflection). Throws Error(invalid_argument) naming `what`.
+double checked_angular_deflection(double radians, const std::string& what);
 // Its format alone.
 ConversionFormat parse_conversion_format(const std::string& options_json);
 

@@ -112,7 +112,8 @@ unsigned aov_bits(const json& v, const std::string& key) {
 }
 
 // The option names, for messages that list them (kept in step with the parsers below).
-constexpr const char* kConversionOptions = "format, units, step_schema, iges_mode, deflection, strict";
+constexpr const char* kConversionOptions =
+    "format, units, step_schema, iges_mode, deflection, angular_deflection, strict";
 constexpr const char* kCameraOptions = "view, eye, target, up, projection, fov_deg, ortho_height, fit_margin";
 constexpr const char* kRenderOptions =
     "width, height, format, background, antialias, edges, edge_color, edge_width, shadows, method, map_precision, "
@@ -371,7 +372,7 @@ E conversion_enum(const std::string& key, const std::string& value, FromName fro
 ConversionRequest parse_conversion_request(const std::string& options_json) {
     const json o = parse_object(options_json);
     std::string format, units, schema, mode;
-    std::optional<double> deflection;
+    std::optional<double> deflection, angular_deflection;
     bool strict = false;
     for (const auto& [key, v] : o.items()) {
         if (key == "format")
@@ -384,6 +385,8 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
             mode = text(v, key);
         else if (key == "deflection")
             deflection = number(v, key);
+        else if (key == "angular_deflection")
+            angular_deflection = number(v, key);
         else if (key == "strict")
             strict = boolean(v, key);
         else
@@ -412,7 +415,12 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
                 "], a fraction of the model's diagonal");
         r.options.deflection = *deflection;
     }
-    if (!units.empty())
+    if (angular_deflection) {
+        only_for("given", ConversionOption::angular_deflection);
+        r.options.angular_deflection = checked_angular_deflection(*angular_deflection, "option 'angular_deflection'");
+    }
+    // "source": the default named (the source's declared unit), as the job document echoes it.
+    if (!units.empty() && units != kSourceUnits)
         r.options.units = conversion_enum<LengthUnit>("units", units, length_unit_from_name, length_unit_names());
     if (!schema.empty())
         r.options.step_schema =
@@ -420,6 +428,32 @@ ConversionRequest parse_conversion_request(const std::string& options_json) {
     if (!mode.empty())
         r.options.iges_mode = conversion_enum<IgesMode>("iges_mode", mode, iges_mode_from_name, iges_mode_names());
     return r;
+}
+
+double checked_angular_deflection(double radians, const std::string& what) {
+    if (!(radians >= kMinAngularDeflection && radians <= kMaxAngularDeflection)) {
+        char text[160];
+        std::snprintf(text, sizeof text, " must be a number of radians in [%g, %.17g]", kMinAngularDeflection,
+                      kMaxAngularDeflection);
+        bad(what + text);
+    }
+    return radians;
+}
+
+std::string conversion_request_json(const ConversionRequest& r) {
+    const ConvertOptions& o = r.options;
+    json j = {{"format", conversion_format_short_name(r.format)}};
+    auto takes = [&](ConversionOption option) { return conversion_option_refusal(option, r.format).empty(); };
+    if (takes(ConversionOption::units))
+        j["units"] =
+            o.units == LengthUnit::unknown ? std::string(kSourceUnits) : std::string(length_unit_name(o.units));
+    if (takes(ConversionOption::step_schema)) j["step_schema"] = step_schema_name(o.step_schema);
+    if (takes(ConversionOption::iges_mode)) j["iges_mode"] = iges_mode_name(o.iges_mode);
+    if (takes(ConversionOption::deflection))
+        j["deflection"] = o.deflection > 0 ? o.deflection : ImportOptions{}.mesh_relative_deflection;
+    if (takes(ConversionOption::angular_deflection)) j["angular_deflection"] = o.angular_deflection;
+    j["strict"] = r.strict;
+    return j.dump();
 }
 
 ConversionFormat parse_conversion_format(const std::string& options_json) {

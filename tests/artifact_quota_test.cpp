@@ -15,6 +15,9 @@ TEST(ArtifactQuota, EstimatesBoundWhatTheOutputsWrite) {
     JobOutput exr = png;
     exr.options_json = R"({"width":400,"height":300,"format":"exr"})";
     EXPECT_EQ(estimated_artifact_bytes(exr, 1000), 400 * 300 * 48);  // 12 float channels
+    JobOutput views = png;  // a frame per view, one file each or a sheet of them
+    views.options_json = R"({"width":400,"height":300,"views":["front","top","iso"],"layout":"separate"})";
+    EXPECT_EQ(estimated_artifact_bytes(views, 1000), 3 * 400 * 300 * 4);
     JobOutput conversion;
     conversion.kind = OutputKind::conversion;
     conversion.options_json = R"({"format":"stl"})";

@@ -54,6 +54,14 @@ TEST(ArtifactReuseKey, DependsOnTheFileTheKindTheOptionsAndTheExtension) {
     render.kind = OutputKind::render;
     EXPECT_NE(ArtifactReuse::key(a, stl), ArtifactReuse::key(a, render));
     EXPECT_EQ(ArtifactReuse::key(a, stl).size(), 64u);
+    // An output of several files: a key per file, by its view and extension, not its output's number.
+    const JobOutput obj = conversion("obj", "0-conversion-1.obj");
+    EXPECT_EQ(ArtifactReuse::key(a, obj), ArtifactReuse::key(a, obj, "0-conversion-1.obj"));
+    EXPECT_NE(ArtifactReuse::key(a, obj, "0-conversion-1.obj"), ArtifactReuse::key(a, obj, "0-conversion-1.mtl"));
+    EXPECT_EQ(ArtifactReuse::key(a, render, "0-render-1.front.png"),
+              ArtifactReuse::key(a, render, "2-render-5.front.png"));
+    EXPECT_NE(ArtifactReuse::key(a, render, "0-render-1.front.png"),
+              ArtifactReuse::key(a, render, "0-render-1.iso.png"));
 }
 
 TEST_F(ArtifactReuseTest, KeepsFindsAndExpires) {

@@ -348,6 +348,46 @@ TEST(Cli, ConvertCoarseMeshWarnsAndStrictRefuses) {
     fs::remove_all(dir);
 }
 
+// --angular-deflection reaches BRepMesh (a coarser angle, fewer triangles of a
+// curved part; the report says what was asked), checked by the request
+// model's range before any read (exit 2 naming the flag), and refused for an
+// exact output.
+TEST(Cli, ConvertAngularDeflection) {
+    const std::string in = nurbsrt::test::freeform_bspline();
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-angle-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    long long triangles[2] = {0, 0};
+    const char* angles[2] = {"0.05", "1.2"};
+    for (int i = 0; i < 2; ++i) {
+        const fs::path report = dir / ("r" + std::to_string(i) + ".json");
+        const CliRun r = run_nurbsrt(std::string("convert --angular-deflection ") + angles[i] + " --report " +
+                                     report.string() + " " + in + " " + (dir / "m.stl").string());
+        ASSERT_EQ(r.status, 0) << r.err;
+        const size_t at = r.err.find(" triangles)");
+        ASSERT_NE(at, std::string::npos) << r.err;
+        triangles[i] = std::stoll(r.err.substr(r.err.rfind(", ", at) + 2));
+        std::ifstream text(report);
+        const auto j = nlohmann::json::parse(text);
+        EXPECT_EQ(j["output"]["asked"]["angular_deflection"].get<double>(), std::stod(angles[i]));
+        EXPECT_EQ(j["output"]["asked"]["deflection"].get<double>(), 0.002);
+        EXPECT_NE(r.err.find(std::string("angular deflection ") + angles[i] + " rad"), std::string::npos) << r.err;
+    }
+    EXPECT_GT(triangles[0], triangles[1]) << "a finer angle makes more triangles";
+    for (const char* bad : {"0.001", "2", "x"}) {
+        const CliRun r =
+            run_nurbsrt(std::string("convert --angular-deflection ") + bad + " " + in + " " + (dir / "b.stl").string());
+        EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+        EXPECT_NE(r.err.find("--angular-deflection"), std::string::npos) << r.err;
+    }
+    const CliRun range = run_nurbsrt("convert --angular-deflection 2 " + in + " " + (dir / "b.stl").string());
+    EXPECT_NE(range.err.find("must be a number of radians in [0.01, 1.57"), std::string::npos) << range.err;
+    EXPECT_FALSE(fs::exists(dir / "b.stl"));
+    const CliRun exact = run_nurbsrt("convert --angular-deflection 0.2 " + in + " " + (dir / "e.step").string());
+    EXPECT_EQ(exact.status, 2) << exact.err;
+    EXPECT_NE(exact.err.find("applies to STL, GLB, VRML and OBJ outputs only"), std::string::npos) << exact.err;
+    fs::remove_all(dir);
+}
+
 // OBJ: the .obj and its .mtl land beside each other under OUT's name (the
 // partial files in a directory of their own, gone after); --strict refuses both.
 TEST(Cli, ConvertToObjWritesItsMtlBeside) {

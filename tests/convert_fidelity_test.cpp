@@ -141,6 +141,29 @@ TEST(ConvertFidelity, CoarseMeshIsWarned) {
     EXPECT_THROW(nurbsrt::convert_file(fan, out_path("coarse.step"), coarse), nurbsrt::Error);
     coarse.deflection = 0.5;
     EXPECT_THROW(nurbsrt::convert_file(fan, out_path("too-coarse.stl"), coarse), nurbsrt::Error);
+    // So is angular_deflection, in [kMinAngularDeflection, kMaxAngularDeflection].
+    nurbsrt::ConvertOptions angle;
+    angle.angular_deflection = 0.2;
+    EXPECT_THROW(nurbsrt::convert_file(fan, out_path("angle.step"), angle), nurbsrt::Error);
+    angle.angular_deflection = nurbsrt::kMaxAngularDeflection * 1.01;
+    EXPECT_THROW(nurbsrt::convert_file(fan, out_path("angle.stl"), angle), nurbsrt::Error);
+}
+
+// The report states what was asked of BRepMesh beside what it achieved: the
+// default angle, and a finer one, which BRepMesh follows with more triangles.
+TEST(ConvertFidelity, MeshReportStatesTheDeflectionsAsked) {
+    const std::string freeform = nurbsrt::test::freeform_bspline();
+    nurbsrt::ConvertOptions fine;
+    fine.angular_deflection = 0.05;
+    const nurbsrt::ConvertReport a = nurbsrt::convert_file(freeform, out_path("angle-default.stl"));
+    const nurbsrt::ConvertReport b = nurbsrt::convert_file(freeform, out_path("angle-fine.stl"), fine);
+    const json fa = json::parse(a.fidelity)["output"], fb = json::parse(b.fidelity)["output"];
+    EXPECT_EQ(fa["asked"]["angular_deflection"].get<double>(), nurbsrt::kDefaultAngularDeflection);
+    EXPECT_EQ(fb["asked"]["angular_deflection"].get<double>(), 0.05);
+    EXPECT_EQ(fa["asked"]["deflection"].get<double>(), nurbsrt::ImportOptions{}.mesh_relative_deflection);
+    EXPECT_GT(fa["asked"]["deflection_mm"].get<double>(), 0);
+    EXPECT_LT(a.triangles, b.triangles);
+    EXPECT_GT(fb["deviation_in_mm"]["points"].get<double>(), fa["deviation_in_mm"]["points"].get<double>());
 }
 
 // Exact outputs: a volume or area moved past 1e-6 relative, and a valid

@@ -322,11 +322,16 @@ TEST(ConvertOptions, CrossTheProcessBoundary) {
     o.step_schema = nurbsrt::StepSchema::ap242;
     o.iges_mode = nurbsrt::IgesMode::faces;
     o.units = nurbsrt::LengthUnit::inch;
+    o.deflection = 0.0123;
+    o.angular_deflection = 0.1 + 1e-16 * 3;  // every digit crosses
     const nurbsrt::ConvertOptions back = nurbsrt::convert_options_from_args(nurbsrt::convert_options_to_args(o));
     EXPECT_EQ(back.step_schema, o.step_schema);
     EXPECT_EQ(back.iges_mode, o.iges_mode);
     EXPECT_EQ(back.units, o.units);
+    EXPECT_EQ(back.deflection, o.deflection);
+    EXPECT_EQ(back.angular_deflection, o.angular_deflection);
     EXPECT_THROW(nurbsrt::convert_options_from_args({"--step-schema=ap203"}), nurbsrt::Error);
+    EXPECT_THROW(nurbsrt::convert_options_from_args({"--angular-deflection=x"}), nurbsrt::Error);
     nurbsrt::IsolationLimits limits;
     limits.worker_executable = NURBSRT_BINARY;
     const std::string out = out_path("iso-242.step");

@@ -3,11 +3,13 @@
 // every mistake rejected with the right code; and the strict name patterns
 // that keep requests from naming anything but a job's own artifacts.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <functional>
 
 #include "core/error.h"
 #include "options/render_request.h"
+#include "server/jobs/job_document.h"
 #include "server/jobs/job_spec.h"
 #include "tests/support/error_code_of.h"
 
@@ -46,7 +48,8 @@ TEST(JobSpec, OutputsGetArtifactNamesAndContentTypes) {
         EXPECT_TRUE(valid_artifact_name(outs[i].artifact)) << outs[i].artifact;
     }
     EXPECT_EQ(outs[1].file, 1);
-    EXPECT_EQ(outs[2].options_json, R"({"format":"iges"})");  // alias normalised
+    EXPECT_EQ(outs[2].options_json,
+              R"({"format":"iges","iges_mode":"brep","strict":false,"units":"source"})");  // alias normalised
     EXPECT_EQ(artifact_format("1-conversion-2.igs"), "iges");
     EXPECT_EQ(artifact_format("0-render-0.jpg"), "jpeg");
     EXPECT_EQ(artifact_format("0-conversion-3.wrl"), "vrml");
@@ -75,6 +78,100 @@ TEST(JobSpec, ConversionOptionsAreTheConversionsRequestModel) {
     EXPECT_FALSE(glb.strict);
 }
 
+// Stored resolved: every option the format takes, its default named, so the
+// job document echoes them and equal requests are equal text.
+TEST(JobSpec, ConversionOptionsAreStoredResolved) {
+    ServerConfig config;
+    const auto spec = parse_job_spec(R"({"outputs": [
+        {"file": 0, "type": "conversion", "format": "igs"},
+        {"file": 1, "type": "conversion", "format": "stl", "options": {"angular_deflection": 0.2}},
+        {"file": 1, "type": "conversion", "format": "json"}]})",
+                                     two_inputs(), config);
+    EXPECT_EQ(spec.outputs[0].options_json, R"({"format":"iges","iges_mode":"brep","strict":false,"units":"source"})");
+    EXPECT_EQ(spec.outputs[1].options_json,
+              R"({"angular_deflection":0.2,"deflection":0.002,"format":"stl","strict":false})");
+    EXPECT_EQ(spec.outputs[2].options_json, R"({"format":"json","strict":false})");
+    // Read back to the same request: "source" is the source's unit.
+    const nurbsrt::ConversionRequest iges = nurbsrt::parse_conversion_request(spec.outputs[0].options_json);
+    EXPECT_EQ(iges.options.units, nurbsrt::LengthUnit::unknown);
+    EXPECT_EQ(nurbsrt::parse_conversion_request(spec.outputs[1].options_json).options.angular_deflection, 0.2);
+}
+
+// One artifact per view of a separate layout, and OBJ's .obj with its .mtl.
+TEST(JobSpec, OutputsOfSeveralFilesNameEach) {
+    ServerConfig config;
+    const auto outs = parse_job_spec(R"({"outputs": [
+        {"file": 0, "type": "render", "options": {"views": ["front", "iso"], "layout": "separate", "format": "jpeg"}},
+        {"file": 1, "type": "conversion", "format": "obj"},
+        {"file": 1, "type": "render", "options": {"views": ["front", "iso"]}}]})",
+                                     two_inputs(), config)
+                          .outputs;
+    ASSERT_EQ(outs.size(), 3u);
+    const std::vector<ArtifactFile> views = output_artifacts(outs[0]);
+    ASSERT_EQ(views.size(), 2u);
+    EXPECT_EQ(outs[0].artifact, "0-render-0.front.jpg");
+    EXPECT_EQ(views[0].name, "0-render-0.front.jpg");
+    EXPECT_EQ(views[1].name, "0-render-0.iso.jpg");
+    EXPECT_EQ(views[1].view, "iso");
+    EXPECT_EQ(views[1].content_type, "image/jpeg");
+    const std::vector<ArtifactFile> obj = output_artifacts(outs[1]);
+    ASSERT_EQ(obj.size(), 2u);
+    EXPECT_EQ(obj[0].name, "1-conversion-1.obj");
+    EXPECT_EQ(obj[0].content_type, "model/obj");
+    EXPECT_EQ(obj[1].name, "1-conversion-1.mtl");
+    EXPECT_EQ(obj[1].content_type, "model/mtl");
+    EXPECT_EQ(output_artifacts(outs[2]).size(), 1u) << "a contact sheet is one image";
+    EXPECT_EQ(outs[2].artifact, "1-render-2.png");
+    for (const auto& files : {views, obj})
+        for (const ArtifactFile& f : files) EXPECT_TRUE(valid_artifact_name(f.name)) << f.name;
+    EXPECT_FALSE(valid_artifact_name("0-render-0.a.b.png"));
+    EXPECT_FALSE(valid_artifact_name("0-render-0..png"));
+    EXPECT_FALSE(valid_artifact_name("0-render-0.x/y.png"));
+    EXPECT_EQ(artifact_format("1-conversion-1.obj"), "obj");
+}
+
+// The job document lists every file of an output: all of a succeeded one
+// (sizes from its result), the placed ones of a running one, and counts them.
+TEST(JobDocument, ListsEachFileOfAnOutput) {
+    ServerConfig config;
+    JobRecord job;
+    job.id = std::string(32, 'a');
+    job.inputs = two_inputs();
+    job.outputs = parse_job_spec(R"({"outputs": [
+        {"file": 0, "type": "render", "options": {"views": ["front", "top", "iso"], "layout": "separate"}},
+        {"file": 1, "type": "conversion", "format": "obj"}]})",
+                                 job.inputs, config)
+                      .outputs;
+    JobOutput& views = job.outputs[0];
+    JobOutput& obj = job.outputs[1];
+    views.state = JobState::running;
+    obj.state = JobState::succeeded;
+    obj.artifact_bytes = 300;
+    obj.result_json = R"({"faces": 3, "artifacts": [{"name": "1-conversion-1.obj", "bytes": 280},
+                                                    {"name": "1-conversion-1.mtl", "bytes": 20}]})";
+    // The first view is in place; the others not yet.
+    const auto placed = [](const std::string& name) -> int64_t { return name == "0-render-0.front.png" ? 77 : -1; };
+    const nlohmann::json doc = job_json(job, placed);
+    const nlohmann::json& running = doc["outputs"][0];
+    ASSERT_EQ(running["artifacts"].size(), 1u);
+    EXPECT_EQ(running["artifacts"][0]["view"], "front");
+    EXPECT_EQ(running["artifacts"][0]["bytes"], 77);
+    EXPECT_EQ(running["artifacts"][0]["url"], "/v1/jobs/" + job.id + "/artifacts/0-render-0.front.png");
+    EXPECT_FALSE(running.contains("artifact"));
+    const nlohmann::json& done = doc["outputs"][1];
+    ASSERT_EQ(done["artifacts"].size(), 2u);
+    EXPECT_EQ(done["artifacts"][1]["name"], "1-conversion-1.mtl");
+    EXPECT_EQ(done["artifacts"][1]["content_type"], "model/mtl");
+    EXPECT_EQ(done["artifacts"][1]["bytes"], 20);
+    EXPECT_EQ(done["artifact"], done["artifacts"][0]);
+    EXPECT_EQ(done["options"], nlohmann::json::parse(R"({"format": "obj", "deflection": 0.002,
+                                                          "angular_deflection": 0.35, "strict": false})"));
+    EXPECT_EQ(doc["statistics"]["artifacts"], 3);
+    EXPECT_EQ(doc["statistics"]["artifact_bytes"], 300);
+    // Without the lookup (a webhook's body, the job finished): a running output lists none.
+    EXPECT_FALSE(job_json(job)["outputs"][0].contains("artifacts"));
+}
+
 TEST(JobSpec, MistakesAreRejected) {
     ServerConfig config;
     config.max_job_outputs = 2;
@@ -101,8 +198,11 @@ TEST(JobSpec, MistakesAreRejected) {
     EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "render", "options": {"bogus": 1}},
                                     {"file": 1, "type": "render"}]})"),
               ErrorCode::invalid_argument);
-    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "obj"},
-                                    {"file": 1, "type": "render"}]})"),
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "obj",
+                                     "options": {"angular_deflection": 0.001}}, {"file": 1, "type": "render"}]})"),
+              ErrorCode::invalid_argument);
+    EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "step",
+                                     "options": {"angular_deflection": 0.5}}, {"file": 1, "type": "render"}]})"),
               ErrorCode::invalid_argument);
     EXPECT_EQ(parse(R"({"outputs": [{"file": 0, "type": "conversion", "format": "dwg"},
                                     {"file": 1, "type": "render"}]})"),

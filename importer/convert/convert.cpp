@@ -46,6 +46,11 @@ ConvertReport convert_file(const std::string& in_path, const std::string& out_pa
     if (const std::string why = conversion_option_refusal(ConversionOption::deflection, r.output);
         options.deflection != 0 && !why.empty())
         throw Error(ErrorCode::invalid_argument, std::string("option 'deflection' ") + why);
+    if (const std::string why = conversion_option_refusal(ConversionOption::angular_deflection, r.output);
+        options.angular_deflection != kDefaultAngularDeflection && !why.empty())
+        throw Error(ErrorCode::invalid_argument, std::string("option 'angular_deflection' ") + why);
+    if (!(options.angular_deflection >= kMinAngularDeflection && options.angular_deflection <= kMaxAngularDeflection))
+        throw Error(ErrorCode::invalid_argument, "option 'angular_deflection' is out of range");
     if (!(options.deflection >= 0 && options.deflection <= kMaxConversionDeflection))
         throw Error(ErrorCode::invalid_argument,
                     "option 'deflection' must be in (0, " + std::to_string(kMaxConversionDeflection) + "]");

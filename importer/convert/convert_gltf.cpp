@@ -78,7 +78,7 @@ void write_glb(const std::string& in_path, const std::string& out_path, const Co
     OcctModel model = read_for_export(in_path, "glTF", r);
     DocumentCloser closer{model.document};
 
-    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options.deflection, model.measures.get());
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options, model.measures.get());
     TDF_LabelSequence roots;
     XCAFDoc_DocumentTool::ShapeTool(model.document->Main())->GetFreeShapes(roots);
 

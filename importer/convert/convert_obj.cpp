@@ -25,7 +25,7 @@ void write_obj(const std::string& in_path, const std::string& out_path, const Co
                ConvertReport& r) {
     OcctModel model = read_for_export(in_path, "OBJ", r);
     DocumentCloser closer{model.document};
-    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options.deflection, model.measures.get());
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options, model.measures.get());
 
     const auto t0 = std::chrono::steady_clock::now();
     try {

@@ -16,7 +16,7 @@ void write_stl(const std::string& in_path, const std::string& out_path, const Co
     r.faces = model.faces.Extent();
     r.in_units = model.units;
     r.read_ms = model.read_ms;
-    mesh_for_export(model.shape, r, options.deflection, model.measures.get());
+    mesh_for_export(model.shape, r, options, model.measures.get());
 
     const auto t0 = std::chrono::steady_clock::now();
     try {

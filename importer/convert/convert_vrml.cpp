@@ -24,7 +24,7 @@ void write_vrml(const std::string& in_path, const std::string& out_path, const C
     DocumentCloser closer{model.document};
     // The writer meshes faces without a triangulation itself, at its own
     // deflection: ours first, with the degenerate triangles taken out.
-    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options.deflection, model.measures.get());
+    const TopoDS_Shape meshed = mesh_document_for_export(model.document, r, options, model.measures.get());
 
     const auto t0 = std::chrono::steady_clock::now();
     try {

@@ -45,9 +45,9 @@ void write_obj(const std::string& in_path, const std::string& out_path, const Co
                ConvertReport& r);
 
 // Meshes every face of `shape` with BRepMesh for export: linear deflection
-// `relative_deflection` (0: ImportOptions{}.mesh_relative_deflection) times the
+// options.deflection (0: ImportOptions{}.mesh_relative_deflection) times the
 // diagonal of the faces' bounding box, angular deflection
-// ImportOptions{}.mesh_angular_deflection.
+// options.angular_deflection; both recorded in r (what the report says was asked).
 // Fills r.mesh_ms, r.triangles (over all face occurrences, instances counted
 // separately) and r.unmeshed_faces (faces left without a triangulation, which
 // mesh outputs cannot contain, a warning). Triangles of no area at float precision or
@@ -58,14 +58,14 @@ void write_obj(const std::string& in_path, const std::string& out_path, const Co
 // output) is not meshed again: its counts are taken over and r.mesh_shared
 // set; one made at other parameters is replaced. Records the mesh made.
 // Returns the deflection used.
-double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection = 0,
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, const ConvertOptions& options = {},
                        MeasuresCache* cache = nullptr);
 // The same for the shapes an XDE document holds (the writers that take a
 // document read the triangulations from them); parts placed twice share their
 // faces, so are meshed once.
 // Returns the meshed compound of the document's free shapes.
 TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r,
-                                      double relative_deflection, MeasuresCache* cache = nullptr);
+                                      const ConvertOptions& options, MeasuresCache* cache = nullptr);
 
 // --- the fidelity report (fidelity.cpp) ----------------------------------------
 // A shape as OCCT measures it: distinct (located) sub-shapes, the volume of its

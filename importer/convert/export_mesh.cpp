@@ -102,7 +102,8 @@ void mesh_anew(const TopoDS_Shape& shape, const TopTools_IndexedMapOfShape& face
 
 }  // namespace
 
-double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relative_deflection, MeasuresCache* cache) {
+double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, const ConvertOptions& options,
+                       MeasuresCache* cache) {
     const auto t0 = std::chrono::steady_clock::now();
     TopTools_IndexedMapOfShape faces;
     TopExp::MapShapes(shape, TopAbs_FACE, faces);
@@ -113,9 +114,12 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relat
     const double diag = box.IsVoid() ? 0.0 : std::sqrt(box.SquareExtent());
     const ImportOptions defaults;
     IMeshTools_Parameters params;
-    const double relative = relative_deflection > 0 ? relative_deflection : defaults.mesh_relative_deflection;
+    const double relative = options.deflection > 0 ? options.deflection : defaults.mesh_relative_deflection;
     params.Deflection = diag > 0 && std::isfinite(diag) ? relative * diag : 1e-3;
-    params.Angle = defaults.mesh_angular_deflection;
+    params.Angle = options.angular_deflection;
+    r.mesh_relative_deflection = relative;
+    r.mesh_deflection_mm = params.Deflection;
+    r.mesh_angular_deflection = params.Angle;
     params.InParallel = Standard_True;
     const bool shared = cache && cache->export_mesh && cache->export_mesh->deflection == params.Deflection &&
                         cache->export_mesh->angle == params.Angle &&
@@ -159,7 +163,7 @@ double mesh_for_export(const TopoDS_Shape& shape, ConvertReport& r, double relat
 namespace nurbsrt::occt {
 
 TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, ConvertReport& r,
-                                      double relative_deflection, MeasuresCache* cache) {
+                                      const ConvertOptions& options, MeasuresCache* cache) {
     const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
     TDF_LabelSequence roots;
     shapes->GetFreeShapes(roots);
@@ -167,7 +171,7 @@ TopoDS_Shape mesh_document_for_export(const Handle(TDocStd_Document) & doc, Conv
     BRep_Builder builder;
     builder.MakeCompound(all);
     for (const TDF_Label& label : roots) builder.Add(all, XCAFDoc_ShapeTool::GetShape(label));
-    mesh_for_export(all, r, relative_deflection, cache);
+    mesh_for_export(all, r, options, cache);
     return all;
 }
 

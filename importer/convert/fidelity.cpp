@@ -310,6 +310,10 @@ std::string mesh_fidelity(const OcctModel& model, const TopoDS_Shape& meshed, Co
                                  " of the diagonal) from the exact faces, beyond " +
                                  std::to_string(kMeshDeviationTolerance));
     }
+    // What was asked of BRepMesh, beside what it achieved.
+    f["output"]["asked"] = {{"deflection", r.mesh_relative_deflection},
+                            {"deflection_mm", r.mesh_deflection_mm},
+                            {"angular_deflection", r.mesh_angular_deflection}};
     f["output"]["deviation_in_mm"] = deviation;
     return f.dump();
 }

@@ -2,6 +2,8 @@
 
 #include <sys/statvfs.h>
 
+#include <algorithm>
+
 #include "core/error.h"
 #include "options/render_request.h"
 
@@ -24,7 +26,8 @@ std::string mib(int64_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >
 int64_t estimated_artifact_bytes(const JobOutput& out, int64_t input_bytes) {
     if (out.kind != OutputKind::render) return kConversionGrowth * input_bytes;
     const RenderRequest r = parse_render_options(out.options_json);
-    const int64_t pixels = int64_t(r.width) * r.height;
+    // Several views: a frame each (a contact sheet of them, or a file each).
+    const int64_t pixels = int64_t(r.width) * r.height * std::max<int64_t>(1, static_cast<int64_t>(r.views.size()));
     return pixels * (r.format.kind == ImageFormat::exr ? kExrBytesPerPixel : kRgbaBytesPerPixel);
 }
 

@@ -44,8 +44,8 @@ ArtifactReuse::ArtifactReuse(std::string dir) : dir_(std::move(dir)) {
     if (ec) throw Error(ErrorCode::io, "cannot create the artifact reuse directory " + dir_);
 }
 
-std::string ArtifactReuse::key(const std::string& content_sha256, const JobOutput& out) {
-    const std::string artifact = out.artifact;
+std::string ArtifactReuse::key(const std::string& content_sha256, const JobOutput& out, const std::string& name) {
+    const std::string& artifact = name.empty() ? out.artifact : name;
     Sha256 h;
     h.update(content_sha256);
     h.update("\0kind\n", 6);
@@ -53,7 +53,7 @@ std::string ArtifactReuse::key(const std::string& content_sha256, const JobOutpu
     h.update("\0options\n", 9);
     h.update(out.options_json);
     h.update("\0extension\n", 11);
-    h.update(artifact.substr(artifact.rfind('.') + 1));
+    h.update(artifact.substr(artifact.find('.') + 1));
     return h.hex();
 }
 

@@ -21,10 +21,11 @@ public:
     // Creates `dir` when needed; throws Error(io) when it cannot.
     explicit ArtifactReuse(std::string dir);
 
-    // The key of an output of a file whose bytes hash to `content_sha256`: its
-    // kind, its canonical options (job_spec.cpp stores them so) and the
-    // artifact's extension.
-    static std::string key(const std::string& content_sha256, const JobOutput& out);
+    // The key of an artifact of an output of a file whose bytes hash to
+    // `content_sha256`: its kind, its canonical options (job_spec.cpp stores
+    // them so) and what the artifact's name says past the output's number (its
+    // view and extension: "front.png", "mtl"); `artifact` empty: JobOutput::artifact.
+    static std::string key(const std::string& content_sha256, const JobOutput& out, const std::string& artifact = {});
 
     // Keeps a succeeded output's artifact and result under `key`. Best effort:
     // an index that cannot be written only means no later reuse.

@@ -5,6 +5,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <cstdint>
+#include <functional>
 #include <string>
 
 #include "server/store/job_store.h"
@@ -12,7 +14,11 @@
 namespace nurbsrt::server {
 
 std::string job_url(const std::string& id);
-nlohmann::json job_json(const JobRecord& job);
+// The size of a job's artifact already in place, -1 when it is not (yet):
+// how the document lists the files a running output has placed (the views of
+// a separate layout, each downloadable as soon as it is written).
+using PlacedArtifact = std::function<int64_t(const std::string& name)>;
+nlohmann::json job_json(const JobRecord& job, const PlacedArtifact& placed = {});
 // The body of the job's webhook: its document without the state of the
 // delivery itself (every attempt sends the same bytes; the attempt is in a header).
 std::string job_webhook_body(const JobRecord& job);

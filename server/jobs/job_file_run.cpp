@@ -69,6 +69,15 @@ nlohmann::json conversion_result(const ConvertReport& report, const FileResult& 
     return result;
 }
 
+// OBJ's .obj names its .mtl by the partial name it was written beside: renamed
+// to the .mtl's artifact, so that the two downloaded side by side work.
+void name_companion(const JobOutput& out, const std::vector<std::string>& partials) {
+    const ConversionFormat format = parse_conversion_format(out.options_json);
+    const std::string written = std::filesystem::path(partials.at(1)).filename().string();
+    write_durably(partials.front(), with_companion_renamed(read_file_bytes(partials.front()), format, written,
+                                                           output_artifacts(out).at(1).name));
+}
+
 }  // namespace
 
 void JobService::run_file(const JobClaim& job, const std::vector<int>& indices,
@@ -171,10 +180,17 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
 
     FilePlan plan;
     plan.scene = want_scene;
+    // Each output's files as it writes them: the converted file, and OBJ's .mtl beside it.
+    std::vector<std::vector<std::string>> partials;
     for (const JobOutput* out : conversions) {
-        plan.conversions.push_back(partial_path(job, *out));
+        partials.push_back(partial_paths(job, *out));
+        plan.conversions.push_back(partials.back().front());
         plan.conversion_options.push_back(parse_conversion_request(out->options_json).options);
     }
+    auto remove_partials = [&](size_t i) {
+        std::error_code ec;
+        for (const std::string& partial : partials[i]) std::filesystem::remove(partial, ec);
+    };
     FileResult result;
     try {
         IsolationLimits limits = isolation_limits(ctx_);
@@ -186,8 +202,7 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
         // may throw bad_alloc) ends every output of the file, never leaves them
         // running: the conversions here, the renders by the caller.
         ticket.reset();
-        std::error_code ec;
-        for (const std::string& partial : plan.conversions) std::filesystem::remove(partial, ec);
+        for (size_t i = 0; i < partials.size(); ++i) remove_partials(i);
         const auto* error = dynamic_cast<const Error*>(&e);
         if (error && error->code() == ErrorCode::canceled && cancel->load()) throw;
         ctx_.metrics.count_import_failure(error ? error_code_name(error->code()) : "internal");
@@ -223,21 +238,22 @@ std::shared_ptr<const PreparedScene> JobService::run_file_child(const JobClaim& 
         try {
             if (c.error) {
                 ctx_.metrics.count_import_failure(error_code_name(c.error->code()));
-                std::error_code ec;
-                std::filesystem::remove(plan.conversions[i], ec);
+                remove_partials(i);
                 throw *c.error;
             }
             if (parse_conversion_request(out.options_json).strict && !c.report->warnings.empty()) {
-                std::error_code ec;
-                std::filesystem::remove(plan.conversions[i], ec);
+                remove_partials(i);
                 throw strict_refusal(c.report->warnings);
             }
-            store_artifact(job, out, plan.conversions[i],
-                           dump_result(conversion_result(*c.report, result, queued, read)), cancel, content_sha256);
+            if (partials[i].size() > 1) name_companion(out, partials[i]);
+            store_artifact(job, out, partials[i], dump_result(conversion_result(*c.report, result, queued, read)),
+                           cancel, content_sha256);
         } catch (const Error& e) {
+            remove_partials(i);
             if (e.code() == ErrorCode::canceled && cancel->load()) throw;
             output_failed(job, out, e);
         } catch (const std::exception& e) {
+            remove_partials(i);
             output_failed(job, out, e);
         }
     }
@@ -276,16 +292,46 @@ void JobService::run_render(const JobClaim& job, const JobOutput& out,
             }
         }
     };
+    // Layout separate: each view is an artifact of its own, placed (and
+    // downloadable) as soon as it is encoded; the output's progress counts the
+    // views done and the running one's share.
+    const std::vector<ArtifactFile> files = output_artifacts(out);
+    std::vector<int64_t> sizes;
+    int64_t placed = 0;
+    // Shared: like the progress callback, it may outlive this call (see above).
+    auto done = std::make_shared<std::atomic<size_t>>(0);
+    if (r.layout == ViewLayout::separate) {
+        const double views = static_cast<double>(files.size());
+        control.progress = [progress = control.progress, done, views](double f) {
+            progress((static_cast<double>(done->load()) + f) / views);
+        };
+        control.view_done = [&, views](const RenderedImage::View& view) {
+            const std::string& name = files.at(done->load()).name;
+            const std::string partial = partial_path(job, name);
+            write_durably(partial, view.bytes);
+            // The views done, past the callback's 5% steps, recorded before the
+            // view is placed: whoever sees its file sees the progress that counts it.
+            const double now_done = static_cast<double>(done->load() + 1) / views;
+            if (now_done < 1) store_->output_progress(job.id, out.index, now_done, job.lease);
+            sizes.push_back(place_artifact(job, name, partial, placed, cancel));
+            placed += sizes.back();
+            ++*done;
+        };
+    }
     const RenderedImage image = render_upload(ctx_, std::string(), r, control);
-    const std::string partial = partial_path(job, out);
-    write_durably(partial, r.layout == ViewLayout::separate ? views_zip(image, r.format) : image.bytes);
     nlohmann::json result = statistics_json(image);
     // The scene came from the cache (or another user's import of the same
     // bytes) unless this file's own read made it: RenderControl::scene alone
     // cannot tell, and would say hit.
     result["cache"] = read.id.empty() ? "hit" : "miss";
     if (!read.id.empty()) result["read"] = file_read_json(read);  // none: the scene was cached
-    store_artifact(job, out, partial, dump_result(result), cancel, content_sha256);
+    if (r.layout == ViewLayout::separate) {
+        output_stored(job, out, sizes, dump_result(result), content_sha256);
+        return;
+    }
+    const std::string partial = partial_path(job, out.artifact);
+    write_durably(partial, image.bytes);
+    store_artifact(job, out, {partial}, dump_result(result), cancel, content_sha256);
 }
 
 std::vector<int> JobService::reuse_artifacts(const JobClaim& job, const std::vector<int>& indices,
@@ -295,19 +341,29 @@ std::vector<int> JobService::reuse_artifacts(const JobClaim& job, const std::vec
     std::vector<int> rest;
     for (const int index : indices) {
         const JobOutput& out = job.outputs.at(static_cast<size_t>(index));
-        const std::string partial = partial_path(job, out);
-        const std::optional<std::string> made = reuse_.recall(ArtifactReuse::key(content_sha256, out), partial);
+        // Each of its files kept under its own key; all of them, or the output is made anew.
+        const std::vector<std::string> partials = partial_paths(job, out);
+        const std::vector<ArtifactFile> files = output_artifacts(out);
+        std::optional<std::string> made;
+        for (size_t i = 0; i < files.size(); ++i) {
+            made = reuse_.recall(ArtifactReuse::key(content_sha256, out, files[i].name), partials[i]);
+            if (!made) break;
+        }
+        auto remove_partials = [&partials] {
+            std::error_code ec;
+            for (const std::string& partial : partials) std::filesystem::remove(partial, ec);
+        };
         if (!made) {
+            remove_partials();
             rest.push_back(index);
             continue;
         }
         try {
             if (!store_->output_running(job.id, out.index, unix_now_ms(), job.lease)) {  // deleted
-                std::error_code ec;
-                std::filesystem::remove(partial, ec);
+                remove_partials();
                 return {};
             }
-            store_artifact(job, out, partial, dump_result(reused_result(*made)), cancel);
+            store_artifact(job, out, partials, dump_result(reused_result(*made)), cancel);
         } catch (const Error& e) {
             if (e.code() == ErrorCode::canceled && cancel->load()) return {};
             output_failed(job, out, e);

@@ -431,30 +431,43 @@ std::string JobService::input_path(const std::string& id, int file) const {
     return job_dir(id) + "/" + input_name(file);
 }
 
-std::string JobService::partial_path(const JobClaim& job, const JobOutput& out) const {
+std::string JobService::partial_path(const JobClaim& job, const std::string& artifact) const {
     // Written under a temporary name with the same extension (the converter
     // picks the format from it), then renamed: an artifact exists only complete.
     // With leases the name holds the claim's token: a run that lost its lease
     // and the one that took over never write the same temporary file.
     return job_dir(job.id) + "/partial-" + (job.lease.empty() ? std::string() : job.lease.substr(0, 12) + "-") +
-           out.artifact;
+           artifact;
+}
+
+std::vector<std::string> JobService::partial_paths(const JobClaim& job, const JobOutput& out) const {
+    std::vector<std::string> paths;
+    for (const ArtifactFile& f : output_artifacts(out)) paths.push_back(partial_path(job, f.name));
+    return paths;
 }
 
 void JobService::output_failed(const JobClaim& job, const JobOutput& out, const std::exception& e) {
     const auto* error = dynamic_cast<const Error*>(&e);
     const auto* service_error = dynamic_cast<const ServiceError*>(&e);  // the render's time limit
+    bool recorded = false;
     if (!error && !service_error) {
-        store_->output_failed(job.id, out.index, "internal", e.what(), unix_now_ms(), job.lease);
-        return;
+        recorded = store_->output_failed(job.id, out.index, "internal", e.what(), unix_now_ms(), job.lease);
+    } else {
+        const ProblemCode code = error ? ProblemCode(error->code()) : ProblemCode(service_error->code());
+        recorded = store_->output_failed(job.id, out.index, code.name(),
+                                         without_paths(e.what(), job_dir(job.id), ctx_.scratch.path()), unix_now_ms(),
+                                         job.lease);
     }
-    const ProblemCode code = error ? ProblemCode(error->code()) : ProblemCode(service_error->code());
-    store_->output_failed(job.id, out.index, code.name(), without_paths(e.what(), job_dir(job.id), ctx_.scratch.path()),
-                          unix_now_ms(), job.lease);
+    // The files it placed before it failed (the first views of a separate
+    // layout) go with it: a failed output has no artifact. Not those of a run
+    // that took its lease over (recorded is false then).
+    if (!recorded) return;
+    std::error_code ec;
+    for (const ArtifactFile& f : output_artifacts(out)) fs::remove(artifact_path(job.id, f.name), ec);
 }
 
-void JobService::store_artifact(const JobClaim& job, const JobOutput& out, const std::string& partial,
-                                const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel,
-                                const std::string& content_sha256) {
+int64_t JobService::place_artifact(const JobClaim& job, const std::string& name, const std::string& partial,
+                                   int64_t placed_bytes, const std::shared_ptr<std::atomic<bool>>& cancel) {
     std::error_code ec;
     // A run whose lease was lost meanwhile leaves the artifact to the run that took over.
     if (!job.lease.empty() && !store_->renew(job)) {
@@ -463,23 +476,61 @@ void JobService::store_artifact(const JobClaim& job, const JobOutput& out, const
         throw Error(ErrorCode::canceled, "the lease of this output was lost or its job canceled");
     }
     try {
-        check_artifact_quota(store_->artifact_bytes(), static_cast<int64_t>(fs::file_size(partial, ec)),
-                             ctx_.config.max_artifact_bytes, "the artifact " + out.artifact);
+        // The output's files placed already count before its success records them.
+        check_artifact_quota(store_->artifact_bytes() + placed_bytes, static_cast<int64_t>(fs::file_size(partial, ec)),
+                             ctx_.config.max_artifact_bytes, "the artifact " + name);
     } catch (const Error&) {
         fs::remove(partial, ec);
         throw;
     }
-    const std::string final_path = artifact_path(job.id, out.artifact);
+    const std::string final_path = artifact_path(job.id, name);
     fs::rename(partial, final_path, ec);
-    if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + out.artifact + ": " + ec.message());
+    if (ec) throw Error(ErrorCode::io, "cannot store the artifact " + name + ": " + ec.message());
     sync_dir(job_dir(job.id));
-    const auto size = static_cast<int64_t>(fs::file_size(final_path, ec));
-    if (!store_->output_succeeded(job.id, out.index, size, result_json, unix_now_ms(), job.lease)) {
+    return static_cast<int64_t>(fs::file_size(final_path, ec));
+}
+
+void JobService::output_stored(const JobClaim& job, const JobOutput& out, const std::vector<int64_t>& sizes,
+                               const std::string& made_json, const std::string& content_sha256) {
+    const std::vector<ArtifactFile> files = output_artifacts(out);
+    std::string result_json = made_json;
+    int64_t bytes = 0;
+    for (const int64_t size : sizes) bytes += size;
+    if (files.size() > 1) {  // the size of each file, for the job document
+        nlohmann::json result = nlohmann::json::parse(made_json, nullptr, false);
+        if (!result.is_object()) result = nlohmann::json::object();
+        result["artifacts"] = nlohmann::json::array();
+        for (size_t i = 0; i < files.size() && i < sizes.size(); ++i)
+            result["artifacts"].push_back({{"name", files[i].name}, {"bytes", sizes[i]}});
+        result_json = result.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    }
+    if (!store_->output_succeeded(job.id, out.index, bytes, result_json, unix_now_ms(), job.lease)) {
         if (!job.lease.empty())
             log_event("job_output_fenced", nlohmann::json{{"job_id", job.id}, {"output", out.index}}.dump());
         return;
     }
-    if (!content_sha256.empty()) reuse_.remember(ArtifactReuse::key(content_sha256, out), final_path, result_json);
+    if (content_sha256.empty()) return;
+    for (const ArtifactFile& f : files)
+        reuse_.remember(ArtifactReuse::key(content_sha256, out, f.name), artifact_path(job.id, f.name), result_json);
+}
+
+void JobService::store_artifact(const JobClaim& job, const JobOutput& out, const std::vector<std::string>& partials,
+                                const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel,
+                                const std::string& content_sha256) {
+    const std::vector<ArtifactFile> files = output_artifacts(out);
+    std::vector<int64_t> sizes;
+    int64_t bytes = 0;
+    for (size_t i = 0; i < files.size(); ++i) {
+        try {
+            sizes.push_back(place_artifact(job, files[i].name, partials.at(i), bytes, cancel));
+            bytes += sizes.back();
+        } catch (const std::exception&) {
+            std::error_code ec;
+            for (size_t k = i + 1; k < partials.size(); ++k) fs::remove(partials[k], ec);
+            throw;
+        }
+    }
+    output_stored(job, out, sizes, result_json, content_sha256);
 }
 
 }  // namespace nurbsrt::server

@@ -114,13 +114,27 @@ private:
                     const std::string& content_sha256);
     // Fails the output with `e` (its message without the service's paths).
     void output_failed(const JobClaim& claim, const JobOutput& out, const std::exception& e);
-    // Moves a written artifact (under its partial name) into place within the
-    // quota and records the output's success with `result`; an artifact made
-    // here (`content_sha256` of its input given) is kept for reuse.
-    void store_artifact(const JobClaim& claim, const JobOutput& out, const std::string& partial,
+    // Moves the written files of `out` (under their partial names, in
+    // output_artifacts order) into place within the quota and records the
+    // output's success with `result`; artifacts made here (`content_sha256` of
+    // their input given) are kept for reuse.
+    void store_artifact(const JobClaim& claim, const JobOutput& out, const std::vector<std::string>& partials,
                         const std::string& result_json, const std::shared_ptr<std::atomic<bool>>& cancel,
                         const std::string& content_sha256 = {});
-    std::string partial_path(const JobClaim& claim, const JobOutput& out) const;
+    // Moves one written file into place under `name` (downloadable from then
+    // on), the lease and the quota checked first (`placed_bytes`: the output's
+    // files placed before it); returns its size.
+    int64_t place_artifact(const JobClaim& claim, const std::string& name, const std::string& partial,
+                           int64_t placed_bytes, const std::shared_ptr<std::atomic<bool>>& cancel);
+    // Records the success of `out`, whose files are in place (`sizes`, in
+    // output_artifacts order, listed in its result when there are several),
+    // and keeps them for reuse when `content_sha256` is given.
+    void output_stored(const JobClaim& claim, const JobOutput& out, const std::vector<int64_t>& sizes,
+                       const std::string& result_json, const std::string& content_sha256);
+    // The temporary name of the artifact `artifact` while it is written.
+    std::string partial_path(const JobClaim& claim, const std::string& artifact) const;
+    // Those of every file of `out`, in output_artifacts order.
+    std::vector<std::string> partial_paths(const JobClaim& claim, const JobOutput& out) const;
     std::string input_path(const std::string& id, int file) const;
     // Whether the job's spec asked `force` (no artifact reuse).
     bool forced(const std::string& id) const;

@@ -9,7 +9,6 @@
 #include "core/json_limits.h"
 #include "options/render_request.h"
 #include "server/render/render_limits.h"
-#include "server/http/zip_archive.h"
 #include "server/jobs/callback_url.h"
 
 namespace nurbsrt::server {
@@ -116,10 +115,8 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             }
             extension = r.format.extension;
             out.content_type = r.format.content_type;
-            if (r.layout == ViewLayout::separate) {  // the views' images in one ZIP (views_zip)
-                extension = ".zip";
-                out.content_type = kZipMediaType;
-            }
+            // An artifact per view (output_artifacts): the first view's names the output's.
+            if (r.layout == ViewLayout::separate) extension = "." + r.views.front().name + extension;
         } else {
             for (const auto& [key, v] : o.items())
                 if (key != "file" && key != "type" && key != "format" && key != "options")
@@ -137,17 +134,14 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
             const ConversionFormat f = conversion_format_from_name(o["format"].get<std::string>());
             if (f == ConversionFormat::unknown)
                 bad_spec(where + ": 'format' must be one of " + conversion_format_names());
-            // An artifact is one file; OBJ's .mtl would be left behind.
-            if (conversion_format_companion(f) != nullptr)
-                bad_spec(where + ": format '" + conversion_format_short_name(f) +
-                         "' writes two files and is not a job output yet (POST /v1/conversions answers it as a ZIP)");
             options["format"] = conversion_format_short_name(f);
             try {
-                (void)parse_conversion_request(options.dump());
+                // Stored resolved (every default named): the job document echoes them
+                // so, and equal requests share an artifact reuse key however they were spelt.
+                out.options_json = conversion_request_json(parse_conversion_request(options.dump()));
             } catch (const Error& e) {
                 throw Error(e.code(), where + ": " + e.what());
             }
-            out.options_json = options.dump();
             extension = conversion_format_extension(f);
             out.content_type = conversion_format_content_type(f);
         }
@@ -164,10 +158,29 @@ std::string artifact_name(int file, const std::string& type, int output, const s
     return std::to_string(file) + "-" + type + "-" + std::to_string(output) + extension;
 }
 
+std::vector<ArtifactFile> output_artifacts(const JobOutput& out) {
+    std::vector<ArtifactFile> files = {{out.artifact, "", out.content_type}};
+    const std::string stem = out.artifact.substr(0, out.artifact.find('.'));
+    if (out.kind == OutputKind::render) {
+        const RenderRequest r = parse_render_options(out.options_json);
+        // A job stored before views were artifacts of their own has its ZIP (one file).
+        if (r.layout != ViewLayout::separate || out.artifact.ends_with(".zip")) return files;
+        files.clear();
+        for (const std::string& view : view_names(r))
+            files.push_back({stem + "." + view + r.format.extension, view, r.format.content_type});
+        return files;
+    }
+    const ConversionFormat f = parse_conversion_format(out.options_json);
+    if (const char* companion = conversion_format_companion(f))
+        files.push_back({stem + companion, "", conversion_format_companion_content_type(f)});
+    return files;
+}
+
 bool valid_artifact_name(const std::string& name) {
-    static const std::regex pattern(
-        R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}\.(png|jpg|tif|exr|zip|step|igs|stl|glb|json|brep|wrl)$)");
-    return name.size() <= 64 && std::regex_match(name, pattern);
+    // A view's label (checked_view_name: [A-Za-z0-9_-]{1,32}) between the output and the extension.
+    static const std::regex pattern(R"(^[0-9]{1,5}-(render|conversion)-[0-9]{1,5}(\.[A-Za-z0-9_-]{1,32})?\.)"
+                                    R"((png|jpg|tif|exr|zip|step|igs|stl|glb|json|brep|wrl|obj|mtl)$)");
+    return name.size() <= 80 && std::regex_match(name, pattern);
 }
 
 std::string artifact_format(const std::string& name) {

@@ -30,6 +30,18 @@ JobSpec parse_job_spec(const std::string& job_json, const std::vector<JobInput>&
 
 // `<file>-<type>-<output><extension>`, e.g. 0-render-1.png, 1-conversion-0.stl.
 std::string artifact_name(int file, const std::string& type, int output, const std::string& extension);
+
+// One file an output makes: its name (generated, valid_artifact_name), the
+// view it shows (layout separate; else empty) and its content type.
+struct ArtifactFile {
+    std::string name, view, content_type;
+};
+// Every file of `out`, JobOutput::artifact first: a render with layout
+// separate makes one per view, `<output>.<view><extension>` (0-render-1.front.png,
+// the name of the API's ZIP entry after the output's); an OBJ conversion its
+// .obj and the .mtl the .obj's mtllib line names (1-conversion-0.obj, 1-conversion-0.mtl);
+// every other output the one file JobOutput::artifact.
+std::vector<ArtifactFile> output_artifacts(const JobOutput& out);
 bool valid_artifact_name(const std::string& name);
 // The output format named by an artifact's extension (png, exr, step, ...).
 std::string artifact_format(const std::string& name);

@@ -250,19 +250,22 @@ RenderedImage render_upload(ServerContext& ctx, const std::string& bytes, const 
     stages.mark("queue");
 
     std::vector<RenderResult> results;
-    for (const Camera& camera : cameras) {
-        results.push_back(render_bounded(ctx, prepared, camera, options, ticket, control.cancel, control.should_stop));
+    for (size_t v = 0; v < cameras.size(); ++v) {
+        results.push_back(
+            render_bounded(ctx, prepared, cameras[v], options, ticket, control.cancel, control.should_stop));
         add_frame_stages(results.back().stats, stages);
         stages.mark("frame_setup");  // the rest: the options, starting the render's thread and joining it
-    }
-    for (size_t v = 0; v < r.views.size(); ++v)
+        if (r.views.empty()) continue;
         out.views.push_back({r.views[v].name, cameras[v], results[v].stats, {}, {}});
-    if (r.layout == ViewLayout::separate) {  // an image per view
-        for (size_t v = 0; v < out.views.size(); ++v) {
-            out.views[v].bytes = encode_image(results[v].image, r.format.name);
-            out.views[v].aovs = aov_buffers(results[v].image, r.aovs);
-        }
-    } else {
+        if (r.layout != ViewLayout::separate) continue;
+        // An image per view, encoded as soon as it is rendered.
+        RenderedImage::View& view = out.views.back();
+        view.bytes = encode_image(results[v].image, r.format.name);
+        view.aovs = aov_buffers(results[v].image, r.aovs);
+        stages.mark("encode");
+        if (control.view_done) control.view_done(view);
+    }
+    if (r.layout != ViewLayout::separate) {
         RenderImage sheet;
         if (!r.views.empty()) sheet = compose_sheet(results, view_names(r), options);
         const RenderImage& image = r.views.empty() ? results[0].image : sheet;

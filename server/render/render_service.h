@@ -60,7 +60,7 @@ struct RenderedImage {
 };
 
 // Layout separate: a ZIP of the views' images, "<view>.<extension>" each (the
-// API's answer without JSON, a job's artifact).
+// API's answer without JSON; a job stores each view as an artifact instead).
 std::string views_zip(const RenderedImage& image, const OutputFormat& format);
 
 // The Statistics object of `image` (the renderer's statistics with the camera,
@@ -91,6 +91,10 @@ struct RenderControl {
     std::shared_ptr<const PreparedScene> scene;
     // The frame's threads (RenderOptions::threads); 0: the service's --render-threads.
     int threads = 0;
+    // Layout separate: called with each view as soon as its image is encoded,
+    // before the next view renders (a job stores it as its artifact then).
+    // What it throws ends the render.
+    std::function<void(const RenderedImage::View&)> view_done;
 };
 
 // The imported and prepared scene of `cad_bytes` (STEP/IGES, checked by

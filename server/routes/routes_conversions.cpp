@@ -40,8 +40,7 @@ std::string zip_with_companion(const std::string& companion_path, std::string ma
     const std::string companion_ext = conversion_format_companion(format);
     const std::string written = std::filesystem::path(companion_path).filename().string();
     const std::string renamed = stem + companion_ext;
-    if (const size_t at = main.find("mtllib " + written); at != std::string::npos)
-        main.replace(at + 7, written.size(), renamed);
+    main = with_companion_renamed(std::move(main), format, written, renamed);
     return zip_archive({{stem + conversion_format_extension(format), std::move(main), true},
                         {renamed, read_file_bytes(companion_path), true}});
 }
@@ -52,7 +51,8 @@ void handle_conversion(ServerContext& ctx, const httplib::Request& req, httplib:
     // Stages marked end to end from the request's arrival (see
     // kConversionStages): they sum to the total.
     StageClock stages(GuardedServer::request_received_at());
-    Upload upload = read_upload(req, {"format", "units", "step_schema", "iges_mode", "deflection", "strict"});
+    Upload upload =
+        read_upload(req, {"format", "units", "step_schema", "iges_mode", "deflection", "angular_deflection", "strict"});
     const ConversionRequest request = parse_conversion_request(upload.options_json);
     const ConversionFormat format = request.format;
     // The converted file itself, or JSON with it inside (RFC 9110 §12.5.1): refused before any work.

@@ -131,7 +131,7 @@ def test_oversized_body_is_still_413(url):
     ("/v1/renders", {}, {"camera": {"colour": 1}}, "unknown option 'colour' in 'camera' (camera options: view"),
     ("/v1/renders", {}, {"width": 64, "backgrund": "1,1,1"}, "unknown option 'backgrund'"),
     ("/v1/conversions", {"format": "stl", "colour": "red"}, None,
-     "unknown option 'colour' (a conversion takes format, units, step_schema, iges_mode, deflection, strict)"),
+     "unknown option 'colour' (a conversion takes format, units, step_schema, iges_mode, deflection, angular_deflection, strict)"),
 ])
 def test_unknown_options_are_named(url, path, params, options, expected):
     files = {"file": ("s.step", SCREW.read_bytes())}

@@ -250,20 +250,23 @@ def test_job_with_several_files_and_outputs(url, tmp_path):
     assert 'nurbsrt_jobs_finished_total{result="succeeded"} 0' not in m
 
 
-def test_render_output_with_separate_views_is_a_zip(url):
-    """A job's render with views and layout separate: one ZIP artifact of an image per view."""
-    import io
-    import zipfile
+def test_render_output_with_separate_views_is_an_artifact_per_view(url):
+    """A job's render with views and layout separate: an artifact per view, `<output>.<view>.png`, listed with
+    its view and counted in the job's statistics (test_jobs_formats.py: downloadable while the job runs)."""
     job = accepted(submit(url, [("screw.step", SCREW.read_bytes())], {"outputs": [
         {"file": 0, "type": "render",
          "options": {"width": 96, "height": 72, "views": ["front", "iso"], "layout": "separate"}}]}))
     job = wait_finished(url, job["id"])
     assert job["state"] == "succeeded", json.dumps(job)[:800]
     out = job["outputs"][0]
-    assert out["artifact"]["content_type"] == "application/zip" and out["artifact"]["name"].endswith(".zip")
-    archive = zipfile.ZipFile(io.BytesIO(download(url, out)))
-    assert archive.namelist() == ["front.png", "iso.png"]
-    assert all(png_size(archive.read(n)) == (96, 72) for n in archive.namelist())
+    files = out["artifacts"]
+    assert [(a["name"], a["view"], a["content_type"]) for a in files] == [
+        ("0-render-0.front.png", "front", "image/png"), ("0-render-0.iso.png", "iso", "image/png")]
+    assert out["artifact"] == files[0] and out["format"] == "png"
+    assert all(png_size(download(url, {"artifact": a})) == (96, 72) for a in files)
+    assert out["statistics"]["artifacts"] == [{"name": a["name"], "bytes": a["bytes"]} for a in files]
+    assert job["statistics"]["artifacts"] == 2
+    assert job["statistics"]["artifact_bytes"] == sum(a["bytes"] for a in files)
 
 
 def test_unreadable_cad_is_a_failed_output(url):
