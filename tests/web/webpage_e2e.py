@@ -21,7 +21,7 @@ ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS") or tempfile.mkd
 SCREENSHOT = os.environ.get("NURBSRT_WEB_SCREENSHOT")  # where to save the README picture, if set
 KEY = os.environ.get("NURBSRT_WEB_KEY", "")  # the service's API key, typed into the page
 MEASURE_SCREENSHOT = os.environ.get("NURBSRT_WEB_MEASURE_SCREENSHOT")  # the README's measuring picture, if set
-ONLY = os.environ.get("NURBSRT_WEB_ONLY")  # "measure": the page's load, the upload and the measuring steps only
+ONLY = os.environ.get("NURBSRT_WEB_ONLY")  # "measure" or "viewer": the page's load, the upload and those steps only
 RENDERS = "/v1/renders"
 
 # Pixels of the canvas: how many differ from the background, a checksum, and
@@ -858,6 +858,27 @@ def step_narrow(page):
     assert m["doc"] <= m["view"], m
 
 
+def step_wide(page):
+    """At 1920x1080 the controls stand beside the image, the image is not scaled past its pixels and nothing
+    is wider than the viewport."""
+    page.b.call("Emulation.setDeviceMetricsOverride", width=1920, height=1080, deviceScaleFactor=1, mobile=False)
+    page.b.pump(0.5)
+    m = page.ev("""(() => { const r = (s) => document.querySelector(s).getBoundingClientRect();
+      const c = r('.controls'), p = r('#view');
+      return {doc: document.documentElement.scrollWidth, view: window.innerWidth, controlsRight: c.right, imageLeft: p.left,
+        controlsTop: c.top, imageTop: p.top, imageBottom: p.bottom, shown: p.width, pixels: document.getElementById('view').width}; })()""")
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "wide-1920.png")
+    log(f"1920 px layout: document {m['doc']} px wide in a {m['view']} px viewport; controls end at x {m['controlsRight']:.0f},"
+        f" image from x {m['imageLeft']:.0f}, shown {m['shown']:.0f} px wide for {m['pixels']} pixels")
+    page.b.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
+    page.b.pump(0.3)
+    assert m["doc"] <= m["view"], m
+    assert m["controlsRight"] <= m["imageLeft"] and m["controlsTop"] < m["imageBottom"], f"not side by side: {m}"
+    assert m["shown"] <= m["pixels"] + 0.5, f"the image is stretched past its pixels: {m}"
+
+
 def step_csp_enforced(page):
     """The browser enforces the page's policy: an injected inline script does not run."""
     directive = page.ev("""new Promise((resolve) => {
@@ -891,6 +912,11 @@ def main():
             browser.call(f"{domain}.enable")
         browser.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
         current = "load"; step_load(page)
+        if ONLY == "viewer":  # a quick run of the viewer steps of this file alone, while working on them
+            current = "upload"; step_upload(page, step_file)
+            current = "wide"; step_wide(page)
+            log("the viewer steps passed (NURBSRT_WEB_ONLY=viewer: no other step ran)")
+            return 0
         if ONLY == "measure":  # a quick run of the measuring step alone, while working on it
             current = "upload"; step_upload(page, step_file)
             current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
@@ -917,6 +943,7 @@ def main():
         current = "upload once"; step_upload_once(page)
         current = "link"; step_link_reopens(page)
         current = "narrow"; step_narrow(page)
+        current = "wide"; step_wide(page)
         current = "job"; step_job(page, [step_file, other_file], downloads)
         current = "conversion"; step_conversion(page)
         current = "accessibility"; step_accessibility(page)
