@@ -159,6 +159,12 @@ function show(frame, job) {
     const s = frame.stats;
     let text = `${frame.width}×${frame.height}, ${s.method}, ${s.faces} faces, ${s.pixels_hit} pixels hit, ` +
       `${fmt(s.timings_ms.total)} ms (${s.cache === 'hit' ? 'cached scene' : 'imported'})`;
+    // The wall-clock time the user waited for this frame (request to image on screen).
+    if (job.startedAt) {
+      const elapsed = (performance.now() - job.startedAt) / 1000;
+      canvas.dataset.elapsedS = elapsed.toFixed(1);
+      text += `; on screen ${elapsed.toFixed(1)} s after the request`;
+    }
     if (job.releasedAt) {
       const latency = performance.now() - job.releasedAt;
       canvas.dataset.latencyMs = latency.toFixed(1);
@@ -188,6 +194,7 @@ function busy(on, job) {
     return;
   }
   const t0 = performance.now();
+  job.startedAt = t0;
   const what = job.first ? 'Importing and rendering' : 'Rendering';
   const tick = () => { $('busy-text').textContent = `${what}… ${((performance.now() - t0) / 1000).toFixed(1)} s`; };
   tick();

@@ -858,6 +858,30 @@ def step_narrow(page):
     assert m["doc"] <= m["view"], m
 
 
+def step_elapsed(page):
+    """A render in flight shows its elapsed seconds ticking; the landed frame its final time."""
+    page.scroll_to("resolution")
+    page.ev("""(() => { window.busyTexts = []; const t = document.getElementById('busy-text');
+      new MutationObserver(() => window.busyTexts.push(t.textContent)).observe(t, {childList: true, characterData: true,
+        subtree: true}); })()""")
+    before = page.frames()
+    # A slower frame (16 rays per edge pixel, 1600x1200), so that the seconds tick; one request.
+    page.ev("document.getElementById('antialias').value = '16'")
+    page.set_select("resolution", "1600x1200")
+    page.wait_final_after(before)
+    ticks = page.ev("window.busyTexts")
+    status = page.ev("document.getElementById('status').textContent")
+    final = float(page.ev("document.getElementById('view').dataset.elapsedS"))
+    shown = [float(t.split("…")[1].split("s")[0]) for t in ticks if "…" in t]
+    log(f"elapsed time: {len(shown)} ticks {shown[:3]}...{shown[-2:]}; status ends '{status[-40:]}'")
+    assert len(set(shown)) >= 2 and shown == sorted(shown), f"the seconds did not tick: {ticks}"
+    assert f"on screen {final:.1f} s after the request" in status and final >= shown[-1], (status, shown)
+    before = page.frames()
+    page.ev("document.getElementById('antialias').value = '4'")
+    page.set_select("resolution", "800x600")
+    page.wait_final_after(before)
+
+
 def step_wide(page):
     """At 1920x1080 the controls stand beside the image, the image is not scaled past its pixels and nothing
     is wider than the viewport."""
@@ -914,6 +938,7 @@ def main():
         current = "load"; step_load(page)
         if ONLY == "viewer":  # a quick run of the viewer steps of this file alone, while working on them
             current = "upload"; step_upload(page, step_file)
+            current = "elapsed"; step_elapsed(page)
             current = "wide"; step_wide(page)
             log("the viewer steps passed (NURBSRT_WEB_ONLY=viewer: no other step ran)")
             return 0
@@ -944,6 +969,7 @@ def main():
         current = "link"; step_link_reopens(page)
         current = "narrow"; step_narrow(page)
         current = "wide"; step_wide(page)
+        current = "elapsed"; step_elapsed(page)
         current = "job"; step_job(page, [step_file, other_file], downloads)
         current = "conversion"; step_conversion(page)
         current = "accessibility"; step_accessibility(page)
