@@ -4,7 +4,7 @@
 // times, the method comparison, jobs and conversions. Only the public REST API
 // is used (api.js).
 
-import { apiKey, setApiKey, render, storeFile, storedFile, base64Bytes, saveBlob } from './api.js';
+import { apiKey, setApiKey, call, render, storeFile, storedFile, base64Bytes, saveBlob } from './api.js';
 import { CadControls } from './cad.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
@@ -154,6 +154,7 @@ function show(frame, job) {
     draw();
     showWarnings(frame.stats.warnings);
     $('save-png').disabled = false;
+    $('save-exr').disabled = false;
     showStages($('stages'), $('stage-list'), frame.stats);
     canvas.dataset.final = '1';
     const s = frame.stats;
@@ -213,8 +214,35 @@ const cad = new CadControls($, {
   },
   final: () => renderFinal(),
 });
+const saveName = (ext) => `${(state.fileName || 'render').replace(/\.[^.]*$/, '')}.${ext}`;
 $('save-png').addEventListener('click', () => {
-  if (state.frame) saveBlob(state.frame.blob, `${(state.fileName || 'render').replace(/\.[^.]*$/, '')}.png`);
+  if (state.frame) saveBlob(state.frame.blob, saveName('png'));
+});
+// The view on screen as OpenEXR: the service writes every AOV as channels of
+// their own (depth, face, normal, (u, v), iterations), so a compositor or a
+// script reads the exact per-pixel values; fetched with the key, saved as a blob.
+$('save-exr').addEventListener('click', async () => {
+  if (!state.fileId) return;
+  const button = $('save-exr'), status = $('save-status');
+  button.disabled = true;
+  status.textContent = 'Rendering the EXR…';
+  try {
+    const job = { final: true };
+    if (!state.view && state.camera) job.camera = state.camera.toOption();
+    else job.view = state.view || 'iso';
+    const res = await call('/v1/renders', {
+      method: 'POST', body: JSON.stringify({ file_id: state.fileId, ...requestOptions(job), format: 'exr' }),
+      contentType: 'application/json', accept: 'image/x-exr', retry: true,
+    });
+    const blob = await res.blob(), name = saveName('exr');
+    saveBlob(blob, name);
+    status.textContent = `saved ${name} (${blob.size} bytes)`;
+  } catch (err) {
+    status.textContent = '';
+    report(err);
+  } finally {
+    button.disabled = !state.fileId;
+  }
 });
 
 const scheduler = new RenderScheduler({
@@ -253,6 +281,8 @@ function clearFrame() {
   $('legend').hidden = true;
   showWarnings([]);
   $('save-png').disabled = true;
+  $('save-exr').disabled = true;
+  $('save-status').textContent = '';
   cad.setModel(null);
   measure.reset();
   setStatus('');

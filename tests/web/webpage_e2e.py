@@ -9,6 +9,8 @@ import os
 import pathlib
 import shutil
 import statistics
+import struct
+import subprocess
 import sys
 import tempfile
 import time
@@ -274,6 +276,8 @@ def render_exchanges(page, since):
         elif m == "Network.loadingFinished" and p["requestId"] in sent:
             rid = p["requestId"]
             body = page.b.call("Network.getResponseBody", requestId=rid)
+            if body.get("base64Encoded"):  # an image answer (the EXR download), no statistics
+                continue
             stats = json.loads(body["body"])["statistics"]
             options = None
             try:  # the multipart body, where Chromium keeps it (the options part is an in-memory blob)
@@ -882,6 +886,53 @@ def step_elapsed(page):
     page.wait_final_after(before)
 
 
+def exr_channels(path):
+    """The channel names of an OpenEXR file: OpenImageIO's oiiotool where Debian's openimageio-tools is
+    installed, else the header's `channels` attribute read directly (OpenEXR file layout: magic, version,
+    then name\\0 type\\0 size value attributes; chlist: name\\0 then 16 bytes per channel, ended by \\0)."""
+    tool = shutil.which("oiiotool")
+    if tool:
+        out = subprocess.run([tool, "--info", "-v", str(path)], capture_output=True, text=True, check=True).stdout
+        line = next(l for l in out.splitlines() if "channel list:" in l)
+        return [c.strip() for c in line.split("channel list:")[1].split(",")], "oiiotool"
+    data = path.read_bytes()
+    assert data[:4] == b"\x76\x2f\x31\x01", f"not an OpenEXR file: {data[:8]!r}"
+    at = 8
+    while data[at] != 0:
+        name_end = data.index(b"\0", at)
+        type_end = data.index(b"\0", name_end + 1)
+        size = struct.unpack_from("<i", data, type_end + 1)[0]
+        value = data[type_end + 5:type_end + 5 + size]
+        if data[at:name_end] == b"channels":
+            names, i = [], 0
+            while value[i] != 0:
+                end = value.index(b"\0", i)
+                names.append(value[i:end].decode())
+                i = end + 1 + 16
+            return names, "the file's header"
+        at = type_end + 5 + size
+    raise AssertionError("no channels attribute in the EXR header")
+
+
+def step_exr_download(page, downloads):
+    """Save EXR with AOVs: a render of the view on screen as OpenEXR, saved with the key; its channels read."""
+    page.b.call("Browser.setDownloadBehavior", behavior="allow", downloadPath=str(downloads))
+    page.scroll_to("save-exr")
+    click(page, "save-exr")
+    status = page.b.wait_for("(() => { const t = document.getElementById('save-status').textContent;"
+                             " return t.startsWith('saved') ? t : ''; })()", 120, "the EXR")
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        done = [p for p in downloads.iterdir() if p.suffix == ".exr"]
+        if done:
+            break
+        page.b.pump(0.2)
+    assert done, "no EXR was downloaded"
+    names, how = exr_channels(done[0])
+    log(f"EXR download: {status}; channels ({how}) {names}")
+    assert {"R", "G", "B", "A", "Z", "face", "N.X", "N.Y", "N.Z", "u", "v", "iterations"} <= set(names), names
+
+
 def step_wide(page):
     """At 1920x1080 the controls stand beside the image, the image is not scaled past its pixels and nothing
     is wider than the viewport."""
@@ -939,6 +990,7 @@ def main():
         if ONLY == "viewer":  # a quick run of the viewer steps of this file alone, while working on them
             current = "upload"; step_upload(page, step_file)
             current = "elapsed"; step_elapsed(page)
+            current = "EXR download"; step_exr_download(page, downloads)
             current = "wide"; step_wide(page)
             log("the viewer steps passed (NURBSRT_WEB_ONLY=viewer: no other step ran)")
             return 0
@@ -972,6 +1024,7 @@ def main():
         current = "elapsed"; step_elapsed(page)
         current = "job"; step_job(page, [step_file, other_file], downloads)
         current = "conversion"; step_conversion(page)
+        current = "EXR download"; step_exr_download(page, downloads)
         current = "accessibility"; step_accessibility(page)
         errors = console_errors(browser.events)
         assert not errors, f"console errors: {errors}"
