@@ -94,7 +94,7 @@ function requestOptions(job) {
   const o = { ...image, ...cad.options(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
   else Object.assign(o, { view: job.view, projection: $('projection').value });
-  if (job.aovs) o.aovs = aovsFor($('look').value, measure.on);
+  if (job.aovs) o.aovs = aovsFor($('look').value, measure.on || cad.picking);
   return o;
 }
 
@@ -213,6 +213,9 @@ const cad = new CadControls($, {
     scheduler.submit(job);
   },
   final: () => renderFinal(),
+  frame: () => state.frame,
+  needAovs: askAovs,
+  busyElsewhere: () => measure.on,
 });
 const saveName = (ext) => `${(state.fileName || 'render').replace(/\.[^.]*$/, '')}.${ext}`;
 $('save-png').addEventListener('click', () => {
@@ -257,12 +260,17 @@ const scheduler = new RenderScheduler({
 // waiting for them.
 function renderFinal(extra = {}) {
   if (!state.fileId) return;
-  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded' || measure.on, ...extra };
+  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded' || measure.on || cad.picking, ...extra };
   // A named view still chosen is fitted again (explode, hidden parts change what
   // it frames); after an orbit, the camera the user left.
   if (!job.view && !state.view && state.camera) job.camera = state.camera.toOption();
   else job.view = job.view || state.view || 'iso';
   scheduler.submit(job);
+}
+
+// The frame on screen again, with the AOVs (measuring and picking a face read them).
+function askAovs() {
+  if (state.frame && !state.frame.stats.views) renderFinal({ aovs: true });
 }
 
 // ---- inputs -------------------------------------------------------------------
@@ -459,7 +467,7 @@ function hover(e) {
 // explode or hidden part moves or removes them).
 const measure = new Measure($, {
   frame: () => state.frame,
-  needAovs: () => { if (state.frame && !state.frame.stats.views) renderFinal({ aovs: true }); },
+  needAovs: askAovs,
   file: () => (state.fileId ? { id: state.fileId, units: state.units } : null),
   snapAllowed: () => Object.keys(cad.options()).length === 0,
   report,

@@ -562,6 +562,21 @@ def final_exchange(page, action, what):
     return exchanges[-1]
 
 
+def drag_section(page, positions):
+    """Drags the section's position slider through `positions` (previews), then releases it (the full frame);
+    the (options, statistics) of the renders since, and the previews' statistics."""
+    since, before = time.monotonic(), page.frames()
+    for t in positions:
+        page.ev(f"(() => {{ const r = document.getElementById('section-at'); r.value = '{t}';"
+                f" r.dispatchEvent(new Event('input')); }})()")
+        page.b.pump(0.15)
+    page.ev("document.getElementById('section-at').dispatchEvent(new Event('change'))")
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    frames = render_exchanges(page, since)
+    return frames, [st for o, st in frames if st["width"] < 800]
+
+
 def step_cad_views(page, assembly):
     """An assembly: the parts panel lists its tree; hide, isolate and ghost a part; a section across Z
     with caps, dragged along (previews while dragging, the exact frame on release); explode. Each
@@ -588,17 +603,7 @@ def step_cad_views(page, assembly):
                                     " s.dispatchEvent(new Event('change')); })()", "a section")
     caps0 = stats["sections"]["cap_pixels"]
     assert stats["sections"]["planes"] == 1 and caps0 > 0, stats["sections"]
-    since = time.monotonic()
-    before = page.frames()
-    for t in (0.45, 0.4, 0.35, 0.3):  # dragging the position slider: previews
-        page.ev(f"(() => {{ const r = document.getElementById('section-at'); r.value = '{t}';"
-                f" r.dispatchEvent(new Event('input')); }})()")
-        page.b.pump(0.15)
-    page.ev("document.getElementById('section-at').dispatchEvent(new Event('change'))")
-    page.wait_final_after(before)
-    page.b.pump(0.2)
-    drag_frames = render_exchanges(page, since)
-    previews = [st for o, st in drag_frames if st["width"] < 800]
+    drag_frames, previews = drag_section(page, (0.45, 0.4, 0.35, 0.3))
     log(f"section drag: {len(previews)} previews, then the full frame; caps {caps0} -> "
         f"{drag_frames[-1][1]['sections']['cap_pixels']} pixels")
     assert previews and drag_frames[-1][1]["width"] == 800 and drag_frames[-1][1]["sections"]["cap_pixels"] > 0
@@ -954,6 +959,62 @@ def step_wide(page):
     assert m["shown"] <= m["pixels"] + 0.5, f"the image is stretched past its pixels: {m}"
 
 
+def step_section_from_face(page, cube):
+    """Section from a clicked face: on the 10 mm cube's front view, the plane goes through the clicked exact
+    surface point with the face's normal towards the eye; dragged along it (previews, then the exact frame)
+    it cuts the cube and shows caps; flip turns the normal."""
+    page.scroll_to("file")
+    page.set_select("look", "shaded")
+    before = page.frames()
+    page.set_files("file", [cube])
+    page.wait_final_after(before)
+    before = page.frames()
+    page.ev("document.querySelector('button.view[data-view=\"front\"]').click()")
+    page.wait_final_after(before)
+    since, before = time.monotonic(), page.frames()
+    if page.ev("document.getElementById('measure-toggle').getAttribute('aria-pressed')") == "true":
+        click(page, "measure-toggle")  # a click in the measuring mode measures
+    page.set_select("section-axis", "face")
+    if page.ev("document.getElementById('view').dataset.busy") == "1":
+        page.wait_final_after(before)  # the frame again with the normals the pick reads
+    page.scroll_to("view")
+    page.b.pump(0.2)
+    x, y, _ = page.canvas_centre()
+    before = page.frames()
+    page.b.mouse("mousePressed", x + 7, y - 5)
+    page.b.mouse("mouseReleased", x + 7, y - 5, buttons=0)
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    options, stats = render_exchanges(page, since)[-1]
+    cam = stats["camera"]
+    eye_dir = [e - t for e, t in zip(cam["eye"], cam["target"])]
+    length = sum(c * c for c in eye_dir) ** 0.5
+    eye_dir = [c / length for c in eye_dir]
+    plane = options["sections"][0]
+    k = max(range(3), key=lambda i: abs(eye_dir[i]))
+    face_at = CUBE_CORNER[k] + (CUBE_SIZE if eye_dir[k] > 0 else 0)  # the front face's plane: the side the eye sees
+    log(f"section from face: clicked plane point {plane['point']} normal {plane['normal']}; face normal towards the"
+        f" eye {eye_dir}; the face's plane at coordinate {k} = {face_at}")
+    assert max(abs(a - b) for a, b in zip(plane["normal"], eye_dir)) <= 1e-6, (plane, eye_dir)
+    assert abs(plane["point"][k] - face_at) <= 1e-4, (plane["point"], face_at)
+    at = float(page.ev("document.getElementById('section-at').value"))
+    frames, previews = drag_section(page, [at - d for d in (0.1, 0.2, 0.3, 0.4)])
+    options, stats = frames[-1]
+    moved = options["sections"][0]
+    depth = face_at - moved["point"][k] if eye_dir[k] > 0 else moved["point"][k] - face_at
+    log(f"section from face dragged: {len(previews)} previews, then the full frame; plane {depth:.3f} mm inside,"
+        f" caps {stats['sections']['cap_pixels']} pixels")
+    assert previews and stats["width"] == 800 and stats["sections"]["cap_pixels"] > 0, stats["sections"]
+    assert moved["normal"] == plane["normal"] and 0 < depth < CUBE_SIZE, moved
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "section-from-face.png")
+    options, stats = final_exchange(page, "document.getElementById('section-flip').click()", "flip")
+    assert options["sections"][0]["normal"] == [-c for c in plane["normal"]], options["sections"]
+    page.set_select("section-axis", "")
+    page.wait_final_after(page.frames() - 1)
+
+
 def step_csp_enforced(page):
     """The browser enforces the page's policy: an injected inline script does not run."""
     directive = page.ev("""new Promise((resolve) => {
@@ -992,6 +1053,7 @@ def main():
             current = "elapsed"; step_elapsed(page)
             current = "EXR download"; step_exr_download(page, downloads)
             current = "wide"; step_wide(page)
+            current = "section from face"; step_section_from_face(page, cube)
             log("the viewer steps passed (NURBSRT_WEB_ONLY=viewer: no other step ran)")
             return 0
         if ONLY == "measure":  # a quick run of the measuring step alone, while working on it
@@ -1039,6 +1101,7 @@ def main():
             log("SKIPPED the CAD views: no generated assembly given")
         if cube:
             current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
+            current = "section from face"; step_section_from_face(page, cube)
         else:
             log("SKIPPED measuring: no generated cube given")
         current = "stored files"; step_stored_files(page)
