@@ -4,7 +4,7 @@
 // times, the method comparison, jobs and conversions. Only the public REST API
 // is used (api.js).
 
-import { apiKey, setApiKey, render, storeFile, storedFile, base64Bytes, saveBlob } from './api.js';
+import { apiKey, setApiKey, call, render, storeFile, storedFile, base64Bytes, saveBlob } from './api.js';
 import { CadControls } from './cad.js';
 import { Camera } from './camera.js';
 import { RenderScheduler } from './scheduler.js';
@@ -94,7 +94,7 @@ function requestOptions(job) {
   const o = { ...image, ...cad.options(), ...job.override, width: Math.round(width / d), height: Math.round(height / d) };
   if (job.camera) o.camera = job.camera;
   else Object.assign(o, { view: job.view, projection: $('projection').value });
-  if (job.aovs) o.aovs = aovsFor($('look').value, measure.on);
+  if (job.aovs) o.aovs = aovsFor($('look').value, measure.on || cad.picking);
   return o;
 }
 
@@ -154,11 +154,18 @@ function show(frame, job) {
     draw();
     showWarnings(frame.stats.warnings);
     $('save-png').disabled = false;
+    $('save-exr').disabled = false;
     showStages($('stages'), $('stage-list'), frame.stats);
     canvas.dataset.final = '1';
     const s = frame.stats;
     let text = `${frame.width}×${frame.height}, ${s.method}, ${s.faces} faces, ${s.pixels_hit} pixels hit, ` +
       `${fmt(s.timings_ms.total)} ms (${s.cache === 'hit' ? 'cached scene' : 'imported'})`;
+    // The wall-clock time the user waited for this frame (request to image on screen).
+    if (job.startedAt) {
+      const elapsed = (performance.now() - job.startedAt) / 1000;
+      canvas.dataset.elapsedS = elapsed.toFixed(1);
+      text += `; on screen ${elapsed.toFixed(1)} s after the request`;
+    }
     if (job.releasedAt) {
       const latency = performance.now() - job.releasedAt;
       canvas.dataset.latencyMs = latency.toFixed(1);
@@ -188,6 +195,7 @@ function busy(on, job) {
     return;
   }
   const t0 = performance.now();
+  job.startedAt = t0;
   const what = job.first ? 'Importing and rendering' : 'Rendering';
   const tick = () => { $('busy-text').textContent = `${what}… ${((performance.now() - t0) / 1000).toFixed(1)} s`; };
   tick();
@@ -205,9 +213,39 @@ const cad = new CadControls($, {
     scheduler.submit(job);
   },
   final: () => renderFinal(),
+  frame: () => state.frame,
+  needAovs: askAovs,
+  busyElsewhere: () => measure.on,
 });
+const saveName = (ext) => `${(state.fileName || 'render').replace(/\.[^.]*$/, '')}.${ext}`;
 $('save-png').addEventListener('click', () => {
-  if (state.frame) saveBlob(state.frame.blob, `${(state.fileName || 'render').replace(/\.[^.]*$/, '')}.png`);
+  if (state.frame) saveBlob(state.frame.blob, saveName('png'));
+});
+// The view on screen as OpenEXR: the service writes every AOV as channels of
+// their own (depth, face, normal, (u, v), iterations), so a compositor or a
+// script reads the exact per-pixel values; fetched with the key, saved as a blob.
+$('save-exr').addEventListener('click', async () => {
+  if (!state.fileId) return;
+  const button = $('save-exr'), status = $('save-status');
+  button.disabled = true;
+  status.textContent = 'Rendering the EXR…';
+  try {
+    const job = { final: true };
+    if (!state.view && state.camera) job.camera = state.camera.toOption();
+    else job.view = state.view || 'iso';
+    const res = await call('/v1/renders', {
+      method: 'POST', body: JSON.stringify({ file_id: state.fileId, ...requestOptions(job), format: 'exr' }),
+      contentType: 'application/json', accept: 'image/x-exr', retry: true,
+    });
+    const blob = await res.blob(), name = saveName('exr');
+    saveBlob(blob, name);
+    status.textContent = `saved ${name} (${blob.size} bytes)`;
+  } catch (err) {
+    status.textContent = '';
+    report(err);
+  } finally {
+    button.disabled = !state.fileId;
+  }
 });
 
 const scheduler = new RenderScheduler({
@@ -222,12 +260,17 @@ const scheduler = new RenderScheduler({
 // waiting for them.
 function renderFinal(extra = {}) {
   if (!state.fileId) return;
-  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded' || measure.on, ...extra };
+  const job = { fileId: state.fileId, final: true, aovs: $('look').value !== 'shaded' || measure.on || cad.picking, ...extra };
   // A named view still chosen is fitted again (explode, hidden parts change what
   // it frames); after an orbit, the camera the user left.
   if (!job.view && !state.view && state.camera) job.camera = state.camera.toOption();
   else job.view = job.view || state.view || 'iso';
   scheduler.submit(job);
+}
+
+// The frame on screen again, with the AOVs (measuring and picking a face read them).
+function askAovs() {
+  if (state.frame && !state.frame.stats.views) renderFinal({ aovs: true });
 }
 
 // ---- inputs -------------------------------------------------------------------
@@ -246,6 +289,8 @@ function clearFrame() {
   $('legend').hidden = true;
   showWarnings([]);
   $('save-png').disabled = true;
+  $('save-exr').disabled = true;
+  $('save-status').textContent = '';
   cad.setModel(null);
   measure.reset();
   setStatus('');
@@ -422,7 +467,7 @@ function hover(e) {
 // explode or hidden part moves or removes them).
 const measure = new Measure($, {
   frame: () => state.frame,
-  needAovs: () => { if (state.frame && !state.frame.stats.views) renderFinal({ aovs: true }); },
+  needAovs: askAovs,
   file: () => (state.fileId ? { id: state.fileId, units: state.units } : null),
   snapAllowed: () => Object.keys(cad.options()).length === 0,
   report,

@@ -1,21 +1,42 @@
-// The CAD-view controls of the page: a section plane across an axis (its
-// position along the model's box, flip, caps, hatching), the explode factor,
+// The CAD-view controls of the page: a section plane across an axis or
+// through a clicked face (its position along the model's box, flip, caps,
+// hatching), the explode factor,
 // and per part of the assembly tree: shown, hidden, alone (isolated) or ghosted.
 // They become render options (sections, explode, parts); while a slider moves,
 // previews; on release, the full frame.
 
+import { Camera } from './camera.js';
+import { dot } from './vec3.js';
+
 const AXES = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
+// A click is a press and release this close (CSS px); farther, it was an orbit.
+const CLICK_SLOP_PX = 4;
 // What a part can be; `only` parts are shown alone (everything else hidden).
 const PART_STATES = [['shown', 'shown'], ['hide', 'hidden'], ['only', 'alone'], ['ghost', 'ghosted']];
 
 export class CadControls {
   // $: the page's element lookup; preview(): a preview frame; final(): the full frame.
-  constructor($, { preview, final }) {
+  // frame(): the full-size frame on screen; needAovs(): asks for it again with
+  // the AOVs; picking(): whether a click on the image is someone else's (measuring).
+  constructor($, { preview, final, frame, needAovs, busyElsewhere }) {
     this.$ = $;
     this.box = null;     // the model's box {min, max}, mm
     this.parts = [];
-    for (const id of ['section-axis', 'section-flip', 'section-caps', 'section-hatch'])
+    // The plane through a clicked face: {point, normal (towards the eye), lo, hi
+    // (the box's extent along it), at (the slider's value through the point)}.
+    this.facePlane = null;
+    this.picking = false;  // the next click on the image sets facePlane
+    Object.assign(this, { frame, needAovs, busyElsewhere });
+    $('section-axis').addEventListener('change', () => {
+      this.facePlane = null;
+      this.setPicking($('section-axis').value === 'face');
+      this.syncSection();
+      if (!this.picking) final();
+    });
+    for (const id of ['section-flip', 'section-caps', 'section-hatch'])
       $(id).addEventListener('change', () => { this.syncSection(); final(); });
+    $('section-pick').addEventListener('click', () => this.setPicking(true));
+    this.bindPick($('view'));
     for (const id of ['section-at', 'explode']) {
       $(id).addEventListener('input', () => preview());
       $(id).addEventListener('change', () => final());
@@ -23,9 +44,79 @@ export class CadControls {
     this.final = final;
   }
 
+  // ---- a section plane from a clicked face ------------------------------------
+  setPicking(on) {
+    this.picking = on;
+    const $ = this.$;
+    $('view').classList.toggle('picking', on);
+    $('section-pick').setAttribute('aria-pressed', String(on));
+    $('section-hint').textContent = on ? 'Click a face in the image: the plane goes through that point, across the face\'s normal.' : '';
+    const f = this.frame();
+    if (on && f && (!f.aov || !f.aov.normal)) this.needAovs();
+  }
+
+  bindPick(canvas) {
+    let down = null;
+    canvas.addEventListener('pointerdown', (e) => { down = { x: e.clientX, y: e.clientY }; });
+    canvas.addEventListener('pointercancel', () => { down = null; });
+    canvas.addEventListener('pointerup', (e) => {
+      const click = down && Math.hypot(e.clientX - down.x, e.clientY - down.y) <= CLICK_SLOP_PX;
+      down = null;
+      if (!click || !this.picking || this.busyElsewhere()) return;
+      const r = canvas.getBoundingClientRect(), f = this.frame();
+      if (!f) return;
+      this.pickFace(f, ((e.clientX - r.left) * f.width) / r.width, ((e.clientY - r.top) * f.height) / r.height);
+    });
+  }
+
+  // The plane through the exact surface point under image position (px, py)
+  // (the pixel ray at the z AOV's distance, as measuring takes it) with the
+  // face's exact normal (normal AOV) turned towards the eye, so that the
+  // section removes the half nearer the viewer.
+  pickFace(f, px, py) {
+    const $ = this.$, hint = $('section-hint');
+    if (f.stats.views || !f.aov || !f.aov.normal || !f.aov.z) {
+      hint.textContent = 'Wait for the full-size frame with its normals, then click again.';
+      this.needAovs();
+      return;
+    }
+    const ix = Math.floor(px), iy = Math.floor(py), i = iy * f.width + ix;
+    if (ix < 0 || iy < 0 || ix >= f.width || iy >= f.height || !f.aov.face[i]) {
+      hint.textContent = 'Nothing there: click a face of the model.';
+      return;
+    }
+    const ray = Camera.fromStatistics(f.stats.camera).rayAt(ix + 0.5, iy + 0.5, f.width, f.height);
+    const point = ray.origin.map((o, k) => o + f.aov.z[i] * ray.dir[k]);
+    let normal = [0, 1, 2].map((k) => f.aov.normal[3 * i + k]);
+    if (dot(normal, ray.dir) > 0) normal = normal.map((c) => -c);
+    // The slider spans the model's box along the normal; its value at the point puts the plane through it.
+    const along = this.boxCorners().map((c) => dot(c, normal));
+    const lo = Math.min(...along), hi = Math.max(...along);
+    const at = hi > lo ? (dot(point, normal) - lo) / (hi - lo) : 0.5;
+    this.facePlane = { point, normal, lo, hi, at, face: f.aov.face[i] };
+    $('section-at').step = 'any';  // the exact value through the point, not a step's
+    $('section-at').value = String(at);
+    $('section-flip').checked = false;
+    this.setPicking(false);
+    hint.textContent = `Plane through face ${f.aov.face[i]} at (${point.map((c) => c.toFixed(3)).join(', ')}), ` +
+      `normal (${normal.map((c) => c.toFixed(4)).join(', ')}); drag "Section position" to move it along its normal.`;
+    this.syncSection();
+    this.final();
+  }
+
+  boxCorners() {
+    if (!this.box) return [[0, 0, 0]];
+    const { min, max } = this.box, out = [];
+    for (let c = 0; c < 8; c++) out.push([c & 1 ? max[0] : min[0], c & 2 ? max[1] : min[1], c & 4 ? max[2] : min[2]]);
+    return out;
+  }
+
   // A new model: its box and tree from the stored file's summary (null: none known).
   setModel(summary) {
     const $ = this.$;
+    this.facePlane = null;
+    this.setPicking(false);
+    $('section-at').step = '0.01';
     this.box = summary?.bbox || null;
     this.parts = summary?.parts || [];
     $('section-axis').value = '';
@@ -51,20 +142,29 @@ export class CadControls {
   }
 
   syncSection() {
-    const $ = this.$, off = $('section-axis').value === '';
+    const $ = this.$, axis = $('section-axis').value, off = axis === '' || (axis === 'face' && !this.facePlane);
+    $('section-pick').hidden = axis !== 'face';
+    if (axis !== 'face') $('section-at').step = '0.01';
     for (const id of ['section-at', 'section-flip', 'section-caps', 'section-hatch']) $(id).disabled = off;
   }
 
   // The render options of the controls (none where they are at rest).
   options() {
     const $ = this.$, o = {};
-    const axis = $('section-axis').value;
-    if (axis !== '' && this.box) {
-      const k = Number(axis), t = Number($('section-at').value);
+    const axis = $('section-axis').value, t = Number($('section-at').value);
+    const sign = $('section-flip').checked ? -1 : 1;
+    const fp = axis === 'face' ? this.facePlane : null;
+    if (fp) {
+      // Moved along its normal by the slider's travel from the clicked point (exactly there at rest).
+      const shift = t === fp.at ? 0 : (t - fp.at) * (fp.hi - fp.lo);
+      o.sections = [{ point: fp.point.map((c, k) => c + shift * fp.normal[k]), normal: fp.normal.map((c) => sign * c) }];
+    } else if (axis !== '' && axis !== 'face' && this.box) {
+      const k = Number(axis);
       const point = [0, 1, 2].map((i) => (this.box.min[i] + this.box.max[i]) / 2);
       point[k] = this.box.min[k] + t * (this.box.max[k] - this.box.min[k]);
-      const sign = $('section-flip').checked ? -1 : 1;
       o.sections = [{ point, normal: AXES[k].map((c) => sign * c) }];
+    }
+    if (o.sections) {
       o.section_caps = $('section-caps').checked;
       o.section_hatch = $('section-hatch').checked;
     }

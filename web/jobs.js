@@ -115,8 +115,12 @@ function outputRow(job, o, report) {
 }
 
 function renderJob(box, job, report, progress) {
-  const done = progress ? progress.outputs_done : job.outputs.filter((o) => DONE.has(o.state)).length;
-  const total = progress ? progress.outputs_total : job.outputs.length;
+  // A finished job's document is the final word: the events before its end are
+  // still being shown one by one (each re-reads the document), so the last
+  // progress event seen may lag behind the state read with it.
+  const live = progress && !DONE.has(job.state);
+  const done = live ? progress.outputs_done : job.outputs.filter((o) => DONE.has(o.state)).length;
+  const total = live ? progress.outputs_total : job.outputs.length;
   const percent = total ? Math.floor((100 * done) / total) : 0;
   box.dataset.percent = String(percent);
   const table = el('table', {},

@@ -9,6 +9,8 @@ import os
 import pathlib
 import shutil
 import statistics
+import struct
+import subprocess
 import sys
 import tempfile
 import time
@@ -21,7 +23,7 @@ ARTIFACTS = pathlib.Path(os.environ.get("NURBSRT_WEB_ARTIFACTS") or tempfile.mkd
 SCREENSHOT = os.environ.get("NURBSRT_WEB_SCREENSHOT")  # where to save the README picture, if set
 KEY = os.environ.get("NURBSRT_WEB_KEY", "")  # the service's API key, typed into the page
 MEASURE_SCREENSHOT = os.environ.get("NURBSRT_WEB_MEASURE_SCREENSHOT")  # the README's measuring picture, if set
-ONLY = os.environ.get("NURBSRT_WEB_ONLY")  # "measure": the page's load, the upload and the measuring steps only
+ONLY = os.environ.get("NURBSRT_WEB_ONLY")  # "measure" or "viewer": the page's load, the upload and those steps only
 RENDERS = "/v1/renders"
 
 # Pixels of the canvas: how many differ from the background, a checksum, and
@@ -274,6 +276,8 @@ def render_exchanges(page, since):
         elif m == "Network.loadingFinished" and p["requestId"] in sent:
             rid = p["requestId"]
             body = page.b.call("Network.getResponseBody", requestId=rid)
+            if body.get("base64Encoded"):  # an image answer (the EXR download), no statistics
+                continue
             stats = json.loads(body["body"])["statistics"]
             options = None
             try:  # the multipart body, where Chromium keeps it (the options part is an in-memory blob)
@@ -558,6 +562,21 @@ def final_exchange(page, action, what):
     return exchanges[-1]
 
 
+def drag_section(page, positions):
+    """Drags the section's position slider through `positions` (previews), then releases it (the full frame);
+    the (options, statistics) of the renders since, and the previews' statistics."""
+    since, before = time.monotonic(), page.frames()
+    for t in positions:
+        page.ev(f"(() => {{ const r = document.getElementById('section-at'); r.value = '{t}';"
+                f" r.dispatchEvent(new Event('input')); }})()")
+        page.b.pump(0.15)
+    page.ev("document.getElementById('section-at').dispatchEvent(new Event('change'))")
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    frames = render_exchanges(page, since)
+    return frames, [st for o, st in frames if st["width"] < 800]
+
+
 def step_cad_views(page, assembly):
     """An assembly: the parts panel lists its tree; hide, isolate and ghost a part; a section across Z
     with caps, dragged along (previews while dragging, the exact frame on release); explode. Each
@@ -584,17 +603,7 @@ def step_cad_views(page, assembly):
                                     " s.dispatchEvent(new Event('change')); })()", "a section")
     caps0 = stats["sections"]["cap_pixels"]
     assert stats["sections"]["planes"] == 1 and caps0 > 0, stats["sections"]
-    since = time.monotonic()
-    before = page.frames()
-    for t in (0.45, 0.4, 0.35, 0.3):  # dragging the position slider: previews
-        page.ev(f"(() => {{ const r = document.getElementById('section-at'); r.value = '{t}';"
-                f" r.dispatchEvent(new Event('input')); }})()")
-        page.b.pump(0.15)
-    page.ev("document.getElementById('section-at').dispatchEvent(new Event('change'))")
-    page.wait_final_after(before)
-    page.b.pump(0.2)
-    drag_frames = render_exchanges(page, since)
-    previews = [st for o, st in drag_frames if st["width"] < 800]
+    drag_frames, previews = drag_section(page, (0.45, 0.4, 0.35, 0.3))
     log(f"section drag: {len(previews)} previews, then the full frame; caps {caps0} -> "
         f"{drag_frames[-1][1]['sections']['cap_pixels']} pixels")
     assert previews and drag_frames[-1][1]["width"] == 800 and drag_frames[-1][1]["sections"]["cap_pixels"] > 0
@@ -858,6 +867,154 @@ def step_narrow(page):
     assert m["doc"] <= m["view"], m
 
 
+def step_elapsed(page):
+    """A render in flight shows its elapsed seconds ticking; the landed frame its final time."""
+    page.scroll_to("resolution")
+    page.ev("""(() => { window.busyTexts = []; const t = document.getElementById('busy-text');
+      new MutationObserver(() => window.busyTexts.push(t.textContent)).observe(t, {childList: true, characterData: true,
+        subtree: true}); })()""")
+    before = page.frames()
+    # A slower frame (16 rays per edge pixel, 1600x1200), so that the seconds tick; one request.
+    page.ev("document.getElementById('antialias').value = '16'")
+    page.set_select("resolution", "1600x1200")
+    page.wait_final_after(before)
+    ticks = page.ev("window.busyTexts")
+    status = page.ev("document.getElementById('status').textContent")
+    final = float(page.ev("document.getElementById('view').dataset.elapsedS"))
+    shown = [float(t.split("…")[1].split("s")[0]) for t in ticks if "…" in t]
+    log(f"elapsed time: {len(shown)} ticks {shown[:3]}...{shown[-2:]}; status ends '{status[-40:]}'")
+    assert len(set(shown)) >= 2 and shown == sorted(shown), f"the seconds did not tick: {ticks}"
+    assert f"on screen {final:.1f} s after the request" in status and final >= shown[-1], (status, shown)
+    before = page.frames()
+    page.ev("document.getElementById('antialias').value = '4'")
+    page.set_select("resolution", "800x600")
+    page.wait_final_after(before)
+
+
+def exr_channels(path):
+    """The channel names of an OpenEXR file: OpenImageIO's oiiotool where Debian's openimageio-tools is
+    installed, else the header's `channels` attribute read directly (OpenEXR file layout: magic, version,
+    then name\\0 type\\0 size value attributes; chlist: name\\0 then 16 bytes per channel, ended by \\0)."""
+    tool = shutil.which("oiiotool")
+    if tool:
+        out = subprocess.run([tool, "--info", "-v", str(path)], capture_output=True, text=True, check=True).stdout
+        line = next(l for l in out.splitlines() if "channel list:" in l)
+        return [c.strip() for c in line.split("channel list:")[1].split(",")], "oiiotool"
+    data = path.read_bytes()
+    assert data[:4] == b"\x76\x2f\x31\x01", f"not an OpenEXR file: {data[:8]!r}"
+    at = 8
+    while data[at] != 0:
+        name_end = data.index(b"\0", at)
+        type_end = data.index(b"\0", name_end + 1)
+        size = struct.unpack_from("<i", data, type_end + 1)[0]
+        value = data[type_end + 5:type_end + 5 + size]
+        if data[at:name_end] == b"channels":
+            names, i = [], 0
+            while value[i] != 0:
+                end = value.index(b"\0", i)
+                names.append(value[i:end].decode())
+                i = end + 1 + 16
+            return names, "the file's header"
+        at = type_end + 5 + size
+    raise AssertionError("no channels attribute in the EXR header")
+
+
+def step_exr_download(page, downloads):
+    """Save EXR with AOVs: a render of the view on screen as OpenEXR, saved with the key; its channels read."""
+    page.b.call("Browser.setDownloadBehavior", behavior="allow", downloadPath=str(downloads))
+    page.scroll_to("save-exr")
+    click(page, "save-exr")
+    status = page.b.wait_for("(() => { const t = document.getElementById('save-status').textContent;"
+                             " return t.startsWith('saved') ? t : ''; })()", 120, "the EXR")
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        done = [p for p in downloads.iterdir() if p.suffix == ".exr"]
+        if done:
+            break
+        page.b.pump(0.2)
+    assert done, "no EXR was downloaded"
+    names, how = exr_channels(done[0])
+    log(f"EXR download: {status}; channels ({how}) {names}")
+    assert {"R", "G", "B", "A", "Z", "face", "N.X", "N.Y", "N.Z", "u", "v", "iterations"} <= set(names), names
+
+
+def step_wide(page):
+    """At 1920x1080 the controls stand beside the image, the image is not scaled past its pixels and nothing
+    is wider than the viewport."""
+    page.b.call("Emulation.setDeviceMetricsOverride", width=1920, height=1080, deviceScaleFactor=1, mobile=False)
+    page.b.pump(0.5)
+    m = page.ev("""(() => { const r = (s) => document.querySelector(s).getBoundingClientRect();
+      const c = r('.controls'), p = r('#view');
+      return {doc: document.documentElement.scrollWidth, view: window.innerWidth, controlsRight: c.right, imageLeft: p.left,
+        controlsTop: c.top, imageTop: p.top, imageBottom: p.bottom, shown: p.width, pixels: document.getElementById('view').width}; })()""")
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "wide-1920.png")
+    log(f"1920 px layout: document {m['doc']} px wide in a {m['view']} px viewport; controls end at x {m['controlsRight']:.0f},"
+        f" image from x {m['imageLeft']:.0f}, shown {m['shown']:.0f} px wide for {m['pixels']} pixels")
+    page.b.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
+    page.b.pump(0.3)
+    assert m["doc"] <= m["view"], m
+    assert m["controlsRight"] <= m["imageLeft"] and m["controlsTop"] < m["imageBottom"], f"not side by side: {m}"
+    assert m["shown"] <= m["pixels"] + 0.5, f"the image is stretched past its pixels: {m}"
+
+
+def step_section_from_face(page, cube):
+    """Section from a clicked face: on the 10 mm cube's front view, the plane goes through the clicked exact
+    surface point with the face's normal towards the eye; dragged along it (previews, then the exact frame)
+    it cuts the cube and shows caps; flip turns the normal."""
+    page.scroll_to("file")
+    page.set_select("look", "shaded")
+    before = page.frames()
+    page.set_files("file", [cube])
+    page.wait_final_after(before)
+    before = page.frames()
+    page.ev("document.querySelector('button.view[data-view=\"front\"]').click()")
+    page.wait_final_after(before)
+    since, before = time.monotonic(), page.frames()
+    if page.ev("document.getElementById('measure-toggle').getAttribute('aria-pressed')") == "true":
+        click(page, "measure-toggle")  # a click in the measuring mode measures
+    page.set_select("section-axis", "face")
+    if page.ev("document.getElementById('view').dataset.busy") == "1":
+        page.wait_final_after(before)  # the frame again with the normals the pick reads
+    page.scroll_to("view")
+    page.b.pump(0.2)
+    x, y, _ = page.canvas_centre()
+    before = page.frames()
+    page.b.mouse("mousePressed", x + 7, y - 5)
+    page.b.mouse("mouseReleased", x + 7, y - 5, buttons=0)
+    page.wait_final_after(before)
+    page.b.pump(0.2)
+    options, stats = render_exchanges(page, since)[-1]
+    cam = stats["camera"]
+    eye_dir = [e - t for e, t in zip(cam["eye"], cam["target"])]
+    length = sum(c * c for c in eye_dir) ** 0.5
+    eye_dir = [c / length for c in eye_dir]
+    plane = options["sections"][0]
+    k = max(range(3), key=lambda i: abs(eye_dir[i]))
+    face_at = CUBE_CORNER[k] + (CUBE_SIZE if eye_dir[k] > 0 else 0)  # the front face's plane: the side the eye sees
+    log(f"section from face: clicked plane point {plane['point']} normal {plane['normal']}; face normal towards the"
+        f" eye {eye_dir}; the face's plane at coordinate {k} = {face_at}")
+    assert max(abs(a - b) for a, b in zip(plane["normal"], eye_dir)) <= 1e-6, (plane, eye_dir)
+    assert abs(plane["point"][k] - face_at) <= 1e-4, (plane["point"], face_at)
+    at = float(page.ev("document.getElementById('section-at').value"))
+    frames, previews = drag_section(page, [at - d for d in (0.1, 0.2, 0.3, 0.4)])
+    options, stats = frames[-1]
+    moved = options["sections"][0]
+    depth = face_at - moved["point"][k] if eye_dir[k] > 0 else moved["point"][k] - face_at
+    log(f"section from face dragged: {len(previews)} previews, then the full frame; plane {depth:.3f} mm inside,"
+        f" caps {stats['sections']['cap_pixels']} pixels")
+    assert previews and stats["width"] == 800 and stats["sections"]["cap_pixels"] > 0, stats["sections"]
+    assert moved["normal"] == plane["normal"] and 0 < depth < CUBE_SIZE, moved
+    page.ev("window.scrollTo(0, 0)")
+    page.b.pump(0.2)
+    page.b.screenshot(ARTIFACTS / "section-from-face.png")
+    options, stats = final_exchange(page, "document.getElementById('section-flip').click()", "flip")
+    assert options["sections"][0]["normal"] == [-c for c in plane["normal"]], options["sections"]
+    page.set_select("section-axis", "")
+    page.wait_final_after(page.frames() - 1)
+
+
 def step_csp_enforced(page):
     """The browser enforces the page's policy: an injected inline script does not run."""
     directive = page.ev("""new Promise((resolve) => {
@@ -891,6 +1048,14 @@ def main():
             browser.call(f"{domain}.enable")
         browser.call("Emulation.setDeviceMetricsOverride", width=1400, height=1100, deviceScaleFactor=1, mobile=False)
         current = "load"; step_load(page)
+        if ONLY == "viewer":  # a quick run of the viewer steps of this file alone, while working on them
+            current = "upload"; step_upload(page, step_file)
+            current = "elapsed"; step_elapsed(page)
+            current = "EXR download"; step_exr_download(page, downloads)
+            current = "wide"; step_wide(page)
+            current = "section from face"; step_section_from_face(page, cube)
+            log("the viewer steps passed (NURBSRT_WEB_ONLY=viewer: no other step ran)")
+            return 0
         if ONLY == "measure":  # a quick run of the measuring step alone, while working on it
             current = "upload"; step_upload(page, step_file)
             current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
@@ -917,8 +1082,11 @@ def main():
         current = "upload once"; step_upload_once(page)
         current = "link"; step_link_reopens(page)
         current = "narrow"; step_narrow(page)
+        current = "wide"; step_wide(page)
+        current = "elapsed"; step_elapsed(page)
         current = "job"; step_job(page, [step_file, other_file], downloads)
         current = "conversion"; step_conversion(page)
+        current = "EXR download"; step_exr_download(page, downloads)
         current = "accessibility"; step_accessibility(page)
         errors = console_errors(browser.events)
         assert not errors, f"console errors: {errors}"
@@ -933,6 +1101,7 @@ def main():
             log("SKIPPED the CAD views: no generated assembly given")
         if cube:
             current = "measure"; step_measure(page, cube, cylinder, MEASURE_SCREENSHOT)
+            current = "section from face"; step_section_from_face(page, cube)
         else:
             log("SKIPPED measuring: no generated cube given")
         current = "stored files"; step_stored_files(page)
