@@ -4,9 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <set>
+
+#include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
+#include "core/io/assembly_tree_json.h"
 #include "core/io/scene_io.h"
 #include "core/scene/scene_ops.h"
 #include "importer/importer.h"
@@ -58,6 +62,21 @@ TEST(AssemblyTree, FixtureAssemblyIsARootAndItsTwoPlacements) {
     // Every body is placed by a leaf, and each leaf's faces are its bodies' faces.
     for (const nurbsrt::Body& b : s.bodies) EXPECT_TRUE(b.part == 1 || b.part == 2) << b.part;
     EXPECT_LT(s.parts[1].bbox.hi.x, s.parts[2].bbox.hi.x);  // left of right
+    // The JSON's face_ranges: each face index 1..N (the face AOV's) in the runs
+    // of the part that places its body, and in no other part's.
+    const nlohmann::json tree = nurbsrt::assembly_tree_json(s);
+    ASSERT_EQ(tree.size(), s.parts.size());
+    EXPECT_TRUE(tree[0]["face_ranges"].empty()) << "the root places no body itself";
+    std::vector<int> owner(s.faces.size() + 1, -1);
+    for (size_t k = 0; k < tree.size(); ++k)
+        for (const nlohmann::json& run : tree[k]["face_ranges"])
+            for (uint64_t f = run[0].get<uint64_t>(); f <= run[1].get<uint64_t>(); ++f) {
+                ASSERT_LE(f, s.faces.size());
+                EXPECT_EQ(owner[f], -1) << "face " << f << " in two parts";
+                owner[f] = static_cast<int>(k);
+            }
+    for (size_t i = 0; i < s.faces.size(); ++i)
+        EXPECT_EQ(owner[i + 1], s.bodies[s.faces[i].body].part) << "face " << i + 1;
 }
 
 TEST(AssemblyTree, SameForEveryImportAndThroughTheIsolatedImport) {

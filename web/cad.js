@@ -1,7 +1,9 @@
 // The CAD-view controls of the page: a section plane across an axis or
 // through a clicked face (its position along the model's box, flip, caps,
 // hatching), the explode factor,
-// and per part of the assembly tree: shown, hidden, alone (isolated) or ghosted.
+// and per part of the assembly tree: shown, hidden, alone (isolated) or ghosted;
+// a click on the image (outside the other picking modes) finds the part under
+// the pointer in that list, from the face AOV and the tree's face ranges.
 // They become render options (sections, explode, parts); while a slider moves,
 // previews; on release, the full frame.
 
@@ -11,6 +13,8 @@ import { dot } from './vec3.js';
 const AXES = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
 // A click is a press and release this close (CSS px); farther, it was an orbit.
 const CLICK_SLOP_PX = 4;
+// How long a part pick waits for the frame with face ids it asked for.
+const PICK_WAIT_MS = 10000;
 // What a part can be; `only` parts are shown alone (everything else hidden).
 const PART_STATES = [['shown', 'shown'], ['hide', 'hidden'], ['only', 'alone'], ['ghost', 'ghosted']];
 
@@ -62,10 +66,12 @@ export class CadControls {
     canvas.addEventListener('pointerup', (e) => {
       const click = down && Math.hypot(e.clientX - down.x, e.clientY - down.y) <= CLICK_SLOP_PX;
       down = null;
-      if (!click || !this.picking || this.busyElsewhere()) return;
+      if (!click || this.busyElsewhere()) return;
       const r = canvas.getBoundingClientRect(), f = this.frame();
       if (!f) return;
-      this.pickFace(f, ((e.clientX - r.left) * f.width) / r.width, ((e.clientY - r.top) * f.height) / r.height);
+      const px = ((e.clientX - r.left) * f.width) / r.width, py = ((e.clientY - r.top) * f.height) / r.height;
+      if (this.picking) this.pickFace(f, px, py);
+      else if (this.parts.length > 1) this.pickPart(f, px, py);
     });
   }
 
@@ -104,6 +110,49 @@ export class CadControls {
     this.final();
   }
 
+  // ---- the part under the pointer --------------------------------------------
+  // The leaf part that places face `face` (1..N, the face AOV's number).
+  partOfFace(face) {
+    for (const part of this.parts)
+      for (const [first, last] of part.face_ranges || []) if (face >= first && face <= last) return part;
+    return null;
+  }
+
+  pickPart(f, px, py) {
+    const $ = this.$, hint = $('parts-hint');
+    const ix = Math.floor(px), iy = Math.floor(py);
+    if (f.stats.views || ix < 0 || iy < 0 || ix >= f.width || iy >= f.height) return;
+    if (!f.aov || !f.aov.face) {
+      // The frame on screen came without face ids: asked for, and the pick is
+      // made when they land (unless the view changed meanwhile).
+      hint.textContent = 'Finding the part…';
+      this.needAovs();
+      const asked = Date.now();
+      const wait = () => {
+        const g = this.frame();
+        if (g && g !== f && g.aov && g.aov.face && g.width === f.width) this.pickPart(g, px, py);
+        else if (g === f || (g && !g.aov)) {
+          if (Date.now() - asked < PICK_WAIT_MS) setTimeout(wait, 50);
+          else hint.textContent = 'The frame with face ids did not come: click again.';
+        }
+      };
+      setTimeout(wait, 50);
+      return;
+    }
+    const face = f.aov.face[iy * f.width + ix];
+    const part = face ? this.partOfFace(face) : null;
+    for (const li of $('parts').querySelectorAll('li.picked')) li.classList.remove('picked');
+    if (!part) {
+      hint.textContent = face ? `Face ${face} belongs to no part of the tree.` : 'Nothing there: click a part of the model.';
+      return;
+    }
+    const select = $('parts').querySelector(`select[data-part="${CSS.escape(part.id)}"]`);
+    $('parts-box').open = true;
+    select.closest('li').classList.add('picked');
+    select.focus();
+    hint.textContent = `Face ${face}: part ${part.id} ${part.name}.`;
+  }
+
   boxCorners() {
     if (!this.box) return [[0, 0, 0]];
     const { min, max } = this.box, out = [];
@@ -125,6 +174,7 @@ export class CadControls {
     this.syncSection();
     const list = $('parts');
     list.replaceChildren();
+    $('parts-hint').textContent = '';
     for (const part of this.parts) {
       const depth = part.id.split('/').length - 1;
       const item = document.createElement('li');

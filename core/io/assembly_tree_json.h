@@ -10,7 +10,11 @@
 namespace nurbsrt {
 
 // [{"id", "name", "parent" (id or null), "color" ([r, g, b] or null), "placement"
-// (3x4 row-major), "faces", "bbox" ({min, max} or null)}, ...]
+// (3x4 row-major), "faces", "bbox" ({min, max} or null), "face_ranges"}, ...]:
+// face_ranges lists the faces the part places itself (not through a child) as
+// [first, last] runs of face indices 1..N, the face AOV's numbers, so that a
+// client maps a face under the pointer to its part.
+
 nlohmann::json assembly_tree_json(const Scene& scene);
 
 }  // namespace nurbsrt

@@ -13,8 +13,11 @@ import struct
 import subprocess
 import sys
 import tempfile
+import re
 import time
 import traceback
+import urllib.parse
+import urllib.request
 
 from cdp import Browser, find_chromium
 
@@ -577,6 +580,45 @@ def drag_section(page, positions):
     return frames, [st for o, st in frames if st["width"] < 800]
 
 
+def pick_parts(page, parts):
+    """Clicks on a grid over the image: each click on the model names the part under the pointer (the
+    parts panel's row is marked and focused, the hint says which face); the face is checked against the
+    part's face ranges in the stored file's summary, fetched here (GET /v1/files/{id}) and not the page's."""
+    file_id = urllib.parse.parse_qs(page.ev("location.hash.slice(1)"))["file"][0]
+    req = urllib.request.Request(f"{URL}/v1/files/{file_id}", headers={"Authorization": f"Bearer {KEY}"})
+    with urllib.request.urlopen(req, timeout=30) as r:
+        summary = json.loads(r.read())["summary"]
+    ranges = {p["id"]: p["face_ranges"] for p in summary["parts"]}
+    picked = {}
+    grid = [(i / 8, j / 6) for j in range(1, 6) for i in range(1, 8)]
+    for u, v in grid:
+        # Where the image is now: the parts panel opens above it at the first pick, and
+        # focusing a part's row scrolls the page.
+        page.scroll_to("view")
+        _, _, (left, top, width, height) = page.canvas_centre()
+        x, y = left + width * u, top + height * v
+        page.ev("document.getElementById('parts-hint').textContent = ''")  # this click's answer, not the last
+        page.b.mouse("mousePressed", x, y)
+        page.b.mouse("mouseReleased", x, y, buttons=0)
+        # The first click may wait for a frame with face ids (the page asks for one and then picks).
+        hint = page.b.wait_for("(() => { const t = document.getElementById('parts-hint').textContent;"
+                               " return t && !t.startsWith('Finding') ? t : ''; })()", 30, "the part picked")
+        row = page.ev("(() => { const li = document.querySelector('#parts li.picked');"
+                      " return li ? li.querySelector('select').dataset.part : ''; })()")
+        m = re.match(r"Face (\d+): part (\S+) ", hint)
+        if not m:
+            assert not row and hint.startswith("Nothing there"), (hint, row)
+            continue
+        face, part = int(m.group(1)), m.group(2)
+        assert row == part and part in parts, (hint, row)
+        assert page.ev("document.activeElement.dataset.part") == part
+        assert any(a <= face <= b for a, b in ranges[part]), (face, part, ranges[part])
+        picked[part] = face
+    log(f"pick a part: {len(picked)} parts picked by {len(grid)} clicks, a face of each: {picked}")
+    assert len(picked) >= 2, picked
+    page.b.screenshot(ARTIFACTS / "pick-part.png")
+
+
 def step_cad_views(page, assembly):
     """An assembly: the parts panel lists its tree; hide, isolate and ghost a part; a section across Z
     with caps, dragged along (previews while dragging, the exact frame on release); explode. Each
@@ -588,6 +630,7 @@ def step_cad_views(page, assembly):
     parts = page.ev("[...document.querySelectorAll('#parts select')].map((s) => s.dataset.part)")
     log(f"CAD views: parts panel {parts}")
     assert len(parts) >= 3 and not page.ev("document.getElementById('parts-box').hidden"), parts
+    pick_parts(page, parts)
     leaf = parts[-1]
     set_part = lambda state: (f"(() => {{ const s = document.querySelector('#parts select[data-part=\"{leaf}\"]');"
                               f" s.value = '{state}'; s.dispatchEvent(new Event('change')); }})()")
