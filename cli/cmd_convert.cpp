@@ -1,5 +1,6 @@
 // nurbsrt convert IN OUT: STEP/IGES/BREP to STEP, IGES, BREP, STL, glb, VRML, OBJ or
-// NURBS JSON, the output format from OUT's extension.
+// NURBS JSON, the output format from OUT's extension; nurbsrt convert FILES...
+// --out-dir DIR --format F: every input in one process.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -67,6 +68,150 @@ void print_fidelity(const std::string& text) {
     }
 }
 
+struct ConvertArgs {
+    std::vector<std::string> files;  // IN OUT, or with out_dir every input
+    std::string out_dir, format;
+    bool quiet = false, strict = false;
+    std::string units, report_path;
+    std::string schema = step_schema_name(StepSchema::ap214);
+    std::string mode = iges_mode_name(IgesMode::brep);
+    double deflection = 0.0;
+    double angular = kDefaultAngularDeflection;
+};
+
+// The request model of POST /v1/conversions and of the jobs (options/render_request.h),
+// its values checked by the same checks as the flags; an option `format` does
+// not take is a usage error, never ignored (as the API refuses it).
+ConversionRequest request_of(const CLI::App& cmd, const ConvertArgs& a, ConversionFormat format) {
+    for (const auto& [flag, option] :
+         {std::pair{"--units", ConversionOption::units}, std::pair{"--step-schema", ConversionOption::step_schema},
+          std::pair{"--iges-mode", ConversionOption::iges_mode},
+          std::pair{"--deflection", ConversionOption::deflection},
+          std::pair{"--angular-deflection", ConversionOption::angular_deflection}})
+        if (const std::string why = conversion_option_refusal(option, format); cmd.count(flag) > 0 && !why.empty())
+            throw CLI::ValidationError(flag, why);
+    ConversionRequest request;
+    request.format = format;
+    request.strict = a.strict;
+    ConvertOptions& options = request.options;
+    options.units = length_unit_from_name(a.units).value_or(LengthUnit::unknown);
+    options.step_schema = step_schema_from_name(a.schema).value_or(StepSchema::ap214);
+    options.iges_mode = iges_mode_from_name(a.mode).value_or(IgesMode::brep);
+    options.deflection = a.deflection;
+    options.angular_deflection = a.angular;
+    return request;
+}
+
+void print_summary(const std::string& in, const std::string& out, const ConvertReport& r) {
+    std::fprintf(stderr, "nurbsrt: converted %s (%s, %s, %d faces) to %s (%s", in.c_str(), format_name(r.in_format),
+                 r.in_units.empty() ? "no unit declared" : r.in_units.c_str(), r.faces, out.c_str(),
+                 conversion_format_name(r.output));
+    if (!r.out_units.empty()) std::fprintf(stderr, ", %s", r.out_units.c_str());
+    if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
+    if (r.degenerate_triangles > 0)
+        std::fprintf(stderr, " (%lld of no area or repeated left out)", r.degenerate_triangles);
+    std::fprintf(stderr, "): read %.1f ms", r.read_ms);
+    if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);
+    std::fprintf(stderr, ", write %.1f ms", r.write_ms);
+    if (r.verify_ms > 0) std::fprintf(stderr, ", verify %.1f ms", r.verify_ms);
+    std::fputc('\n', stderr);
+}
+
+// One conversion: written under OUT's own name in a temporary directory beside
+// it (the writer picks the format by the extension, and OBJ names its .mtl
+// after the stem), moved out when kept: OUT exists only complete, and not at
+// all when --strict refuses it.
+void convert_one(const std::string& in, const std::string& out, const ConversionRequest& request,
+                 const std::string& report_path, bool quiet) {
+    // Removes the partial files on every way out but the renames below.
+    struct PartialDir {
+        std::filesystem::path path;
+        ~PartialDir() {
+            std::error_code ec;
+            if (!path.empty()) std::filesystem::remove_all(path, ec);
+        }
+    };
+    const std::filesystem::path target(out);
+    PartialDir partial{target.parent_path() /
+                       ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()))};
+    std::filesystem::create_directory(partial.path);
+    const std::filesystem::path written = partial.path / target.filename();
+    const ConvertReport r = convert_file(in, written.string(), request.options);
+    if (!report_path.empty()) {
+        std::ofstream report(report_path, std::ios::binary | std::ios::trunc);
+        nlohmann::ordered_json j =
+            r.fidelity.empty() ? nlohmann::ordered_json::object() : nlohmann::ordered_json::parse(r.fidelity);
+        j["warnings"] = r.warnings;
+        report << j.dump(2) << '\n';
+        if (!report) throw Error(ErrorCode::io, "cannot write the report '" + report_path + "'");
+    }
+    if (!quiet) print_fidelity(r.fidelity);
+    report_warnings(r.warnings, quiet, request.strict);
+    // OUT, and what a format writes beside it (OBJ's .mtl).
+    for (const std::filesystem::directory_entry& e : std::filesystem::directory_iterator(partial.path))
+        std::filesystem::rename(e.path(), target.parent_path() / e.path().filename());
+    if (!quiet) print_summary(in, out, r);
+}
+
+// --out-dir: every input to DIR/STEM.EXT, one after the other; two inputs of
+// one stem would overwrite each other, so that is a usage error before any
+// work. A file that fails is reported with its error and the rest go on; the
+// command then fails naming how many did.
+void convert_each(const CLI::App& cmd, const ConvertArgs& a) {
+    if (a.format.empty()) throw CLI::ValidationError("--format", "--out-dir needs the output format (--format)");
+    const ConversionFormat format = conversion_format_from_name(a.format);
+    const ConversionRequest request = request_of(cmd, a, format);
+    std::vector<std::string> outs;
+    for (const std::string& in : a.files) {
+        if (const std::string why = CLI::ExistingFile(in); !why.empty()) throw CLI::ValidationError("FILES", why);
+        const std::string stem = std::filesystem::path(in).stem().string();
+        const std::string out =
+            (std::filesystem::path(a.out_dir) / (stem + conversion_format_extension(format))).string();
+        for (size_t k = 0; k < outs.size(); ++k)
+            if (outs[k] == out)
+                throw CLI::ValidationError("FILES", a.files[k] + " and " + in + " would both write " + out);
+        outs.push_back(out);
+    }
+    size_t failed = 0;
+    for (size_t k = 0; k < a.files.size(); ++k) {
+        const std::string report = a.report_path.empty()
+                                       ? ""
+                                       : (std::filesystem::path(a.out_dir) /
+                                          (std::filesystem::path(a.files[k]).stem().string() + ".fidelity.json"))
+                                             .string();
+        try {
+            convert_one(a.files[k], outs[k], request, report, a.quiet);
+        } catch (const WarningsRefused& e) {
+            ++failed;
+            std::fprintf(stderr, "nurbsrt: %s: error [strict]: %s\n", a.files[k].c_str(), e.what());
+        } catch (const Error& e) {
+            ++failed;
+            std::fprintf(stderr, "nurbsrt: %s: error [%s]: %s\n", a.files[k].c_str(), error_code_name(e.code()),
+                         e.what());
+        }
+    }
+    if (!a.quiet)
+        std::fprintf(stderr, "nurbsrt: converted %zu of %zu files into %s\n", a.files.size() - failed, a.files.size(),
+                     a.out_dir.c_str());
+    if (failed)
+        throw Error(ErrorCode::invalid_argument, std::to_string(failed) + " of " + std::to_string(a.files.size()) +
+                                                     " files failed (each reported above); the others were written");
+}
+
+void run_convert(const CLI::App& cmd, const ConvertArgs& a) {
+    if (!a.out_dir.empty()) return convert_each(cmd, a);
+    if (!a.format.empty()) throw CLI::ValidationError("--format", "is for --out-dir; OUT's extension names the format");
+    if (a.files.size() != 2)
+        throw CLI::ValidationError("FILES", "give IN and OUT, or several inputs with --out-dir DIR --format F");
+    const std::string &in = a.files[0], &out = a.files[1];
+    if (const std::string why = CLI::ExistingFile(in); !why.empty()) throw CLI::ValidationError("IN", why);
+    if (const std::string why = output_file_validator(
+            {".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".obj", ".json", ".brep", ".brp", ".wrl", ".vrml"})(out);
+        !why.empty())
+        throw CLI::ValidationError("OUT", why);
+    convert_one(in, out, request_of(cmd, a, conversion_format_from_extension(out)), a.report_path, a.quiet);
+}
+
 }  // namespace
 
 void add_convert_command(CLI::App& app) {
@@ -99,122 +244,56 @@ void add_convert_command(CLI::App& app) {
                            "  .json       the NURBS patches (degrees, knots, homogeneous control points, trim\n"
                            "              loops, face attributes); schema: api_schema/nurbs_scene.schema.json\n"
                            "Examples: nurbsrt convert part.step part.igs\n"
-                           "          nurbsrt convert part.igs part.glb");
-    auto in = std::make_shared<std::string>();
-    auto out = std::make_shared<std::string>();
-    struct Flags {
-        bool quiet = false, strict = false;
-    };
-    auto flags = std::make_shared<Flags>();
-    auto units = std::make_shared<std::string>();
-    auto report_path = std::make_shared<std::string>();
-    auto schema = std::make_shared<std::string>(step_schema_name(StepSchema::ap214));
-    auto mode = std::make_shared<std::string>(iges_mode_name(IgesMode::brep));
-    auto deflection = std::make_shared<double>(0.0);
-    auto angular = std::make_shared<double>(kDefaultAngularDeflection);
-    cmd->add_option("IN", *in, "input STEP, IGES or BREP file")->required()->check(CLI::ExistingFile);
-    cmd->add_option("OUT", *out, "output file (.stp, .step, .igs, .iges, .stl, .glb, .obj, .json, .brep or .wrl)")
-        ->required()
-        ->check(output_file_validator(
-            {".stp", ".step", ".igs", ".iges", ".stl", ".glb", ".obj", ".json", ".brep", ".brp", ".wrl", ".vrml"}));
-    cmd->add_option("--units", *units,
+                           "          nurbsrt convert part.igs part.glb\n"
+                           "          nurbsrt convert parts/*.step --out-dir meshes --format stl");
+    auto a = std::make_shared<ConvertArgs>();
+    cmd->add_option("FILES", a->files,
+                    "IN OUT: the input (STEP, IGES or BREP) and the output file (.stp, .step, .igs, .iges, .stl,\n"
+                    ".glb, .obj, .json, .brep or .wrl); with --out-dir, every input")
+        ->required();
+    cmd->add_option("--out-dir", a->out_dir,
+                    "convert every input FILE into this directory, as DIR/STEM.EXT in --format, one after the\n"
+                    "other in this process (the libraries set up once); a file that fails is reported and the\n"
+                    "rest go on")
+        ->check(CLI::ExistingDirectory);
+    cmd->add_option("--format", a->format, "the output format of --out-dir: " + conversion_format_names())
+        ->check(CLI::Validator(
+            [](std::string& s) {
+                return conversion_format_from_name(s) == ConversionFormat::unknown
+                           ? "not an output format; one of " + conversion_format_names()
+                           : std::string();
+            },
+            "FORMAT"));
+    cmd->add_option("--units", a->units,
                     "STEP/IGES outputs: the length unit to write (the geometry is scaled to it); default: the\n"
                     "source's")
         ->check(CLI::IsMember(length_unit_names()));
-    cmd->add_option("--step-schema", *schema, "STEP outputs: the application protocol, ap214 or ap242")
+    cmd->add_option("--step-schema", a->schema, "STEP outputs: the application protocol, ap214 or ap242")
         ->check(CLI::IsMember(step_schema_names()))
         ->capture_default_str();
-    cmd->add_option("--iges-mode", *mode, "IGES outputs: brep (solids and shells) or faces (trimmed surfaces)")
+    cmd->add_option("--iges-mode", a->mode, "IGES outputs: brep (solids and shells) or faces (trimmed surfaces)")
         ->check(CLI::IsMember(iges_mode_names()))
         ->capture_default_str();
-    cmd->add_option("--deflection", *deflection,
+    cmd->add_option("--deflection", a->deflection,
                     "STL, glb, VRML and OBJ outputs: the mesh's linear deflection, a fraction of the model's\n"
                     "bounding-box diagonal (default 0.002)")
         ->check(CLI::Range(std::numeric_limits<double>::min(), kMaxConversionDeflection));
     // Checked by the request model's own check (the API's and the jobs' option), before the import.
-    cmd->add_option("--angular-deflection", *angular,
+    cmd->add_option("--angular-deflection", a->angular,
                     "STL, glb, VRML and OBJ outputs: the mesh's angular deflection, radians (the largest turn of\n"
                     "the normal along a triangle's edge)")
         ->capture_default_str()
         ->check(shared_check(
             // CLI11 names the flag before the message.
             [](const std::string& s) { checked_angular_deflection(std::stod(s), "'" + s + "'"); }, "RADIANS"));
-    cmd->add_option("--report", *report_path,
+    cmd->add_option("--report", a->report_path,
                     "write the fidelity report (JSON: source and output measured and compared) to this file,\n"
-                    "also when --strict refuses the conversion")
+                    "also when --strict refuses the conversion (with --out-dir: DIR/STEM.fidelity.json of each)")
         ->check(output_file_validator({".json"}));
-    cmd->add_flag("-q,--quiet", flags->quiet, "no summary or warnings on stderr");
-    cmd->add_flag("--strict", flags->strict,
+    cmd->add_flag("-q,--quiet", a->quiet, "no summary or warnings on stderr");
+    cmd->add_flag("--strict", a->strict,
                   "fail with exit status 3, writing nothing, when the conversion has warnings (something lost)");
-    cmd->callback([cmd, in, out, flags, units, schema, mode, deflection, angular, report_path] {
-        // An option OUT's format does not take is a usage error, never ignored
-        // (as the API refuses it).
-        const ConversionFormat format = conversion_format_from_extension(*out);
-        for (const auto& [flag, option] :
-             {std::pair{"--units", ConversionOption::units}, std::pair{"--step-schema", ConversionOption::step_schema},
-              std::pair{"--iges-mode", ConversionOption::iges_mode},
-              std::pair{"--deflection", ConversionOption::deflection},
-              std::pair{"--angular-deflection", ConversionOption::angular_deflection}})
-            if (const std::string why = conversion_option_refusal(option, format); cmd->count(flag) > 0 && !why.empty())
-                throw CLI::ValidationError(flag, why);
-        const auto [quiet, strict] = *flags;
-        // Removes the partial files on every way out but the renames below.
-        struct PartialDir {
-            std::filesystem::path path;
-            ~PartialDir() {
-                std::error_code ec;
-                if (!path.empty()) std::filesystem::remove_all(path, ec);
-            }
-        };
-        // Written under OUT's own name in a temporary directory beside it (the
-        // writer picks the format by the extension, and OBJ names its .mtl
-        // after the stem), moved out when kept: OUT exists only complete, and
-        // not at all when --strict refuses it.
-        const std::filesystem::path target(*out);
-        PartialDir partial{target.parent_path() /
-                           ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()))};
-        std::filesystem::create_directory(partial.path);
-        const std::filesystem::path written = partial.path / target.filename();
-        // The request model of POST /v1/conversions and of the jobs (options/render_request.h),
-        // its values checked by the same checks above.
-        ConversionRequest request;
-        request.format = format;
-        request.strict = strict;
-        ConvertOptions& options = request.options;
-        options.units = length_unit_from_name(*units).value_or(LengthUnit::unknown);
-        options.step_schema = step_schema_from_name(*schema).value_or(StepSchema::ap214);
-        options.iges_mode = iges_mode_from_name(*mode).value_or(IgesMode::brep);
-        options.deflection = *deflection;
-        options.angular_deflection = *angular;
-        const ConvertReport r = convert_file(*in, written.string(), request.options);
-        const std::vector<std::string>& warnings = r.warnings;
-        if (!report_path->empty()) {
-            std::ofstream report(*report_path, std::ios::binary | std::ios::trunc);
-            nlohmann::ordered_json j =
-                r.fidelity.empty() ? nlohmann::ordered_json::object() : nlohmann::ordered_json::parse(r.fidelity);
-            j["warnings"] = warnings;
-            report << j.dump(2) << '\n';
-            if (!report) throw Error(ErrorCode::io, "cannot write the report '" + *report_path + "'");
-        }
-        if (!quiet) print_fidelity(r.fidelity);
-        report_warnings(warnings, quiet, request.strict);
-        // OUT, and what a format writes beside it (OBJ's .mtl).
-        for (const std::filesystem::directory_entry& e : std::filesystem::directory_iterator(partial.path))
-            std::filesystem::rename(e.path(), target.parent_path() / e.path().filename());
-        if (quiet) return;
-        std::fprintf(stderr, "nurbsrt: converted %s (%s, %s, %d faces) to %s (%s", in->c_str(),
-                     format_name(r.in_format), r.in_units.empty() ? "no unit declared" : r.in_units.c_str(), r.faces,
-                     out->c_str(), conversion_format_name(r.output));
-        if (!r.out_units.empty()) std::fprintf(stderr, ", %s", r.out_units.c_str());
-        if (r.triangles > 0) std::fprintf(stderr, ", %lld triangles", r.triangles);
-        if (r.degenerate_triangles > 0)
-            std::fprintf(stderr, " (%lld of no area or repeated left out)", r.degenerate_triangles);
-        std::fprintf(stderr, "): read %.1f ms", r.read_ms);
-        if (r.mesh_ms > 0) std::fprintf(stderr, ", mesh %.1f ms", r.mesh_ms);
-        std::fprintf(stderr, ", write %.1f ms", r.write_ms);
-        if (r.verify_ms > 0) std::fprintf(stderr, ", verify %.1f ms", r.verify_ms);
-        std::fputc('\n', stderr);
-    });
+    cmd->callback([cmd, a] { run_convert(*cmd, *a); });
 }
 
 }  // namespace nurbsrt::cli

@@ -904,3 +904,47 @@ TEST(CliRender, OutDirRendersEachModel) {
     EXPECT_EQ(both.status, 2) << both.err;
     fs::remove_all(dir);
 }
+
+// convert --out-dir converts each input on its own in one process, DIR/STEM.EXT
+// in --format each (each the bytes a lone conversion writes), with its report
+// beside it as STEM.fidelity.json when --report asks; an input that fails is
+// reported by name and the rest are written (exit 1). Usage errors before any
+// work: --out-dir without --format, --format without --out-dir, two inputs of
+// one stem, IN alone, a format that is none.
+TEST(CliConvert, OutDirConvertsEachFile) {
+    const fs::path dir = fs::temp_directory_path() / ("nurbsrt-cli-convert-outdir-" + std::to_string(::getpid()));
+    fs::create_directories(dir / "in");
+    const fs::path broken = dir / "in" / "broken.step";
+    std::ofstream(broken) << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
+    const std::string bearing = "/usr/share/opencascade/data/iges/bearing.iges";
+    const CliRun r = run_nurbsrt("convert " + kScrew + " " + broken.string() + " " + bearing + " --out-dir " +
+                                 dir.string() + " --format stl -q --report r.json");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find(broken.string() + ": error [unreadable_file]"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("1 of 3 files failed"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "broken.stl"));
+    for (const char* stem : {"screw", "bearing"}) {
+        EXPECT_TRUE(fs::exists(dir / (std::string(stem) + ".stl"))) << stem;
+        std::ifstream report(dir / (std::string(stem) + ".fidelity.json"));
+        const nlohmann::json j = nlohmann::json::parse(report);
+        EXPECT_GT(j["output"]["mesh_in_mm"]["triangles"].get<long long>(), 0) << stem;
+    }
+    // The same bytes as a lone conversion of the same file.
+    const CliRun lone = run_nurbsrt("convert " + kScrew + " " + (dir / "lone.stl").string() + " -q");
+    ASSERT_EQ(lone.status, 0) << lone.err;
+    auto bytes = [](const fs::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(bytes(dir / "screw.stl"), bytes(dir / "lone.stl"));
+    fs::copy_file(kScrew, dir / "in" / "screw.step");
+    for (const std::string& args :
+         {kScrew + " " + (dir / "in" / "screw.step").string() + " --out-dir " + dir.string() + " --format glb",
+          kScrew + " --out-dir " + dir.string(), kScrew + " " + (dir / "x.stl").string() + " --format stl", kScrew,
+          kScrew + " --out-dir " + dir.string() + " --format xyz"}) {
+        const CliRun bad = run_nurbsrt("convert " + args);
+        EXPECT_EQ(bad.status, 2) << args << ": " << bad.err;
+    }
+    EXPECT_FALSE(fs::exists(dir / "screw.glb"));
+    fs::remove_all(dir);
+}
