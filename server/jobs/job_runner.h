@@ -32,12 +32,13 @@ namespace nurbsrt::server {
 struct ServerContext;
 
 // The niceness of a job's work: its runner threads (and so the threads they
-// start, a job render's among them) and its children. At 10 the kernel's
-// scheduler weights it about 1:10 against normal work (CFS's
-// sched_prio_to_weight: 110 vs 1024), so a client's render gets the cores at
-// once while a large job runs (bench/fairness.sh), and the job still has them
-// whole when nothing else runs.
-inline constexpr int kJobNice = 10;
+// start, a job render's among them) and its children. At 19 the kernel's
+// scheduler weights it about 1:68 against normal work (CFS's
+// sched_prio_to_weight: 15 vs 1024), so a client's render gets the cores at
+// once while a large job runs (bench/fairness.sh: at 10, 1:9, a job dense
+// enough to fill both cores cost the clients' renders 33-41 ms at p99, at 19
+// 26-32 ms), and the job still has them whole when nothing else runs.
+inline constexpr int kJobNice = 19;
 // The threads of a job's frame and of its scene's preparation: 1, so that all
 // of that work runs in the job's own niced threads, never in oneTBB's shared
 // workers (job_file_run.cpp, run_render).
