@@ -59,6 +59,15 @@ public:
         }
     }
 
+    struct Edge {
+        explicit Edge(const TopoDS_Edge& e) : edge(e), curve(e) {}
+        TopoDS_Edge edge;
+        BRepAdaptor_Curve curve;
+        Bnd_Box box;
+        std::vector<gp_Pnt> ends;  // its vertices
+    };
+    const std::deque<Edge>& edges() const { return edges_; }
+
     // The least of `d` and the distance from `p` to the boundary's points.
     double nearer(const gp_Pnt& p, double d) const {
         for (const Edge& e : edges_) {
@@ -76,12 +85,6 @@ public:
     }
 
 private:
-    struct Edge {
-        explicit Edge(const TopoDS_Edge& e) : curve(e) {}
-        BRepAdaptor_Curve curve;
-        Bnd_Box box;
-        std::vector<gp_Pnt> ends;
-    };
     static double box_distance(const Bnd_Box& b, const gp_Pnt& p) {
         if (b.IsVoid()) return 0;
         double lo[3], hi[3];
@@ -126,22 +129,15 @@ private:
 // of the face is found by a local search on its own edge.
 class BoundaryNodes {
 public:
-    BoundaryNodes(const TopoDS_Face& face, const Handle(Poly_Triangulation) & t, const TopLoc_Location& loc)
-        : at_(static_cast<size_t>(t->NbNodes()) + 1) {
-        for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
-            const TopoDS_Edge& edge = TopoDS::Edge(e.Current());
-            if (BRep_Tool::Degenerated(edge)) continue;
-            const Handle(Poly_PolygonOnTriangulation) polygon = BRep_Tool::PolygonOnTriangulation(edge, t, loc);
+    BoundaryNodes(const FaceBoundary& boundary, const Handle(Poly_Triangulation) & t, const TopLoc_Location& loc)
+        : boundary_(boundary), at_(static_cast<size_t>(t->NbNodes()) + 1) {
+        const std::deque<FaceBoundary::Edge>& edges = boundary.edges();
+        for (size_t k = 0; k < edges.size(); ++k) {
+            const Handle(Poly_PolygonOnTriangulation) polygon =
+                BRep_Tool::PolygonOnTriangulation(edges[k].edge, t, loc);
             if (polygon.IsNull() || !polygon->HasParameters()) continue;
-            curves_.emplace_back(edge);
-            TopoDS_Vertex first, last;
-            TopExp::Vertices(edge, first, last);
-            std::vector<gp_Pnt>& ends = ends_.emplace_back();
-            for (const TopoDS_Vertex& v : {first, last})
-                if (!v.IsNull()) ends.push_back(BRep_Tool::Pnt(v));
             for (int i = 1; i <= polygon->NbNodes(); ++i)
-                at_[static_cast<size_t>(polygon->Node(i))] = {static_cast<int>(curves_.size()) - 1,
-                                                              polygon->Parameter(i)};
+                at_[static_cast<size_t>(polygon->Node(i))] = {static_cast<int>(k), polygon->Parameter(i)};
         }
     }
 
@@ -149,12 +145,13 @@ public:
     // the node's parameter; -1 for a node on no edge.
     double distance(int node, const gp_Pnt& p) const {
         const Where& w = at_[static_cast<size_t>(node)];
-        if (w.curve < 0) return -1;
-        const BRepAdaptor_Curve& c = curves_[static_cast<size_t>(w.curve)];
+        if (w.edge < 0) return -1;
+        const FaceBoundary::Edge& e = boundary_.edges()[static_cast<size_t>(w.edge)];
+        const BRepAdaptor_Curve& c = e.curve;
         // The edge's vertices bound it too: BRepMesh puts an edge's end nodes at
         // its vertices, which lie off the curve by up to their tolerance.
         double d = p.Distance(c.Value(w.parameter));
-        for (const gp_Pnt& end : ends_[static_cast<size_t>(w.curve)]) d = std::min(d, p.Distance(end));
+        for (const gp_Pnt& end : e.ends) d = std::min(d, p.Distance(end));
         if (d <= Precision::Confusion()) return d;
         try {
             const Extrema_LocateExtPC local(p, c, w.parameter, Precision::PConfusion());
@@ -165,12 +162,11 @@ public:
 
 private:
     struct Where {
-        int curve = -1;
+        int edge = -1;  // in boundary_.edges()
         double parameter = 0;
     };
+    const FaceBoundary& boundary_;
     std::vector<Where> at_;
-    std::deque<BRepAdaptor_Curve> curves_;
-    std::vector<std::vector<gp_Pnt>> ends_;  // each curve's vertices
 };
 
 // A placed face's triangulation and what measuring it needs.
@@ -180,9 +176,12 @@ struct MeshedFace {
     TopLoc_Location loc;
     gp_Trsf placement;
     Handle(Geom_Surface) surface;  // placed as the face is (BRep_Tool::Surface applies its location)
-    std::optional<BoundaryNodes> nodes;
     std::optional<FaceBoundary> boundary;
+    std::optional<BoundaryNodes> nodes;    // on `boundary`'s edges
     std::optional<FaceInterior> interior;  // built at the first point that needs it
+    // Per node (1-based, as the triangulation numbers them): placed, and the
+    // surface at its (u, v); measured once, read by every triangle around it.
+    std::vector<gp_Pnt> xyz, on_surface;
 
     double nearer_interior(const gp_Pnt& p, double d) {
         if (!interior) interior.emplace(face);
@@ -195,10 +194,13 @@ struct MeshedFace {
 // off the surface by up to the edge tolerance: those are measured to their own
 // edge, then to any part of the boundary that could be nearer.
 void vertex_deviations(MeshedFace& f, std::vector<double>& out) {
+    f.xyz.assign(static_cast<size_t>(f.t->NbNodes()) + 1, gp_Pnt());
+    f.on_surface.assign(f.xyz.size(), gp_Pnt());
     for (int i = 1; i <= f.t->NbNodes(); ++i) {
         const gp_Pnt2d uv = f.t->UVNode(i);
-        const gp_Pnt p = f.t->Node(i).Transformed(f.placement);
-        double d = p.Distance(f.surface->Value(uv.X(), uv.Y()));
+        const gp_Pnt p = f.xyz[static_cast<size_t>(i)] = f.t->Node(i).Transformed(f.placement);
+        f.on_surface[static_cast<size_t>(i)] = f.surface->Value(uv.X(), uv.Y());
+        double d = p.Distance(f.on_surface[static_cast<size_t>(i)]);
         if (d > Precision::Confusion()) {
             const double to_edge = f.nodes->distance(i, p);
             if (to_edge >= 0) d = std::min(d, to_edge);
@@ -223,7 +225,7 @@ void centroid_deviations(MeshedFace& f, std::vector<double>& out, long long& out
         gp_XYZ p(0, 0, 0);
         gp_XY uv(0, 0);
         for (int c : n) {
-            p += f.t->Node(c).Transformed(f.placement).XYZ();
+            p += f.xyz[static_cast<size_t>(c)].XYZ();
             uv += f.t->UVNode(c).XY();
         }
         const gp_Pnt centroid(p / 3);
@@ -232,10 +234,7 @@ void centroid_deviations(MeshedFace& f, std::vector<double>& out, long long& out
         // trim): no closest point is farther. A root beyond that is another
         // sheet's (the normal condition near a pole, say), not this point's.
         double bound = std::numeric_limits<double>::infinity();
-        for (int c : n) {
-            const gp_Pnt2d at = f.t->UVNode(c);
-            bound = std::min(bound, centroid.Distance(f.surface->Value(at.X(), at.Y())));
-        }
+        for (int c : n) bound = std::min(bound, centroid.Distance(f.on_surface[static_cast<size_t>(c)]));
         double d = -1;
         try {
             project.Perform(centroid, uv.X(), uv.Y(), /*isDistanceCriteria=*/Standard_True);
@@ -261,15 +260,15 @@ void centroid_deviations(MeshedFace& f, std::vector<double>& out, long long& out
 
 std::vector<double> face_mesh_deviations(const TopoDS_Face& face, long long& outside_trim) {
     std::vector<double> out;
-    MeshedFace f{face, {}, {}, {}, {}, {}, {}, {}};
+    MeshedFace f{face, {}, {}, {}, {}, {}, {}, {}, {}, {}};
     f.t = BRep_Tool::Triangulation(face, f.loc);
     if (f.t.IsNull() || !f.t->HasUVNodes()) return out;
     f.placement = f.loc.Transformation();
     f.surface = BRep_Tool::Surface(face);
     if (f.surface.IsNull()) return out;
-    f.nodes.emplace(face, f.t, f.loc);
     f.boundary.emplace(face);
-    vertex_deviations(f, out);
+    f.nodes.emplace(*f.boundary, f.t, f.loc);
+    vertex_deviations(f, out);  // before the centroids: it measures the nodes they read
     centroid_deviations(f, out, outside_trim);
     return out;
 }
