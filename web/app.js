@@ -152,6 +152,7 @@ function show(frame, job) {
   if (job.final) {
     state.frame = frame;
     draw();
+    cad.frameShown(frame);
     showWarnings(frame.stats.warnings);
     $('save-png').disabled = false;
     $('save-exr').disabled = false;

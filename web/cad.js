@@ -13,8 +13,6 @@ import { dot } from './vec3.js';
 const AXES = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
 // A click is a press and release this close (CSS px); farther, it was an orbit.
 const CLICK_SLOP_PX = 4;
-// How long a part pick waits for the frame with face ids it asked for.
-const PICK_WAIT_MS = 10000;
 // What a part can be; `only` parts are shown alone (everything else hidden).
 const PART_STATES = [['shown', 'shown'], ['hide', 'hidden'], ['only', 'alone'], ['ghost', 'ghosted']];
 
@@ -30,6 +28,7 @@ export class CadControls {
     // (the box's extent along it), at (the slider's value through the point)}.
     this.facePlane = null;
     this.picking = false;  // the next click on the image sets facePlane
+    this.pendingPick = null;  // a part pick waiting for a frame with face ids {px, py, width}
     Object.assign(this, { frame, needAovs, busyElsewhere });
     $('section-axis').addEventListener('change', () => {
       this.facePlane = null;
@@ -111,6 +110,12 @@ export class CadControls {
   }
 
   // ---- the part under the pointer --------------------------------------------
+  // A full-size frame is on screen: a part pick waiting for face ids is made on it.
+  frameShown(f) {
+    const p = this.pendingPick;
+    if (p && f.aov && f.aov.face && f.width === p.width) this.pickPart(f, p.px, p.py);
+  }
+
   // The leaf part that places face `face` (1..N, the face AOV's number).
   partOfFace(face) {
     for (const part of this.parts)
@@ -124,21 +129,13 @@ export class CadControls {
     if (f.stats.views || ix < 0 || iy < 0 || ix >= f.width || iy >= f.height) return;
     if (!f.aov || !f.aov.face) {
       // The frame on screen came without face ids: asked for, and the pick is
-      // made when they land (unless the view changed meanwhile).
+      // made when they land (frameShown).
       hint.textContent = 'Finding the part…';
+      this.pendingPick = { px, py, width: f.width };
       this.needAovs();
-      const asked = Date.now();
-      const wait = () => {
-        const g = this.frame();
-        if (g && g !== f && g.aov && g.aov.face && g.width === f.width) this.pickPart(g, px, py);
-        else if (g === f || (g && !g.aov)) {
-          if (Date.now() - asked < PICK_WAIT_MS) setTimeout(wait, 50);
-          else hint.textContent = 'The frame with face ids did not come: click again.';
-        }
-      };
-      setTimeout(wait, 50);
       return;
     }
+    this.pendingPick = null;
     const face = f.aov.face[iy * f.width + ix];
     const part = face ? this.partOfFace(face) : null;
     for (const li of $('parts').querySelectorAll('li.picked')) li.classList.remove('picked');
@@ -164,6 +161,7 @@ export class CadControls {
   setModel(summary) {
     const $ = this.$;
     this.facePlane = null;
+    this.pendingPick = null;
     this.setPicking(false);
     $('section-at').step = '0.01';
     this.box = summary?.bbox || null;
